@@ -1,0 +1,102 @@
+//! Acceleration structures over any set of primitives.
+//!
+//! The octree does not know what a primitive is: it asks a [`PrimitiveSet`] for bounds, for an
+//! overlap test against a cell and for a ray hit, by primitive index. The scene implements it
+//! over triangles and quadrics together.
+
+pub mod octree;
+
+use crate::geometry::Aabb;
+use glam::DVec3;
+
+pub use octree::{Octree, OctreeParams, OctreeStats};
+
+/// A ray prepared for tracing: world origin and direction plus whatever the primitive set
+/// precomputes per ray (`R`, for instance the watertight triangle frame).
+#[derive(Debug, Clone, Copy)]
+pub struct PreparedRay<R> {
+    /// Ray origin in the acceleration structure's (scene-local) coordinates.
+    pub local_origin: DVec3,
+    /// Ray direction; no component is -0.0.
+    pub dir: DVec3,
+    /// Per-ray data of the primitive set.
+    pub extra: R,
+}
+
+/// The closest hit of a ray: its parameter and the global primitive index.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    /// Ray parameter: the hit point is `origin + t * dir`.
+    pub t: f64,
+    /// Index of the primitive in the [`PrimitiveSet`].
+    pub prim: u32,
+}
+
+impl Hit {
+    /// True when `self` beats `best`: nearer, or as near with a smaller primitive index (so
+    /// every traversal order picks the same primitive on ties).
+    pub fn beats(&self, best: &Option<Hit>) -> bool {
+        match best {
+            None => true,
+            Some(b) => self.t < b.t || (self.t == b.t && self.prim < b.prim),
+        }
+    }
+}
+
+/// A collection of primitives an acceleration structure can be built over.
+pub trait PrimitiveSet: Sync {
+    /// Per-ray data computed once by [`PrimitiveSet::prepare`].
+    type RayData: Copy;
+
+    /// Number of primitives.
+    fn len(&self) -> usize;
+
+    /// True when there is no primitive.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bounding box of primitive `index`, in local coordinates.
+    fn bounds(&self, index: usize) -> Aabb;
+
+    /// Conservative test: may primitive `index` touch the closed box `cell`?
+    fn overlaps(&self, index: usize, cell: &Aabb) -> bool;
+
+    /// Per-ray precomputation for a ray with the given local origin and direction.
+    fn prepare(&self, local_origin: DVec3, dir: DVec3) -> Self::RayData;
+
+    /// Parameter `t` of the nearest hit of primitive `index` with `0 < t <= t_max`.
+    fn intersect(&self, index: usize, ray: &PreparedRay<Self::RayData>, t_max: f64) -> Option<f64>;
+}
+
+/// Prepares a ray for [`PrimitiveSet::intersect`]; turns -0.0 direction components into +0.0.
+pub fn prepare_ray<P: PrimitiveSet>(
+    set: &P,
+    local_origin: DVec3,
+    dir: DVec3,
+) -> PreparedRay<P::RayData> {
+    let dir = dir + DVec3::ZERO;
+    PreparedRay {
+        local_origin,
+        dir,
+        extra: set.prepare(local_origin, dir),
+    }
+}
+
+/// The reference answer: tests every primitive. Used by tests and as the exactness oracle.
+pub fn brute_force<P: PrimitiveSet>(set: &P, ray: &PreparedRay<P::RayData>) -> Option<Hit> {
+    let mut best: Option<Hit> = None;
+    for index in 0..set.len() {
+        let t_max = best.map_or(f64::INFINITY, |b| b.t);
+        if let Some(t) = set.intersect(index, ray, t_max) {
+            let hit = Hit {
+                t,
+                prim: index as u32,
+            };
+            if hit.beats(&best) {
+                best = Some(hit);
+            }
+        }
+    }
+    best
+}

@@ -1,0 +1,132 @@
+//! Cameras: the glTF conventions (look down local -Z, +Y up, vertical field of view), framing
+//! of a whole scene, and the per-pixel ray generation.
+
+use crate::error::{Error, Result};
+use crate::geometry::{Aabb, Ray};
+use glam::{DMat4, DVec3, DVec4};
+use serde::Serialize;
+
+/// How a camera projects.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum Projection {
+    /// Pinhole camera with a vertical field of view in radians.
+    Perspective {
+        /// Vertical field of view, radians.
+        yfov: f64,
+    },
+    /// Parallel projection; `ymag` is half the view height.
+    Orthographic {
+        /// Half the view height in scene units.
+        ymag: f64,
+    },
+}
+
+/// A camera placed in the world.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera {
+    /// Name (glTF camera or node name), or a description for generated cameras.
+    pub name: String,
+    /// Where it came from, e.g. `gltf camera 0`, `auto`, `command line`.
+    pub source: String,
+    /// Projection.
+    pub projection: Projection,
+    /// Width / height the file asks for, if any.
+    pub aspect_ratio: Option<f64>,
+    /// Near clipping distance (reported only; rays start at the eye).
+    pub znear: f64,
+    /// Far clipping distance, `None` for infinite (reported only).
+    pub zfar: Option<f64>,
+    /// Camera-to-world matrix with an orthonormal rotation part.
+    pub to_world: DMat4,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target`, with `up` giving the vertical.
+    pub fn look_at(eye: DVec3, target: DVec3, up: DVec3, projection: Projection) -> Result<Camera> {
+        let back = (eye - target)
+            .try_normalize()
+            .ok_or_else(|| Error::msg("camera eye and target coincide"))?;
+        let right = up
+            .cross(back)
+            .try_normalize()
+            .ok_or_else(|| Error::msg("camera up vector is parallel to the view direction"))?;
+        let up = back.cross(right);
+        Ok(Camera {
+            name: "camera".into(),
+            source: "command line".into(),
+            projection,
+            aspect_ratio: None,
+            znear: 0.0,
+            zfar: None,
+            to_world: DMat4::from_cols(
+                right.extend(0.0),
+                up.extend(0.0),
+                back.extend(0.0),
+                eye.extend(1.0),
+            ),
+        })
+    }
+
+    /// A perspective camera framing all of `bounds` from the front (+Z side, slightly from
+    /// the right and above), 0.8 rad vertical field of view.
+    pub fn framing(bounds: &Aabb) -> Camera {
+        let (centre, radius) = if bounds.is_empty() {
+            (DVec3::ZERO, 1.0)
+        } else {
+            (bounds.center(), (bounds.size().length() * 0.5).max(1e-9))
+        };
+        let yfov: f64 = 0.8;
+        let distance = radius / (yfov * 0.5).sin() * 1.05;
+        let eye = centre + DVec3::new(0.4, 0.3, 1.0).normalize() * distance;
+        let mut camera = Camera::look_at(eye, centre, DVec3::Y, Projection::Perspective { yfov })
+            .expect("framing direction is never parallel to +Y");
+        camera.name = "auto".into();
+        camera.source = "auto (frames the whole scene)".into();
+        camera.znear = distance - radius;
+        camera
+    }
+
+    /// Camera-to-world matrix with the rotation part orthonormalised (scale and shear of a
+    /// node transform removed), keeping the position and the viewing direction.
+    pub fn orthonormalised(to_world: DMat4) -> Option<DMat4> {
+        let back = to_world.z_axis.truncate().try_normalize()?;
+        let right = to_world.y_axis.truncate().cross(back).try_normalize()?;
+        let up = back.cross(right);
+        Some(DMat4::from_cols(
+            right.extend(0.0),
+            up.extend(0.0),
+            back.extend(0.0),
+            to_world.w_axis,
+        ))
+    }
+
+    /// Eye position in the world.
+    pub fn eye(&self) -> DVec3 {
+        self.to_world.w_axis.truncate()
+    }
+
+    /// Unit viewing direction (the camera's -Z axis in the world).
+    pub fn forward(&self) -> DVec3 {
+        -self.to_world.z_axis.truncate()
+    }
+
+    /// The ray through the centre of pixel (`column`, `row`) of a `width`×`height` image;
+    /// row 0 is the top.
+    pub fn pixel_ray(&self, column: usize, row: usize, width: usize, height: usize) -> Ray {
+        let aspect = width as f64 / height as f64;
+        let sx = 2.0 * (column as f64 + 0.5) / width as f64 - 1.0;
+        let sy = 1.0 - 2.0 * (row as f64 + 0.5) / height as f64;
+        match self.projection {
+            Projection::Perspective { yfov } => {
+                let tan = (yfov * 0.5).tan();
+                let dir = DVec4::new(sx * tan * aspect, sy * tan, -1.0, 0.0);
+                Ray::new(self.eye(), (self.to_world * dir).truncate())
+            }
+            Projection::Orthographic { ymag } => {
+                let local = DVec4::new(sx * ymag * aspect, sy * ymag, 0.0, 1.0);
+                Ray::new((self.to_world * local).truncate(), self.forward())
+            }
+        }
+    }
+}

@@ -1,0 +1,53 @@
+//! The crate's error type: every failure names the file it concerns and what is wrong.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// An error with the file it concerns (when there is one) and a one-line description.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Error {
+    /// The file the error is about, if any.
+    pub path: Option<PathBuf>,
+    /// What is wrong, in one line.
+    pub message: String,
+}
+
+/// Result type used throughout the crate.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// An error about `path`.
+    pub fn in_file(path: impl AsRef<Path>, message: impl Into<String>) -> Self {
+        Error {
+            path: Some(path.as_ref().to_path_buf()),
+            message: message.into(),
+        }
+    }
+
+    /// An error that concerns no particular file.
+    pub fn msg(message: impl Into<String>) -> Self {
+        Error {
+            path: None,
+            message: message.into(),
+        }
+    }
+
+    /// Attaches `path` unless the error already names a file.
+    pub fn with_path(mut self, path: impl AsRef<Path>) -> Self {
+        if self.path.is_none() {
+            self.path = Some(path.as_ref().to_path_buf());
+        }
+        self
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.path {
+            Some(path) => write!(f, "{}: {}", path.display(), self.message),
+            None => f.write_str(&self.message),
+        }
+    }
+}
+
+impl std::error::Error for Error {}

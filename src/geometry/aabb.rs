@@ -1,0 +1,89 @@
+//! Axis-aligned bounding boxes in f64.
+
+use glam::DVec3;
+
+/// An axis-aligned box; `min > max` on some axis means empty.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    /// Smallest corner.
+    pub min: DVec3,
+    /// Largest corner.
+    pub max: DVec3,
+}
+
+impl Aabb {
+    /// The empty box: the identity of [`Aabb::union`].
+    pub const EMPTY: Aabb = Aabb {
+        min: DVec3::splat(f64::INFINITY),
+        max: DVec3::splat(f64::NEG_INFINITY),
+    };
+
+    /// A box from its two corners.
+    pub fn new(min: DVec3, max: DVec3) -> Self {
+        Aabb { min, max }
+    }
+
+    /// The smallest box holding all `points`.
+    pub fn from_points(points: impl IntoIterator<Item = DVec3>) -> Self {
+        points.into_iter().fold(Aabb::EMPTY, |b, p| b.grow(p))
+    }
+
+    /// This box grown to hold `p`.
+    pub fn grow(self, p: DVec3) -> Self {
+        Aabb::new(self.min.min(p), self.max.max(p))
+    }
+
+    /// The smallest box holding both.
+    pub fn union(self, other: Aabb) -> Self {
+        Aabb::new(self.min.min(other.min), self.max.max(other.max))
+    }
+
+    /// The common part of both boxes (possibly empty).
+    pub fn intersection(self, other: Aabb) -> Self {
+        Aabb::new(self.min.max(other.min), self.max.min(other.max))
+    }
+
+    /// True when the box holds no point.
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+
+    /// True when both boxes share at least one point (closed boxes).
+    pub fn overlaps(&self, other: &Aabb) -> bool {
+        self.min.cmple(other.max).all() && other.min.cmple(self.max).all()
+    }
+
+    /// Centre point.
+    pub fn center(&self) -> DVec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Edge lengths.
+    pub fn size(&self) -> DVec3 {
+        self.max - self.min
+    }
+
+    /// The box grown by `margin` on every side.
+    pub fn expanded(&self, margin: f64) -> Self {
+        Aabb::new(
+            self.min - DVec3::splat(margin),
+            self.max + DVec3::splat(margin),
+        )
+    }
+
+    /// The same box moved by `-offset`.
+    pub fn translated(&self, offset: DVec3) -> Self {
+        Aabb::new(self.min - offset, self.max - offset)
+    }
+
+    /// The eight corners.
+    pub fn corners(&self) -> [DVec3; 8] {
+        std::array::from_fn(|i| {
+            DVec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            )
+        })
+    }
+}

@@ -1,0 +1,158 @@
+//! Triangles: the watertight ray test and the exact triangle/box overlap test.
+//!
+//! Vertices are stored as f32 (relative to the scene anchor) and promoted to f64 for every test,
+//! so the arithmetic error is far below the storage precision.
+
+use super::Aabb;
+use glam::{DVec3, Vec3};
+
+/// Per-ray constants of the watertight test (Woop, Benthin and Wald, JCGT 2013): the axis
+/// permutation that makes z the dominant direction component, and the shear that maps the ray
+/// onto the +z axis.
+#[derive(Debug, Clone, Copy)]
+pub struct WatertightRay {
+    origin: DVec3,
+    axes: [usize; 3],
+    shear: DVec3,
+}
+
+impl WatertightRay {
+    /// Prepares `origin + t * dir` (same coordinates as the triangles; `dir` non-zero).
+    pub fn new(origin: DVec3, dir: DVec3) -> Self {
+        let abs = dir.abs();
+        let kz = if abs.x >= abs.y && abs.x >= abs.z {
+            0
+        } else if abs.y >= abs.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if dir[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        let shear = DVec3::new(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]);
+        WatertightRay {
+            origin,
+            axes: [kx, ky, kz],
+            shear,
+        }
+    }
+
+    /// Moves a vertex into the ray's sheared frame (z not yet scaled).
+    fn sheared(&self, v: Vec3) -> DVec3 {
+        let p = v.as_dvec3() - self.origin;
+        let [kx, ky, kz] = self.axes;
+        DVec3::new(
+            p[kx] - self.shear.x * p[kz],
+            p[ky] - self.shear.y * p[kz],
+            p[kz],
+        )
+    }
+
+    /// The ray parameter `t` of the hit with triangle `tri`, if `0 < t <= t_max`.
+    ///
+    /// Watertight: a ray through a shared edge or vertex hits at least one of the triangles
+    /// sharing it, because the edge functions of a shared edge are exact negatives of each
+    /// other and a zero counts as inside.
+    pub fn intersect(&self, tri: &[Vec3; 3], t_max: f64) -> Option<f64> {
+        let a = self.sheared(tri[0]);
+        let b = self.sheared(tri[1]);
+        let c = self.sheared(tri[2]);
+        let u = c.x * b.y - c.y * b.x;
+        let v = a.x * c.y - a.y * c.x;
+        let w = b.x * a.y - b.y * a.x;
+        let negative = u < 0.0 || v < 0.0 || w < 0.0;
+        let positive = u > 0.0 || v > 0.0 || w > 0.0;
+        if negative && positive {
+            return None;
+        }
+        let det = u + v + w;
+        if det == 0.0 {
+            return None;
+        }
+        let sz = self.shear.z;
+        let t_scaled = u * sz * a.z + v * sz * b.z + w * sz * c.z;
+        let t = t_scaled / det;
+        (t > 0.0 && t <= t_max).then_some(t)
+    }
+}
+
+/// Unit geometric normal of a triangle from its winding (counter-clockwise = front), or
+/// `None` for a degenerate triangle.
+pub fn geometric_normal(tri: &[Vec3; 3]) -> Option<DVec3> {
+    let [a, b, c] = tri.map(|v| v.as_dvec3());
+    (b - a).cross(c - a).try_normalize()
+}
+
+/// Exact separating-axis test: does the closed triangle touch the closed box?
+///
+/// Axes: the three box normals, the triangle normal and the nine edge/box-axis cross products
+/// (Akenine-Möller 2001). Computed in f64 on the exact f32 vertex values.
+pub fn overlaps_box(tri: &[Vec3; 3], aabb: &Aabb) -> bool {
+    let centre = aabb.center();
+    let half = aabb.size() * 0.5;
+    let v = tri.map(|p| p.as_dvec3() - centre);
+    let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
+    let separated = |axis: DVec3| {
+        let p = [axis.dot(v[0]), axis.dot(v[1]), axis.dot(v[2])];
+        let radius = half.dot(axis.abs());
+        p[0].min(p[1]).min(p[2]) > radius || p[0].max(p[1]).max(p[2]) < -radius
+    };
+    if DVec3::AXES.into_iter().any(separated) || separated(edges[0].cross(edges[1])) {
+        return false;
+    }
+    !edges
+        .iter()
+        .flat_map(|e| DVec3::AXES.map(|axis| e.cross(axis)))
+        .any(separated)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TRI: [Vec3; 3] = [
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ];
+
+    #[test]
+    fn hits_at_the_analytic_distance() {
+        let ray = WatertightRay::new(DVec3::new(0.0, 0.0, 5.0), DVec3::new(0.0, 0.0, -2.0));
+        assert_eq!(ray.intersect(&TRI, f64::INFINITY), Some(2.5));
+        assert_eq!(ray.intersect(&TRI, 2.0), None);
+    }
+
+    #[test]
+    fn misses_behind_and_beside() {
+        let behind = WatertightRay::new(DVec3::new(0.0, 0.0, 5.0), DVec3::Z);
+        assert_eq!(behind.intersect(&TRI, f64::INFINITY), None);
+        let beside = WatertightRay::new(DVec3::new(3.0, 0.0, 5.0), -DVec3::Z);
+        assert_eq!(beside.intersect(&TRI, f64::INFINITY), None);
+    }
+
+    #[test]
+    fn normal_follows_winding() {
+        assert_eq!(geometric_normal(&TRI), Some(DVec3::Z));
+        let flipped = [TRI[0], TRI[2], TRI[1]];
+        assert_eq!(geometric_normal(&flipped), Some(-DVec3::Z));
+        assert_eq!(geometric_normal(&[TRI[0]; 3]), None);
+    }
+
+    #[test]
+    fn box_overlap_is_exact() {
+        let unit = Aabb::new(DVec3::splat(-0.5), DVec3::splat(0.5));
+        assert!(overlaps_box(&TRI, &unit));
+        // Box whose bounding boxes overlap the triangle's but which lies beyond its slanted edge.
+        let corner = Aabb::new(DVec3::new(0.8, 0.8, -0.1), DVec3::new(1.0, 1.0, 0.1));
+        assert!(!overlaps_box(&TRI, &corner));
+        // Touching the plane z = 0 from above counts (closed box).
+        let touching = Aabb::new(DVec3::new(-0.1, -0.1, 0.0), DVec3::new(0.1, 0.1, 1.0));
+        assert!(overlaps_box(&TRI, &touching));
+        let above = Aabb::new(DVec3::new(-0.1, -0.1, 0.001), DVec3::new(0.1, 0.1, 1.0));
+        assert!(!overlaps_box(&TRI, &above));
+    }
+}

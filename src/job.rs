@@ -1,0 +1,228 @@
+//! One render run from start to finish: load, build, trace, write, with timings. The binary
+//! is a thin layer over [`run`].
+
+use crate::accel::{Octree, OctreeParams};
+use crate::camera::{Camera, Projection};
+use crate::error::{Error, Result};
+use crate::import::{self, LoadOptions};
+use crate::output::sidecar::{self, CameraInfo, Sidecar, Stats, Timings};
+use crate::output::{self, Format, Layout, Staging};
+use crate::render::{self, Aov, CameraView, RaySource, Tracer};
+use crate::scene::Scene;
+use glam::DVec3;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// How to choose the camera.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CameraChoice {
+    /// A file camera by index or name; `None` takes the first one, or frames the scene.
+    pub name: Option<String>,
+    /// Look from `eye` to `target` with `up` instead of a file camera.
+    pub look_at: Option<(DVec3, DVec3, DVec3)>,
+    /// Override the projection: perspective with this vertical field of view (degrees).
+    pub fov_degrees: Option<f64>,
+    /// Override the projection: orthographic with this full view height.
+    pub ortho_height: Option<f64>,
+}
+
+/// Everything a render run needs.
+#[derive(Debug, Clone)]
+pub struct RenderJob {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Importer options.
+    pub load: LoadOptions,
+    /// Buffers to compute.
+    pub aovs: Vec<Aov>,
+    /// Camera choice (camera mode).
+    pub camera: CameraChoice,
+    /// Image width; `None` for the default.
+    pub width: Option<usize>,
+    /// Image height; `None` for the default.
+    pub height: Option<usize>,
+    /// A ray file: rays mode instead of camera mode.
+    pub rays: Option<PathBuf>,
+    /// Output folder; `None` for `<scene stem>.raycast`.
+    pub out: Option<PathBuf>,
+    /// Output formats; `None` for the mode's default.
+    pub formats: Option<Vec<Format>>,
+    /// Octree parameters.
+    pub octree: OctreeParams,
+}
+
+/// Default image width and height.
+const DEFAULT_SIZE: usize = 512;
+
+/// Largest image side accepted.
+const MAX_SIDE: usize = 1 << 15;
+
+impl RenderJob {
+    /// The output folder this job writes to.
+    pub fn out_dir(&self) -> PathBuf {
+        self.out.clone().unwrap_or_else(|| {
+            let stem = self.scene.file_stem().unwrap_or_default().to_string_lossy();
+            PathBuf::from(format!("{stem}.raycast"))
+        })
+    }
+}
+
+/// Runs a render job; `progress(done, total)` is called as rays complete.
+pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Sidecar> {
+    let started = Instant::now();
+    let scene = import::load(&job.scene, &job.load)?;
+    let load = started.elapsed().as_secs_f64();
+    let rays = job
+        .rays
+        .as_deref()
+        .map(output::npy::read_rays)
+        .transpose()?;
+    if rays.is_some() && job.aovs.contains(&Aov::Z) {
+        return Err(Error::msg(
+            "the z AOV needs a camera; it is not available with --rays",
+        ));
+    }
+    let view = match rays {
+        Some(_) => None,
+        None => Some(camera_view(&scene, job)?),
+    };
+    let started = Instant::now();
+    let octree = Octree::build(&scene, job.octree);
+    let build = started.elapsed().as_secs_f64();
+    let tracer = Tracer {
+        scene: &scene,
+        octree: &octree,
+    };
+    let source: &dyn RaySource = match (&rays, &view) {
+        (Some(rays), _) => rays,
+        (None, Some(view)) => view,
+        (None, None) => unreachable!("camera mode always has a view"),
+    };
+    let total = source.len();
+    let started = Instant::now();
+    let buffers = render::render(&tracer, source, &job.aovs, |done| progress(done, total));
+    let trace = started.elapsed().as_secs_f64();
+
+    let started = Instant::now();
+    let layout = match &view {
+        Some(v) => Layout::Image {
+            width: v.width,
+            height: v.height,
+        },
+        None => Layout::Rays(total),
+    };
+    let formats = job.formats.clone().unwrap_or_else(|| match layout {
+        Layout::Image { .. } => vec![Format::Exr, Format::Png],
+        Layout::Rays(_) => vec![Format::Npy],
+    });
+    let mut staging = Staging::new(&job.out_dir())?;
+    let depth_png_range = output::write_buffers(&mut staging, &buffers, layout, &formats)?;
+    let write = started.elapsed().as_secs_f64();
+    let mut files = staging.names();
+    files.push("raycast.json".into());
+    let sidecar = Sidecar {
+        raycast_version: env!("CARGO_PKG_VERSION"),
+        scene: job.scene.display().to_string(),
+        mode: if view.is_some() { "camera" } else { "rays" },
+        width: view.as_ref().map(|v| v.width),
+        height: view.as_ref().map(|v| v.height),
+        rays: view.is_none().then_some(total),
+        camera: view
+            .as_ref()
+            .map(|v| CameraInfo::new(&v.camera, v.width, v.height)),
+        aovs: job.aovs.iter().map(|a| a.to_string()).collect(),
+        conventions: sidecar::conventions(),
+        files,
+        depth_png_range,
+        objects: scene.objects.clone(),
+        stats: Stats {
+            triangles: scene.triangle_count(),
+            quadrics: scene.quadrics().len(),
+            objects: scene.objects.len(),
+            octree: octree.stats(),
+            octree_params: octree.params(),
+        },
+        timings: Timings {
+            load,
+            build,
+            trace,
+            write,
+        },
+        warnings: scene.warnings.clone(),
+    };
+    let json = serde_json::to_string_pretty(&sidecar).map_err(|e| Error::msg(e.to_string()))?;
+    let path = staging.file("raycast.json");
+    std::fs::write(&path, json).map_err(|e| Error::in_file(&path, format!("cannot write: {e}")))?;
+    staging.commit()?;
+    Ok(sidecar)
+}
+
+/// The camera and image size for camera mode.
+fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
+    let mut camera = choose_camera(scene, &job.camera)?;
+    if let Some(fov) = job.camera.fov_degrees {
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(Error::msg(format!(
+                "--fov must lie between 0 and 180 degrees, got {fov}"
+            )));
+        }
+        camera.projection = Projection::Perspective {
+            yfov: fov.to_radians(),
+        };
+    }
+    if let Some(height) = job.camera.ortho_height {
+        if !(height > 0.0 && height.is_finite()) {
+            return Err(Error::msg(format!(
+                "--ortho must be a positive height, got {height}"
+            )));
+        }
+        camera.projection = Projection::Orthographic { ymag: height / 2.0 };
+    }
+    let aspect = camera.aspect_ratio.filter(|a| a.is_finite() && *a > 0.0);
+    let from_aspect = |side: usize, a: f64| ((side as f64 * a).round() as usize).max(1);
+    let (width, height) = match (job.width, job.height, aspect) {
+        (Some(w), Some(h), _) => (w, h),
+        (Some(w), None, Some(a)) => (w, from_aspect(w, 1.0 / a)),
+        (None, Some(h), Some(a)) => (from_aspect(h, a), h),
+        (Some(w), None, None) => (w, w),
+        (None, Some(h), None) => (h, h),
+        (None, None, Some(a)) => (DEFAULT_SIZE, from_aspect(DEFAULT_SIZE, 1.0 / a)),
+        (None, None, None) => (DEFAULT_SIZE, DEFAULT_SIZE),
+    };
+    if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
+        return Err(Error::msg(format!(
+            "image size {width}x{height} is out of range (1 to {MAX_SIDE} per side)"
+        )));
+    }
+    Ok(CameraView {
+        camera,
+        width,
+        height,
+    })
+}
+
+fn choose_camera(scene: &Scene, choice: &CameraChoice) -> Result<Camera> {
+    if let Some((eye, target, up)) = choice.look_at {
+        let projection = Projection::Perspective { yfov: 0.8 };
+        return Camera::look_at(eye, target, up, projection);
+    }
+    match &choice.name {
+        Some(name) => scene
+            .cameras
+            .iter()
+            .enumerate()
+            .find(|(i, c)| name.parse::<usize>() == Ok(*i) || &c.name == name)
+            .map(|(_, c)| c.clone())
+            .ok_or_else(|| {
+                Error::in_file(
+                    &scene.path,
+                    format!("no camera '{name}' (the file has {})", scene.cameras.len()),
+                )
+            }),
+        None => Ok(scene
+            .cameras
+            .first()
+            .cloned()
+            .unwrap_or_else(|| Camera::framing(&scene.world_bounds()))),
+    }
+}

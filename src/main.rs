@@ -1,0 +1,247 @@
+//! The `raycast` command line: a thin layer over the library.
+
+use clap::{Args, Parser, Subcommand};
+use glam::DVec3;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use raycast::accel::OctreeParams;
+use raycast::import::{self, LoadOptions};
+use raycast::info::SceneInfo;
+use raycast::job::{self, CameraChoice, RenderJob};
+use raycast::output::Format;
+use raycast::render::Aov;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+/// Exact ray casting of glTF and OBJ scenes with triangle meshes and analytic quadrics.
+#[derive(Parser)]
+#[command(
+    name = "raycast",
+    version,
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    #[command(flatten)]
+    render: RenderArgs,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print what the importer finds in a scene.
+    Info(InfoArgs),
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    /// Scene file (.gltf, .glb, .obj).
+    scene: PathBuf,
+    /// glTF scene by index or name.
+    #[arg(long = "scene", value_name = "N|NAME")]
+    scene_choice: Option<String>,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Scene file (.gltf, .glb, .obj).
+    #[arg(required = true)]
+    scene: Option<PathBuf>,
+    /// Buffers to compute: depth, z, normal, position, id, prim.
+    #[arg(long, value_delimiter = ',', default_value = "depth")]
+    aov: Vec<Aov>,
+    /// Image width in pixels (default 512, or from the camera's aspect ratio).
+    #[arg(long)]
+    width: Option<usize>,
+    /// Image height in pixels.
+    #[arg(long)]
+    height: Option<usize>,
+    /// Camera from the file, by index or name (default: the first, else a framing view).
+    #[arg(long, value_name = "N|NAME", conflicts_with = "eye")]
+    camera: Option<String>,
+    /// Eye position x,y,z (with --target).
+    #[arg(long, value_parser = parse_vec3, requires = "target", allow_hyphen_values = true)]
+    eye: Option<DVec3>,
+    /// Point to look at x,y,z (with --eye).
+    #[arg(long, value_parser = parse_vec3, requires = "eye", allow_hyphen_values = true)]
+    target: Option<DVec3>,
+    /// Up direction x,y,z (default 0,1,0).
+    #[arg(long, value_parser = parse_vec3, requires = "eye", allow_hyphen_values = true)]
+    up: Option<DVec3>,
+    /// Perspective projection with this vertical field of view in degrees.
+    #[arg(long, conflicts_with = "ortho")]
+    fov: Option<f64>,
+    /// Orthographic projection with this view height in scene units.
+    #[arg(long)]
+    ortho: Option<f64>,
+    /// Trace the rays of an (N, 6) .npy file (origin xyz, direction xyz) instead of a camera.
+    #[arg(long, value_name = "FILE.npy", conflicts_with_all = ["camera", "eye", "width", "height", "fov", "ortho"])]
+    rays: Option<PathBuf>,
+    /// Output folder (default: <scene stem>.raycast).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Output formats: exr, png, npy (default exr,png; npy with --rays).
+    #[arg(long, value_delimiter = ',')]
+    format: Option<Vec<Format>>,
+    /// glTF scene by index or name.
+    #[arg(long = "scene", value_name = "N|NAME")]
+    scene_choice: Option<String>,
+    /// Worker threads (default: all cores). The output does not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+fn parse_vec3(text: &str) -> Result<DVec3, String> {
+    let parts: Vec<f64> = text
+        .split(',')
+        .map(|p| {
+            p.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("'{p}' is not a number"))
+        })
+        .collect::<Result<_, _>>()?;
+    match parts[..] {
+        [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok(DVec3::new(x, y, z)),
+        _ => Err(format!("expected three finite numbers x,y,z, got '{text}'")),
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Some(Command::Info(args)) => info(args),
+        None => render(cli.render),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("raycast: error: {e}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn info(args: InfoArgs) -> raycast::Result<()> {
+    let options = LoadOptions {
+        scene: args.scene_choice,
+    };
+    let scene = import::load(&args.scene, &options)?;
+    let info = SceneInfo::new(&scene);
+    if args.json {
+        let text =
+            serde_json::to_string_pretty(&info).map_err(|e| raycast::Error::msg(e.to_string()))?;
+        println!("{text}");
+    } else {
+        print!("{info}");
+    }
+    Ok(())
+}
+
+fn render(args: RenderArgs) -> raycast::Result<()> {
+    if let Some(threads) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.max(1))
+            .build_global()
+            .map_err(|e| raycast::Error::msg(format!("cannot start {threads} threads: {e}")))?;
+    }
+    let look_at = args
+        .eye
+        .zip(args.target)
+        .map(|(eye, target)| (eye, target, args.up.unwrap_or(DVec3::Y)));
+    let job = RenderJob {
+        scene: args.scene.unwrap_or_default(),
+        load: LoadOptions {
+            scene: args.scene_choice,
+        },
+        aovs: dedup(args.aov),
+        camera: CameraChoice {
+            name: args.camera,
+            look_at,
+            fov_degrees: args.fov,
+            ortho_height: args.ortho,
+        },
+        width: args.width,
+        height: args.height,
+        rays: args.rays,
+        out: args.out,
+        formats: args.format,
+        octree: OctreeParams::default(),
+    };
+    let bar = Progress::new(args.quiet);
+    let sidecar = job::run(&job, |done, total| bar.update(done, total))?;
+    bar.finish();
+    if !args.quiet {
+        for warning in &sidecar.warnings {
+            eprintln!("raycast: warning: {warning}");
+        }
+        let t = sidecar.timings;
+        eprintln!(
+            "raycast: wrote {} to {} (load {:.3}s, build {:.3}s, trace {:.3}s, write {:.3}s)",
+            sidecar.files.join(", "),
+            job.out_dir().display(),
+            t.load,
+            t.build,
+            t.trace,
+            t.write
+        );
+    }
+    Ok(())
+}
+
+/// AOVs in the order given, without repeats.
+fn dedup(aovs: Vec<Aov>) -> Vec<Aov> {
+    let mut seen = Vec::new();
+    for aov in aovs {
+        if !seen.contains(&aov) {
+            seen.push(aov);
+        }
+    }
+    seen
+}
+
+/// A progress bar on stderr that appears only on a terminal and only once a render has taken
+/// more than a second.
+struct Progress {
+    bar: Option<ProgressBar>,
+    started: Instant,
+}
+
+impl Progress {
+    fn new(quiet: bool) -> Progress {
+        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+            let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
+            if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} rays {eta}") {
+                bar.set_style(style);
+            }
+            bar
+        });
+        Progress {
+            bar,
+            started: Instant::now(),
+        }
+    }
+
+    fn update(&self, done: usize, total: usize) {
+        if let Some(bar) = &self.bar {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+            if bar.is_hidden() && self.started.elapsed() > Duration::from_secs(1) {
+                bar.set_draw_target(ProgressDrawTarget::stderr());
+            }
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
+}

@@ -1,0 +1,132 @@
+//! The JSON sidecar `raycast.json` that travels with every set of buffers.
+
+use crate::accel::{OctreeParams, OctreeStats};
+use crate::camera::{Camera, Projection};
+use crate::scene::Object;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Everything `raycast.json` records about a run.
+#[derive(Debug, Clone, Serialize)]
+pub struct Sidecar {
+    /// Version of raycast that wrote it.
+    pub raycast_version: &'static str,
+    /// The scene file.
+    pub scene: String,
+    /// `camera` or `rays`.
+    pub mode: &'static str,
+    /// Image width (camera mode).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub width: Option<usize>,
+    /// Image height (camera mode).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height: Option<usize>,
+    /// Number of rays (rays mode).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rays: Option<usize>,
+    /// The camera actually used (camera mode).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraInfo>,
+    /// AOVs written.
+    pub aovs: Vec<String>,
+    /// What each AOV means, including its miss value.
+    pub conventions: BTreeMap<&'static str, &'static str>,
+    /// Files written, besides this one.
+    pub files: Vec<String>,
+    /// Depth range mapped into `depth.png` (near = light, far = dark).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth_png_range: Option<[f64; 2]>,
+    /// The object table; `id` indexes it from 1.
+    pub objects: Vec<Object>,
+    /// Totals.
+    pub stats: Stats,
+    /// Seconds per stage.
+    pub timings: Timings,
+    /// Importer and render warnings.
+    pub warnings: Vec<String>,
+}
+
+/// Scene and acceleration totals.
+#[derive(Debug, Clone, Serialize)]
+pub struct Stats {
+    /// Triangles.
+    pub triangles: usize,
+    /// Quadrics.
+    pub quadrics: usize,
+    /// Objects.
+    pub objects: usize,
+    /// Octree size figures.
+    pub octree: OctreeStats,
+    /// Octree build parameters.
+    pub octree_params: OctreeParams,
+}
+
+/// Seconds spent per stage.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Timings {
+    /// Reading and importing the scene.
+    pub load: f64,
+    /// Building the octree.
+    pub build: f64,
+    /// Tracing rays and filling buffers.
+    pub trace: f64,
+    /// Writing buffers.
+    pub write: f64,
+}
+
+/// The camera as recorded in the sidecar (enough to regenerate every ray).
+#[derive(Debug, Clone, Serialize)]
+pub struct CameraInfo {
+    /// Where the camera came from.
+    pub source: String,
+    /// Its name.
+    pub name: String,
+    /// Projection type and its parameter (`yfov` or `ymag`).
+    #[serde(flatten)]
+    pub projection: Projection,
+    /// Image width / height used for the rays.
+    pub aspect_ratio: f64,
+    /// Half the view width (orthographic only): `ymag · aspect_ratio`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub xmag: Option<f64>,
+    /// Near clipping distance from the file (rays start at the eye regardless).
+    pub znear: f64,
+    /// Far clipping distance from the file; null = infinite.
+    pub zfar: Option<f64>,
+    /// Camera-to-world matrix, row-major.
+    pub camera_to_world: [[f64; 4]; 4],
+}
+
+impl CameraInfo {
+    /// The record of `camera` used for a `width`×`height` image.
+    pub fn new(camera: &Camera, width: usize, height: usize) -> CameraInfo {
+        let aspect_ratio = width as f64 / height as f64;
+        let rows = camera.to_world.transpose().to_cols_array_2d();
+        CameraInfo {
+            source: camera.source.clone(),
+            name: camera.name.clone(),
+            projection: camera.projection,
+            aspect_ratio,
+            xmag: match camera.projection {
+                Projection::Orthographic { ymag } => Some(ymag * aspect_ratio),
+                Projection::Perspective { .. } => None,
+            },
+            znear: camera.znear,
+            zfar: camera.zfar,
+            camera_to_world: rows,
+        }
+    }
+}
+
+/// The meaning of each AOV, as written to the sidecar.
+pub fn conventions() -> BTreeMap<&'static str, &'static str> {
+    BTreeMap::from([
+        ("depth", "distance from the ray origin to the hit, |hit - origin|, in scene units; miss = +inf"),
+        ("z", "camera-space depth along the view axis; miss = +inf"),
+        ("normal", "world-space unit geometric normal; triangles: counter-clockwise winding is the front, not flipped toward the ray; quadrics: gradient direction, toward f > 0; miss = (0, 0, 0)"),
+        ("position", "world-space hit point; miss = (+inf, +inf, +inf)"),
+        ("id", "1-based object id indexing `objects`; miss = 0"),
+        ("prim", "triangle index inside the object in the object's own order, 0 for quadrics; miss = 4294967295"),
+        ("pixels", "one ray per pixel through the pixel centre; row 0 is the top row; the camera looks down its local -Z with +Y up; yfov is vertical"),
+    ])
+}

@@ -1,0 +1,16 @@
+//! Analytic quadric surfaces `p·Q·p + P·p + R = 0`: parsing from scene files, placement in
+//! world space about a local anchor, classification, bounds and ray intersection in f64.
+//!
+//! The module is self-contained and depends only on `glam` and `serde_json`.
+
+mod eigen;
+mod interval;
+mod kind;
+mod spec;
+mod surface;
+#[cfg(test)]
+mod tests;
+
+pub use kind::QuadricKind;
+pub use spec::QuadricSpec;
+pub use surface::Quadric;

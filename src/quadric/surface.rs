@@ -1,0 +1,306 @@
+//! A quadric placed in world space: intersection, normals, bounds and classification.
+
+use glam::{DMat3, DMat4, DVec3, DVec4};
+
+use super::eigen::is_definite;
+use super::interval::value_range_may_contain_zero;
+use super::kind::{classify, QuadricKind};
+use super::spec::QuadricSpec;
+
+/// Ray coefficients below this fraction of their rounding scale count as zero.
+const NEGLIGIBLE_COEFFICIENT: f64 = 1e-13;
+
+/// World matrices whose determinant is below this fraction of the cube of the longest column
+/// count as singular (a condition number of about 1e14 or worse).
+const SINGULAR_DETERMINANT: f64 = 1e-14;
+
+/// Relative padding that keeps the world bounds conservative under rounding.
+const BOUNDS_PADDING: f64 = 1e-12;
+
+/// The clip box grows by this fraction of its largest side, so that a surface lying on a box
+/// face (a cylinder of radius 1 clipped to `[-1, 1]³`) is not lost to rounding of the hit point.
+const CLIP_TOLERANCE: f64 = 1e-9;
+
+/// A quadric placed in world space, ready to intersect.
+///
+/// The world-space coefficients are expressed about an anchor point `c` (the world image of the
+/// clip-box centre, or of the ellipsoid centre when there is no clip box):
+/// `f(w) = u·Q'·u + P'·u + R'` with `u = w − c`. This keeps the precision of the local
+/// description however far from the world origin the surface is placed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Quadric {
+    /// World anchor `c` that `u = w − c` is measured from.
+    anchor: DVec3,
+    /// `Q'`, scaled by a power of two so that its largest entry is about 1.
+    q: DMat3,
+    /// `|Q'|` entrywise, for rounding-error scales.
+    q_abs: DMat3,
+    /// `P'` with the same scaling.
+    p: DVec3,
+    /// `R'` with the same scaling.
+    r: f64,
+    /// The world→local linear map `A⁻¹`: `local = A⁻¹ u + local_anchor`.
+    to_local: DMat3,
+    /// The anchor in local coordinates.
+    local_anchor: DVec3,
+    /// Clip box in local coordinates, widened by [`CLIP_TOLERANCE`].
+    clip: Option<[DVec3; 2]>,
+    /// Conservative world AABB of the clipped surface.
+    bounds: [DVec3; 2],
+    /// Affine type, from the world-space coefficients.
+    kind: QuadricKind,
+}
+
+/// The quadratic `K t² + L t + M` along a ray, with rounding scales for `K` and `L`.
+struct RayPolynomial {
+    k: f64,
+    l: f64,
+    m: f64,
+    k_scale: f64,
+    l_scale: f64,
+}
+
+impl Quadric {
+    /// Places `spec` in world space with the object→world affine matrix `world`.
+    /// Errors: an invalid spec (see [`QuadricSpec::validate`], which includes an unbounded
+    /// surface without bounds), a non-finite, non-affine or singular `world`.
+    pub fn new(spec: &QuadricSpec, world: DMat4) -> Result<Quadric, String> {
+        spec.validate()?;
+        let linear = affine_linear_part(world)?;
+        let to_local = linear.inverse();
+        let local_anchor = match spec.bounds {
+            Some([min, max]) => (min + max) * 0.5,
+            None => -0.5 * (spec.q.inverse() * spec.p),
+        };
+        let gradient = 2.0 * (spec.q * local_anchor) + spec.p;
+        let q_world = to_local.transpose() * spec.q * to_local;
+        let q_world = (q_world + q_world.transpose()) * 0.5;
+        let p_world = to_local.transpose() * gradient;
+        let r_world = local_anchor.dot(spec.q * local_anchor) + spec.p.dot(local_anchor) + spec.r;
+        let scale = power_of_two_normaliser(q_world, p_world);
+        let anchor = world.transform_point3(local_anchor);
+        let mut quadric = Quadric {
+            anchor,
+            q: q_world * scale,
+            q_abs: (q_world * scale).abs(),
+            p: p_world * scale,
+            r: r_world * scale,
+            to_local,
+            local_anchor,
+            clip: spec.bounds.map(widen_clip_box),
+            bounds: [anchor, anchor],
+            kind: QuadricKind::Empty,
+        };
+        let clip_world = quadric
+            .clip
+            .map(|b| quadric.world_box_of_local_box(b, linear));
+        quadric.bounds = quadric.clipped_bounds(clip_world, is_definite(spec.q));
+        let length = clip_world.map_or(0.0, |[min, max]| 0.5 * (max - min).length());
+        quadric.kind = classify(quadric.q, quadric.p, quadric.r, length);
+        Ok(quadric)
+    }
+
+    /// Conservative world-space AABB `[min, max]` of the clipped surface; tight (to rounding)
+    /// for an unclipped ellipsoid. Always finite; a single point for an empty surface.
+    pub fn bounds(&self) -> [DVec3; 2] {
+        self.bounds
+    }
+
+    /// The world anchor point the coefficients are expressed about.
+    pub fn anchor(&self) -> DVec3 {
+        self.anchor
+    }
+
+    /// Smallest `t` with `0 < t <= t_max` where `origin + t·dir` lies on the surface inside the
+    /// clip box. `origin` and `dir` are in world coordinates; `dir` need not be unit length.
+    pub fn intersect(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<f64> {
+        let start = origin - self.anchor;
+        let roots = self.ray_roots(start, dir)?;
+        roots
+            .into_iter()
+            .find(|&t| t > 0.0 && t <= t_max && self.inside_clip(start + t * dir))
+    }
+
+    /// Unit world normal at `origin + t·dir`: the normalised gradient `2Q'u + P'`, pointing to
+    /// `f > 0`. Where the gradient vanishes or cannot be normalised (cone apex, the crossing line
+    /// of a plane pair, a point quadric) it is `−dir` normalised, and `+Z` if even that fails.
+    pub fn normal(&self, origin: DVec3, dir: DVec3, t: f64) -> DVec3 {
+        let u = (origin - self.anchor) + t * dir;
+        let gradient = 2.0 * (self.q * u) + self.p;
+        unit_or_none(gradient)
+            .or_else(|| unit_or_none(-dir))
+            .unwrap_or(DVec3::Z)
+    }
+
+    /// Affine classification from the world-space coefficients.
+    pub fn kind(&self) -> QuadricKind {
+        self.kind
+    }
+
+    /// Conservative test whether the clipped surface may touch the world AABB `[min, max]`:
+    /// false only if the box misses [`Quadric::bounds`] or the quadric's value has one strict
+    /// sign over the whole box (interval arithmetic, padded for rounding).
+    pub fn may_overlap_box(&self, min: DVec3, max: DVec3) -> bool {
+        let lo = min.max(self.bounds[0]);
+        let hi = max.min(self.bounds[1]);
+        if lo.cmpgt(hi).any() {
+            return false;
+        }
+        value_range_may_contain_zero(self.q, self.p, self.r, lo - self.anchor, hi - self.anchor)
+    }
+
+    /// `f(u) = u·Q'·u + P'·u + R'` for `u` measured from the anchor.
+    fn value(&self, u: DVec3) -> f64 {
+        u.dot(self.q * u) + self.p.dot(u) + self.r
+    }
+
+    /// The ray's quadratic `K t² + L t + M` for a start point `u0` relative to the anchor.
+    fn ray_polynomial(&self, u0: DVec3, dir: DVec3) -> RayPolynomial {
+        let qd = self.q * dir;
+        let dir_abs = dir.abs();
+        let q_abs_d = self.q_abs * dir_abs;
+        RayPolynomial {
+            k: dir.dot(qd),
+            l: 2.0 * u0.dot(qd) + self.p.dot(dir),
+            m: self.value(u0),
+            k_scale: dir_abs.dot(q_abs_d),
+            l_scale: 2.0 * u0.abs().dot(q_abs_d) + self.p.abs().dot(dir_abs),
+        }
+    }
+
+    /// The real roots of the ray's quadratic in ascending order (equal for a double or a single
+    /// linear root), or `None` when there is none or the ray lies along the surface.
+    fn ray_roots(&self, u0: DVec3, dir: DVec3) -> Option<[f64; 2]> {
+        let poly = self.ray_polynomial(u0, dir);
+        if poly.k.abs() <= NEGLIGIBLE_COEFFICIENT * poly.k_scale {
+            if poly.l.abs() <= NEGLIGIBLE_COEFFICIENT * poly.l_scale {
+                return None;
+            }
+            let t = -poly.m / poly.l;
+            return t.is_finite().then_some([t, t]);
+        }
+        let disc = self.discriminant(&poly, u0, dir);
+        if disc.is_nan() || disc < 0.0 {
+            return None;
+        }
+        let q = -0.5 * (poly.l + disc.sqrt().copysign(poly.l));
+        if q == 0.0 {
+            let t = -poly.l / (2.0 * poly.k);
+            return Some([t, t]);
+        }
+        let (a, b) = (q / poly.k, poly.m / q);
+        Some([a.min(b), a.max(b)])
+    }
+
+    /// `Δ = L² − 4KM`. When `4KM` is close to `L²` the difference cancels, so it is computed as
+    /// `−4K·f(m)` at the point `m = u0 + t_c·dir`, `t_c = −L/(2K)`, closest (in the quadric's
+    /// metric) to the vertex of the parabola in `t`; elsewhere the plain form is accurate.
+    fn discriminant(&self, poly: &RayPolynomial, u0: DVec3, dir: DVec3) -> f64 {
+        let four_km = 4.0 * poly.k * poly.m;
+        let square = poly.l * poly.l;
+        if four_km <= 0.5 * square {
+            return square - four_km;
+        }
+        let t_c = -poly.l / (2.0 * poly.k);
+        -4.0 * poly.k * self.value(u0 + t_c * dir)
+    }
+
+    /// Whether the world point `anchor + u` lies in the clip box (inclusive); true without one.
+    fn inside_clip(&self, u: DVec3) -> bool {
+        self.clip.is_none_or(|[min, max]| {
+            let local = self.to_local * u + self.local_anchor;
+            local.cmpge(min).all() && local.cmple(max).all()
+        })
+    }
+
+    /// World AABB of the local box `[min, max]` (its eight corners), padded for rounding.
+    fn world_box_of_local_box(&self, [min, max]: [DVec3; 2], linear: DMat3) -> [DVec3; 2] {
+        let centre = linear * ((min + max) * 0.5 - self.local_anchor);
+        let half = linear.abs() * ((max - min) * 0.5);
+        let (lo, hi) = (self.anchor + centre - half, self.anchor + centre + half);
+        pad([lo, hi])
+    }
+
+    /// The world bounds: the clip box's world AABB, intersected with the ellipsoid's tight box
+    /// when `Q` is `definite` (always so when there is no clip box).
+    fn clipped_bounds(&self, clip_world: Option<[DVec3; 2]>, definite: bool) -> [DVec3; 2] {
+        let ellipsoid = definite.then(|| self.ellipsoid_box());
+        let [lo, hi] = match (clip_world, ellipsoid) {
+            (Some([a, b]), Some([c, d])) => [a.max(c), b.min(d)],
+            (Some(b), None) | (None, Some(b)) => b,
+            (None, None) => [self.anchor, self.anchor],
+        };
+        if lo.cmple(hi).all() {
+            [lo, hi]
+        } else {
+            [self.anchor, self.anchor]
+        }
+    }
+
+    /// Tight world AABB of the ellipsoid `f = 0` for a definite `Q'`: centre
+    /// `e = −Q'⁻¹P'/2`, half-extent `sqrt(−f(e)·(Q'⁻¹)ᵢᵢ)` along axis `i`. An empty
+    /// surface gives the point box at its centre.
+    fn ellipsoid_box(&self) -> [DVec3; 2] {
+        let inverse = self.q.inverse();
+        let centre = -0.5 * (inverse * self.p);
+        let level = -(self.r + 0.5 * self.p.dot(centre));
+        let diagonal = DVec3::new(inverse.x_axis.x, inverse.y_axis.y, inverse.z_axis.z);
+        let half = (diagonal * level).max(DVec3::ZERO);
+        let half = DVec3::new(half.x.sqrt(), half.y.sqrt(), half.z.sqrt());
+        let world_centre = self.anchor + centre;
+        pad([world_centre - half, world_centre + half])
+    }
+}
+
+/// The upper-left 3×3 of an affine matrix, after checking it is finite, affine and invertible.
+fn affine_linear_part(world: DMat4) -> Result<DMat3, String> {
+    if !world.is_finite() {
+        return Err("world matrix has a non-finite entry".into());
+    }
+    if world.row(3) != DVec4::W {
+        return Err("world matrix is not affine (last row is not 0 0 0 1)".into());
+    }
+    let linear = DMat3::from_mat4(world);
+    let longest = [linear.x_axis, linear.y_axis, linear.z_axis]
+        .map(DVec3::length)
+        .into_iter()
+        .fold(0.0, f64::max);
+    if linear.determinant().abs() <= SINGULAR_DETERMINANT * longest.powi(3) {
+        return Err("world matrix is singular".into());
+    }
+    Ok(linear)
+}
+
+/// The power of two that brings the largest entry of `Q'` (or of `P'` when `Q' = 0`) near 1.
+/// Scaling by a power of two is exact, so it changes no rounding.
+fn power_of_two_normaliser(q: DMat3, p: DVec3) -> f64 {
+    let largest = q.abs().to_cols_array().into_iter().fold(0.0, f64::max);
+    let largest = if largest > 0.0 {
+        largest
+    } else {
+        p.abs().max_element()
+    };
+    2f64.powi(-(largest.log2().round() as i32))
+}
+
+/// The local clip box widened by [`CLIP_TOLERANCE`] times its largest side.
+fn widen_clip_box([min, max]: [DVec3; 2]) -> [DVec3; 2] {
+    let margin = CLIP_TOLERANCE * (max - min).max_element();
+    [min - margin, max + margin]
+}
+
+/// Grows a box by a relative margin so that rounding in its computation cannot shrink it.
+fn pad([lo, hi]: [DVec3; 2]) -> [DVec3; 2] {
+    let margin = (lo.abs().max(hi.abs())) * BOUNDS_PADDING;
+    [lo - margin, hi + margin]
+}
+
+/// `v` normalised, or `None` if it is zero or not finite. Scaling by the largest component
+/// first avoids overflow and underflow.
+fn unit_or_none(v: DVec3) -> Option<DVec3> {
+    let largest = v.abs().max_element();
+    if !(largest > 0.0 && largest.is_finite()) {
+        return None;
+    }
+    (v / largest).try_normalize()
+}

@@ -1,0 +1,230 @@
+//! Tracing: rays from a camera or a list, in parallel, into the requested AOV buffers.
+//!
+//! Every ray is traced independently and results are stored by ray index, so the buffers are
+//! bit-identical for any thread count. Only the requested AOVs are computed.
+
+use crate::accel::{prepare_ray, Hit, Octree};
+use crate::camera::Camera;
+use crate::geometry::Ray;
+use crate::scene::Scene;
+use glam::DVec3;
+use rayon::prelude::*;
+use std::fmt;
+use std::str::FromStr;
+
+/// An output buffer kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Aov {
+    /// Distance from the ray origin to the hit, `|hit - origin|`; +inf on a miss.
+    Depth,
+    /// Camera-space depth along the view axis (camera mode only); +inf on a miss.
+    Z,
+    /// World-space unit geometric normal; (0, 0, 0) on a miss.
+    Normal,
+    /// World-space hit point; (+inf, +inf, +inf) on a miss.
+    Position,
+    /// 1-based object id; 0 on a miss.
+    Id,
+    /// Primitive index inside the object; `u32::MAX` on a miss.
+    Prim,
+}
+
+impl Aov {
+    /// All AOVs, in output order.
+    pub const ALL: [Aov; 6] = [
+        Aov::Depth,
+        Aov::Z,
+        Aov::Normal,
+        Aov::Position,
+        Aov::Id,
+        Aov::Prim,
+    ];
+
+    /// The name used on the command line and in file names.
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::Depth => "depth",
+            Aov::Z => "z",
+            Aov::Normal => "normal",
+            Aov::Position => "position",
+            Aov::Id => "id",
+            Aov::Prim => "prim",
+        }
+    }
+}
+
+impl fmt::Display for Aov {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Aov {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Aov::ALL.into_iter().find(|a| a.name() == s).ok_or_else(|| {
+            format!("unknown AOV '{s}' (choose from depth, z, normal, position, id, prim)")
+        })
+    }
+}
+
+/// Something that yields rays by index: a camera image or a list of rays.
+pub trait RaySource: Sync {
+    /// Number of rays.
+    fn len(&self) -> usize;
+    /// True when there are no rays.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Ray number `index`.
+    fn ray(&self, index: usize) -> Ray;
+    /// Eye and unit view direction, for the `z` AOV (cameras only).
+    fn view_axis(&self) -> Option<(DVec3, DVec3)> {
+        None
+    }
+}
+
+/// A camera image: one ray per pixel, row-major from the top row.
+#[derive(Debug, Clone)]
+pub struct CameraView {
+    /// The camera.
+    pub camera: Camera,
+    /// Image width in pixels.
+    pub width: usize,
+    /// Image height in pixels.
+    pub height: usize,
+}
+
+impl RaySource for CameraView {
+    fn len(&self) -> usize {
+        self.width * self.height
+    }
+    fn ray(&self, index: usize) -> Ray {
+        self.camera.pixel_ray(
+            index % self.width,
+            index / self.width,
+            self.width,
+            self.height,
+        )
+    }
+    fn view_axis(&self) -> Option<(DVec3, DVec3)> {
+        Some((self.camera.eye(), self.camera.forward()))
+    }
+}
+
+impl RaySource for Vec<Ray> {
+    fn len(&self) -> usize {
+        Vec::len(self)
+    }
+    fn ray(&self, index: usize) -> Ray {
+        self[index]
+    }
+}
+
+/// A scene with its acceleration structure, ready to trace.
+#[derive(Debug, Clone, Copy)]
+pub struct Tracer<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Octree built over the scene.
+    pub octree: &'a Octree,
+}
+
+impl Tracer<'_> {
+    /// The nearest hit of `ray` with `t > 0`.
+    pub fn trace(&self, ray: &Ray) -> Option<Hit> {
+        let local = ray.origin - self.scene.anchor;
+        let prepared = prepare_ray(self.scene, local, ray.dir);
+        self.octree.intersect(self.scene, &prepared, f64::INFINITY)
+    }
+}
+
+/// The requested buffers, one value per ray (row-major pixels in camera mode).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Buffers {
+    /// `depth` values.
+    pub depth: Option<Vec<f64>>,
+    /// `z` values.
+    pub z: Option<Vec<f64>>,
+    /// `normal` values.
+    pub normal: Option<Vec<DVec3>>,
+    /// `position` values.
+    pub position: Option<Vec<DVec3>>,
+    /// `id` values.
+    pub id: Option<Vec<u32>>,
+    /// `prim` values.
+    pub prim: Option<Vec<u32>>,
+}
+
+/// Rays traced per progress report.
+const CHUNK: usize = 1 << 16;
+
+/// Traces every ray of `source` and fills the buffers of `aovs`. `progress` is told how many
+/// rays are done after each chunk.
+pub fn render(
+    tracer: &Tracer,
+    source: &(impl RaySource + ?Sized),
+    aovs: &[Aov],
+    mut progress: impl FnMut(usize),
+) -> Buffers {
+    let n = source.len();
+    let mut hits: Vec<Option<Hit>> = Vec::with_capacity(n);
+    for start in (0..n).step_by(CHUNK) {
+        let end = (start + CHUNK).min(n);
+        hits.par_extend(
+            (start..end)
+                .into_par_iter()
+                .map(|i| tracer.trace(&source.ray(i))),
+        );
+        progress(end);
+    }
+    let fill = |f: &(dyn Fn(usize, &Hit) -> f64 + Sync), miss: f64| {
+        (0..n)
+            .into_par_iter()
+            .map(|i| hits[i].as_ref().map_or(miss, |h| f(i, h)))
+            .collect::<Vec<f64>>()
+    };
+    let fill3 = |f: &(dyn Fn(usize, &Hit) -> DVec3 + Sync), miss: DVec3| {
+        (0..n)
+            .into_par_iter()
+            .map(|i| hits[i].as_ref().map_or(miss, |h| f(i, h)))
+            .collect::<Vec<DVec3>>()
+    };
+    let fill_u32 = |f: &(dyn Fn(&Hit) -> u32 + Sync), miss: u32| {
+        hits.par_iter()
+            .map(|h| h.as_ref().map_or(miss, f))
+            .collect::<Vec<u32>>()
+    };
+    let point = |i: usize, h: &Hit| source.ray(i).at(h.t);
+    let mut buffers = Buffers::default();
+    for aov in aovs {
+        match aov {
+            Aov::Depth => {
+                buffers.depth = Some(fill(
+                    &|i, h| h.t * source.ray(i).dir.length(),
+                    f64::INFINITY,
+                ))
+            }
+            Aov::Z => {
+                let (eye, forward) = source.view_axis().unwrap_or((DVec3::ZERO, DVec3::ZERO));
+                buffers.z = Some(fill(
+                    &|i, h| (point(i, h) - eye).dot(forward),
+                    f64::INFINITY,
+                ))
+            }
+            Aov::Normal => {
+                let normal = |i: usize, h: &Hit| {
+                    let ray = source.ray(i);
+                    tracer.scene.normal(h.prim, ray.origin, ray.dir, h.t)
+                };
+                buffers.normal = Some(fill3(&normal, DVec3::ZERO))
+            }
+            Aov::Position => buffers.position = Some(fill3(&point, DVec3::INFINITY)),
+            Aov::Id => buffers.id = Some(fill_u32(&|h| tracer.scene.object_of(h.prim).0.id, 0)),
+            Aov::Prim => {
+                buffers.prim = Some(fill_u32(&|h| tracer.scene.object_of(h.prim).1, u32::MAX))
+            }
+        }
+    }
+    buffers
+}
