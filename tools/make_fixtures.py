@@ -715,8 +715,12 @@ and the shared copy instead.
 The shared README gives the licence per folder, not per file: for `gltf/` it
 says "see the Khronos sample-model licenses (CC-BY 4.0 for DamagedHelmet)",
 and for `obj/` "research/test models; see the original sources listed there".
-The rows above repeat that; the per-file origins beyond it are the shared
-README's own descriptions.
+The licence column repeats that. The origin column adds only what the shared
+README does not say per file but is well known (Box and TriangleWithoutIndices
+are Khronos sample models, the bunny is from the Stanford 3D Scanning
+Repository, Suzanne is Blender's test monkey); check the upstream pages before
+redistributing any of these outside this repository. `BoxDraco.gltf` refers to
+an external `0.bin` that the shared folder does not have either.
 """
 
 

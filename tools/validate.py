@@ -633,8 +633,9 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
             if "tie" in rs:
                 reasons["tie"][i] = True
         both = np.isfinite(qr["depth"]) & np.isfinite(mdepth)
-        reasons["tie"] |= both & (np.abs(qr["depth"] - mdepth) <=
-                                  AMBIG["tie_rel"] * np.minimum(qr["depth"], mdepth))
+        with np.errstate(invalid="ignore"):
+            reasons["tie"] |= both & (np.abs(qr["depth"] - mdepth) <=
+                                      AMBIG["tie_rel"] * np.minimum(qr["depth"], mdepth))
 
     # ---- raycast outputs
     rdepth = np.asarray(rc["depth"], dtype=np.float64).reshape(-1)
@@ -775,6 +776,8 @@ def validate_scene(path, raycast, nrays=2000, seed=0, max_f64=2000, camera=False
         return [dict(base, status="skip", reason=f"trimesh cannot load: {type(e).__name__}: {e}")]
     if len(ref.tris) == 0 and not ref.quadrics:
         return [dict(base, status="skip", reason="no triangles or quadrics in the reference")]
+    if ref.bounds() is None:
+        return [dict(base, status="skip", reason="no bounded geometry to aim rays at")]
     reports = []
     tmp = Path(tempfile.mkdtemp(prefix="validate-"))
     try:

@@ -44,13 +44,19 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let bytes =
         std::fs::read(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
     let fail = |message: String| Error::in_file(path, message);
+    let kind = if bytes.starts_with(b"glTF") {
+        "GLB"
+    } else {
+        "glTF"
+    };
     let gltf = gltf::Gltf::from_slice_without_validation(&bytes)
-        .map_err(|e| fail(format!("not a valid glTF file: {e}")))?;
+        .map_err(|e| fail(format!("not a valid {kind} file: {e}")))?;
     let raw = raw_json(&bytes).map_err(fail)?;
     let document = &gltf.document;
     check_required_extensions(document).map_err(fail)?;
     validate(document).map_err(fail)?;
     let base = path.parent().unwrap_or(Path::new("."));
+    check_buffer_files(document, base).map_err(fail)?;
     let buffers = gltf::import_buffers(document, Some(base), gltf.blob.clone())
         .map_err(|e| fail(format!("cannot load buffers: {e}")))?;
     let buffers: Vec<&[u8]> = buffers.iter().map(|b| &b.0[..]).collect();
@@ -67,6 +73,11 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let roots =
         scene_roots(document, options.scene.as_deref(), &mut loader.builder).map_err(fail)?;
     loader.walk(&roots).map_err(fail)?;
+    if loader.builder.object_count() == 0 {
+        loader
+            .builder
+            .warn("the scene holds no triangles or quadrics");
+    }
     Ok(loader.builder.finish(path.to_path_buf()))
 }
 
@@ -81,6 +92,26 @@ fn raw_json(bytes: &[u8]) -> std::result::Result<Value, String> {
         bytes.to_vec()
     };
     serde_json::from_slice(&json).map_err(|e| format!("invalid JSON: {e}"))
+}
+
+/// Names the first external buffer file that does not exist, before anything is read.
+fn check_buffer_files(document: &Document, base: &Path) -> std::result::Result<(), String> {
+    for buffer in document.buffers() {
+        if let gltf::buffer::Source::Uri(uri) = buffer.source() {
+            if uri.starts_with("data:") {
+                continue;
+            }
+            let decoded =
+                urlencoding::decode(uri).map_or_else(|_| uri.to_string(), |d| d.into_owned());
+            if !base.join(&decoded).is_file() {
+                return Err(format!(
+                    "buffer {} refers to '{decoded}', which does not exist",
+                    buffer.index()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Runs the crate's validation, ignoring its verdict on required extensions.
@@ -208,9 +239,11 @@ impl Loader<'_> {
                 .map_or_else(|| format!("node{index}"), String::from);
             if let Some(mesh) = node.mesh() {
                 let local = self.mesh_triangles(&mesh)?;
-                let triangles = place(local, &world);
-                self.builder
-                    .add_mesh(name.clone(), format!("/nodes/{index}"), triangles);
+                if !local.is_empty() {
+                    let triangles = place(local, &world);
+                    self.builder
+                        .add_mesh(name.clone(), format!("/nodes/{index}"), triangles);
+                }
             }
             if let Some(extension) = self.raw["nodes"][index]["extensions"].get(QUADRIC_EXTENSION) {
                 let quadric = QuadricSpec::from_gltf_extension(extension)

@@ -1,0 +1,340 @@
+//! The command line as a user runs it: outputs, conventions, exit codes and error messages.
+
+mod common;
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn raycast(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raycast"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("raycast-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn arg(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn default_render_writes_exr_png_and_sidecar() {
+    let out = temp_dir("default");
+    let scene = fixture("gltf/cube.gltf");
+    let result = raycast(&[arg(&scene), "--out", arg(&out), "--quiet"]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    assert!(result.stderr.is_empty(), "--quiet prints nothing");
+    let mut files: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    files.sort();
+    assert_eq!(files, ["depth.exr", "depth.png", "raycast.json"]);
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    assert_eq!(json["width"], 512);
+    assert_eq!(json["camera"]["name"], "cam");
+    assert_eq!(json["objects"][0]["name"], "cube");
+    assert_eq!(json["objects"][0]["id"], 1);
+    assert_eq!(json["stats"]["triangles"], 12);
+    for stage in ["load", "build", "trace", "write"] {
+        assert!(json["timings"][stage].as_f64().unwrap() >= 0.0);
+    }
+    let png = image::open(out.join("depth.png")).unwrap().to_rgb8();
+    assert_eq!(png.get_pixel(0, 0).0, [0, 0, 0], "corner misses: black");
+    assert_ne!(png.get_pixel(256, 256).0, [0, 0, 0]);
+}
+
+#[test]
+fn camera_buffers_follow_the_pixel_conventions() {
+    let out = temp_dir("conventions");
+    let scene = fixture("gltf/cube.gltf");
+    let result = raycast(&[
+        arg(&scene),
+        "--aov",
+        "depth,z,normal,position,id,prim",
+        "--format",
+        "npy",
+        "--width",
+        "65",
+        "--height",
+        "65",
+        "--out",
+        arg(&out),
+        "--quiet",
+    ]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let (shape, depth) = read_f64(&out.join("depth.npy"));
+    assert_eq!(shape, [65, 65]);
+    assert_eq!(
+        depth[32 * 65 + 32],
+        4.0,
+        "centre pixel looks straight at the face"
+    );
+    let (_, z) = read_f64(&out.join("z.npy"));
+    let (shape, position) = read_f64(&out.join("position.npy"));
+    assert_eq!(shape, [65, 65, 3]);
+    // Row 1 is near the top of the image (+Y), column 1 near the left (-X).
+    let p = &position[(65 + 1) * 3..(65 + 1) * 3 + 3];
+    assert!(
+        p[0] < -0.9 && p[1] > 0.9 && (p[2] - 1.0).abs() < 1e-12,
+        "{p:?}"
+    );
+    let k = 0.25f64.tan();
+    let (sx, sy) = (2.0 * 1.5 / 65.0 - 1.0, 1.0 - 2.0 * 1.5 / 65.0);
+    let expected = 4.0 * (1.0 + (sx * k).powi(2) + (sy * k).powi(2)).sqrt();
+    assert!(
+        (depth[66] - expected).abs() < 1e-12 * expected,
+        "{} vs {expected}",
+        depth[66]
+    );
+    assert!((z[66] - 4.0).abs() < 1e-12);
+    let (_, id) = read_u32(&out.join("id.npy"));
+    let (_, prim) = read_u32(&out.join("prim.npy"));
+    let (_, normal) = read_f64(&out.join("normal.npy"));
+    assert_eq!(
+        (id[0], prim[0], depth[0], z[0]),
+        (0, u32::MAX, f64::INFINITY, f64::INFINITY),
+        "corner misses"
+    );
+    assert_eq!(&normal[..3], &[0.0, 0.0, 0.0]);
+    assert_eq!(id[66], 1);
+    assert_eq!(&normal[66 * 3..66 * 3 + 3], &[0.0, 0.0, 1.0]);
+    let hits = id.iter().filter(|&&i| i == 1).count();
+    assert_eq!(hits, 63 * 63, "|sx|, |sy| <= 1/(4k) hit the front face");
+}
+
+#[test]
+fn rays_mode_keeps_input_order_and_is_thread_count_independent() {
+    let out1 = temp_dir("rays1");
+    let out2 = temp_dir("rays2");
+    std::fs::create_dir_all(&out1).unwrap();
+    let rays_file = out1.join("rays.npy");
+    let mut rays = vec![
+        [0.5, -0.25, 5.0, 0.0, 0.0, -1.0],
+        [2.0, 0.0, 5.0, 0.0, 0.0, -1.0],
+        [0.25, 0.5, 0.0, 0.0, 0.0, 2.0],
+    ];
+    let mut rng = Rng(7);
+    for _ in 0..5000 {
+        let o = rng.point(-3.0, 3.0);
+        let d = rng.direction();
+        rays.push([o.x, o.y, o.z, d.x, d.y, d.z]);
+    }
+    write_rays(&rays_file, &rays);
+    let scene = fixture("gltf/instances.gltf");
+    for (out, threads) in [(&out1, "1"), (&out2, "2")] {
+        let result = raycast(&[
+            arg(&scene),
+            "--rays",
+            arg(&rays_file),
+            "--aov",
+            "depth,normal,id,prim",
+            "--out",
+            arg(out),
+            "--threads",
+            threads,
+            "--quiet",
+        ]);
+        assert!(
+            result.status.success(),
+            "{}",
+            String::from_utf8_lossy(&result.stderr)
+        );
+    }
+    for name in ["depth.npy", "normal.npy", "id.npy", "prim.npy"] {
+        assert_eq!(
+            std::fs::read(out1.join(name)).unwrap(),
+            std::fs::read(out2.join(name)).unwrap(),
+            "{name}"
+        );
+    }
+    let (shape, depth) = read_f64(&out1.join("depth.npy"));
+    assert_eq!(shape, [rays.len()]);
+    assert_eq!(depth[1], f64::INFINITY);
+    let cube = temp_dir("rays-cube");
+    let result = raycast(&[
+        arg(&fixture("gltf/cube.gltf")),
+        "--rays",
+        arg(&rays_file),
+        "--out",
+        arg(&cube),
+        "--quiet",
+    ]);
+    assert!(result.status.success());
+    let (_, depth) = read_f64(&cube.join("depth.npy"));
+    assert_eq!(&depth[..3], &[4.0, f64::INFINITY, 1.0]);
+}
+
+#[test]
+fn bad_inputs_fail_cleanly_naming_the_file() {
+    let out = temp_dir("bad");
+    let cube = fixture("gltf/cube.gltf");
+    let cases: Vec<(PathBuf, Vec<&str>, &str)> = vec![
+        (fixture("bad/truncated.glb"), vec![], "GLB"),
+        (
+            fixture("bad/bad_index.gltf"),
+            vec![],
+            "index 99 out of range",
+        ),
+        (fixture("bad/nan_position.gltf"), vec![], "not finite"),
+        (
+            fixture("bad/missing_buffer.gltf"),
+            vec![],
+            "missing_buffer.bin', which does not exist",
+        ),
+        (fixture("bad/not_json.gltf"), vec![], "glTF"),
+        (
+            fixture("bad/draco_required.gltf"),
+            vec![],
+            "KHR_draco_mesh_compression",
+        ),
+        (
+            fixture("bad/meshopt_required.gltf"),
+            vec![],
+            "EXT_meshopt_compression",
+        ),
+        (fixture("bad/buffer_too_short.gltf"), vec![], "past the end"),
+        (fixture("bad/node_cycle.gltf"), vec![], "cycle"),
+        (fixture("bad/garbage.obj"), vec![], "out of bounds"),
+        (fixture("does_not_exist.gltf"), vec![], "cannot read"),
+        (fixture("README.md"), vec![], "unsupported file type"),
+        (cube.clone(), vec!["--rays", "BAD_RAYS"], "shape"),
+        (cube.clone(), vec!["--rays", "NAN_RAYS"], "non-finite"),
+        (cube.clone(), vec!["--camera", "nope"], "no camera 'nope'"),
+    ];
+    let bad_rays = fixture("bad/bad_rays.npy");
+    let nan_rays = fixture("bad/nan_rays.npy");
+    for (file, extra, message) in cases {
+        let mut args = vec![arg(&file), "--out", arg(&out)];
+        args.extend(extra.iter().map(|a| match *a {
+            "BAD_RAYS" => arg(&bad_rays),
+            "NAN_RAYS" => arg(&nan_rays),
+            other => other,
+        }));
+        let result = raycast(&args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(1), "{file:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
+        assert!(
+            stderr.contains(message),
+            "{file:?}: expected '{message}' in: {stderr}"
+        );
+        assert!(
+            stderr.contains(file.file_name().unwrap().to_str().unwrap()) || extra.len() > 0,
+            "{stderr}"
+        );
+    }
+    assert!(!out.exists(), "failed runs leave no output folder");
+}
+
+#[test]
+fn empty_scene_renders_all_misses() {
+    let out = temp_dir("empty");
+    let result = raycast(&[
+        arg(&fixture("bad/empty.gltf")),
+        "--format",
+        "npy",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--out",
+        arg(&out),
+        "--quiet",
+    ]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let (_, depth) = read_f64(&out.join("depth.npy"));
+    assert!(depth.iter().all(|d| *d == f64::INFINITY));
+}
+
+#[test]
+fn usage_errors_exit_with_2() {
+    for args in [
+        vec![],
+        vec!["scene.gltf", "--aov", "colour"],
+        vec!["scene.gltf", "--format", "tiff"],
+        vec!["scene.gltf", "--eye", "1,2"],
+        vec!["scene.gltf", "--fov", "40", "--ortho", "2"],
+    ] {
+        let result = raycast(&args);
+        assert_eq!(result.status.code(), Some(2), "{args:?}");
+    }
+}
+
+#[test]
+fn eye_target_and_orthographic_cameras() {
+    let out = temp_dir("ortho");
+    let scene = fixture("gltf/plane.gltf");
+    let result = raycast(&[
+        arg(&scene),
+        "--eye",
+        "0,0,3",
+        "--target",
+        "0,0,0",
+        "--ortho",
+        "4",
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "--aov",
+        "depth,id",
+        "--format",
+        "npy",
+        "--out",
+        arg(&out),
+        "--quiet",
+    ]);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    let (_, depth) = read_f64(&out.join("depth.npy"));
+    // Pixel centres at x, y = ±0.5, ±1.5: the inner 2×2 hit the plane at depth 3.
+    let expected: Vec<f64> = (0..16)
+        .map(|i| {
+            if (1..3).contains(&(i % 4)) && (1..3).contains(&(i / 4)) {
+                3.0
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect();
+    assert_eq!(depth, expected);
+}
+
+#[test]
+fn info_reports_objects_cameras_and_extensions() {
+    let result = raycast(&["info", arg(&fixture("gltf/quantized.gltf")), "--json"]);
+    assert!(result.status.success());
+    let json: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
+    assert_eq!(json["triangles"], 4);
+    assert_eq!(json["objects"][1]["name"], "ubyte");
+    assert_eq!(json["extensions_used"][0], "KHR_mesh_quantization");
+    let text = raycast(&["info", arg(&fixture("gltf/cameras.gltf"))]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(
+        text.contains("persp") && text.contains("orthographic"),
+        "{text}"
+    );
+}

@@ -1,0 +1,187 @@
+//! Helpers shared by the integration tests: fixture paths and casting rays through the library.
+#![allow(dead_code)]
+
+use glam::DVec3;
+use raycast::accel::{Octree, OctreeParams};
+use raycast::geometry::Ray;
+use raycast::import::{self, LoadOptions};
+use raycast::render::{self, Aov, Tracer};
+use raycast::scene::Scene;
+use std::path::PathBuf;
+
+/// Path of a file under `fixtures/`.
+pub fn fixture(relative: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(relative)
+}
+
+/// Loads a fixture with default options.
+pub fn load(relative: &str) -> Scene {
+    import::load(&fixture(relative), &LoadOptions::default())
+        .unwrap_or_else(|e| panic!("{relative} should load: {e}"))
+}
+
+/// What one ray found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sample {
+    pub depth: f64,
+    pub normal: DVec3,
+    pub position: DVec3,
+    pub object: Option<String>,
+    pub prim: u32,
+}
+
+/// Casts `rays` at `scene` through the octree and returns every AOV per ray.
+pub fn cast(scene: &Scene, rays: &[Ray]) -> Vec<Sample> {
+    let octree = Octree::build(scene, OctreeParams::default());
+    let tracer = Tracer {
+        scene,
+        octree: &octree,
+    };
+    let aovs = [Aov::Depth, Aov::Normal, Aov::Position, Aov::Id, Aov::Prim];
+    let b = render::render(&tracer, &rays.to_vec(), &aovs, |_| {});
+    (0..rays.len())
+        .map(|i| {
+            let id = b.id.as_ref().unwrap()[i];
+            Sample {
+                depth: b.depth.as_ref().unwrap()[i],
+                normal: b.normal.as_ref().unwrap()[i],
+                position: b.position.as_ref().unwrap()[i],
+                object: (id > 0).then(|| scene.objects[id as usize - 1].name.clone()),
+                prim: b.prim.as_ref().unwrap()[i],
+            }
+        })
+        .collect()
+}
+
+/// Casts one ray.
+pub fn cast_one(scene: &Scene, origin: [f64; 3], dir: [f64; 3]) -> Sample {
+    cast(scene, &[ray(origin, dir)]).remove(0)
+}
+
+/// A ray from arrays.
+pub fn ray(origin: [f64; 3], dir: [f64; 3]) -> Ray {
+    Ray::new(DVec3::from_array(origin), DVec3::from_array(dir))
+}
+
+/// Asserts a hit on `object` at `depth` (relative 1e-12) with `normal` (1e-12) and one of `prims`.
+pub fn assert_hit(s: &Sample, object: &str, depth: f64, normal: [f64; 3], prims: &[u32]) {
+    assert_eq!(s.object.as_deref(), Some(object), "{s:?}");
+    assert!(
+        (s.depth - depth).abs() <= 1e-12 * depth.abs().max(1.0),
+        "depth {} != {depth}: {s:?}",
+        s.depth
+    );
+    assert!(
+        (s.normal - DVec3::from_array(normal)).length() <= 1e-12,
+        "normal {:?} != {normal:?}",
+        s.normal
+    );
+    assert!(prims.contains(&s.prim), "prim {} not in {prims:?}", s.prim);
+}
+
+/// Asserts a miss with the documented miss values.
+pub fn assert_miss(s: &Sample) {
+    assert_eq!(s.object, None, "{s:?}");
+    assert_eq!(s.depth, f64::INFINITY);
+    assert_eq!(s.normal, DVec3::ZERO);
+    assert_eq!(s.position, DVec3::INFINITY);
+    assert_eq!(s.prim, u32::MAX);
+}
+
+/// A small deterministic generator (xorshift64*), so tests need no extra crate.
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// Next raw value.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in [lo, hi).
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// A point with coordinates uniform in [lo, hi).
+    pub fn point(&mut self, lo: f64, hi: f64) -> DVec3 {
+        DVec3::new(
+            self.uniform(lo, hi),
+            self.uniform(lo, hi),
+            self.uniform(lo, hi),
+        )
+    }
+    /// A random unit vector.
+    pub fn direction(&mut self) -> DVec3 {
+        loop {
+            let p = self.point(-1.0, 1.0);
+            if p.length_squared() > 1e-4 && p.length_squared() <= 1.0 {
+                return p.normalize();
+            }
+        }
+    }
+}
+
+/// Reads the shape and raw little-endian payload of a `.npy` file written by raycast.
+pub fn read_npy(path: &std::path::Path) -> (String, Vec<usize>, Vec<u8>) {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
+    let len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let header = std::str::from_utf8(&bytes[10..10 + len])
+        .unwrap()
+        .to_string();
+    let shape_text = header
+        .split("'shape': (")
+        .nth(1)
+        .unwrap()
+        .split(')')
+        .next()
+        .unwrap();
+    let shape = shape_text
+        .split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(|s| s.trim().parse().unwrap())
+        .collect();
+    (header, shape, bytes[10 + len..].to_vec())
+}
+
+/// The values of a float64 `.npy` file.
+pub fn read_f64(path: &std::path::Path) -> (Vec<usize>, Vec<f64>) {
+    let (header, shape, data) = read_npy(path);
+    assert!(header.contains("'<f8'"), "{header}");
+    (
+        shape,
+        data.chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+            .collect(),
+    )
+}
+
+/// The values of a uint32 `.npy` file.
+pub fn read_u32(path: &std::path::Path) -> (Vec<usize>, Vec<u32>) {
+    let (header, shape, data) = read_npy(path);
+    assert!(header.contains("'<u4'"), "{header}");
+    (
+        shape,
+        data.chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect(),
+    )
+}
+
+/// Writes an (N, 6) float64 ray file.
+pub fn write_rays(path: &std::path::Path, rays: &[[f64; 6]]) {
+    let header = format!(
+        "{{'descr': '<f8', 'fortran_order': False, 'shape': ({}, 6), }}\n",
+        rays.len()
+    );
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    for v in rays.iter().flatten() {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    std::fs::write(path, out).unwrap();
+}

@@ -1,0 +1,154 @@
+//! The octree must return exactly what a brute-force loop over all primitives returns,
+//! including in the lecture's boundary trap and for rays lying on cell planes.
+
+mod common;
+use common::*;
+use glam::{DMat4, DQuat, DVec3};
+use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams, PrimitiveSet};
+use raycast::quadric::{Quadric, QuadricSpec};
+use raycast::scene::{Scene, SceneBuilder};
+
+/// Random triangles of mixed sizes (some spanning most of the scene) and random quadrics.
+fn random_scene(rng: &mut Rng, triangles: usize, quadrics: usize) -> Scene {
+    let mut builder = SceneBuilder::new();
+    let mut tris = Vec::new();
+    for i in 0..triangles {
+        let size = if i % 50 == 0 {
+            8.0
+        } else {
+            rng.uniform(0.01, 1.0)
+        };
+        let c = rng.point(-10.0, 10.0);
+        tris.push([c, c + rng.direction() * size, c + rng.direction() * size]);
+    }
+    builder.add_mesh("triangles".into(), "test".into(), tris);
+    for i in 0..quadrics {
+        let world = DMat4::from_scale_rotation_translation(
+            DVec3::new(
+                rng.uniform(0.5, 2.0),
+                rng.uniform(0.5, 2.0),
+                rng.uniform(0.5, 2.0),
+            ),
+            DQuat::from_scaled_axis(rng.direction() * rng.uniform(0.0, 3.0)),
+            rng.point(-8.0, 8.0),
+        );
+        let spec = if i % 2 == 0 {
+            QuadricSpec::from_coefficients(
+                [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
+                None,
+            )
+        } else {
+            let bounds = Some([DVec3::splat(-1.5), DVec3::splat(1.5)]);
+            QuadricSpec::from_coefficients(
+                [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
+                bounds,
+            )
+        };
+        let quadric = Quadric::new(&spec.unwrap(), world).unwrap();
+        builder.add_quadric(format!("q{i}"), "test".into(), quadric);
+    }
+    builder.finish("random".into())
+}
+
+fn assert_same_as_brute_force(scene: &Scene, octree: &Octree, origin: DVec3, dir: DVec3) {
+    let local = origin - scene.anchor;
+    let ray = prepare_ray(scene, local, dir);
+    let expected = brute_force(scene, &ray);
+    let found = octree.intersect(scene, &ray, f64::INFINITY);
+    assert_eq!(found, expected, "ray {origin:?} + t {dir:?}");
+}
+
+#[test]
+fn random_scenes_match_brute_force() {
+    let mut rng = Rng(0x5eed_0001);
+    for round in 0..4 {
+        let scene = random_scene(&mut rng, 400 + 300 * round, 6);
+        let octree = Octree::build(&scene, OctreeParams::default());
+        assert!(octree.stats().depth >= 2, "{:?}", octree.stats());
+        let mut hits = 0;
+        for _ in 0..3000 {
+            let origin = rng.point(-14.0, 14.0);
+            let dir = rng.direction() * rng.uniform(0.1, 10.0);
+            assert_same_as_brute_force(&scene, &octree, origin, dir);
+            hits += usize::from(
+                brute_force(&scene, &prepare_ray(&scene, origin - scene.anchor, dir)).is_some(),
+            );
+        }
+        assert!(hits > 200, "the test should exercise hits, got {hits}");
+    }
+}
+
+#[test]
+fn rays_on_cell_planes_axis_parallel_and_negative_zero() {
+    let mut rng = Rng(0x5eed_0002);
+    let scene = random_scene(&mut rng, 1500, 4);
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let root = octree.root();
+    let c = root.center() + scene.anchor;
+    let quarter = root.size().x / 4.0;
+    let planes = [c.x - quarter, c.x, c.x + quarter];
+    for _ in 0..1500 {
+        let mut origin = rng.point(-12.0, 12.0);
+        origin.x = planes[(rng.next_u64() % 3) as usize];
+        origin.y = [c.y, origin.y][(rng.next_u64() % 2) as usize];
+        let axis = (rng.next_u64() % 3) as usize;
+        let mut dir = DVec3::ZERO;
+        dir[axis] = if rng.next_u64() % 2 == 0 { 1.0 } else { -1.0 };
+        // Other components: +0.0, -0.0 or a real value.
+        for other in 0..3 {
+            if other != axis {
+                dir[other] = [0.0, -0.0, rng.uniform(-1.0, 1.0)][(rng.next_u64() % 3) as usize];
+            }
+        }
+        assert_same_as_brute_force(&scene, &octree, origin, dir);
+    }
+}
+
+/// The lecture's trap, from fixtures/gltf/trap.gltf: the big triangle is found first, in a
+/// cell whose exit lies before its hit, while the nearer quad waits in a later cell.
+#[test]
+fn boundary_trap_is_not_fallen_into() {
+    let scene = load("gltf/trap.gltf");
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let origin = DVec3::new(-12.0, 0.25, 0.25) - scene.anchor;
+    let dir = DVec3::X;
+    let ray = prepare_ray(&scene, origin, dir);
+    // What a naive traversal would report: the first hit found in the first leaf holding one.
+    let mut naive: Option<(u32, f64, f64)> = None;
+    octree.traverse(origin, dir, f64::INFINITY, |refs, _enter, exit| {
+        for &prim in refs {
+            if let Some(t) = scene.intersect(prim as usize, &ray, f64::INFINITY) {
+                if naive.is_none() {
+                    naive = Some((prim, t, exit));
+                }
+            }
+        }
+        f64::INFINITY
+    });
+    let (prim, t, exit) = naive.expect("the ray hits something");
+    assert_eq!(
+        scene.object_of(prim).0.name,
+        "big",
+        "the trap needs the big triangle first"
+    );
+    assert!(
+        t > exit,
+        "the big triangle's hit (t = {t}) lies beyond its cell (exit {exit})"
+    );
+    assert!((t - 20.0).abs() < 1e-9);
+    // The octree's answer is the nearer quad, exactly as brute force finds it.
+    let hit = octree.intersect(&scene, &ray, f64::INFINITY).unwrap();
+    assert_eq!(Some(hit), brute_force(&scene, &ray));
+    assert_eq!(scene.object_of(hit.prim).0.name, "near");
+    assert!((hit.t - 14.0).abs() < 1e-12);
+    let sample = cast_one(&scene, [-12.0, 0.25, 0.25], [1.0, 0.0, 0.0]);
+    assert_hit(&sample, "near", 14.0, [-1.0, 0.0, 0.0], &[0]);
+}
+
+#[test]
+fn empty_scene_misses_everything() {
+    let scene = SceneBuilder::new().finish("empty".into());
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let ray = prepare_ray(&scene, DVec3::ZERO, DVec3::X);
+    assert_eq!(octree.intersect(&scene, &ray, f64::INFINITY), None);
+}
