@@ -235,7 +235,7 @@ fn bad_inputs_fail_cleanly_naming_the_file() {
             "{file:?}: expected '{message}' in: {stderr}"
         );
         assert!(
-            stderr.contains(file.file_name().unwrap().to_str().unwrap()) || extra.len() > 0,
+            stderr.contains(file.file_name().unwrap().to_str().unwrap()) || !extra.is_empty(),
             "{stderr}"
         );
     }
