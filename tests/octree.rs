@@ -93,7 +93,11 @@ fn rays_on_cell_planes_axis_parallel_and_negative_zero() {
         origin.y = [c.y, origin.y][(rng.next_u64() % 2) as usize];
         let axis = (rng.next_u64() % 3) as usize;
         let mut dir = DVec3::ZERO;
-        dir[axis] = if rng.next_u64() % 2 == 0 { 1.0 } else { -1.0 };
+        dir[axis] = if rng.next_u64().is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
         // Other components: +0.0, -0.0 or a real value.
         for other in 0..3 {
             if other != axis {
