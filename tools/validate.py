@@ -650,7 +650,8 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
     quad_node_of_id = {}
     for so in sobjs:
         if so.get("kind") == "quadric" and str(so.get("source", "")).startswith("/nodes/"):
-            quad_node_of_id[int(so["id"])] = int(so["source"].split("/")[-1])
+            # "/nodes/3" or "/nodes/3/extensions/RAYCAST_quadric"
+            quad_node_of_id[int(so["id"])] = int(so["source"].split("/")[2])
     rc_obj = np.full(n, -1, dtype=np.int64)
     valid_id = (rid > 0) & (rid < len(omap))
     rc_obj[valid_id] = omap[rid[valid_id]]

@@ -7,7 +7,9 @@
 //! `traversal_cost + Σ_children (area_child / area_cell) · n_child · intersection_cost`, where
 //! every child cube has a quarter of its parent's surface area. Primitives that straddle cells
 //! count in every child they touch, so splitting stops by itself where duplication outweighs
-//! separation. A primitive goes into every child it really overlaps (exact triangle/box test;
+//! separation. A cell is also kept whole when one of its children would hold every one of its
+//! references (the triangles around a shared vertex, say): no split can separate them there, and
+//! without this rule the cost model alone keeps splitting such cells to the depth cap. A primitive goes into every child it really overlaps (exact triangle/box test;
 //! see [`PrimitiveSet::overlaps`]), tested against the child cell grown by a tiny margin so that
 //! rounding in the traversal can never lose a primitive lying on a cell face.
 //!
@@ -194,6 +196,9 @@ impl Octree {
             return None;
         }
         let children = distribute(set, cell, refs, margin);
+        if children.iter().any(|c| c.len() == refs.len()) {
+            return None;
+        }
         let child_refs: usize = children.iter().map(Vec::len).sum();
         let p = &self.params;
         let leaf_cost = refs.len() as f64 * p.intersection_cost;
