@@ -1,8 +1,9 @@
 //! The scene model: world-space triangles and quadrics, the object table and the cameras.
 //!
-//! Triangles are stored as f32 relative to a scene anchor (the centre of the scene's bounds,
-//! kept in f64), so a scene placed far from the world origin keeps its digits; every test
-//! promotes them back to f64.
+//! Triangles are stored as f32 relative to a scene anchor kept in f64: the centre of the scene's
+//! bounds when the scene lies far from the world origin (more than 64 times its size away), so
+//! it keeps its digits, and the origin otherwise, so that vertices read from f32 file data are
+//! stored exactly. Every test promotes them back to f64.
 
 use crate::accel::{PreparedRay, PrimitiveSet};
 use crate::camera::Camera;
@@ -175,6 +176,12 @@ impl PrimitiveSet for Scene {
     }
 }
 
+/// True when a scene lies close enough to the origin, relative to its size, that its
+/// coordinates keep their digits in f32 without an anchor.
+fn near_origin(bounds: &Aabb) -> bool {
+    bounds.center().abs().max_element() <= 64.0 * bounds.size().max_element()
+}
+
 /// Collects objects in world space (f64) and turns them into a [`Scene`].
 #[derive(Debug, Default)]
 pub struct SceneBuilder {
@@ -254,8 +261,9 @@ impl SceneBuilder {
         self.objects.len()
     }
 
-    /// Fixes the anchor at the centre of the scene's bounds and stores the triangles relative
-    /// to it in f32.
+    /// Fixes the anchor and stores the triangles relative to it in f32: the world origin for a
+    /// scene near it (so vertices that were f32 in the file are stored exactly), else the
+    /// centre of the scene's bounds.
     pub fn finish(self, path: PathBuf) -> Scene {
         let bounds = self
             .triangles
@@ -266,7 +274,7 @@ impl SceneBuilder {
             let [min, max] = q.bounds();
             b.union(Aabb::new(min, max))
         });
-        let anchor = if bounds.is_empty() {
+        let anchor = if bounds.is_empty() || near_origin(&bounds) {
             DVec3::ZERO
         } else {
             bounds.center()
