@@ -162,8 +162,10 @@ fn moving_the_node_equals_moving_the_ray() {
                     a.depth,
                     b.depth
                 );
+                compared += 1;
             }
         }
+        assert!(compared >= 40, "{family}: only {compared} rays hit");
     }
 }
 
