@@ -1,0 +1,182 @@
+//! Building the octree: the split rule, the exact distribution of primitives over children,
+//! and parallel construction of large subtrees.
+
+use super::{Node, OctreeParams, OctreeStats, INTERIOR};
+use crate::accel::PrimitiveSet;
+use crate::geometry::Aabb;
+use glam::DVec3;
+
+/// Cells with more references than this build their children in parallel.
+const PARALLEL_REFS: usize = 8192;
+
+/// A subtree in its own arrays: node 0 is its root; interior nodes point at eight contiguous
+/// children by index into `nodes`, leaves at a run of `refs`.
+#[derive(Debug, Default)]
+pub(super) struct Subtree {
+    pub nodes: Vec<Node>,
+    pub refs: Vec<u32>,
+    pub stats: OctreeStats,
+}
+
+/// What every cell of one build shares.
+pub(super) struct Builder<'a, P> {
+    pub set: &'a P,
+    pub bounds: Vec<Aabb>,
+    pub params: OctreeParams,
+    /// Cells are grown by this much for the overlap tests.
+    pub margin: f64,
+}
+
+impl<P: PrimitiveSet> Builder<'_, P> {
+    /// The subtree for `cell` holding `refs`, at `depth`.
+    pub fn subtree(&self, cell: Aabb, refs: Vec<u32>, depth: u32) -> Subtree {
+        let Some(children) = self.split(&cell, &refs, depth) else {
+            return leaf(refs, depth);
+        };
+        drop(refs);
+        let build =
+            |(i, child): (usize, Vec<u32>)| self.subtree(child_cell(&cell, i), child, depth + 1);
+        let parts: Vec<Subtree> = if children.iter().map(Vec::len).sum::<usize>() > PARALLEL_REFS {
+            use rayon::prelude::*;
+            children.into_par_iter().enumerate().map(build).collect()
+        } else {
+            children.into_iter().enumerate().map(build).collect()
+        };
+        join(parts)
+    }
+
+    /// The children's references if splitting `cell` pays, by the rule in the module docs.
+    fn split(&self, cell: &Aabb, refs: &[u32], depth: u32) -> Option<Vec<Vec<u32>>> {
+        if refs.len() <= self.params.leaf_size || depth >= self.params.max_depth {
+            return None;
+        }
+        let children = self.distribute(cell, refs);
+        if children.iter().any(|c| c.len() == refs.len()) {
+            return None;
+        }
+        let child_refs: usize = children.iter().map(Vec::len).sum();
+        let p = &self.params;
+        let leaf_cost = refs.len() as f64 * p.intersection_cost;
+        let split_cost = p.traversal_cost + 0.25 * child_refs as f64 * p.intersection_cost;
+        (split_cost < leaf_cost).then_some(children)
+    }
+
+    /// Sorts the references of `cell` into its eight children. A primitive whose bounds fall
+    /// in one child goes there directly; one whose bounds span several is tested exactly
+    /// against each.
+    fn distribute(&self, cell: &Aabb, refs: &[u32]) -> Vec<Vec<u32>> {
+        let mid = cell.center();
+        let cells: [Aabb; 8] = std::array::from_fn(|i| child_cell(cell, i).expanded(self.margin));
+        let mut children: Vec<Vec<u32>> = vec![Vec::new(); 8];
+        for &prim in refs {
+            let b = &self.bounds[prim as usize];
+            let low = b.min.cmplt(DVec3::splat(self.margin) + mid).bitmask();
+            let high = b.max.cmpgt(mid - DVec3::splat(self.margin)).bitmask();
+            let single = (low ^ high) == 0b111;
+            for (i, child) in children.iter_mut().enumerate() {
+                let upper = i as u32;
+                // Child i spans the upper half on axis a when bit a of i is set.
+                if (high & upper) != upper || (low & !upper & 0b111) != (!upper & 0b111) {
+                    continue;
+                }
+                if single || self.set.overlaps(prim as usize, &cells[i]) {
+                    child.push(prim);
+                }
+            }
+        }
+        children
+    }
+}
+
+/// A leaf subtree.
+fn leaf(refs: Vec<u32>, depth: u32) -> Subtree {
+    Subtree {
+        nodes: vec![Node {
+            first: 0,
+            count: refs.len() as u32,
+        }],
+        stats: OctreeStats {
+            nodes: 1,
+            leaves: 1,
+            empty_leaves: usize::from(refs.is_empty()),
+            depth,
+            references: refs.len(),
+        },
+        refs,
+    }
+}
+
+/// Joins eight child subtrees under a new root: root, then the eight child roots, then the
+/// rest of each child's nodes in order.
+fn join(parts: Vec<Subtree>) -> Subtree {
+    let mut mask = 0u32;
+    for (i, part) in parts.iter().enumerate() {
+        if !part.refs.is_empty() {
+            mask |= 1 << i;
+        }
+    }
+    let total: usize = parts.iter().map(|p| p.nodes.len()).sum();
+    let mut nodes = Vec::with_capacity(total + 1);
+    nodes.push(Node {
+        first: 1,
+        count: INTERIOR | mask,
+    });
+    let mut refs = Vec::with_capacity(parts.iter().map(|p| p.refs.len()).sum());
+    let mut stats = OctreeStats {
+        nodes: total + 1,
+        ..OctreeStats::default()
+    };
+    // Where each child's non-root nodes start, and where its references start.
+    let mut node_base = 9;
+    let mut bases = Vec::with_capacity(8);
+    for part in &parts {
+        bases.push((node_base, refs.len()));
+        node_base += part.nodes.len() - 1;
+        refs.extend_from_slice(&part.refs);
+        stats.leaves += part.stats.leaves;
+        stats.empty_leaves += part.stats.empty_leaves;
+        stats.depth = stats.depth.max(part.stats.depth);
+        stats.references += part.stats.references;
+    }
+    let relocate = |node: &Node, (node_base, ref_base): (usize, usize)| match node.count & INTERIOR
+    {
+        0 => Node {
+            first: node.first + ref_base as u32,
+            count: node.count,
+        },
+        _ => Node {
+            first: node.first - 1 + node_base as u32,
+            count: node.count,
+        },
+    };
+    for (part, base) in parts.iter().zip(&bases) {
+        nodes.push(relocate(&part.nodes[0], *base));
+    }
+    for (part, base) in parts.iter().zip(&bases) {
+        nodes.extend(part.nodes[1..].iter().map(|n| relocate(n, *base)));
+    }
+    Subtree { nodes, refs, stats }
+}
+
+/// Child `i` of a cubic cell: bit 0 selects the upper x half, bit 1 y, bit 2 z.
+pub(super) fn child_cell(cell: &Aabb, i: usize) -> Aabb {
+    let half = cell.size() * 0.5;
+    let offset = DVec3::new(
+        if i & 1 != 0 { half.x } else { 0.0 },
+        if i & 2 != 0 { half.y } else { 0.0 },
+        if i & 4 != 0 { half.z } else { 0.0 },
+    );
+    let min = cell.min + offset;
+    Aabb::new(min, min + half)
+}
+
+/// The smallest cube holding `bounds` with a little room, or a unit cube for an empty box.
+pub(super) fn cube_around(bounds: &Aabb) -> Aabb {
+    if bounds.is_empty() {
+        return Aabb::new(DVec3::splat(-0.5), DVec3::splat(0.5));
+    }
+    let centre = bounds.center();
+    let extent = bounds.size().max_element();
+    let half = (extent * 0.5) * (1.0 + 1e-6) + 1e-9 * (centre.abs().max_element() + 1.0);
+    Aabb::new(centre - DVec3::splat(half), centre + DVec3::splat(half))
+}
