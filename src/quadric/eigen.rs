@@ -3,7 +3,7 @@
 use glam::{DMat3, DVec3};
 
 /// Eigenvalues whose magnitude is at most this fraction of the largest magnitude count as zero.
-pub(super) const ZERO_EIGENVALUE: f64 = 1e-10;
+pub(super) const ZERO_EIGENVALUE: f64 = 1e-13;
 
 /// Upper bound on Jacobi sweeps; a 3×3 matrix converges to machine precision in about six.
 const MAX_SWEEPS: usize = 50;

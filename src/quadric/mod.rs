@@ -6,6 +6,7 @@
 mod eigen;
 mod interval;
 mod kind;
+mod polynomial;
 mod spec;
 mod surface;
 #[cfg(test)]

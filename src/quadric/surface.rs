@@ -5,10 +5,8 @@ use glam::{DMat3, DMat4, DVec3, DVec4};
 use super::eigen::is_definite;
 use super::interval::value_range_may_contain_zero;
 use super::kind::{classify, QuadricKind};
+use super::polynomial::Polynomial;
 use super::spec::QuadricSpec;
-
-/// Ray coefficients below this fraction of their rounding scale count as zero.
-const NEGLIGIBLE_COEFFICIENT: f64 = 1e-13;
 
 /// World matrices whose determinant is below this fraction of the cube of the longest column
 /// count as singular (a condition number of about 1e14 or worse).
@@ -23,22 +21,24 @@ const CLIP_TOLERANCE: f64 = 1e-9;
 
 /// A quadric placed in world space, ready to intersect.
 ///
-/// The world-space coefficients are expressed about an anchor point `c` (the world image of the
-/// clip-box centre, or of the ellipsoid centre when there is no clip box):
-/// `f(w) = u·Q'·u + P'·u + R'` with `u = w − c`. This keeps the precision of the local
-/// description however far from the world origin the surface is placed.
+/// Both forms are kept about an anchor point `c` (the world image of the clip-box centre, or of
+/// the ellipsoid centre when there is no clip box), which keeps the precision of the local
+/// description however far from the world origin the surface is placed:
+/// - the world form `f(w) = u·Q'·u + P'·u + R'` with `u = w − c` (`Q' = A⁻ᵀQA⁻¹`), used for the
+///   classification, the bounds and the cell overlap test;
+/// - the local form about the local anchor, used for intersection: the ray is moved into the
+///   node's frame (`x0 = A⁻¹(o − c)`, `v = A⁻¹d`, same `t`). Computing `K = v·Q·v` there keeps
+///   its relative accuracy when the ray runs nearly along a direction in which the surface is
+///   flat (a cylinder's axis, a cone's generator): in the world form `K = d·Q'·d` carries an
+///   absolute error of about `u·|Q'|·|d|²` and loses such rays.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Quadric {
     /// World anchor `c` that `u = w − c` is measured from.
     anchor: DVec3,
-    /// `Q'`, scaled by a power of two so that its largest entry is about 1.
-    q: DMat3,
-    /// `|Q'|` entrywise, for rounding-error scales.
-    q_abs: DMat3,
-    /// `P'` with the same scaling.
-    p: DVec3,
-    /// `R'` with the same scaling.
-    r: f64,
+    /// The world form about the anchor.
+    world: Polynomial,
+    /// The local form about the local anchor.
+    local: Polynomial,
     /// The world→local linear map `A⁻¹`: `local = A⁻¹ u + local_anchor`.
     to_local: DMat3,
     /// The anchor in local coordinates.
@@ -49,15 +49,6 @@ pub struct Quadric {
     bounds: [DVec3; 2],
     /// Affine type, from the world-space coefficients.
     kind: QuadricKind,
-}
-
-/// The quadratic `K t² + L t + M` along a ray, with rounding scales for `K` and `L`.
-struct RayPolynomial {
-    k: f64,
-    l: f64,
-    m: f64,
-    k_scale: f64,
-    l_scale: f64,
 }
 
 impl Quadric {
@@ -77,14 +68,11 @@ impl Quadric {
         let q_world = (q_world + q_world.transpose()) * 0.5;
         let p_world = to_local.transpose() * gradient;
         let r_world = local_anchor.dot(spec.q * local_anchor) + spec.p.dot(local_anchor) + spec.r;
-        let scale = power_of_two_normaliser(q_world, p_world);
         let anchor = world.transform_point3(local_anchor);
         let mut quadric = Quadric {
             anchor,
-            q: q_world * scale,
-            q_abs: (q_world * scale).abs(),
-            p: p_world * scale,
-            r: r_world * scale,
+            world: Polynomial::new(q_world, p_world, r_world),
+            local: Polynomial::new(spec.q, gradient, r_world),
             to_local,
             local_anchor,
             clip: spec.bounds.map(widen_clip_box),
@@ -96,7 +84,7 @@ impl Quadric {
             .map(|b| quadric.world_box_of_local_box(b, linear));
         quadric.bounds = quadric.clipped_bounds(clip_world, is_definite(spec.q));
         let length = clip_world.map_or(0.0, |[min, max]| 0.5 * (max - min).length());
-        quadric.kind = classify(quadric.q, quadric.p, quadric.r, length);
+        quadric.kind = classify(quadric.world.q, quadric.world.p, quadric.world.r, length);
         Ok(quadric)
     }
 
@@ -114,19 +102,21 @@ impl Quadric {
     /// Smallest `t` with `0 < t <= t_max` where `origin + t·dir` lies on the surface inside the
     /// clip box. `origin` and `dir` are in world coordinates; `dir` need not be unit length.
     pub fn intersect(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<f64> {
-        let start = origin - self.anchor;
-        let roots = self.ray_roots(start, dir)?;
+        let x0 = self.to_local * (origin - self.anchor);
+        let v = self.to_local * dir;
+        let roots = self.local.ray_roots(x0, v)?;
         roots
             .into_iter()
-            .find(|&t| t > 0.0 && t <= t_max && self.inside_clip(start + t * dir))
+            .find(|&t| t > 0.0 && t <= t_max && self.inside_clip(x0 + t * v))
     }
 
-    /// Unit world normal at `origin + t·dir`: the normalised gradient `2Q'u + P'`, pointing to
-    /// `f > 0`. Where the gradient vanishes or cannot be normalised (cone apex, the crossing line
-    /// of a plane pair, a point quadric) it is `−dir` normalised, and `+Z` if even that fails.
+    /// Unit world normal at `origin + t·dir`: the normalised world gradient
+    /// `A⁻ᵀ(2Qx + P)` (equal to `2Q'u + P'`), pointing to `f > 0`. Where the gradient vanishes
+    /// or cannot be normalised (cone apex, the crossing line of a plane pair, a point quadric)
+    /// it is `−dir` normalised, and `+Z` if even that fails.
     pub fn normal(&self, origin: DVec3, dir: DVec3, t: f64) -> DVec3 {
-        let u = (origin - self.anchor) + t * dir;
-        let gradient = 2.0 * (self.q * u) + self.p;
+        let x = self.to_local * (origin - self.anchor) + t * (self.to_local * dir);
+        let gradient = self.to_local.transpose() * self.local.gradient(x);
         unit_or_none(gradient)
             .or_else(|| unit_or_none(-dir))
             .unwrap_or(DVec3::Z)
@@ -146,69 +136,15 @@ impl Quadric {
         if lo.cmpgt(hi).any() {
             return false;
         }
-        value_range_may_contain_zero(self.q, self.p, self.r, lo - self.anchor, hi - self.anchor)
+        let w = &self.world;
+        value_range_may_contain_zero(w.q, w.p, w.r, lo - self.anchor, hi - self.anchor)
     }
 
-    /// `f(u) = u·Q'·u + P'·u + R'` for `u` measured from the anchor.
-    fn value(&self, u: DVec3) -> f64 {
-        u.dot(self.q * u) + self.p.dot(u) + self.r
-    }
-
-    /// The ray's quadratic `K t² + L t + M` for a start point `u0` relative to the anchor.
-    fn ray_polynomial(&self, u0: DVec3, dir: DVec3) -> RayPolynomial {
-        let qd = self.q * dir;
-        let dir_abs = dir.abs();
-        let q_abs_d = self.q_abs * dir_abs;
-        RayPolynomial {
-            k: dir.dot(qd),
-            l: 2.0 * u0.dot(qd) + self.p.dot(dir),
-            m: self.value(u0),
-            k_scale: dir_abs.dot(q_abs_d),
-            l_scale: 2.0 * u0.abs().dot(q_abs_d) + self.p.abs().dot(dir_abs),
-        }
-    }
-
-    /// The real roots of the ray's quadratic in ascending order (equal for a double or a single
-    /// linear root), or `None` when there is none or the ray lies along the surface.
-    fn ray_roots(&self, u0: DVec3, dir: DVec3) -> Option<[f64; 2]> {
-        let poly = self.ray_polynomial(u0, dir);
-        if poly.k.abs() <= NEGLIGIBLE_COEFFICIENT * poly.k_scale {
-            if poly.l.abs() <= NEGLIGIBLE_COEFFICIENT * poly.l_scale {
-                return None;
-            }
-            let t = -poly.m / poly.l;
-            return t.is_finite().then_some([t, t]);
-        }
-        let disc = self.discriminant(&poly, u0, dir);
-        if disc.is_nan() || disc < 0.0 {
-            return None;
-        }
-        let q = -0.5 * (poly.l + disc.sqrt().copysign(poly.l));
-        if q == 0.0 {
-            let t = -poly.l / (2.0 * poly.k);
-            return Some([t, t]);
-        }
-        let (a, b) = (q / poly.k, poly.m / q);
-        Some([a.min(b), a.max(b)])
-    }
-
-    /// `Δ = L² − 4KM`. When `4KM` is close to `L²` the difference cancels, so it is computed as
-    /// `−4K·f(m)` at the point `m = u0 + t_c·dir`, `t_c = −L/(2K)`, closest (in the quadric's
-    /// metric) to the vertex of the parabola in `t`; elsewhere the plain form is accurate.
-    fn discriminant(&self, poly: &RayPolynomial, u0: DVec3, dir: DVec3) -> f64 {
-        let four_km = 4.0 * poly.k * poly.m;
-        let square = poly.l * poly.l;
-        if four_km <= 0.5 * square {
-            return square - four_km;
-        }
-        let t_c = -poly.l / (2.0 * poly.k);
-        -4.0 * poly.k * self.value(u0 + t_c * dir)
-    }
-
-    /// Whether the world point `anchor + u` lies in the clip box (inclusive); true without one.
-    fn inside_clip(&self, u: DVec3) -> bool {
+    /// Whether the local point `local_anchor + x` lies in the clip box (inclusive); true
+    /// without one.
+    fn inside_clip(&self, x: DVec3) -> bool {
         self.clip.is_none_or(|[min, max]| {
-            let local = self.to_local * u + self.local_anchor;
+            let local = x + self.local_anchor;
             local.cmpge(min).all() && local.cmple(max).all()
         })
     }
@@ -241,9 +177,10 @@ impl Quadric {
     /// `e = −Q'⁻¹P'/2`, half-extent `sqrt(−f(e)·(Q'⁻¹)ᵢᵢ)` along axis `i`. An empty
     /// surface gives the point box at its centre.
     fn ellipsoid_box(&self) -> [DVec3; 2] {
-        let inverse = self.q.inverse();
-        let centre = -0.5 * (inverse * self.p);
-        let level = -(self.r + 0.5 * self.p.dot(centre));
+        let w = &self.world;
+        let inverse = w.q.inverse();
+        let centre = -0.5 * (inverse * w.p);
+        let level = -(w.r + 0.5 * w.p.dot(centre));
         let diagonal = DVec3::new(inverse.x_axis.x, inverse.y_axis.y, inverse.z_axis.z);
         let half = (diagonal * level).max(DVec3::ZERO);
         let half = DVec3::new(half.x.sqrt(), half.y.sqrt(), half.z.sqrt());
@@ -269,18 +206,6 @@ fn affine_linear_part(world: DMat4) -> Result<DMat3, String> {
         return Err("world matrix is singular".into());
     }
     Ok(linear)
-}
-
-/// The power of two that brings the largest entry of `Q'` (or of `P'` when `Q' = 0`) near 1.
-/// Scaling by a power of two is exact, so it changes no rounding.
-fn power_of_two_normaliser(q: DMat3, p: DVec3) -> f64 {
-    let largest = q.abs().to_cols_array().into_iter().fold(0.0, f64::max);
-    let largest = if largest > 0.0 {
-        largest
-    } else {
-        p.abs().max_element()
-    };
-    2f64.powi(-(largest.log2().round() as i32))
 }
 
 /// The local clip box widened by [`CLIP_TOLERANCE`] times its largest side.
