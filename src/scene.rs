@@ -5,7 +5,7 @@
 //! it keeps its digits, and the origin otherwise, so that vertices read from f32 file data are
 //! stored exactly. Every test promotes them back to f64.
 
-use crate::accel::{PreparedRay, PrimitiveSet};
+use crate::accel::{octants_by_overlap, PreparedRay, PrimitiveSet};
 use crate::camera::Camera;
 use crate::geometry::triangle::{self, WatertightRay};
 use crate::geometry::Aabb;
@@ -158,6 +158,13 @@ impl PrimitiveSet for Scene {
                 let world = cell.translated(-self.anchor);
                 self.quadrics[q].may_overlap_box(world.min, world.max)
             }
+        }
+    }
+
+    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64) -> u8 {
+        match index.checked_sub(self.triangles.len()) {
+            None => triangle::octant_mask(&self.triangles[index], cell, margin),
+            Some(_) => octants_by_overlap(self, index, cell, margin),
         }
     }
 

@@ -62,11 +62,29 @@ pub trait PrimitiveSet: Sync {
     /// Conservative test: may primitive `index` touch the closed box `cell`?
     fn overlaps(&self, index: usize, cell: &Aabb) -> bool;
 
+    /// Which octants of `cell`, each grown by `margin`, primitive `index` may touch: bit `i`
+    /// for [`Aabb::octant`] `i`. The default asks [`PrimitiveSet::overlaps`] eight times.
+    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64) -> u8 {
+        octants_by_overlap(self, index, cell, margin)
+    }
+
     /// Per-ray precomputation for a ray with the given local origin and direction.
     fn prepare(&self, local_origin: DVec3, dir: DVec3) -> Self::RayData;
 
     /// Parameter `t` of the nearest hit of primitive `index` with `0 < t <= t_max`.
     fn intersect(&self, index: usize, ray: &PreparedRay<Self::RayData>, t_max: f64) -> Option<f64>;
+}
+
+/// [`PrimitiveSet::child_mask`] computed with eight [`PrimitiveSet::overlaps`] tests.
+pub fn octants_by_overlap<P: PrimitiveSet + ?Sized>(
+    set: &P,
+    index: usize,
+    cell: &Aabb,
+    margin: f64,
+) -> u8 {
+    (0..8)
+        .filter(|&i| set.overlaps(index, &cell.octant(i).expanded(margin)))
+        .fold(0, |mask, i| mask | (1 << i))
 }
 
 /// Prepares a ray for [`PrimitiveSet::intersect`]; turns -0.0 direction components into +0.0.

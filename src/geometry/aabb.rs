@@ -76,6 +76,18 @@ impl Aabb {
         Aabb::new(self.min - offset, self.max - offset)
     }
 
+    /// Octant `i` of the box: bit 0 of `i` selects the upper x half, bit 1 y, bit 2 z.
+    pub fn octant(&self, i: usize) -> Aabb {
+        let half = self.size() * 0.5;
+        let offset = DVec3::new(
+            if i & 1 != 0 { half.x } else { 0.0 },
+            if i & 2 != 0 { half.y } else { 0.0 },
+            if i & 4 != 0 { half.z } else { 0.0 },
+        );
+        let min = self.min + offset;
+        Aabb::new(min, min + half)
+    }
+
     /// The eight corners.
     pub fn corners(&self) -> [DVec3; 8] {
         std::array::from_fn(|i| {

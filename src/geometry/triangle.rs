@@ -109,6 +109,38 @@ pub fn overlaps_box(tri: &[Vec3; 3], aabb: &Aabb) -> bool {
         .any(separated)
 }
 
+/// Which octants of `cell`, each grown by `margin`, the closed triangle touches: bit `i` for
+/// [`Aabb::octant`] `i`. The same separating-axis test as [`overlaps_box`], with each axis's
+/// triangle projection computed once and compared against all eight octants.
+pub fn octant_mask(tri: &[Vec3; 3], cell: &Aabb, margin: f64) -> u8 {
+    let centre = cell.center();
+    let quarter = cell.size() * 0.25;
+    let half = quarter + DVec3::splat(margin);
+    let v = tri.map(|p| p.as_dvec3() - centre);
+    let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
+    let mut mask = 0xFFu8;
+    let mut separate = |axis: DVec3| {
+        let p = [axis.dot(v[0]), axis.dot(v[1]), axis.dot(v[2])];
+        let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+        let radius = half.dot(axis.abs());
+        let a = quarter * axis;
+        for i in 0..8 {
+            let sign = |bit: usize| if i & bit != 0 { 1.0 } else { -1.0 };
+            let c = sign(1) * a.x + sign(2) * a.y + sign(4) * a.z;
+            if lo - c > radius || hi - c < -radius {
+                mask &= !(1 << i);
+            }
+        }
+    };
+    DVec3::AXES.into_iter().for_each(&mut separate);
+    separate(edges[0].cross(edges[1]));
+    edges
+        .iter()
+        .flat_map(|e| DVec3::AXES.map(|axis| e.cross(axis)))
+        .for_each(separate);
+    mask
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -140,6 +172,35 @@ mod tests {
         let flipped = [TRI[0], TRI[2], TRI[1]];
         assert_eq!(geometric_normal(&flipped), Some(-DVec3::Z));
         assert_eq!(geometric_normal(&[TRI[0]; 3]), None);
+    }
+
+    #[test]
+    fn octant_mask_agrees_with_the_box_test() {
+        let cell = Aabb::new(DVec3::splat(-1.0), DVec3::splat(1.0));
+        let tris = [
+            TRI,
+            [
+                Vec3::new(0.1, 0.1, 0.1),
+                Vec3::new(0.9, 0.2, 0.3),
+                Vec3::new(0.2, 0.8, 0.9),
+            ],
+            [
+                Vec3::new(-0.9, 0.8, -0.1),
+                Vec3::new(0.95, -0.9, 0.2),
+                Vec3::new(0.7, 0.9, 0.05),
+            ],
+            [
+                Vec3::new(0.5, -2.0, 0.5),
+                Vec3::new(0.5, 2.0, 0.5),
+                Vec3::new(-3.0, 0.0, -0.2),
+            ],
+        ];
+        for tri in &tris {
+            let expected = (0..8)
+                .filter(|&i| overlaps_box(tri, &cell.octant(i).expanded(1e-9)))
+                .fold(0u8, |m, i| m | (1 << i));
+            assert_eq!(octant_mask(tri, &cell, 1e-9), expected, "{tri:?}");
+        }
     }
 
     #[test]

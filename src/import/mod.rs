@@ -2,6 +2,7 @@
 
 pub mod gltf;
 pub mod obj;
+pub mod usd;
 
 use crate::error::{Error, Result};
 use crate::scene::Scene;
@@ -23,9 +24,10 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     match extension.as_deref() {
         Some("gltf") | Some("glb") => gltf::load(path, options),
         Some("obj") => obj::load(path),
+        Some("usda") | Some("usdc") | Some("usd") | Some("usdz") => usd::load(path, options),
         _ => Err(Error::in_file(
             path,
-            "unsupported file type (expected .gltf, .glb or .obj)",
+            "unsupported file type (expected .gltf, .glb, .obj, .usda, .usdc, .usd or .usdz)",
         )),
     }
 }

@@ -34,8 +34,7 @@ impl<P: PrimitiveSet> Builder<'_, P> {
             return leaf(refs, depth);
         };
         drop(refs);
-        let build =
-            |(i, child): (usize, Vec<u32>)| self.subtree(child_cell(&cell, i), child, depth + 1);
+        let build = |(i, child): (usize, Vec<u32>)| self.subtree(cell.octant(i), child, depth + 1);
         let parts: Vec<Subtree> = if children.iter().map(Vec::len).sum::<usize>() > PARALLEL_REFS {
             use rayon::prelude::*;
             children.into_par_iter().enumerate().map(build).collect()
@@ -51,10 +50,10 @@ impl<P: PrimitiveSet> Builder<'_, P> {
             return None;
         }
         let children = self.distribute(cell, refs);
-        if children.iter().any(|c| c.len() == refs.len()) {
+        let child_refs: usize = children.iter().map(Vec::len).sum();
+        if child_refs > refs.len() && children.iter().any(|c| c.len() == refs.len()) {
             return None;
         }
-        let child_refs: usize = children.iter().map(Vec::len).sum();
         let p = &self.params;
         let leaf_cost = refs.len() as f64 * p.intersection_cost;
         let split_cost = p.traversal_cost + 0.25 * child_refs as f64 * p.intersection_cost;
@@ -66,20 +65,24 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     /// against each.
     fn distribute(&self, cell: &Aabb, refs: &[u32]) -> Vec<Vec<u32>> {
         let mid = cell.center();
-        let cells: [Aabb; 8] = std::array::from_fn(|i| child_cell(cell, i).expanded(self.margin));
+        let margin = DVec3::splat(self.margin);
         let mut children: Vec<Vec<u32>> = vec![Vec::new(); 8];
         for &prim in refs {
             let b = &self.bounds[prim as usize];
-            let low = b.min.cmplt(DVec3::splat(self.margin) + mid).bitmask();
-            let high = b.max.cmpgt(mid - DVec3::splat(self.margin)).bitmask();
-            let single = (low ^ high) == 0b111;
+            let low = b.min.cmplt(mid + margin).bitmask();
+            let high = b.max.cmpgt(mid - margin).bitmask();
+            // Children whose (grown) cell the bounds reach: child i spans the upper half on
+            // axis a when bit a of i is set.
+            let reached = (0..8u32)
+                .filter(|&i| (high & i) == i && (low & !i & 0b111) == (!i & 0b111))
+                .fold(0u8, |m, i| m | (1 << i));
+            let mask = if reached.count_ones() == 1 {
+                reached
+            } else {
+                reached & self.set.child_mask(prim as usize, cell, self.margin)
+            };
             for (i, child) in children.iter_mut().enumerate() {
-                let upper = i as u32;
-                // Child i spans the upper half on axis a when bit a of i is set.
-                if (high & upper) != upper || (low & !upper & 0b111) != (!upper & 0b111) {
-                    continue;
-                }
-                if single || self.set.overlaps(prim as usize, &cells[i]) {
+                if mask & (1 << i) != 0 {
                     child.push(prim);
                 }
             }
@@ -156,18 +159,6 @@ fn join(parts: Vec<Subtree>) -> Subtree {
         nodes.extend(part.nodes[1..].iter().map(|n| relocate(n, *base)));
     }
     Subtree { nodes, refs, stats }
-}
-
-/// Child `i` of a cubic cell: bit 0 selects the upper x half, bit 1 y, bit 2 z.
-pub(super) fn child_cell(cell: &Aabb, i: usize) -> Aabb {
-    let half = cell.size() * 0.5;
-    let offset = DVec3::new(
-        if i & 1 != 0 { half.x } else { 0.0 },
-        if i & 2 != 0 { half.y } else { 0.0 },
-        if i & 4 != 0 { half.z } else { 0.0 },
-    );
-    let min = cell.min + offset;
-    Aabb::new(min, min + half)
 }
 
 /// The smallest cube holding `bounds` with a little room, or a unit cube for an empty box.

@@ -8,8 +8,10 @@
 //! every child cube has a quarter of its parent's surface area. Primitives that straddle cells
 //! count in every child they touch, so splitting stops by itself where duplication outweighs
 //! separation. A cell is also kept whole when one of its children would hold every one of its
-//! references (the triangles around a shared vertex, say): no split can separate them there, and
-//! without this rule the cost model alone keeps splitting such cells to the depth cap. A primitive goes into every child it really overlaps (exact triangle/box test;
+//! references while others hold copies of some (the triangles around a shared vertex, say): no
+//! split can separate them there, and without this rule the cost model alone keeps splitting such
+//! cells to the depth cap. (When all references fall into one child and no other, the split goes
+//! ahead: it only shrinks the cell around them.) A primitive goes into every child it really overlaps (exact triangle/box test;
 //! see [`PrimitiveSet::overlaps`]), tested against the child cell grown by a tiny margin so that
 //! rounding in the traversal can never lose a primitive lying on a cell face.
 //!

@@ -1,0 +1,122 @@
+//! UsdGeomMesh: polygons triangulated as fans in the prim's local space.
+
+use super::value;
+use glam::DVec3;
+use openusd::usd::Prim;
+
+/// What reading a mesh gave.
+pub enum MeshRead {
+    /// Local-space triangles, in face order, winding made counter-clockwise-is-front.
+    Triangles {
+        triangles: Vec<[DVec3; 3]>,
+        /// The mesh is a subdivision surface (drawn as its control cage).
+        subdivided: bool,
+        /// Faces with fewer than three vertices that were dropped.
+        degenerate_faces: usize,
+    },
+    /// Nothing to draw, with the reason (a warning).
+    Skip(String),
+}
+
+/// Reads `points`, `faceVertexCounts`, `faceVertexIndices`, `orientation` and
+/// `subdivisionScheme`. Malformed data (a value of the wrong type, an index out of range,
+/// counts that do not add up to the index count) skips the mesh with a warning, as
+/// usd-core's imaging does; the error only reports a failure to read the stage.
+pub fn read(prim: &Prim) -> Result<MeshRead, String> {
+    match read_checked(prim) {
+        Ok(read) => Ok(read),
+        Err(message) => Ok(MeshRead::Skip(format!("{message}: mesh skipped"))),
+    }
+}
+
+fn read_checked(prim: &Prim) -> Result<MeshRead, String> {
+    let path = prim.path();
+    let points = value::vec3s(prim, "points")?;
+    let counts = value::ints(prim, "faceVertexCounts")?;
+    let indices = value::ints(prim, "faceVertexIndices")?;
+    let (Some(points), Some(counts), Some(indices)) = (points, counts, indices) else {
+        let animated = ["points", "faceVertexCounts", "faceVertexIndices"]
+            .iter()
+            .any(|name| value::has_time_samples(prim, name));
+        let why = if animated {
+            "has time-sampled points or topology but no default value"
+        } else {
+            "has no points or faces"
+        };
+        return Ok(MeshRead::Skip(format!(
+            "{path}: empty mesh ({why}): skipped"
+        )));
+    };
+    if points.is_empty() || counts.is_empty() || indices.is_empty() {
+        return Ok(MeshRead::Skip(format!(
+            "{path}: empty mesh (no points or faces): skipped"
+        )));
+    }
+    if let Some(i) = points.iter().position(|p| !p.is_finite()) {
+        return Ok(MeshRead::Skip(format!(
+            "{path}: point {i} is not finite: mesh skipped"
+        )));
+    }
+    if let Some(&bad) = counts.iter().find(|&&c| c < 0) {
+        return Ok(MeshRead::Skip(format!(
+            "{path}: faceVertexCounts holds {bad}: mesh skipped"
+        )));
+    }
+    let total: i64 = counts.iter().sum();
+    if total != indices.len() as i64 {
+        return Ok(MeshRead::Skip(format!(
+            "{path}: faceVertexCounts add up to {total} but faceVertexIndices has {}: mesh skipped",
+            indices.len()
+        )));
+    }
+    if let Some(&bad) = indices
+        .iter()
+        .find(|&&i| i < 0 || i as usize >= points.len())
+    {
+        return Ok(MeshRead::Skip(format!(
+            "{path}: faceVertexIndices holds {bad}, out of range for {} points: mesh skipped",
+            points.len()
+        )));
+    }
+    let left_handed = match value::token(prim, "orientation")?.as_deref() {
+        None | Some("rightHanded") => false,
+        Some("leftHanded") => true,
+        Some(other) => {
+            return Err(format!(
+                "{path}.orientation: '{other}' is neither rightHanded nor leftHanded"
+            ));
+        }
+    };
+    // USD's fallback subdivisionScheme is catmullClark: a mesh is a subdivision surface
+    // unless it says `none`.
+    let subdivided = value::token(prim, "subdivisionScheme")?.as_deref() != Some("none");
+    let mut triangles = Vec::with_capacity(indices.len());
+    let mut degenerate_faces = 0;
+    let mut start = 0usize;
+    for &count in &counts {
+        let face = &indices[start..start + count as usize];
+        start += count as usize;
+        if face.len() < 3 {
+            degenerate_faces += 1;
+            continue;
+        }
+        let p = |k: usize| points[face[k] as usize];
+        for k in 1..face.len() - 1 {
+            triangles.push(if left_handed {
+                [p(0), p(k + 1), p(k)]
+            } else {
+                [p(0), p(k), p(k + 1)]
+            });
+        }
+    }
+    if triangles.is_empty() {
+        return Ok(MeshRead::Skip(format!(
+            "{path}: empty mesh (no face has three vertices): skipped"
+        )));
+    }
+    Ok(MeshRead::Triangles {
+        triangles,
+        subdivided,
+        degenerate_faces,
+    })
+}

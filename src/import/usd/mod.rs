@@ -1,0 +1,658 @@
+//! USD (`.usda`, `.usdc`, `.usd`, `.usdz`) through the `openusd` crate.
+//!
+//! openusd composes the stage (sublayers, references, payloads, variants, inherits,
+//! specializes, scene-graph instancing); this module walks the composed prims from the
+//! pseudo-root (or from the prim chosen with `--scene PATH`) and turns them into world-space
+//! triangles and quadrics:
+//!
+//! - transforms composed in f64 from the root ([`xform`]), `!resetXformStack!` honoured;
+//! - `Mesh` polygons as triangle fans ([`mesh`]); intrinsic gprims as quadrics ([`shapes`]);
+//!   prims with `raycast:quadric:*` attributes as general quadrics ([`quadric`]);
+//! - `Camera` prims as cameras named by their prim path;
+//! - instanceable prims through their instance proxies (each instance's gprims are objects
+//!   named by their proxy paths) and `PointInstancer` (one object per instance, `path[i]`);
+//! - `def` prims only (not `over` or `class`), active, not `invisible`, purpose neither
+//!   `guide` nor `proxy`.
+//!
+//! Attribute values are read at the default time code, as usd-core does for
+//! `UsdTimeCode::Default()`. Composition problems (a missing referenced file, an unresolved
+//! payload) are warnings. The file format is read by openusd; docs/usd.md has the details.
+
+mod mesh;
+mod quadric;
+mod shapes;
+mod value;
+mod xform;
+
+use super::LoadOptions;
+use crate::camera::{Camera, Projection};
+use crate::error::{Error, Result};
+use crate::quadric::Quadric;
+use crate::scene::{Scene, SceneBuilder};
+use glam::{DMat4, DVec3};
+use openusd::sdf;
+use openusd::usd::{Prim, Stage};
+use shapes::Part;
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::path::Path;
+use std::rc::Rc;
+
+/// Deepest nesting of point instancers (a prototype that instances itself is refused).
+const MAX_INSTANCER_DEPTH: usize = 16;
+
+/// Most prims one file may expand to, counting every instance.
+const MAX_PRIM_VISITS: usize = 20_000_000;
+
+/// Loads a USD file.
+pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
+    std::fs::metadata(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
+    let text = path
+        .to_str()
+        .ok_or_else(|| Error::in_file(path, "the file name is not valid UTF-8"))?;
+    // openusd is young: a panic inside it on malformed input becomes an error here.
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        load_stage(path, text, options)
+    }));
+    match outcome {
+        Ok(result) => result,
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| panic.downcast_ref::<&str>().copied())
+                .unwrap_or("unknown cause");
+            Err(Error::in_file(
+                path,
+                format!("the USD reader failed on this file: {what}"),
+            ))
+        }
+    }
+}
+
+fn load_stage(path: &Path, text: &str, options: &LoadOptions) -> Result<Scene> {
+    let fail = |message: String| Error::in_file(path, message);
+    let stage = Stage::open(text).map_err(|e| fail(format!("cannot open the USD stage: {e:#}")))?;
+    let mut loader = Loader {
+        stage: stage.clone(),
+        builder: SceneBuilder::new(),
+        warnings: Vec::new(),
+        notes: BTreeMap::new(),
+        meshes: HashMap::new(),
+        excluded: HashSet::new(),
+        visits: 0,
+    };
+    let roots = loader.roots(options.scene.as_deref()).map_err(fail)?;
+    for (root, world) in roots {
+        loader
+            .walk(&root, world, None, &mut None, 0)
+            .map_err(fail)?;
+    }
+    let mut builder = std::mem::take(&mut loader.builder);
+    for error in stage.composition_errors() {
+        builder.warn(format!("composition: {error}"));
+    }
+    for warning in loader.warnings.drain(..) {
+        builder.warn(warning);
+    }
+    for (what, prims) in &loader.notes {
+        let shown: Vec<&str> = prims.iter().take(3).map(String::as_str).collect();
+        let more = if prims.len() > 3 {
+            format!(" and {} more", prims.len() - 3)
+        } else {
+            String::new()
+        };
+        builder.warn(format!(
+            "{} {what}: {}{more}",
+            prims.len(),
+            shown.join(", ")
+        ));
+    }
+    if builder.object_count() == 0 {
+        builder.warn("the stage holds no triangles or quadrics");
+    }
+    Ok(builder.finish(path.to_path_buf()))
+}
+
+/// What an instance of a point instancer collects while its prototype is walked.
+struct Instance {
+    /// Object name of the instance: `instancer[i]`.
+    name: String,
+    /// Path of the prototype root being walked.
+    root: String,
+    /// Prim path of the instancer (the object's source).
+    source: String,
+    /// The instance's triangles, in world space.
+    triangles: Vec<[DVec3; 3]>,
+}
+
+/// Local triangles of a mesh prim, shared by every instance that draws it.
+#[derive(Clone)]
+struct CachedMesh {
+    triangles: Rc<Vec<[DVec3; 3]>>,
+    subdivided: bool,
+}
+
+struct Loader {
+    stage: Stage,
+    builder: SceneBuilder,
+    /// Warnings, in the order met.
+    warnings: Vec<String>,
+    /// Aggregated notes: what happened -> prims it happened to.
+    notes: BTreeMap<&'static str, Vec<String>>,
+    /// Mesh data by the path it was read from (prototype paths for instance proxies).
+    meshes: HashMap<String, Option<CachedMesh>>,
+    /// Point-instancer prototypes that live under their instancer: never drawn in place.
+    excluded: HashSet<String>,
+    visits: usize,
+}
+
+/// `true` when the type carries a transform (UsdGeomXformable); the ops of untyped prims
+/// and scopes are ignored, as usd-core does.
+fn is_xformable(type_name: &str) -> bool {
+    !matches!(
+        type_name,
+        "" | "Scope" | "GeomSubset" | "Material" | "Shader" | "NodeGraph"
+    )
+}
+
+fn err(prim: &Prim, e: impl std::fmt::Display) -> String {
+    format!("{}: {e:#}", prim.path())
+}
+
+impl Loader {
+    fn note(&mut self, what: &'static str, prim: &Prim) {
+        self.notes
+            .entry(what)
+            .or_default()
+            .push(prim.path().to_string());
+    }
+
+    /// The prims to walk, with their parents' world transforms: every root prim, or the
+    /// prim named by `--scene`.
+    fn roots(&mut self, choice: Option<&str>) -> std::result::Result<Vec<(Prim, DMat4)>, String> {
+        if let Some(name) = self.stage.default_prim() {
+            let path = format!("/{}", name.as_str());
+            let exists = sdf::Path::new(&path)
+                .ok()
+                .map(|p| self.stage.prim(p))
+                .is_some_and(|p| p.is_valid().unwrap_or(false));
+            if !exists {
+                self.warnings.push(format!(
+                    "defaultPrim '{}' does not exist: drawing the whole stage",
+                    name.as_str()
+                ));
+            }
+        }
+        match choice {
+            None => {
+                let names = self
+                    .stage
+                    .root_prims()
+                    .map_err(|e| format!("cannot list the root prims: {e:#}"))?;
+                let mut roots = Vec::new();
+                for name in names {
+                    let path = sdf::Path::new(&format!("/{}", name.as_str()))
+                        .map_err(|e| format!("bad root prim name '{}': {e}", name.as_str()))?;
+                    roots.push((self.stage.prim(path), DMat4::IDENTITY));
+                }
+                Ok(roots)
+            }
+            Some(choice) => {
+                let path = if choice == "default" {
+                    let name = self
+                        .stage
+                        .default_prim()
+                        .ok_or("--scene default: the stage has no defaultPrim")?;
+                    format!("/{}", name.as_str())
+                } else {
+                    choice.to_string()
+                };
+                let sdf_path = sdf::Path::new(&path)
+                    .map_err(|e| format!("--scene '{path}' is not a prim path: {e}"))?;
+                let prim = self.stage.prim(sdf_path);
+                if !prim.is_valid().map_err(|e| err(&prim, e))? || !path.starts_with('/') {
+                    return Err(format!("no prim '{path}' in the stage"));
+                }
+                // The chosen prim keeps its ancestors' transforms.
+                let mut world = DMat4::IDENTITY;
+                let mut ancestors: Vec<Prim> = Vec::new();
+                let mut p = prim.path().parent();
+                while let Some(parent) = p {
+                    if parent.is_abs_root() {
+                        break;
+                    }
+                    p = parent.parent();
+                    ancestors.push(self.stage.prim(parent));
+                }
+                for ancestor in ancestors.iter().rev() {
+                    world = self.world_of(ancestor, world)?;
+                }
+                Ok(vec![(prim, world)])
+            }
+        }
+    }
+
+    /// World transform of `prim` given its parent's.
+    fn world_of(&mut self, prim: &Prim, parent: DMat4) -> std::result::Result<DMat4, String> {
+        let type_name = prim.type_name().map_err(|e| err(prim, e))?;
+        let type_name = type_name.as_deref().unwrap_or("");
+        if !is_xformable(type_name) {
+            return Ok(parent);
+        }
+        let local = xform::local_transform(prim, &mut self.warnings)?;
+        let world = if local.resets {
+            local.matrix
+        } else {
+            parent * local.matrix
+        };
+        if world.is_finite() {
+            Ok(world)
+        } else {
+            Err(format!("{}: world transform is not finite", prim.path()))
+        }
+    }
+
+    /// Name of the object drawn for `prim`: its path, or inside a point instance the
+    /// instance name followed by the prim's path below the prototype root.
+    fn object_name(prim: &Prim, instance: &Option<Instance>) -> String {
+        let path = prim.path().to_string();
+        match instance {
+            None => path,
+            Some(inst) => {
+                let rest = path.strip_prefix(&inst.root).unwrap_or(&path);
+                format!("{}{rest}", inst.name)
+            }
+        }
+    }
+
+    /// Walks `prim` and its descendants. `purpose` is the closest authored purpose above.
+    fn walk(
+        &mut self,
+        prim: &Prim,
+        parent_world: DMat4,
+        purpose: Option<Rc<str>>,
+        instance: &mut Option<Instance>,
+        depth: usize,
+    ) -> std::result::Result<(), String> {
+        self.visits += 1;
+        if self.visits > MAX_PRIM_VISITS {
+            return Err(format!(
+                "the stage expands to more than {MAX_PRIM_VISITS} prims (counting instances)"
+            ));
+        }
+        let path = prim.path().to_string();
+        let is_instance_root = instance.as_ref().is_some_and(|i| i.root == path);
+        if !is_instance_root && self.excluded.contains(&path) {
+            return Ok(());
+        }
+        match prim.specifier().map_err(|e| err(prim, e))? {
+            Some(sdf::Specifier::Def) => {}
+            // `over` without a `def` anywhere, and `class`, are not drawn (nor their subtree).
+            _ => return Ok(()),
+        }
+        if !prim.is_active().map_err(|e| err(prim, e))? {
+            self.note("inactive prims skipped", prim);
+            return Ok(());
+        }
+        if value::token(prim, "visibility")?.as_deref() == Some("invisible") {
+            self.note("invisible prims skipped", prim);
+            return Ok(());
+        }
+        let purpose = match value::token(prim, "purpose")? {
+            Some(p) => Some(Rc::from(p.as_str())),
+            None => purpose,
+        };
+        let type_name = prim.type_name().map_err(|e| err(prim, e))?;
+        let type_name = type_name.as_deref().unwrap_or("").to_string();
+        let world = if is_instance_root {
+            // A point-instance prototype keeps its own transform under the instance's.
+            let local = xform::local_transform(prim, &mut self.warnings)?;
+            parent_world * local.matrix
+        } else {
+            self.world_of(prim, parent_world)?
+        };
+        let hidden_purpose = matches!(purpose.as_deref(), Some("guide") | Some("proxy"));
+        let draws =
+            type_name == "Mesh" || shapes::is_shape(&type_name) || quadric::has_quadric(prim)?;
+        if hidden_purpose && draws {
+            self.note("guide or proxy prims skipped", prim);
+        } else {
+            self.draw(prim, &type_name, world, instance)?;
+        }
+        if type_name == "PointInstancer" {
+            if hidden_purpose {
+                self.note("guide or proxy prims skipped", prim);
+            } else {
+                self.point_instancer(prim, world, instance, depth)?;
+            }
+        }
+        let children = prim.children().map_err(|e| err(prim, e))?;
+        for child in children {
+            self.walk(&child, world, purpose.clone(), instance, depth)?;
+        }
+        Ok(())
+    }
+
+    /// Draws what the prim itself defines: a mesh, a gprim, a quadric, a camera.
+    fn draw(
+        &mut self,
+        prim: &Prim,
+        type_name: &str,
+        world: DMat4,
+        instance: &mut Option<Instance>,
+    ) -> std::result::Result<(), String> {
+        let name = Self::object_name(prim, instance);
+        let source = prim.path().to_string();
+        if type_name == "Mesh" {
+            if let Some(mesh) = self.mesh(prim)? {
+                if mesh.subdivided {
+                    self.note("subdivision meshes drawn as their control cage", prim);
+                }
+                let triangles = place(&mesh.triangles, &world);
+                if triangles.iter().flatten().all(|p| p.is_finite()) {
+                    self.add_triangles(name.clone(), source.clone(), triangles, instance);
+                } else {
+                    self.warnings.push(format!(
+                        "{source}: its projective transform sends points to infinity: skipped"
+                    ));
+                }
+            }
+        } else if shapes::is_shape(type_name) {
+            match shapes::parts(prim, type_name)? {
+                Err(reason) => self.warnings.push(reason),
+                Ok(parts) => {
+                    for part in parts {
+                        match part {
+                            Part::Quadric {
+                                suffix,
+                                spec,
+                                frame,
+                            } => {
+                                let quadric = Quadric::new(&spec, world * frame)
+                                    .map_err(|e| format!("{source} ({type_name}): {e}"))?;
+                                self.builder.add_quadric(
+                                    format!("{name}{suffix}"),
+                                    source.clone(),
+                                    quadric,
+                                );
+                            }
+                            Part::Mesh { suffix, triangles } => {
+                                let triangles = place(&triangles, &world);
+                                self.add_triangles(
+                                    format!("{name}{suffix}"),
+                                    source.clone(),
+                                    triangles,
+                                    instance,
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        } else if type_name == "Camera" {
+            self.camera(prim, &name, world)?;
+        }
+        if quadric::has_quadric(prim)? {
+            let quadric = quadric::read(prim)
+                .and_then(|spec| Quadric::new(&spec, world))
+                .map_err(|e| format!("{source}: raycast:quadric: {e}"))?;
+            self.builder.add_quadric(name, source, quadric);
+        }
+        Ok(())
+    }
+
+    /// Adds a mesh object, or inside a point instance adds the triangles to the instance.
+    fn add_triangles(
+        &mut self,
+        name: String,
+        source: String,
+        triangles: Vec<[DVec3; 3]>,
+        instance: &mut Option<Instance>,
+    ) {
+        if triangles.is_empty() {
+            return;
+        }
+        match instance {
+            Some(inst) => inst.triangles.extend(triangles),
+            None => {
+                self.builder.add_mesh(name, source, triangles);
+            }
+        }
+    }
+
+    /// A mesh's local triangles, read once per prototype.
+    fn mesh(&mut self, prim: &Prim) -> std::result::Result<Option<CachedMesh>, String> {
+        let key = match prim.prim_in_prototype() {
+            Ok(Some(proto)) => proto.path().to_string(),
+            _ => prim.path().to_string(),
+        };
+        if let Some(cached) = self.meshes.get(&key) {
+            return Ok(cached.clone());
+        }
+        let read = match mesh::read(prim)? {
+            mesh::MeshRead::Skip(reason) => {
+                self.warnings.push(reason);
+                None
+            }
+            mesh::MeshRead::Triangles {
+                triangles,
+                subdivided,
+                degenerate_faces,
+            } => {
+                if degenerate_faces > 0 {
+                    self.warnings.push(format!(
+                        "{}: {degenerate_faces} faces with fewer than 3 vertices skipped",
+                        prim.path()
+                    ));
+                }
+                Some(CachedMesh {
+                    triangles: Rc::new(triangles),
+                    subdivided,
+                })
+            }
+        };
+        self.meshes.insert(key, read.clone());
+        Ok(read)
+    }
+
+    /// A UsdGeomCamera as a camera named by its prim path.
+    fn camera(&mut self, prim: &Prim, name: &str, world: DMat4) -> std::result::Result<(), String> {
+        let Some(to_world) = Camera::orthonormalised(world) else {
+            self.warnings.push(format!(
+                "{}: camera has a degenerate transform: skipped",
+                prim.path()
+            ));
+            return Ok(());
+        };
+        let focal = value::scalar(prim, "focalLength")?.unwrap_or(50.0);
+        let horizontal = value::scalar(prim, "horizontalAperture")?.unwrap_or(20.955);
+        let vertical = value::scalar(prim, "verticalAperture")?.unwrap_or(15.2908);
+        let [near, far] = value::vec2(prim, "clippingRange")?.unwrap_or([1.0, 1e6]);
+        let projection = value::token(prim, "projection")?.unwrap_or_else(|| "perspective".into());
+        let positive = |x: f64| x.is_finite() && x > 0.0;
+        if !positive(horizontal) || !positive(vertical) {
+            self.warnings.push(format!(
+                "{}: camera apertures must be positive: skipped",
+                prim.path()
+            ));
+            return Ok(());
+        }
+        let projection = match projection.as_str() {
+            "orthographic" => Projection::Orthographic {
+                // Apertures are in tenths of a scene unit.
+                ymag: vertical * 0.1 / 2.0,
+            },
+            _ => {
+                if !positive(focal) {
+                    self.warnings.push(format!(
+                        "{}: camera focalLength must be positive: skipped",
+                        prim.path()
+                    ));
+                    return Ok(());
+                }
+                Projection::Perspective {
+                    yfov: 2.0 * (vertical / (2.0 * focal)).atan(),
+                }
+            }
+        };
+        for offset in ["horizontalApertureOffset", "verticalApertureOffset"] {
+            if value::scalar(prim, offset)?.is_some_and(|x| x != 0.0) {
+                self.warnings.push(format!(
+                    "{}: camera {offset} is not supported (ignored)",
+                    prim.path()
+                ));
+            }
+        }
+        self.builder.add_camera(Camera {
+            name: name.to_string(),
+            source: format!("usd camera {}", prim.path()),
+            projection,
+            aspect_ratio: Some(horizontal / vertical),
+            znear: near,
+            zfar: Some(far).filter(|f| f.is_finite()),
+            to_world,
+        });
+        Ok(())
+    }
+
+    /// A UsdGeomPointInstancer: each instance walks its prototype with the instance
+    /// transform `world · T(position) · R(orientation) · S(scale)`, collecting its
+    /// triangles into one object named `name[i]`.
+    fn point_instancer(
+        &mut self,
+        prim: &Prim,
+        world: DMat4,
+        outer: &mut Option<Instance>,
+        depth: usize,
+    ) -> std::result::Result<(), String> {
+        let path = prim.path().to_string();
+        if depth >= MAX_INSTANCER_DEPTH {
+            return Err(format!(
+                "{path}: point instancers nest deeper than {MAX_INSTANCER_DEPTH} (a prototype instancing itself?)"
+            ));
+        }
+        let targets = prim
+            .relationship("prototypes")
+            .targets()
+            .map_err(|e| err(prim, e))?;
+        let targets: Vec<Prim> = targets.into_iter().map(|t| self.stage.prim(t)).collect();
+        // Prototypes under their instancer are drawn only through it.
+        for target in &targets {
+            let target_path = target.path().to_string();
+            if target_path.starts_with(&format!("{path}/")) {
+                self.excluded.insert(target_path);
+            }
+        }
+        let skip = |loader: &mut Self, why: String| {
+            loader
+                .warnings
+                .push(format!("{path}: point instancer {why}: nothing drawn"));
+            Ok(())
+        };
+        let Some(indices) = value::ints(prim, "protoIndices")? else {
+            return skip(self, "has no protoIndices".into());
+        };
+        let n = indices.len();
+        let Some(positions) = value::vec3s(prim, "positions")? else {
+            return skip(self, "has no positions".into());
+        };
+        if positions.len() != n {
+            return skip(
+                self,
+                format!("has {} positions for {n} protoIndices", positions.len()),
+            );
+        }
+        let orientations = match value::quats(prim, "orientations")? {
+            Some(q) => Some(q),
+            None => value::quats(prim, "orientationsf")?,
+        };
+        let scales = value::vec3s(prim, "scales")?;
+        for (what, len) in [
+            ("orientations", orientations.as_ref().map(Vec::len)),
+            ("scales", scales.as_ref().map(Vec::len)),
+        ] {
+            if let Some(len) = len.filter(|&len| len != n) {
+                return skip(self, format!("has {len} {what} for {n} protoIndices"));
+            }
+        }
+        let ids = value::ints(prim, "ids")?;
+        if let Some(ids) = ids.as_ref().filter(|ids| ids.len() != n) {
+            return skip(self, format!("has {} ids for {n} protoIndices", ids.len()));
+        }
+        let invisible: HashSet<i64> = value::ints(prim, "invisibleIds")?
+            .unwrap_or_default()
+            .into_iter()
+            .collect();
+        let base_name = Self::object_name(prim, outer);
+        let mut bad_index = 0usize;
+        for i in 0..n {
+            let id = ids.as_ref().map_or(i as i64, |ids| ids[i]);
+            if invisible.contains(&id) {
+                continue;
+            }
+            let Some(target) = usize::try_from(indices[i])
+                .ok()
+                .and_then(|k| targets.get(k))
+            else {
+                bad_index += 1;
+                continue;
+            };
+            let rotation = orientations
+                .as_ref()
+                .map(|q| q[i])
+                .filter(|q| q.is_finite() && q.length_squared() > 0.0)
+                .map_or(glam::DQuat::IDENTITY, |q| q.normalize());
+            let scale = scales.as_ref().map_or(DVec3::ONE, |s| s[i]);
+            let instance_world =
+                world * DMat4::from_scale_rotation_translation(scale, rotation, positions[i]);
+            let mut inner = Some(Instance {
+                name: format!("{base_name}[{i}]"),
+                root: target.path().to_string(),
+                source: path.clone(),
+                triangles: Vec::new(),
+            });
+            self.walk(target, instance_world, None, &mut inner, depth + 1)?;
+            let Some(inner) = inner.filter(|inner| !inner.triangles.is_empty()) else {
+                continue;
+            };
+            match outer {
+                Some(outer) => outer.triangles.extend(inner.triangles),
+                None => {
+                    self.builder
+                        .add_mesh(inner.name, inner.source, inner.triangles);
+                }
+            }
+        }
+        if bad_index > 0 {
+            self.warnings.push(format!(
+                "{path}: {bad_index} instances have a protoIndex with no prototype: skipped"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Local triangles placed in the world; a mirroring transform keeps the front face. A
+/// projective matrix (`matrix4d` ops may have one; usd-core applies it with the
+/// homogeneous divide) maps triangles to triangles: points are divided by `w`.
+fn place(local: &[[DVec3; 3]], world: &DMat4) -> Vec<[DVec3; 3]> {
+    let flip = world.determinant() < 0.0;
+    let projective = world.row(3) != glam::DVec4::W;
+    local
+        .iter()
+        .map(|tri| {
+            let [a, b, c] = tri.map(|p| {
+                if projective {
+                    world.project_point3(p)
+                } else {
+                    world.transform_point3(p)
+                }
+            });
+            if flip {
+                [a, c, b]
+            } else {
+                [a, b, c]
+            }
+        })
+        .collect()
+}

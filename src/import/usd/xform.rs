@@ -1,0 +1,181 @@
+//! `xformOpOrder` composed into a local matrix, in f64, with glam's column-vector convention.
+//!
+//! openusd 0.6 has `Xformable::local_to_parent_transform`, but it silently turns an unknown op,
+//! a missing op attribute or a wrongly typed value into the identity. This module composes the
+//! same stack itself so that those cases are reported: every op kind of UsdGeomXformOp
+//! (`translate[XYZ]`, `scale[XYZ]`, `rotate[XYZ]`, the six `rotateXYZ`-style Euler orders,
+//! `orient`, `transform`), op suffixes (`xformOp:translate:pivot`), `!invert!` and a leading
+//! `!resetXformStack!`.
+//!
+//! `xformOpOrder` lists ops outermost first: for `[A, B, C]` a point `p` maps to `A·B·C·p`.
+
+use super::value::{self, value_matrix4, value_quat, value_scalar, value_vec3};
+use glam::{DMat4, DQuat, DVec3};
+use openusd::sdf::Value;
+use openusd::usd::Prim;
+
+const INVERT: &str = "!invert!";
+const RESET: &str = "!resetXformStack!";
+
+/// A prim's local transform.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Local {
+    /// Local-to-parent matrix (column vectors).
+    pub matrix: DMat4,
+    /// `!resetXformStack!`: the matrix is local-to-world, the parent's transform is dropped.
+    pub resets: bool,
+}
+
+/// Composes the prim's `xformOpOrder`. Problems that usd-core reports as warnings (an op
+/// attribute that is not authored, an unknown op name) are pushed to `warnings` and the op
+/// is skipped; a value of the wrong type or a singular inverted op is an error.
+pub fn local_transform(prim: &Prim, warnings: &mut Vec<String>) -> Result<Local, String> {
+    let order = match value::raw(prim, "xformOpOrder")? {
+        None => {
+            return Ok(Local {
+                matrix: DMat4::IDENTITY,
+                resets: false,
+            })
+        }
+        Some(Value::TokenVec(tokens)) => tokens.iter().map(|t| t.as_str().to_string()).collect(),
+        Some(Value::StringVec(strings)) => strings,
+        Some(Value::TokenListOp(op)) => op
+            .flatten()
+            .into_iter()
+            .map(|t| t.as_str().to_string())
+            .collect::<Vec<String>>(),
+        Some(other) => {
+            return Err(format!(
+                "{}.xformOpOrder: expected token[], found {}",
+                prim.path(),
+                value::value_kind(&other)
+            ))
+        }
+    };
+    let mut matrix = DMat4::IDENTITY;
+    let mut resets = false;
+    for (i, entry) in order.iter().enumerate() {
+        if entry == RESET {
+            if i == 0 {
+                resets = true;
+                continue;
+            }
+            return Err(format!(
+                "{}.xformOpOrder: {RESET} is only valid as the first entry (found at {i})",
+                prim.path()
+            ));
+        }
+        let (inverted, name) = match entry.strip_prefix(INVERT) {
+            Some(rest) => (true, rest),
+            None => (false, entry.as_str()),
+        };
+        let Some(op) = op_matrix(prim, name, warnings)? else {
+            continue;
+        };
+        let op = if inverted {
+            invert(op).ok_or_else(|| {
+                format!(
+                    "{}: {entry} cannot be inverted (its matrix is singular)",
+                    prim.path()
+                )
+            })?
+        } else {
+            op
+        };
+        matrix *= op;
+    }
+    if !matrix.is_finite() {
+        return Err(format!(
+            "{}: the local transform is not finite",
+            prim.path()
+        ));
+    }
+    Ok(Local { matrix, resets })
+}
+
+/// Inverse of an op matrix, `None` when it is singular.
+fn invert(m: DMat4) -> Option<DMat4> {
+    let det = m.determinant();
+    let scale =
+        m.x_axis.truncate().length() * m.y_axis.truncate().length() * m.z_axis.truncate().length();
+    (det.is_finite() && det.abs() > 1e-300 && det.abs() > 1e-14 * scale).then(|| m.inverse())
+}
+
+/// The matrix of one op, `None` (with a warning) when it cannot be evaluated.
+fn op_matrix(prim: &Prim, name: &str, warnings: &mut Vec<String>) -> Result<Option<DMat4>, String> {
+    let Some(rest) = name.strip_prefix("xformOp:") else {
+        warnings.push(format!(
+            "{}: xformOpOrder entry '{name}' is not an xformOp: ignored",
+            prim.path()
+        ));
+        return Ok(None);
+    };
+    let kind = rest.split(':').next().unwrap_or(rest);
+    let Some(raw) = value::raw(prim, name)? else {
+        let why = if value::has_time_samples(prim, name) {
+            "has only time samples (read at the default time, as usd-core does)"
+        } else {
+            "is not authored"
+        };
+        warnings.push(format!("{}: xformOp {name} {why}: ignored", prim.path()));
+        return Ok(None);
+    };
+    let bad = |expected: &str| {
+        format!(
+            "{}.{name}: expected {expected}, found {}",
+            prim.path(),
+            value::value_kind(&raw)
+        )
+    };
+    let scalar = || value_scalar(&raw).ok_or_else(|| bad("a number"));
+    let vector = || value_vec3(&raw).ok_or_else(|| bad("a 3-vector"));
+    let rx = |deg: f64| DMat4::from_rotation_x(deg.to_radians());
+    let ry = |deg: f64| DMat4::from_rotation_y(deg.to_radians());
+    let rz = |deg: f64| DMat4::from_rotation_z(deg.to_radians());
+    let matrix = match kind {
+        "translate" => DMat4::from_translation(vector()?),
+        "translateX" => DMat4::from_translation(DVec3::X * scalar()?),
+        "translateY" => DMat4::from_translation(DVec3::Y * scalar()?),
+        "translateZ" => DMat4::from_translation(DVec3::Z * scalar()?),
+        "scale" => DMat4::from_scale(vector()?),
+        "scaleX" => DMat4::from_scale(DVec3::new(scalar()?, 1.0, 1.0)),
+        "scaleY" => DMat4::from_scale(DVec3::new(1.0, scalar()?, 1.0)),
+        "scaleZ" => DMat4::from_scale(DVec3::new(1.0, 1.0, scalar()?)),
+        "rotateX" => rx(scalar()?),
+        "rotateY" => ry(scalar()?),
+        "rotateZ" => rz(scalar()?),
+        // `rotateXYZ` rotates about X first, then Y, then Z: R = Rz·Ry·Rx for column vectors.
+        "rotateXYZ" | "rotateXZY" | "rotateYXZ" | "rotateYZX" | "rotateZXY" | "rotateZYX" => {
+            let angles = vector()?;
+            let mut m = DMat4::IDENTITY;
+            for axis in kind["rotate".len()..].chars() {
+                let r = match axis {
+                    'X' => rx(angles.x),
+                    'Y' => ry(angles.y),
+                    _ => rz(angles.z),
+                };
+                m = r * m;
+            }
+            m
+        }
+        "orient" => {
+            let q = value_quat(&raw).ok_or_else(|| bad("a quaternion"))?;
+            if q.length_squared() == 0.0 || !q.is_finite() {
+                return Err(format!(
+                    "{}.{name}: zero or non-finite quaternion",
+                    prim.path()
+                ));
+            }
+            DMat4::from_quat(DQuat::normalize(q))
+        }
+        "transform" => value_matrix4(&raw).ok_or_else(|| bad("a matrix4d"))?,
+        _ => {
+            warnings.push(format!(
+                "{}: unknown xformOp kind '{kind}' ({name}): ignored",
+                prim.path()
+            ));
+            return Ok(None);
+        }
+    };
+    Ok(Some(matrix))
+}
