@@ -1,13 +1,13 @@
 //! One render run from start to finish: load, build, trace, write, with timings. The binary
 //! is a thin layer over [`run`].
 
-use crate::accel::{Octree, OctreeParams};
+use crate::accel::OctreeParams;
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
 use crate::import::{self, LoadOptions};
 use crate::output::sidecar::{self, CameraInfo, Sidecar, Stats, Timings};
 use crate::output::{self, Format, Layout, Staging};
-use crate::render::{self, Aov, CameraView, RaySource, Tracer};
+use crate::render::{self, AccelKind, AccelStructure, Aov, CameraView, RaySource, Tracer};
 use crate::scene::Scene;
 use glam::DVec3;
 use std::path::PathBuf;
@@ -49,6 +49,8 @@ pub struct RenderJob {
     pub formats: Option<Vec<Format>>,
     /// Octree parameters.
     pub octree: OctreeParams,
+    /// The acceleration structure to build.
+    pub accel: AccelKind,
 }
 
 /// Default image width and height.
@@ -87,11 +89,11 @@ pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Si
         None => Some(camera_view(&scene, job)?),
     };
     let started = Instant::now();
-    let octree = Octree::build(&scene, job.octree);
+    let accel = AccelStructure::build(&scene, job.accel, job.octree);
     let build = started.elapsed().as_secs_f64();
     let tracer = Tracer {
         scene: &scene,
-        octree: &octree,
+        accel: accel.view(),
     };
     let source: &dyn RaySource = match (&rays, &view) {
         (Some(rays), _) => rays,
@@ -139,8 +141,19 @@ pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Si
             triangles: scene.triangle_count(),
             quadrics: scene.quadrics().len(),
             objects: scene.objects.len(),
-            octree: octree.stats(),
-            octree_params: octree.params(),
+            accel: job.accel.name(),
+            octree: match &accel {
+                AccelStructure::Octree(o) => Some(o.stats()),
+                AccelStructure::Bvh(_) => None,
+            },
+            octree_params: match &accel {
+                AccelStructure::Octree(o) => Some(o.params()),
+                AccelStructure::Bvh(_) => None,
+            },
+            bvh: match &accel {
+                AccelStructure::Octree(_) => None,
+                AccelStructure::Bvh(b) => Some(b.stats()),
+            },
         },
         timings: Timings {
             load,

@@ -8,7 +8,7 @@ use raycast::import::{self, LoadOptions};
 use raycast::info::SceneInfo;
 use raycast::job::{self, CameraChoice, RenderJob};
 use raycast::output::Format;
-use raycast::render::Aov;
+use raycast::render::{AccelKind, Aov};
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -91,6 +91,10 @@ struct RenderArgs {
     /// glTF scene by index or name.
     #[arg(long = "scene", value_name = "N|NAME")]
     scene_choice: Option<String>,
+    /// Acceleration structure: octree, bvh (obvhs BVH2) or cwbvh (obvhs CWBVH). The output
+    /// does not depend on it.
+    #[arg(long, default_value = "octree")]
+    accel: AccelKind,
     /// Worker threads (default: all cores). The output does not depend on it.
     #[arg(long)]
     threads: Option<usize>,
@@ -135,14 +139,25 @@ fn info(args: InfoArgs) -> raycast::Result<()> {
     };
     let scene = import::load(&args.scene, &options)?;
     let info = SceneInfo::new(&scene);
-    if args.json {
-        let text =
+    let text = if args.json {
+        let json =
             serde_json::to_string_pretty(&info).map_err(|e| raycast::Error::msg(e.to_string()))?;
-        println!("{text}");
+        format!("{json}\n")
     } else {
-        print!("{info}");
+        info.to_string()
+    };
+    print_stdout(&text)
+}
+
+/// Writes `text` to standard output; a closed pipe (`raycast info x | head`) is not an error.
+fn print_stdout(text: &str) -> raycast::Result<()> {
+    use std::io::Write;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(raycast::Error::msg(format!(
+            "cannot write to standard output: {e}"
+        ))),
+        _ => Ok(()),
     }
-    Ok(())
 }
 
 fn render(args: RenderArgs) -> raycast::Result<()> {
@@ -174,6 +189,7 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         out: args.out,
         formats: args.format,
         octree: OctreeParams::default(),
+        accel: args.accel,
     };
     let bar = Progress::new(args.quiet);
     let sidecar = job::run(&job, |done, total| bar.update(done, total))?;

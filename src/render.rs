@@ -3,7 +3,7 @@
 //! Every ray is traced independently and results are stored by ray index, so the buffers are
 //! bit-identical for any thread count. Only the requested AOVs are computed.
 
-use crate::accel::{prepare_ray, Hit, Octree};
+use crate::accel::{prepare_ray, Bvh, BvhKind, Hit, Octree, OctreeParams};
 use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::scene::Scene;
@@ -121,21 +121,125 @@ impl RaySource for Vec<Ray> {
     }
 }
 
+/// Which acceleration structure to build: the octree (the default) or an obvhs BVH.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum AccelKind {
+    /// The octree of [`crate::accel::octree`].
+    #[default]
+    Octree,
+    /// An obvhs hierarchy (see [`crate::accel::bvh`]).
+    Bvh(BvhKind),
+}
+
+impl AccelKind {
+    /// All choices, in the order the command line lists them.
+    pub const ALL: [AccelKind; 3] = [
+        AccelKind::Octree,
+        AccelKind::Bvh(BvhKind::Bvh2),
+        AccelKind::Bvh(BvhKind::Cwbvh),
+    ];
+
+    /// The name used on the command line and in the sidecar.
+    pub fn name(self) -> &'static str {
+        match self {
+            AccelKind::Octree => "octree",
+            AccelKind::Bvh(kind) => kind.name(),
+        }
+    }
+}
+
+impl fmt::Display for AccelKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for AccelKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        AccelKind::ALL
+            .into_iter()
+            .find(|a| a.name() == s)
+            .ok_or_else(|| {
+                format!("unknown acceleration structure '{s}' (choose octree, bvh, cwbvh)")
+            })
+    }
+}
+
+/// A built acceleration structure of either backend.
+#[derive(Debug, Clone)]
+pub enum AccelStructure {
+    /// The octree.
+    Octree(Octree),
+    /// An obvhs hierarchy.
+    Bvh(Bvh),
+}
+
+impl AccelStructure {
+    /// Builds the structure of `kind` over `scene` (`params` apply to the octree only).
+    pub fn build(scene: &Scene, kind: AccelKind, params: OctreeParams) -> AccelStructure {
+        match kind {
+            AccelKind::Octree => AccelStructure::Octree(Octree::build(scene, params)),
+            AccelKind::Bvh(kind) => AccelStructure::Bvh(Bvh::build(scene, kind)),
+        }
+    }
+
+    /// A borrowed view for a [`Tracer`].
+    pub fn view(&self) -> Accel<'_> {
+        match self {
+            AccelStructure::Octree(o) => Accel::Octree(o),
+            AccelStructure::Bvh(b) => Accel::Bvh(b),
+        }
+    }
+}
+
+/// The acceleration structure a [`Tracer`] traverses.
+#[derive(Debug, Clone, Copy)]
+pub enum Accel<'a> {
+    /// The octree.
+    Octree(&'a Octree),
+    /// An obvhs hierarchy.
+    Bvh(&'a Bvh),
+}
+
+impl<'a> From<&'a Octree> for Accel<'a> {
+    fn from(octree: &'a Octree) -> Self {
+        Accel::Octree(octree)
+    }
+}
+
+impl<'a> From<&'a Bvh> for Accel<'a> {
+    fn from(bvh: &'a Bvh) -> Self {
+        Accel::Bvh(bvh)
+    }
+}
+
 /// A scene with its acceleration structure, ready to trace.
 #[derive(Debug, Clone, Copy)]
 pub struct Tracer<'a> {
     /// The scene.
     pub scene: &'a Scene,
-    /// Octree built over the scene.
-    pub octree: &'a Octree,
+    /// The acceleration structure built over the scene.
+    pub accel: Accel<'a>,
 }
 
-impl Tracer<'_> {
+impl<'a> Tracer<'a> {
+    /// A tracer of `scene` through `accel` (an `&Octree` or a `&Bvh`).
+    pub fn new(scene: &'a Scene, accel: impl Into<Accel<'a>>) -> Self {
+        Tracer {
+            scene,
+            accel: accel.into(),
+        }
+    }
+
     /// The nearest hit of `ray` with `t > 0`.
     pub fn trace(&self, ray: &Ray) -> Option<Hit> {
         let local = ray.origin - self.scene.anchor;
         let prepared = prepare_ray(self.scene, local, ray.dir);
-        self.octree.intersect(self.scene, &prepared, f64::INFINITY)
+        match self.accel {
+            Accel::Octree(octree) => octree.intersect(self.scene, &prepared, f64::INFINITY),
+            Accel::Bvh(bvh) => bvh.intersect(self.scene, &prepared, f64::INFINITY),
+        }
     }
 }
 

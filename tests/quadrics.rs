@@ -61,7 +61,7 @@ fn render_view(file: &str, eye: DVec3, size: usize) -> render::Buffers {
     let octree = Octree::build(&scene, OctreeParams::default());
     let tracer = Tracer {
         scene: &scene,
-        octree: &octree,
+        accel: (&octree).into(),
     };
     let camera = Camera::look_at(
         eye,

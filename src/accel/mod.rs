@@ -4,11 +4,13 @@
 //! overlap test against a cell and for a ray hit, by primitive index. The scene implements it
 //! over triangles and quadrics together.
 
+pub mod bvh;
 pub mod octree;
 
 use crate::geometry::Aabb;
 use glam::DVec3;
 
+pub use bvh::{Bvh, BvhKind, BvhStats};
 pub use octree::{Octree, OctreeParams, OctreeStats};
 
 /// A ray prepared for tracing: world origin and direction plus whatever the primitive set

@@ -37,7 +37,7 @@ pub fn cast(scene: &Scene, rays: &[Ray]) -> Vec<Sample> {
     let octree = Octree::build(scene, OctreeParams::default());
     let tracer = Tracer {
         scene,
-        octree: &octree,
+        accel: (&octree).into(),
     };
     let aovs = [Aov::Depth, Aov::Normal, Aov::Position, Aov::Id, Aov::Prim];
     let b = render::render(&tracer, &rays.to_vec(), &aovs, |_| {});
