@@ -110,35 +110,57 @@ pub fn overlaps_box(tri: &[Vec3; 3], aabb: &Aabb) -> bool {
 }
 
 /// Which octants of `cell`, each grown by `margin`, the closed triangle touches: bit `i` for
-/// [`Aabb::octant`] `i`. The same separating-axis test as [`overlaps_box`], with each axis's
-/// triangle projection computed once and compared against all eight octants.
+/// [`Aabb::octant`] `i`. The same separating-axis test as [`overlaps_box`]: the three box axes
+/// reduce to comparing the triangle's bounds with the cell's midplanes, and for the other ten
+/// axes each projection of the triangle is computed once and compared with every octant still
+/// in question.
 pub fn octant_mask(tri: &[Vec3; 3], cell: &Aabb, margin: f64) -> u8 {
     let centre = cell.center();
     let quarter = cell.size() * 0.25;
     let half = quarter + DVec3::splat(margin);
     let v = tri.map(|p| p.as_dvec3() - centre);
+    let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+    // Box axes: octant i spans [c - half, c + half] with c = ±quarter on each axis.
+    let mut mask = 0u8;
+    for i in 0..8 {
+        let c = octant_offset(i, quarter);
+        if (lo - c).cmple(half).all() && (hi - c).cmpge(-half).all() {
+            mask |= 1 << i;
+        }
+    }
     let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
-    let mut mask = 0xFFu8;
-    let mut separate = |axis: DVec3| {
+    let axes = std::iter::once(edges[0].cross(edges[1])).chain(
+        edges
+            .iter()
+            .flat_map(|e| DVec3::AXES.map(|axis| e.cross(axis))),
+    );
+    for axis in axes {
+        if mask == 0 {
+            break;
+        }
         let p = [axis.dot(v[0]), axis.dot(v[1]), axis.dot(v[2])];
         let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
         let radius = half.dot(axis.abs());
-        let a = quarter * axis;
         for i in 0..8 {
-            let sign = |bit: usize| if i & bit != 0 { 1.0 } else { -1.0 };
-            let c = sign(1) * a.x + sign(2) * a.y + sign(4) * a.z;
-            if lo - c > radius || hi - c < -radius {
-                mask &= !(1 << i);
+            if mask & (1 << i) != 0 {
+                let c = octant_offset(i, quarter).dot(axis);
+                if lo - c > radius || hi - c < -radius {
+                    mask &= !(1 << i);
+                }
             }
         }
-    };
-    DVec3::AXES.into_iter().for_each(&mut separate);
-    separate(edges[0].cross(edges[1]));
-    edges
-        .iter()
-        .flat_map(|e| DVec3::AXES.map(|axis| e.cross(axis)))
-        .for_each(separate);
+    }
     mask
+}
+
+/// Centre of octant `i` relative to the cell centre, for a cell whose quarter size is `quarter`.
+fn octant_offset(i: usize, quarter: DVec3) -> DVec3 {
+    let sign = |bit: usize| if i & bit != 0 { 1.0 } else { -1.0 };
+    DVec3::new(
+        sign(1) * quarter.x,
+        sign(2) * quarter.y,
+        sign(4) * quarter.z,
+    )
 }
 
 #[cfg(test)]

@@ -56,8 +56,8 @@ impl Default for OctreeParams {
     fn default() -> Self {
         OctreeParams {
             max_depth: 16,
-            leaf_size: 4,
-            traversal_cost: 1.0,
+            leaf_size: 8,
+            traversal_cost: 2.0,
             intersection_cost: 1.0,
         }
     }
