@@ -43,6 +43,7 @@ import math
 import os
 import platform
 import shutil
+import subprocess
 import sys
 import tempfile
 import time
@@ -603,7 +604,21 @@ def summary_text(rows, infos):
     return "\n".join(out)
 
 
-def write_report(rows, infos, mach, args, elapsed, md_path, png_path):
+def stiff_table() -> str:
+    """Every stiff and extreme case with its measured error and bound, from the Rust test
+    tests/stiff.rs (expected values: mpmath at 200 bits, fixtures/stiff/cases.json)."""
+    with tempfile.TemporaryDirectory(prefix="stiff") as td:
+        table = Path(td) / "stiff.md"
+        env = dict(os.environ, RAYCAST_STIFF_REPORT=str(table))
+        run = subprocess.run(["cargo", "test", "--release", "--quiet", "--test", "stiff"],
+                             cwd=ROOT, env=env, capture_output=True, text=True)
+        if run.returncode != 0 or not table.exists():
+            return ("**The stiff-case test failed** (`cargo test --release --test stiff`):\n\n"
+                    "```\n" + (run.stdout + run.stderr)[-3000:] + "\n```")
+        return table.read_text()
+
+
+def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
     L = []
     L.append("# Depth error versus run time per ray")
     L.append("")
@@ -690,6 +705,18 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path):
              f"ray_triangle on {args.f64_rays} rays up to {args.f64_max_segments} segments, "
              f"bunny reference on {args.mesh_ref_rays} rays, mpmath on {args.mp_rays} quadric "
              f"hits per scene, best of {args.repeat} runs.")
+    L.append("")
+    L.append("## Stiff and extreme cases")
+    L.append("")
+    L.append("From `cargo test --release --test stiff` (tests/stiff.rs), which checks each case of "
+             "`fixtures/stiff/cases.json` against its expected value, computed offline in mpmath "
+             "at 200 bits by `tools/stiff_cases.py`, and against the case's own bound (derivations "
+             "in `fixtures/stiff/README.md`; near tangency the bound scales with the root's "
+             "condition, and ambiguous cases accept either a hit or a miss). *result* is the "
+             "depth raycast computed, or what happened; the test fails if any case leaves its "
+             "bound.")
+    L.append("")
+    L.append(stiff)
     md_path.write_text("\n".join(L) + "\n")
 
 
@@ -741,7 +768,7 @@ def main(argv=None):
     elapsed = time.perf_counter() - t0
     png = out / "error_vs_time.png"
     plot(rows, infos, png)
-    write_report(rows, infos, mach, a, elapsed, out / "error_vs_time.md", png)
+    write_report(rows, infos, mach, a, elapsed, out / "error_vs_time.md", png, stiff_table())
     (out / "error_vs_time.json").write_text(json.dumps(
         {"machine": mach, "scenes": infos, "rows": rows, "seconds": elapsed}, indent=1,
         default=lambda x: x.item() if hasattr(x, "item") else str(x)))
