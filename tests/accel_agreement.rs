@@ -5,58 +5,12 @@
 
 mod common;
 use common::*;
-use glam::{DMat4, DQuat, DVec3};
+use glam::DVec3;
 use raycast::accel::{
     brute_force, prepare_ray, Bvh, BvhKind, Hit, Octree, OctreeParams, PrimitiveSet,
 };
-use raycast::quadric::{Quadric, QuadricSpec};
 use raycast::render::{Accel, Tracer};
 use raycast::scene::{Scene, SceneBuilder};
-
-/// Random triangles of mixed sizes (some spanning most of the scene) and random quadrics
-/// (spheres and clipped cylinders), all shifted by `offset`.
-fn random_scene(rng: &mut Rng, triangles: usize, quadrics: usize, offset: DVec3) -> Scene {
-    let mut builder = SceneBuilder::new();
-    let mut tris = Vec::new();
-    for i in 0..triangles {
-        let size = if i % 50 == 0 {
-            8.0
-        } else {
-            rng.uniform(0.01, 1.0)
-        };
-        let c = rng.point(-10.0, 10.0) + offset;
-        tris.push([c, c + rng.direction() * size, c + rng.direction() * size]);
-    }
-    if !tris.is_empty() {
-        builder.add_mesh("triangles".into(), "test".into(), tris);
-    }
-    for i in 0..quadrics {
-        let world = DMat4::from_scale_rotation_translation(
-            DVec3::new(
-                rng.uniform(0.3, 2.0),
-                rng.uniform(0.3, 2.0),
-                rng.uniform(0.3, 2.0),
-            ),
-            DQuat::from_scaled_axis(rng.direction() * rng.uniform(0.0, 3.0)),
-            rng.point(-8.0, 8.0) + offset,
-        );
-        let spec = if i % 2 == 0 {
-            QuadricSpec::from_coefficients(
-                [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
-                None,
-            )
-        } else {
-            let bounds = Some([DVec3::splat(-1.5), DVec3::splat(1.5)]);
-            QuadricSpec::from_coefficients(
-                [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
-                bounds,
-            )
-        };
-        let quadric = Quadric::new(&spec.unwrap(), world).unwrap();
-        builder.add_quadric(format!("q{i}"), "test".into(), quadric);
-    }
-    builder.finish("random".into())
-}
 
 /// Tallies of one scene's comparisons.
 #[derive(Default, Debug)]

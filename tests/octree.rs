@@ -3,52 +3,9 @@
 
 mod common;
 use common::*;
-use glam::{DMat4, DQuat, DVec3};
-use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams, PrimitiveSet};
-use raycast::quadric::{Quadric, QuadricSpec};
+use glam::DVec3;
+use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams};
 use raycast::scene::{Scene, SceneBuilder};
-
-/// Random triangles of mixed sizes (some spanning most of the scene) and random quadrics.
-fn random_scene(rng: &mut Rng, triangles: usize, quadrics: usize) -> Scene {
-    let mut builder = SceneBuilder::new();
-    let mut tris = Vec::new();
-    for i in 0..triangles {
-        let size = if i % 50 == 0 {
-            8.0
-        } else {
-            rng.uniform(0.01, 1.0)
-        };
-        let c = rng.point(-10.0, 10.0);
-        tris.push([c, c + rng.direction() * size, c + rng.direction() * size]);
-    }
-    builder.add_mesh("triangles".into(), "test".into(), tris);
-    for i in 0..quadrics {
-        let world = DMat4::from_scale_rotation_translation(
-            DVec3::new(
-                rng.uniform(0.5, 2.0),
-                rng.uniform(0.5, 2.0),
-                rng.uniform(0.5, 2.0),
-            ),
-            DQuat::from_scaled_axis(rng.direction() * rng.uniform(0.0, 3.0)),
-            rng.point(-8.0, 8.0),
-        );
-        let spec = if i % 2 == 0 {
-            QuadricSpec::from_coefficients(
-                [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
-                None,
-            )
-        } else {
-            let bounds = Some([DVec3::splat(-1.5), DVec3::splat(1.5)]);
-            QuadricSpec::from_coefficients(
-                [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
-                bounds,
-            )
-        };
-        let quadric = Quadric::new(&spec.unwrap(), world).unwrap();
-        builder.add_quadric(format!("q{i}"), "test".into(), quadric);
-    }
-    builder.finish("random".into())
-}
 
 fn assert_same_as_brute_force(scene: &Scene, octree: &Octree, origin: DVec3, dir: DVec3) {
     let local = origin - scene.anchor;
@@ -62,7 +19,7 @@ fn assert_same_as_brute_force(scene: &Scene, octree: &Octree, origin: DVec3, dir
 fn random_scenes_match_brute_force() {
     let mut rng = Rng(0x5eed_0001);
     for round in 0..4 {
-        let scene = random_scene(&mut rng, 400 + 300 * round, 6);
+        let scene = random_scene(&mut rng, 400 + 300 * round, 6, DVec3::ZERO);
         let octree = Octree::build(&scene, OctreeParams::default());
         assert!(octree.stats().depth >= 2, "{:?}", octree.stats());
         let mut hits = 0;
@@ -81,7 +38,7 @@ fn random_scenes_match_brute_force() {
 #[test]
 fn rays_on_cell_planes_axis_parallel_and_negative_zero() {
     let mut rng = Rng(0x5eed_0002);
-    let scene = random_scene(&mut rng, 1500, 4);
+    let scene = random_scene(&mut rng, 1500, 4, DVec3::ZERO);
     let octree = Octree::build(&scene, OctreeParams::default());
     let root = octree.root();
     let c = root.center() + scene.anchor;
@@ -117,19 +74,7 @@ fn boundary_trap_is_not_fallen_into() {
     let origin = DVec3::new(-12.0, 0.25, 0.25) - scene.anchor;
     let dir = DVec3::X;
     let ray = prepare_ray(&scene, origin, dir);
-    // What a naive traversal would report: the first hit found in the first leaf holding one.
-    let mut naive: Option<(u32, f64, f64)> = None;
-    octree.traverse(origin, dir, f64::INFINITY, |refs, _enter, exit| {
-        for &prim in refs {
-            if let Some(t) = scene.intersect(prim as usize, &ray, f64::INFINITY) {
-                if naive.is_none() {
-                    naive = Some((prim, t, exit));
-                }
-            }
-        }
-        f64::INFINITY
-    });
-    let (prim, t, exit) = naive.expect("the ray hits something");
+    let (prim, t, exit) = naive_first_hit(&scene, &octree, &ray);
     assert_eq!(
         scene.object_of(prim).0.name,
         "big",

@@ -6,7 +6,7 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams, PrimitiveSet};
+use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams};
 use raycast::camera::{Camera, Projection};
 use raycast::render::{self, Aov, CameraView, Tracer};
 use serde_json::Value;
@@ -196,16 +196,7 @@ fn boundary_trap_with_a_large_quadric() {
     let origin = DVec3::new(6.9375, 1.3125, 12.0) - scene.anchor;
     let dir = DVec3::NEG_Z;
     let ray = prepare_ray(&scene, origin, dir);
-    let mut naive: Option<(u32, f64, f64)> = None;
-    octree.traverse(origin, dir, f64::INFINITY, |refs, _, exit| {
-        for &prim in refs {
-            if let Some(t) = scene.intersect(prim as usize, &ray, f64::INFINITY) {
-                naive = naive.or(Some((prim, t, exit)));
-            }
-        }
-        f64::INFINITY
-    });
-    let (prim, t, exit) = naive.unwrap();
+    let (prim, t, exit) = naive_first_hit(&scene, &octree, &ray);
     assert_eq!(
         scene.object_of(prim).0.name,
         "big_sphere",

@@ -30,7 +30,7 @@
 //! The pad makes the boxes a little looser than tight f32 boxes: `1e-5` of the scene size,
 //! small against the primitives of any scene with fewer than about 10¹⁰ of them.
 
-use super::{Hit, PreparedRay, PrimitiveSet};
+use super::{test_primitive, Hit, PreparedRay, PrimitiveSet};
 use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb as Aabb32;
 use obvhs::bvh2::builder::build_bvh2;
@@ -243,21 +243,7 @@ impl Bvh {
         t_max: f64,
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
-        // Tests `prim`; true when it became the best hit.
-        let test = |prim: u32, best: &mut Option<Hit>| {
-            let bound = best.map_or(t_max, |b| b.t);
-            match set.intersect(prim as usize, ray, bound) {
-                Some(t) => {
-                    let hit = Hit { t, prim };
-                    let better = hit.beats(best);
-                    if better {
-                        *best = Some(hit);
-                    }
-                    better
-                }
-                None => false,
-            }
-        };
+        let test = |prim: u32, best: &mut Option<Hit>| test_primitive(set, prim, ray, t_max, best);
         for &prim in &self.unbounded {
             test(prim, &mut best);
         }

@@ -106,17 +106,30 @@ pub fn prepare_ray<P: PrimitiveSet>(
 /// The reference answer: tests every primitive. Used by tests and as the exactness oracle.
 pub fn brute_force<P: PrimitiveSet>(set: &P, ray: &PreparedRay<P::RayData>) -> Option<Hit> {
     let mut best: Option<Hit> = None;
-    for index in 0..set.len() {
-        let t_max = best.map_or(f64::INFINITY, |b| b.t);
-        if let Some(t) = set.intersect(index, ray, t_max) {
-            let hit = Hit {
-                t,
-                prim: index as u32,
-            };
-            if hit.beats(&best) {
-                best = Some(hit);
-            }
-        }
+    for index in 0..set.len() as u32 {
+        test_primitive(set, index, ray, f64::INFINITY, &mut best);
     }
     best
+}
+
+/// Tests primitive `prim` for a hit with `0 < t <= t_max` and keeps it in `best` when it beats
+/// the hit there (see [`Hit::beats`]); returns whether it did. Every backend goes through here,
+/// so all of them pick the same primitive.
+pub fn test_primitive<P: PrimitiveSet>(
+    set: &P,
+    prim: u32,
+    ray: &PreparedRay<P::RayData>,
+    t_max: f64,
+    best: &mut Option<Hit>,
+) -> bool {
+    let bound = best.map_or(t_max, |b| b.t);
+    let Some(t) = set.intersect(prim as usize, ray, bound) else {
+        return false;
+    };
+    let hit = Hit { t, prim };
+    let better = hit.beats(best);
+    if better {
+        *best = Some(hit);
+    }
+    better
 }

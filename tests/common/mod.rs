@@ -1,12 +1,13 @@
 //! Helpers shared by the integration tests: fixture paths and casting rays through the library.
 #![allow(dead_code)]
 
-use glam::DVec3;
-use raycast::accel::{Octree, OctreeParams};
+use glam::{DMat4, DQuat, DVec3};
+use raycast::accel::{Octree, OctreeParams, PreparedRay, PrimitiveSet};
 use raycast::geometry::Ray;
 use raycast::import::{self, LoadOptions};
+use raycast::quadric::{Quadric, QuadricSpec};
 use raycast::render::{self, Aov, Tracer};
-use raycast::scene::Scene;
+use raycast::scene::{Scene, SceneBuilder};
 use std::path::PathBuf;
 
 /// Path of a file under `fixtures/`.
@@ -184,4 +185,68 @@ pub fn write_rays(path: &std::path::Path, rays: &[[f64; 6]]) {
         out.extend_from_slice(&v.to_le_bytes());
     }
     std::fs::write(path, out).unwrap();
+}
+
+/// Random triangles of mixed sizes (some spanning most of the scene) and random quadrics
+/// (spheres and clipped cylinders), all shifted by `offset`.
+pub fn random_scene(rng: &mut Rng, triangles: usize, quadrics: usize, offset: DVec3) -> Scene {
+    let mut builder = SceneBuilder::new();
+    let mut tris = Vec::new();
+    for i in 0..triangles {
+        let size = if i % 50 == 0 {
+            8.0
+        } else {
+            rng.uniform(0.01, 1.0)
+        };
+        let c = rng.point(-10.0, 10.0) + offset;
+        tris.push([c, c + rng.direction() * size, c + rng.direction() * size]);
+    }
+    if !tris.is_empty() {
+        builder.add_mesh("triangles".into(), "test".into(), tris);
+    }
+    for i in 0..quadrics {
+        let world = DMat4::from_scale_rotation_translation(
+            DVec3::new(
+                rng.uniform(0.3, 2.0),
+                rng.uniform(0.3, 2.0),
+                rng.uniform(0.3, 2.0),
+            ),
+            DQuat::from_scaled_axis(rng.direction() * rng.uniform(0.0, 3.0)),
+            rng.point(-8.0, 8.0) + offset,
+        );
+        let spec = if i % 2 == 0 {
+            QuadricSpec::from_coefficients(
+                [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
+                None,
+            )
+        } else {
+            let bounds = Some([DVec3::splat(-1.5), DVec3::splat(1.5)]);
+            QuadricSpec::from_coefficients(
+                [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
+                bounds,
+            )
+        };
+        let quadric = Quadric::new(&spec.unwrap(), world).unwrap();
+        builder.add_quadric(format!("q{i}"), "test".into(), quadric);
+    }
+    builder.finish("random".into())
+}
+
+/// What a naive octree traversal would report for `ray`: the first hit found in the first leaf
+/// holding one, with that leaf's exit parameter (the lecture's boundary trap when `t > exit`).
+pub fn naive_first_hit(
+    scene: &Scene,
+    octree: &Octree,
+    ray: &PreparedRay<<Scene as PrimitiveSet>::RayData>,
+) -> (u32, f64, f64) {
+    let mut naive: Option<(u32, f64, f64)> = None;
+    octree.traverse(ray.local_origin, ray.dir, f64::INFINITY, |refs, _, exit| {
+        for &prim in refs {
+            if let Some(t) = scene.intersect(prim as usize, ray, f64::INFINITY) {
+                naive = naive.or(Some((prim, t, exit)));
+            }
+        }
+        f64::INFINITY
+    });
+    naive.expect("the ray hits something")
 }

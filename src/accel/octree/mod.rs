@@ -33,7 +33,7 @@
 
 mod build;
 
-use super::{Hit, PreparedRay, PrimitiveSet};
+use super::{test_primitive, Hit, PreparedRay, PrimitiveSet};
 use crate::geometry::Aabb;
 use build::{cube_around, Builder};
 use glam::DVec3;
@@ -179,13 +179,7 @@ impl Octree {
         let mut best: Option<Hit> = None;
         self.traverse(ray.local_origin, ray.dir, t_max, |refs, _, _| {
             for &prim in refs {
-                let bound = best.map_or(t_max, |b| b.t);
-                if let Some(t) = set.intersect(prim as usize, ray, bound) {
-                    let hit = Hit { t, prim };
-                    if hit.beats(&best) {
-                        best = Some(hit);
-                    }
-                }
+                test_primitive(set, prim, ray, t_max, &mut best);
             }
             best.map_or(t_max, |b| b.t)
         });
