@@ -12,6 +12,17 @@ fn raycast(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
+/// Runs raycast and asserts that it succeeded, showing its error output otherwise.
+fn raycast_ok(args: &[&str]) -> Output {
+    let result = raycast(args);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    result
+}
+
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("raycast-cli-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -26,12 +37,7 @@ fn arg(p: &Path) -> &str {
 fn default_render_writes_exr_png_and_sidecar() {
     let out = temp_dir("default");
     let scene = fixture("gltf/cube.gltf");
-    let result = raycast(&[arg(&scene), "--out", arg(&out), "--quiet"]);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
+    let result = raycast_ok(&[arg(&scene), "--out", arg(&out), "--quiet"]);
     assert!(result.stderr.is_empty(), "--quiet prints nothing");
     let mut files: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
@@ -58,7 +64,7 @@ fn default_render_writes_exr_png_and_sidecar() {
 fn camera_buffers_follow_the_pixel_conventions() {
     let out = temp_dir("conventions");
     let scene = fixture("gltf/cube.gltf");
-    let result = raycast(&[
+    raycast_ok(&[
         arg(&scene),
         "--aov",
         "depth,z,normal,position,id,prim",
@@ -72,11 +78,6 @@ fn camera_buffers_follow_the_pixel_conventions() {
         arg(&out),
         "--quiet",
     ]);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
     let (shape, depth) = read_f64(&out.join("depth.npy"));
     assert_eq!(shape, [65, 65]);
     assert_eq!(
@@ -137,7 +138,7 @@ fn rays_mode_keeps_input_order_and_is_thread_count_independent() {
     write_rays(&rays_file, &rays);
     let scene = fixture("gltf/instances.gltf");
     for (out, threads) in [(&out1, "1"), (&out2, "2")] {
-        let result = raycast(&[
+        raycast_ok(&[
             arg(&scene),
             "--rays",
             arg(&rays_file),
@@ -149,11 +150,6 @@ fn rays_mode_keeps_input_order_and_is_thread_count_independent() {
             threads,
             "--quiet",
         ]);
-        assert!(
-            result.status.success(),
-            "{}",
-            String::from_utf8_lossy(&result.stderr)
-        );
     }
     for name in ["depth.npy", "normal.npy", "id.npy", "prim.npy"] {
         assert_eq!(
@@ -245,7 +241,7 @@ fn bad_inputs_fail_cleanly_naming_the_file() {
 #[test]
 fn empty_scene_renders_all_misses() {
     let out = temp_dir("empty");
-    let result = raycast(&[
+    raycast_ok(&[
         arg(&fixture("bad/empty.gltf")),
         "--format",
         "npy",
@@ -257,11 +253,6 @@ fn empty_scene_renders_all_misses() {
         arg(&out),
         "--quiet",
     ]);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
     let (_, depth) = read_f64(&out.join("depth.npy"));
     assert!(depth.iter().all(|d| *d == f64::INFINITY));
 }
@@ -284,7 +275,7 @@ fn usage_errors_exit_with_2() {
 fn eye_target_and_orthographic_cameras() {
     let out = temp_dir("ortho");
     let scene = fixture("gltf/plane.gltf");
-    let result = raycast(&[
+    raycast_ok(&[
         arg(&scene),
         "--eye",
         "0,0,3",
@@ -304,11 +295,6 @@ fn eye_target_and_orthographic_cameras() {
         arg(&out),
         "--quiet",
     ]);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
     let (_, depth) = read_f64(&out.join("depth.npy"));
     // Pixel centres at x, y = ±0.5, ±1.5: the inner 2×2 hit the plane at depth 3.
     let expected: Vec<f64> = (0..16)
