@@ -41,6 +41,10 @@ from pathlib import Path
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from make_quadric_fixtures import tri_hit  # noqa: E402
+from usd_counts import drawn_prims, hidden_purpose  # noqa: E402
+
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "fixtures" / "usd"
 EXPECTED: dict[str, list] = {}
@@ -542,18 +546,9 @@ def flatten(stage):
                 tris.append(t)
         return tris
 
-    predicate = Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)
-    it = iter(Usd.PrimRange(stage.GetPseudoRoot(), predicate))
     excluded = set()
-    for prim in it:
-        if prim.GetPath() in excluded:
-            it.PruneChildren()
-            continue
-        imageable = UsdGeom.Imageable(prim)
-        if imageable and imageable.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible:
-            it.PruneChildren()
-            continue
-        if imageable and imageable.ComputePurpose() in (UsdGeom.Tokens.guide, UsdGeom.Tokens.proxy):
+    for prim in drawn_prims(stage.GetPseudoRoot(), excluded):
+        if hidden_purpose(prim):
             continue
         if prim.IsA(UsdGeom.Mesh):
             matrix = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
@@ -591,22 +586,11 @@ def intersect(origin, direction, objects):
     """Nearest hit over all triangles: (name, t, triangle index, unit normal) or None."""
     best = None
     for name, tris in objects:
-        for index, (a, b, c) in enumerate(tris):
-            e1, e2 = b - a, c - a
-            p = np.cross(direction, e2)
-            det = e1 @ p
-            if abs(det) < 1e-14:
-                continue
-            s = origin - a
-            u = (s @ p) / det
-            q = np.cross(s, e1)
-            v = (direction @ q) / det
-            t = (e2 @ q) / det
-            if u < 0 or v < 0 or u + v > 1 or t <= 0:
-                continue
-            if best is None or t < best[1]:
-                n = np.cross(e1, e2)
-                best = (name, t, index, n / np.linalg.norm(n), min(u, v, 1 - u - v))
+        for index, tri in enumerate(tris):
+            h = tri_hit(tri, origin, direction, min_det=1e-14)
+            if h is not None and (best is None or h[0] < best[1]):
+                t, n, u, v = h
+                best = (name, t, index, n, min(u, v, 1 - u - v))
     return best
 
 

@@ -204,11 +204,13 @@ class Gltf:
         self.doc["extensionsRequired"].append(ext)
 
     # -- output ------------------------------------------------------------
-    def finish(self, uri: str | None, byte_length: int | None = None) -> tuple[dict, bytes]:
+    def finish(self, uri: str | None, byte_length: int | None = None, **top) -> tuple[dict, bytes]:
         """Return (json document, binary buffer). uri None = GLB BIN chunk,
-        "data" = base64 data URI, else the external file name."""
+        "data" = base64 data URI, else the external file name. `top` replaces
+        top-level entries of the document (in place, before empty arrays are dropped)."""
         data = bytes(self.bin)
         doc = json.loads(json.dumps(self.doc))  # deep copy
+        doc.update(json.loads(json.dumps(top)))
         if data:
             buf = {"byteLength": len(data) if byte_length is None else byte_length}
             if uri == "data":

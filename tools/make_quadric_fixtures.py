@@ -22,14 +22,17 @@ Options: --check-only (verify, write nothing).
 
 from __future__ import annotations
 
-import base64
 import json
 import math
-import struct
 import sys
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import make_fixtures as mf  # noqa: E402
+import quadric_reference as qref  # noqa: E402
+from make_fixtures import json_text  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 QDIR = ROOT / "fixtures" / "quadrics"
@@ -37,43 +40,17 @@ BAD_DIR = ROOT / "fixtures" / "bad"
 GENERATOR = "raycast tools/make_quadric_fixtures.py"
 EXT = "RAYCAST_quadric"
 
-FLOAT, UNSIGNED_SHORT = 5126, 5123
-ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
-
 CHECK_ONLY = "--check-only" in sys.argv
-written: list[Path] = []
 EXPECTED: dict[str, dict] = {}
 
 
 # --------------------------------------------------------------------------
-# output helpers (same JSON layout as tools/make_fixtures.py)
+# output helpers (tools/make_fixtures.py's, so the JSON layout is the same)
 
 
 def write_bytes(path: Path, data: bytes) -> None:
-    if CHECK_ONLY:
-        return
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if path.exists() and path.read_bytes() == data:
-        status = "same"
-    else:
-        path.write_bytes(data)
-        status = "wrote"
-    written.append(path)
-    print(f"  {status:5} {path.relative_to(ROOT)} ({len(data)} bytes)")
-
-
-def json_text(value, indent: int = 0) -> str:
-    """json.dumps(indent=2), except that lists of plain numbers/strings stay on
-    one line. Python's float repr is the shortest string that round-trips the
-    double, so every number keeps full double precision."""
-    pad, inner = "  " * indent, "  " * (indent + 1)
-    if isinstance(value, dict) and value:
-        items = [f"{inner}{json.dumps(k)}: {json_text(v, indent + 1)}" for k, v in value.items()]
-        return "{\n" + ",\n".join(items) + "\n" + pad + "}"
-    if isinstance(value, list) and value and any(isinstance(v, (dict, list)) for v in value):
-        items = [inner + json_text(v, indent + 1) for v in value]
-        return "[\n" + ",\n".join(items) + "\n" + pad + "]"
-    return json.dumps(value, allow_nan=False)
+    if not CHECK_ONLY:
+        mf.write_bytes(path, data)
 
 
 def write_json(path: Path, doc: dict, raw: dict[str, str] | None = None) -> None:
@@ -95,138 +72,54 @@ def fl(v):
 # a tiny glTF writer
 
 
-class Gltf:
+class Gltf(mf.Gltf):
+    """tools/make_fixtures.py's writer, plus RAYCAST_quadric nodes and the mesh
+    triangles kept for the self-check."""
+
     def __init__(self) -> None:
-        self.bin = bytearray()
-        self.doc: dict = {
-            "asset": {"version": "2.0", "generator": GENERATOR},
-            "extensionsUsed": [],
-            "extensionsRequired": [],
-            "scene": 0,
-            "scenes": [],
-            "nodes": [],
-            "meshes": [],
-            "cameras": [],
-            "accessors": [],
-            "bufferViews": [],
-            "buffers": [],
-        }
-        # geometry kept for the self-check: (node index, kind, payload)
+        super().__init__()
+        self.doc["asset"]["generator"] = GENERATOR
+        # geometry kept for the self-check: mesh index -> (n, 3, 3) float64 triangles
         self.mesh_tris: dict[int, np.ndarray] = {}
 
-    def view(self, data: bytes, target: int) -> int:
-        self.bin += b"\0" * ((-len(self.bin)) % 4)
-        self.doc["bufferViews"].append(
-            {"buffer": 0, "byteOffset": len(self.bin), "byteLength": len(data), "target": target})
-        self.bin += data
-        return len(self.doc["bufferViews"]) - 1
-
-    def mesh(self, name: str, verts, idx) -> int:
+    def indexed_mesh(self, name: str, verts, idx) -> int:
+        """One triangle-list primitive: float32 positions, uint16 indices."""
         v = np.asarray(verts, dtype=np.float32).reshape(-1, 3)
         i = np.asarray(idx, dtype=np.uint16).reshape(-1)
         assert np.all(v.astype(np.float64) == np.asarray(verts, dtype=np.float64).reshape(-1, 3)), \
             "mesh vertices must be exact in float32"
-        acc = self.doc["accessors"]
-        acc.append({"bufferView": self.view(v.tobytes(), ARRAY_BUFFER), "componentType": FLOAT,
-                    "count": len(v), "type": "VEC3",
-                    "min": fl(v.min(axis=0)), "max": fl(v.max(axis=0))})
-        pos = len(acc) - 1
-        acc.append({"bufferView": self.view(i.tobytes(), ELEMENT_ARRAY_BUFFER),
-                    "componentType": UNSIGNED_SHORT, "count": len(i), "type": "SCALAR"})
-        self.doc["meshes"].append({"name": name, "primitives": [
-            {"attributes": {"POSITION": pos}, "indices": len(acc) - 1, "mode": 4}]})
-        m = len(self.doc["meshes"]) - 1
+        pos = self.positions(v)
+        m = self.mesh(name, [{"attributes": {"POSITION": pos}, "indices": self.indices(i), "mode": 4}])
         self.mesh_tris[m] = v.astype(np.float64)[i.reshape(-1, 3)]
         return m
-
-    def node(self, name: str, **props) -> int:
-        n = {"name": name}
-        n.update(props)
-        self.doc["nodes"].append(n)
-        return len(self.doc["nodes"]) - 1
 
     def quadric_node(self, name: str, ext: dict, **props) -> int:
         props.setdefault("extensions", {})[EXT] = ext
         return self.node(name, **props)
 
     def camera(self, name: str, yfov: float, aspect: float, znear: float = 0.01, **props) -> int:
-        self.doc["cameras"].append({"name": name, "type": "perspective", "perspective": {
-            "aspectRatio": float(aspect), "yfov": float(yfov), "znear": float(znear)}})
-        return self.node(name, camera=len(self.doc["cameras"]) - 1, **props)
+        cam = self.perspective(name, float(yfov), float(aspect), float(znear))
+        return self.node(name, camera=cam, **props)
 
-    def finish(self, required: bool) -> dict:
-        doc = json.loads(json.dumps(self.doc))
-        doc["extensionsUsed"] = [EXT]
-        if required:
-            doc["extensionsRequired"] = [EXT]
-        if doc["scenes"] == []:
-            doc["scenes"] = [{"nodes": list(range(len(doc["nodes"])))}]
-        data = bytes(self.bin)
-        if data:
-            doc["buffers"] = [{"byteLength": len(data), "uri": "data:application/octet-stream;base64,"
-                               + base64.b64encode(data).decode("ascii")}]
-        for key in [k for k, v in doc.items() if isinstance(v, list) and not v]:
-            del doc[key]
+    def document(self, required: bool) -> dict:
+        """The glTF JSON, buffer as a data URI, RAYCAST_quadric used (and required
+        when `required`), one scene of all nodes unless a scene was added."""
+        doc, _ = self.finish("data", extensionsUsed=[EXT],
+                             extensionsRequired=[EXT] if required else self.doc["extensionsRequired"],
+                             scenes=self.doc["scenes"] or [{"nodes": list(range(len(self.doc["nodes"])))}])
         return doc
 
 
 # --------------------------------------------------------------------------
-# math: node matrices, quadric parsing, an object-space reference intersector
-
-
-def quat_matrix(q) -> np.ndarray:
-    x, y, z, w = (float(c) for c in q)
-    n = math.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x / n, y / n, z / n, w / n
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
-def local_matrix(node: dict) -> np.ndarray:
-    if "matrix" in node:
-        return np.array(node["matrix"], dtype=np.float64).reshape(4, 4).T  # column-major
-    m = np.eye(4)
-    rs = quat_matrix(node.get("rotation", [0, 0, 0, 1])) * np.array(node.get("scale", [1, 1, 1]), float)
-    m[:3, :3] = rs
-    m[:3, 3] = node.get("translation", [0, 0, 0])
-    return m
-
-
-def world_matrices(doc: dict) -> dict[int, np.ndarray]:
-    out: dict[int, np.ndarray] = {}
-
-    def visit(i, parent):
-        out[i] = parent @ local_matrix(doc["nodes"][i])
-        for c in doc["nodes"][i].get("children", []):
-            visit(c, out[i])
-
-    for r in doc["scenes"][doc.get("scene", 0)]["nodes"]:
-        visit(r, np.eye(4))
-    return out
-
-
-def parse_quadric(ext: dict):
-    if "coefficients" in ext:
-        a, b, c, d, e, f, g, h, i, j = (float(x) for x in ext["coefficients"])
-        Q = np.array([[a, d / 2, e / 2], [d / 2, b, f / 2], [e / 2, f / 2, c]])
-        P = np.array([g, h, i])
-        R = j
-    else:
-        Q = np.array(ext["Q"], float).reshape(3, 3)
-        P = np.array(ext["P"], float)
-        R = float(ext["R"])
-    b = ext.get("bounds")
-    box = None if b is None else (np.array(b["min"], float), np.array(b["max"], float))
-    return Q, P, R, box
+# math: an object-space reference intersector (node matrices and quadric
+# parsing are tools/quadric_reference.py's)
 
 
 def q_f(Q, P, R, p):
     return p @ Q @ p + P @ p + R
 
 
-def intersect_local(Q, P, R, box, o, v):
+def intersect_local(Q, P, R, bmin, bmax, o, v):
     """Smallest t > 0 of o + t v on the (clipped) quadric, object space. Returns
     (t, p_local) or None. Roots from the stable pair, refined by one Newton step."""
     K = v @ Q @ v
@@ -255,22 +148,24 @@ def intersect_local(Q, P, R, box, o, v):
         if not t > 0:
             continue
         p = o + t * v
-        if box is not None:
-            lo, hi = box
-            eps = 1e-9 * float((hi - lo).max())
-            if np.any(p < lo - eps) or np.any(p > hi + eps):
+        if bmin is not None:
+            eps = 1e-9 * float((bmax - bmin).max())
+            if np.any(p < bmin - eps) or np.any(p > bmax + eps):
                 continue
         if best is None or t < best[0]:
             best = (t, p)
     return best
 
 
-def tri_hit(tri, o, d):
+def tri_hit(tri, o, d, min_det: float = 1e-300):
+    """Möller–Trumbore in float64: (t, unit normal, u, v) for the hit of o + t d
+    (t > 0) on triangle (a, b, c) = a + u (b - a) + v (c - a), normal along
+    (b - a) x (c - a); None on a miss or when |det| < min_det (parallel)."""
     a, b, c = tri
     e1, e2 = b - a, c - a
     pv = np.cross(d, e2)
     det = e1 @ pv
-    if abs(det) < 1e-300:
+    if abs(det) < min_det:
         return None
     s = o - a
     u = (s @ pv) / det
@@ -280,13 +175,13 @@ def tri_hit(tri, o, d):
     if u < 0 or w < 0 or u + w > 1 or t <= 0:
         return None
     n = np.cross(e1, e2)
-    return t, n / np.linalg.norm(n)
+    return t, n / np.linalg.norm(n), u, w
 
 
 def trace(g: Gltf, doc: dict, o, d):
     """Nearest hit over all nodes: (node name, kind, t, depth, normal, position) or None."""
     o, d = np.asarray(o, float), np.asarray(d, float)
-    mats = world_matrices(doc)
+    mats = qref.node_world_matrices(doc)
     best = None
     for i, T in mats.items():
         node = doc["nodes"][i]
@@ -301,9 +196,9 @@ def trace(g: Gltf, doc: dict, o, d):
                     best = (node["name"], "mesh", h[0], h[0] * np.linalg.norm(d), n, o + h[0] * d, k)
         ext = node.get("extensions", {}).get(EXT)
         if ext is not None:
-            Q, P, R, box = parse_quadric(ext)
+            Q, P, R, bmin, bmax = qref.parse_quadric(ext)
             Ai = np.linalg.inv(A)
-            h = intersect_local(Q, P, R, box, Ai @ (o - tr), Ai @ d)
+            h = intersect_local(Q, P, R, bmin, bmax, Ai @ (o - tr), Ai @ d)
             if h and (best is None or h[0] < best[2]):
                 t, p = h
                 n = Ai.T @ (2 * Q @ p + P)
@@ -320,10 +215,10 @@ def mp_check(doc: dict, node_name: str, o, d, depth: float) -> float:
     except ImportError:
         return 0.0
     mp.mp.prec = 120
-    mats = world_matrices(doc)
+    mats = qref.node_world_matrices(doc)
     i = [k for k, n in enumerate(doc["nodes"]) if n["name"] == node_name][0]
     node = doc["nodes"][i]
-    Q, P, R, box = parse_quadric(node["extensions"][EXT])
+    Q, P, R, bmin, bmax = qref.parse_quadric(node["extensions"][EXT])
     # exact node matrix from the JSON numbers (quaternion normalised in mpmath)
     if "matrix" in node:
         T = mp.matrix(4, 4)
@@ -369,7 +264,7 @@ def mp_check(doc: dict, node_name: str, o, d, depth: float) -> float:
         if t <= 0:
             continue
         p = [ol[r] + t * vl[r] for r in range(3)]
-        if box is not None and any(p[r] < box[0][r] - 1e-9 or p[r] > box[1][r] + 1e-9 for r in range(3)):
+        if bmin is not None and any(p[r] < bmin[r] - 1e-9 or p[r] > bmax[r] + 1e-9 for r in range(3)):
             continue
         return float(abs(t * dn - mp.mpf(depth)) / abs(t * dn))
     raise AssertionError("mpmath found no hit")
@@ -422,7 +317,7 @@ class Rays:
 
 
 def write_fixture(g: Gltf, fname: str, required: bool, build_rays, description: str) -> dict:
-    doc = g.finish(required)
+    doc = g.document(required)
     rays = Rays(g, doc, fname)
     build_rays(rays, doc)
     EXPECTED[fname] = {"description": description, "rays": rays.rows}
@@ -534,7 +429,7 @@ FAMILIES = [
 
 
 def gradient(coeffs, p):
-    Q, P, _, _ = parse_quadric({"coefficients": coeffs})
+    Q, P, _, _, _ = qref.parse_quadric({"coefficients": coeffs})
     return 2 * Q @ np.asarray(p, float) + P
 
 
@@ -548,8 +443,8 @@ def make_families() -> None:
             g.quadric_node(name, json.loads(json.dumps(ext)), **props)
         g.camera("cam", 0.5, 3.0, rotation=CAM_Q, translation=CAM_T)
         # the clip boxes (or ellipsoid boxes) must not overlap in x
-        doc0 = g.finish(True)
-        mats = world_matrices(doc0)
+        doc0 = g.document(True)
+        mats = qref.node_world_matrices(doc0)
         lo_box = np.array(bounds[0]) if bounds else np.array([-2.0, -1.0, -1.5])
         hi_box = np.array(bounds[1]) if bounds else np.array([2.0, 1.0, 1.5])
         corners = np.array([[x, y, z] for x in (lo_box[0], hi_box[0]) for y in (lo_box[1], hi_box[1])
@@ -563,7 +458,7 @@ def make_families() -> None:
             assert a[1] < b[0] - 0.5, (fname, spans)
 
         def build(r: Rays, doc, local_rays=local_rays, coeffs=coeffs):
-            mats = world_matrices(doc)
+            mats = qref.node_world_matrices(doc)
             for i, (name, _) in enumerate(placements()):
                 T = mats[i]
                 A, tr = T[:3, :3], T[:3, 3]
@@ -601,12 +496,12 @@ CAM_T = [0.0, 40.0 * math.sin(CAM_ALPHA), 40.0 * math.cos(CAM_ALPHA)]
 
 def make_mixed() -> None:
     g = Gltf()
-    ground = g.mesh("ground", [[-6, -1, 5], [6, -1, 5], [6, -1, -5], [-6, -1, -5]], [0, 1, 2, 0, 2, 3])
+    ground = g.indexed_mesh("ground", [[-6, -1, 5], [6, -1, 5], [6, -1, -5], [-6, -1, -5]], [0, 1, 2, 0, 2, 3])
     h = 0.5
     cv = [[-h, -h, -h], [h, -h, -h], [h, h, -h], [-h, h, -h], [-h, -h, h], [h, -h, h], [h, h, h], [-h, h, h]]
     cf = [4, 5, 6, 4, 6, 7, 0, 2, 1, 0, 3, 2, 1, 2, 6, 1, 6, 5, 0, 4, 7, 0, 7, 3, 3, 7, 6, 3, 6, 2, 0, 1, 5, 0, 5, 4]
-    cube = g.mesh("half_cube", cv, cf)
-    tri = g.mesh("small_triangle", [[0.5, -0.25, 0], [1.0, -0.25, 0], [0.75, 0.25, 0]], [0, 1, 2])
+    cube = g.indexed_mesh("half_cube", cv, cf)
+    tri = g.indexed_mesh("small_triangle", [[0.5, -0.25, 0], [1.0, -0.25, 0], [0.75, 0.25, 0]], [0, 1, 2])
     g.node("ground", mesh=ground)
     g.quadric_node("sphere", {"coefficients": [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0]})
     g.node("cube", mesh=cube, translation=[3.0, 0.0, 0.0])
@@ -752,11 +647,11 @@ def trap_filler():
 def make_trap() -> None:
     g = Gltf()
     fv, ff = trap_filler()
-    filler = g.mesh("filler", fv, ff)
+    filler = g.indexed_mesh("filler", fv, ff)
     x0, y0 = TRAP_RAY_XY
     e = 0.1875
     qx, qy = x0 + 0.0625, y0 - 0.0625  # quad centre: the ray misses the diagonal (prim 1)
-    near = g.mesh("near_quad", [[qx - e, qy - e, TRAP_QUAD_Z], [qx + e, qy - e, TRAP_QUAD_Z],
+    near = g.indexed_mesh("near_quad", [[qx - e, qy - e, TRAP_QUAD_Z], [qx + e, qy - e, TRAP_QUAD_Z],
                                 [qx + e, qy + e, TRAP_QUAD_Z], [qx - e, qy + e, TRAP_QUAD_Z]],
                   [0, 1, 2, 0, 2, 3])
     g.quadric_node("big_sphere", {"coefficients": [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -64.0]},

@@ -55,6 +55,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import quadric_reference as qref  # noqa: E402
 import tessellate as tess  # noqa: E402
+import validate  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 QFIX = ROOT / "fixtures" / "quadrics"
@@ -113,30 +114,16 @@ def _tri_normals(tris):
     return n / np.where(ln > 0, ln, 1.0)[:, None]
 
 
-def _mesh(tris):
-    import trimesh
-    v = tris.reshape(-1, 3)
-    return trimesh.Trimesh(vertices=v, faces=np.arange(len(v)).reshape(-1, 3),
-                           process=False, validate=False)
+_mesh = validate.tri_mesh
 
 
 def trace_ray_triangle(tris, origins, unit, chunk=64):
     """trimesh ray_triangle (float64): nearest hit depth (inf miss), normal, triangle."""
-    from trimesh.ray.ray_triangle import RayMeshIntersector
     n = len(origins)
     depth = np.full(n, np.inf)
     tri = np.full(n, -1, np.int64)
     if len(tris):
-        inter = RayMeshIntersector(_mesh(tris))
-        for s in range(0, n, chunk):
-            o, d = origins[s:s + chunk], unit[s:s + chunk]
-            it, ir, loc = inter.intersects_id(o, d, multiple_hits=True, return_locations=True)
-            if len(it) == 0:
-                continue
-            dist = np.linalg.norm(loc - o[ir], axis=1)
-            order = np.lexsort((dist, ir))
-            it, ir, dist = it[order], ir[order], dist[order]
-            first = np.flatnonzero(np.r_[True, ir[1:] != ir[:-1]])
+        for s, it, ir, dist, first in validate.ray_triangle_hits(tris, origins, unit, chunk):
             depth[s + ir[first]] = dist[first]
             tri[s + ir[first]] = it[first]
     normal = np.zeros((n, 3))

@@ -95,6 +95,23 @@ def hidden_purpose(prim):
     return imageable.ComputePurpose() in (UsdGeom.Tokens.guide, UsdGeom.Tokens.proxy)
 
 
+def drawn_prims(root, excluded):
+    """Prims of the subtree at `root`, instance proxies included, without invisible
+    subtrees or the subtrees at the paths in `excluded`, a set the caller may add to
+    while iterating (a point instancer's own prototypes)."""
+    predicate = Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)
+    it = iter(Usd.PrimRange(root, predicate))
+    for prim in it:
+        if prim.GetPath() in excluded:
+            it.PruneChildren()
+            continue
+        imageable = UsdGeom.Imageable(prim)
+        if imageable and imageable.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible:
+            it.PruneChildren()
+            continue
+        yield prim
+
+
 def world_bounds(prim):
     """World-space box of the points a mesh's faces use, [[min], [max]], in double."""
     mesh = UsdGeom.Mesh(prim)
@@ -118,18 +135,9 @@ class Counter:
 
     def walk(self, root, multiplier, depth=0):
         """Counts the subtree at `root` (`multiplier` copies of it)."""
-        predicate = Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)
-        it = iter(Usd.PrimRange(root, predicate))
         excluded = set()
-        for prim in it:
+        for prim in drawn_prims(root, excluded):
             path = prim.GetPath()
-            if path in excluded:
-                it.PruneChildren()
-                continue
-            imageable = UsdGeom.Imageable(prim)
-            if imageable and imageable.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible:
-                it.PruneChildren()
-                continue
             type_name = prim.GetTypeName()
             if type_name in ("Mesh",) or type_name in GPRIMS:
                 if hidden_purpose(prim):

@@ -406,11 +406,38 @@ def camera_rays(cam: dict, width: int, height: int):
 
 # ------------------------------------------------------------------ references
 
-def _mesh(ref: RefScene):
+def tri_mesh(tris):
+    """An (n, 3, 3) triangle soup as an unprocessed trimesh.Trimesh (face i = tris[i])."""
     import trimesh
-    v = ref.tris.reshape(-1, 3)
+    v = tris.reshape(-1, 3)
     f = np.arange(len(v)).reshape(-1, 3)
     return trimesh.Trimesh(vertices=v, faces=f, process=False, validate=False)
+
+
+def _mesh(ref: RefScene):
+    return tri_mesh(ref.tris)
+
+
+def ray_triangle_hits(tris, origins, unit, chunk):
+    """All hits of trimesh's float64 ray_triangle, chunk rays at a time.
+
+    Yields (s, it, ir, dist, first) for each chunk starting at ray s that hits
+    anything: triangle, chunk-relative ray and distance of every hit, sorted by ray
+    then distance, and `first`, the index of each ray's nearest hit in those arrays
+    (the one multiple_hits=False would return).  `tris` must be non-empty.
+    """
+    from trimesh.ray.ray_triangle import RayMeshIntersector
+    inter = RayMeshIntersector(tri_mesh(tris))
+    for s in range(0, len(origins), chunk):
+        o, d = origins[s:s + chunk], unit[s:s + chunk]
+        it, ir, loc = inter.intersects_id(o, d, multiple_hits=True, return_locations=True)
+        if len(it) == 0:
+            continue
+        dist = np.linalg.norm(loc - o[ir], axis=1)
+        order = np.lexsort((dist, ir))
+        it, ir, dist = it[order], ir[order], dist[order]
+        first = np.flatnonzero(np.r_[True, ir[1:] != ir[:-1]])
+        yield s, it, ir, dist, first
 
 
 def trace_f64(ref: RefScene, origins, unit, chunk=32):
@@ -420,24 +447,13 @@ def trace_f64(ref: RefScene, origins, unit, chunk=32):
     tie_rel of the nearest.  The nearest hit is the one multiple_hits=False would
     return (both take the smallest distance along the ray).
     """
-    from trimesh.ray.ray_triangle import RayMeshIntersector
     n = len(origins)
     depth = np.full(n, np.inf)
     tri = np.full(n, -1, dtype=np.int64)
     tie = np.zeros(n, dtype=bool)
     if len(ref.tris) == 0:
         return depth, tri, tie
-    mesh = _mesh(ref)
-    inter = RayMeshIntersector(mesh)
-    for s in range(0, n, chunk):
-        o, d = origins[s:s + chunk], unit[s:s + chunk]
-        it, ir, loc = inter.intersects_id(o, d, multiple_hits=True, return_locations=True)
-        if len(it) == 0:
-            continue
-        dist = np.linalg.norm(loc - o[ir], axis=1)
-        order = np.lexsort((dist, ir))
-        it, ir, dist = it[order], ir[order], dist[order]
-        first = np.flatnonzero(np.r_[True, ir[1:] != ir[:-1]])
+    for s, it, ir, dist, first in ray_triangle_hits(ref.tris, origins, unit, chunk):
         for k, f0 in enumerate(first):
             end = first[k + 1] if k + 1 < len(first) else len(ir)
             r = s + ir[f0]
