@@ -43,7 +43,7 @@ from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from make_quadric_fixtures import tri_hit  # noqa: E402
-from usd_counts import drawn_prims, hidden_purpose  # noqa: E402
+from usd_counts import GPRIMS, drawn_prims, hidden_purpose, mesh_triangles  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "fixtures" / "usd"
@@ -521,11 +521,19 @@ def export_composition():
                                         quadric_at=("/World/Quadric", [0, 14, 0]))
 
 
-def flatten(stage):
-    """(object name, world triangles) drawn, by raycast's rules, with usd-core placing them."""
+def flatten(stage, gprim=None):
+    """(object name, world triangles) drawn, by raycast's rules, with usd-core placing them.
+
+    Meshes only by default. `gprim`, when given, is called as `gprim(prim, world matrix,
+    object name)` for each drawn intrinsic gprim (usd_counts.GPRIMS), in place and in
+    point-instancer prototypes, and returns a list of (object name, triangles) to add
+    (tools/validate_usd.py tessellates them). Meshes whose topology raycast rejects
+    (usd_counts.mesh_triangles is None) give no triangles."""
     objects = []
 
     def mesh_tris(prim, matrix):
+        if mesh_triangles(prim) is None:
+            return []
         mesh = UsdGeom.Mesh(prim)
         points = mesh.GetPointsAttr().Get()
         counts = mesh.GetFaceVertexCountsAttr().Get()
@@ -553,6 +561,9 @@ def flatten(stage):
         if prim.IsA(UsdGeom.Mesh):
             matrix = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
             objects.append((str(prim.GetPath()), mesh_tris(prim, matrix)))
+        elif gprim is not None and prim.GetTypeName() in GPRIMS:
+            matrix = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+            objects += gprim(prim, matrix, str(prim.GetPath()))
         elif prim.IsA(UsdGeom.PointInstancer):
             instancer = UsdGeom.PointInstancer(prim)
             targets = instancer.GetPrototypesRel().GetTargets()
@@ -567,9 +578,10 @@ def flatten(stage):
                 if mask and not mask[i]:
                     continue
                 proto = stage.GetPrimAtPath(targets[k])
-                tris = []
-                for sub in Usd.PrimRange(proto):
-                    if sub.IsA(UsdGeom.Mesh):
+                tris, extra = [], []
+                for sub in drawn_prims(proto, set()):
+                    is_gprim = gprim is not None and sub.GetTypeName() in GPRIMS
+                    if (sub.IsA(UsdGeom.Mesh) or is_gprim) and not hidden_purpose(sub):
                         # the prototype root's own transform is in m (IncludeProtoXform);
                         # below it, the path from the root
                         below = Gf.Matrix4d(1)
@@ -577,8 +589,14 @@ def flatten(stage):
                         while p.GetPath() != proto.GetPath():
                             below = below * UsdGeom.Xformable(p).GetLocalTransformation()
                             p = p.GetParent()
-                        tris += mesh_tris(sub, below * m * parent if sub != proto else m * parent)
+                        world = below * m * parent if sub != proto else m * parent
+                        if is_gprim:
+                            relative = str(sub.GetPath())[len(str(proto.GetPath())):]
+                            extra += gprim(sub, world, f"{prim.GetPath()}[{i}]{relative}")
+                        else:
+                            tris += mesh_tris(sub, world)
                 objects.append((f"{prim.GetPath()}[{i}]", tris))
+                objects += extra
     return objects
 
 
