@@ -1,7 +1,7 @@
 //! `raycast info`: what the importer found in a scene.
 
 use crate::camera::Projection;
-use crate::scene::{ObjectKind, Scene};
+use crate::scene::{ObjectKind, Scene, StageInfo};
 use serde::Serialize;
 use std::fmt;
 
@@ -22,6 +22,9 @@ pub struct SceneInfo {
     pub cameras: Vec<CameraSummary>,
     /// Extensions the file declares.
     pub extensions_used: Vec<String>,
+    /// USD stage metadata.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stage: Option<StageInfo>,
     /// Importer warnings.
     pub warnings: Vec<String>,
 }
@@ -98,6 +101,7 @@ impl SceneInfo {
                 })
                 .collect(),
             extensions_used: scene.extensions_used.clone(),
+            stage: scene.stage.clone(),
             warnings: scene.warnings.clone(),
         }
     }
@@ -136,6 +140,13 @@ impl fmt::Display for SceneInfo {
                 f,
                 "  camera {:>4}  {:<32} {projection}, eye {:?}",
                 c.index, c.name, c.eye
+            )?;
+        }
+        if let Some(stage) = &self.stage {
+            writeln!(
+                f,
+                "  stage: upAxis {}, metersPerUnit {}",
+                stage.up_axis, stage.meters_per_unit
             )?;
         }
         if !self.extensions_used.is_empty() {

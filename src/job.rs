@@ -118,6 +118,10 @@ pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Si
         Layout::Rays(_) => vec![Format::Npy],
     });
     let mut staging = Staging::new(&job.out_dir())?;
+    staging.protect(&job.scene);
+    if let Some(rays) = &job.rays {
+        staging.protect(rays);
+    }
     let depth_png_range = output::write_buffers(&mut staging, &buffers, layout, &formats)?;
     let write = started.elapsed().as_secs_f64();
     let mut files = staging.names();
@@ -161,6 +165,7 @@ pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Si
             trace,
             write,
         },
+        stage: scene.stage.clone(),
         warnings: scene.warnings.clone(),
     };
     let json = serde_json::to_string_pretty(&sidecar).map_err(|e| Error::msg(e.to_string()))?;

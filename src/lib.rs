@@ -8,6 +8,7 @@
 
 pub mod accel;
 pub mod camera;
+pub mod check;
 pub mod error;
 pub mod geometry;
 pub mod import;

@@ -33,6 +33,8 @@ struct Cli {
 enum Command {
     /// Print what the importer finds in a scene.
     Info(InfoArgs),
+    /// Validate assets for CI (exit 0: no errors, 1: errors, 2: usage or I/O problem).
+    Check(raycast::check::cli::CheckArgs),
 }
 
 #[derive(Args)]
@@ -122,6 +124,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Info(args)) => info(args),
+        Some(Command::Check(args)) => return raycast::check::cli::run(&args),
         None => render(cli.render),
     };
     match result {

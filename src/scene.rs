@@ -42,6 +42,16 @@ pub struct Object {
     pub first: u32,
 }
 
+/// USD stage metadata, after USD's fallbacks (`upAxis` Y, `metersPerUnit` 0.01).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct StageInfo {
+    /// The stage's up axis, `Y` or `Z`.
+    pub up_axis: String,
+    /// Metres per scene unit.
+    pub meters_per_unit: f64,
+}
+
 /// A loaded scene, ready for an acceleration structure.
 #[derive(Debug, Clone)]
 pub struct Scene {
@@ -61,6 +71,8 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// Extensions the file declares (glTF `extensionsUsed`).
     pub extensions_used: Vec<String>,
+    /// USD stage metadata (USD files only).
+    pub stage: Option<StageInfo>,
 }
 
 /// Per-ray data of the scene's primitives.
@@ -90,6 +102,19 @@ impl Scene {
             local
         } else {
             local.translated(-self.anchor)
+        }
+    }
+
+    /// A mesh object's triangles, stored relative to [`Scene::anchor`] in f32 (empty for a
+    /// quadric). Used by `raycast check` for topology and hole tests.
+    pub fn mesh_triangles(&self, object: &Object) -> &[[Vec3; 3]] {
+        match object.kind {
+            ObjectKind::Mesh => {
+                let start = (object.first as usize).min(self.triangles.len());
+                let end = (start + object.triangles as usize).min(self.triangles.len());
+                &self.triangles[start..end]
+            }
+            ObjectKind::Quadric => &[],
         }
     }
 
@@ -200,6 +225,7 @@ pub struct SceneBuilder {
     cameras: Vec<Camera>,
     warnings: Vec<String>,
     extensions_used: Vec<String>,
+    stage: Option<StageInfo>,
 }
 
 impl SceneBuilder {
@@ -263,6 +289,11 @@ impl SceneBuilder {
         self.extensions_used = extensions;
     }
 
+    /// Records USD stage metadata.
+    pub fn set_stage(&mut self, stage: StageInfo) {
+        self.stage = Some(stage);
+    }
+
     /// Number of objects added so far.
     pub fn object_count(&self) -> usize {
         self.objects.len()
@@ -302,6 +333,7 @@ impl SceneBuilder {
             cameras: self.cameras,
             warnings: self.warnings,
             extensions_used: self.extensions_used,
+            stage: self.stage,
         }
     }
 }

@@ -239,6 +239,26 @@ fn bad_inputs_fail_cleanly_naming_the_file() {
 }
 
 #[test]
+fn an_input_is_never_overwritten() {
+    let dir = temp_dir("protect");
+    std::fs::create_dir_all(&dir).unwrap();
+    let rays = dir.join("depth.npy");
+    write_rays(&rays, &[[0.0, 0.0, 5.0, 0.0, 0.0, -1.0]]);
+    let before = std::fs::read(&rays).unwrap();
+    let scene = fixture("gltf/cube.gltf");
+    let result = raycast(&[arg(&scene), "--rays", arg(&rays), "--out", arg(&dir)]);
+    assert_eq!(result.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&result.stderr).contains("is an input of this run"));
+    assert_eq!(
+        std::fs::read(&rays).unwrap(),
+        before,
+        "the ray file is unchanged"
+    );
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    assert_eq!(left.len(), 1, "no other file was left behind");
+}
+
+#[test]
 fn empty_scene_renders_all_misses() {
     let out = temp_dir("empty");
     raycast_ok(&[

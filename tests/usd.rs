@@ -472,3 +472,30 @@ fn chess_set_draws_every_pawn() {
         .all(|p| p.triangles == pawns[0].triangles && p.triangles > 0));
     assert_eq!(scene.triangle_count(), 1_430_784);
 }
+
+/// Stage metadata reaches the scene (and from there the sidecar and `info`), with USD's
+/// fallbacks when it is not authored. Expected values are read from the files' own headers.
+#[test]
+fn stage_metadata_is_reported() {
+    let authored = load("usd/gltf_sphere_matrices.usda");
+    let stage = authored.stage.expect("USD scenes carry stage metadata");
+    let text = std::fs::read_to_string(fixture("usd/gltf_sphere_matrices.usda")).unwrap();
+    assert!(
+        text.contains(&format!("upAxis = \"{}\"", stage.up_axis)),
+        "{stage:?}"
+    );
+    assert!(
+        text.contains(&format!("metersPerUnit = {}", stage.meters_per_unit)),
+        "{stage:?}"
+    );
+    assert!(load("gltf/cube.gltf").stage.is_none());
+    let z_up =
+        load("usd/assets/usd-wg/test_assets/foundation/stage_configuration/upAxis/upAxis_Z.usda");
+    assert_eq!(z_up.stage.unwrap().up_axis, "Z");
+    // composition.usda authors neither: USD's fallbacks apply.
+    let fallback = load("usd/composition.usda").stage.unwrap();
+    assert_eq!(
+        (fallback.up_axis.as_str(), fallback.meters_per_unit),
+        ("Y", 0.01)
+    );
+}

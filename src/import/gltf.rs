@@ -21,7 +21,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 /// Our node extension carrying an analytic quadric (docs/RAYCAST_quadric.md).
-const QUADRIC_EXTENSION: &str = "RAYCAST_quadric";
+pub(crate) const QUADRIC_EXTENSION: &str = "RAYCAST_quadric";
 
 /// Extensions whose absence from the crate does not change the geometry we read.
 const HONOURED_REQUIRED: &[&str] = &["KHR_mesh_quantization", QUADRIC_EXTENSION];
@@ -35,6 +35,9 @@ const APPEARANCE_PREFIXES: &[&str] = &[
     "EXT_lights_",
     "MSFT_texture_",
 ];
+
+/// Largest count of an accessor without a buffer view (all zeros but its sparse values).
+const MAX_UNBACKED_COUNT: usize = 1 << 24;
 
 /// Most node instances one file may expand to (guards against exponential node sharing).
 const MAX_NODE_VISITS: usize = 10_000_000;
@@ -117,6 +120,10 @@ fn check_buffer_files(document: &Document, base: &Path) -> std::result::Result<(
 /// Runs the crate's validation, ignoring its verdict on required extensions.
 fn validate(document: &Document) -> std::result::Result<(), String> {
     let root = document.as_json();
+    // gltf-json 1.4 indexes the POSITION accessor without a bounds check while validating.
+    if let Some(first) = dangling_positions(root).first() {
+        return Err(format!("invalid glTF: {first}: accessor does not exist"));
+    }
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         if error != ValidationError::Unsupported {
@@ -133,13 +140,29 @@ fn validate(document: &Document) -> std::result::Result<(), String> {
     }
 }
 
+/// JSON pointers of POSITION attributes that name an accessor the file does not have. The
+/// `gltf` crate's validation panics on them, so they are checked before it runs (here and
+/// in `raycast check`).
+pub(crate) fn dangling_positions(root: &gltf::json::Root) -> Vec<String> {
+    let mut found = Vec::new();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(index) = primitive.attributes.get(&position) {
+                if index.value() >= root.accessors.len() {
+                    found.push(format!("/meshes/{m}/primitives/{p}/attributes/POSITION"));
+                }
+            }
+        }
+    }
+    found
+}
+
 /// Refuses files that require an extension that changes geometry and that we cannot decode.
 fn check_required_extensions(document: &Document) -> std::result::Result<(), String> {
     let unsupported: Vec<&str> = document
         .extensions_required()
-        .filter(|e| {
-            !HONOURED_REQUIRED.contains(e) && !APPEARANCE_PREFIXES.iter().any(|p| e.starts_with(p))
-        })
+        .filter(|e| !can_honour_required(e))
         .collect();
     if unsupported.is_empty() {
         Ok(())
@@ -149,6 +172,12 @@ fn check_required_extensions(document: &Document) -> std::result::Result<(), Str
             unsupported.join(", ")
         ))
     }
+}
+
+/// True when a file that requires extension `name` can still be drawn correctly (it does not
+/// change geometry, or we decode it). Shared with `raycast check`.
+pub(crate) fn can_honour_required(name: &str) -> bool {
+    HONOURED_REQUIRED.contains(&name) || APPEARANCE_PREFIXES.iter().any(|p| name.starts_with(p))
 }
 
 /// The root nodes of the chosen scene: by index or name, else the default scene, else the
@@ -437,20 +466,27 @@ fn check_accessor(accessor: &gltf::Accessor, buffers: &[&[u8]]) -> std::result::
     if count == 0 {
         return Err(format!("accessor {} has count 0", accessor.index()));
     }
-    let fits = |view: &gltf::buffer::View,
-                offset: usize,
-                stride: usize,
-                items: usize,
-                size: usize| {
-        let buffer_len = buffers.get(view.buffer().index()).map_or(0, |b| b.len());
-        let view_end = view.offset().checked_add(view.length());
-        let last = stride
-            .checked_mul(items - 1)
-            .and_then(|x| x.checked_add(offset))
-            .and_then(|x| x.checked_add(size));
-        matches!((view_end, last), (Some(end), Some(last)) if end <= buffer_len && last <= view.length())
-            && stride >= size
-    };
+    // Without a buffer view nothing bounds the count by the file's size: cap what it may
+    // make us allocate.
+    if accessor.view().is_none() && count > MAX_UNBACKED_COUNT {
+        return Err(format!(
+            "accessor {} has no buffer view and count {count} (more than {MAX_UNBACKED_COUNT})",
+            accessor.index()
+        ));
+    }
+    let fits =
+        |view: &gltf::buffer::View, offset: usize, stride: usize, items: usize, size: usize| {
+            let buffer_len = buffers.get(view.buffer().index()).map_or(0, |b| b.len());
+            span_fits(
+                buffer_len,
+                view.offset(),
+                view.length(),
+                offset,
+                stride,
+                items,
+                size,
+            )
+        };
     let bad = || {
         format!(
             "accessor {} reads past the end of its buffer",
@@ -486,6 +522,28 @@ fn check_accessor(accessor: &gltf::Accessor, buffers: &[&[u8]]) -> std::result::
         }
     }
     Ok(())
+}
+
+/// True when `items` elements of `size` bytes, `stride` apart from `offset` inside a buffer
+/// view (`view_offset`, `view_length`) of a buffer of `buffer_len` bytes, all lie inside the
+/// view and the view inside the buffer, without overflow. Shared with `raycast check`.
+pub(crate) fn span_fits(
+    buffer_len: usize,
+    view_offset: usize,
+    view_length: usize,
+    offset: usize,
+    stride: usize,
+    items: usize,
+    size: usize,
+) -> bool {
+    let view_end = view_offset.checked_add(view_length);
+    let last = stride
+        .checked_mul(items.saturating_sub(1))
+        .and_then(|x| x.checked_add(offset))
+        .and_then(|x| x.checked_add(size));
+    matches!((view_end, last), (Some(end), Some(last)) if end <= buffer_len && last <= view_length)
+        && stride >= size
+        && items > 0
 }
 
 /// Reads an accessor as items of type `T` after [`check_accessor`].

@@ -57,6 +57,7 @@ pub enum Layout {
 pub struct Staging {
     dir: PathBuf,
     files: Vec<(PathBuf, String)>,
+    protected: Vec<PathBuf>,
 }
 
 impl Staging {
@@ -67,7 +68,15 @@ impl Staging {
         Ok(Staging {
             dir: dir.to_path_buf(),
             files: Vec::new(),
+            protected: Vec::new(),
         })
+    }
+
+    /// Marks an input file that must never be replaced by an output.
+    pub fn protect(&mut self, input: &Path) {
+        if let Ok(path) = input.canonicalize() {
+            self.protected.push(path);
+        }
     }
 
     /// Temporary path to write the file `name` to.
@@ -84,8 +93,21 @@ impl Staging {
         self.files.iter().map(|(_, name)| name.clone()).collect()
     }
 
-    /// Renames every staged file to its final name.
+    /// Renames every staged file to its final name; refuses, before renaming anything, when a
+    /// final name is one of the protected inputs.
     pub fn commit(mut self) -> Result<()> {
+        for (_, name) in &self.files {
+            let target = self.dir.join(name);
+            if target
+                .canonicalize()
+                .is_ok_and(|t| self.protected.contains(&t))
+            {
+                return Err(Error::in_file(
+                    &target,
+                    "is an input of this run; choose another --out folder",
+                ));
+            }
+        }
         for (temp, name) in std::mem::take(&mut self.files) {
             let target = self.dir.join(&name);
             std::fs::rename(&temp, &target)

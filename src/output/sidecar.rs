@@ -2,7 +2,7 @@
 
 use crate::accel::{BvhStats, OctreeParams, OctreeStats};
 use crate::camera::{Camera, Projection};
-use crate::scene::Object;
+use crate::scene::{Object, StageInfo};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -42,6 +42,9 @@ pub struct Sidecar {
     pub stats: Stats,
     /// Seconds per stage.
     pub timings: Timings,
+    /// USD stage metadata (`upAxis`, `metersPerUnit`), for USD scenes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stage: Option<StageInfo>,
     /// Importer and render warnings.
     pub warnings: Vec<String>,
 }

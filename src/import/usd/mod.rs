@@ -18,6 +18,7 @@
 //! `UsdTimeCode::Default()`. Composition problems (a missing referenced file, an unresolved
 //! payload) are warnings. The file format is read by openusd; docs/usd.md has the details.
 
+mod confine;
 mod mesh;
 mod quadric;
 mod shapes;
@@ -28,7 +29,7 @@ use super::LoadOptions;
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
 use crate::quadric::Quadric;
-use crate::scene::{Scene, SceneBuilder};
+use crate::scene::{Scene, SceneBuilder, StageInfo};
 use glam::{DMat4, DVec3};
 use openusd::sdf;
 use openusd::usd::{Prim, Stage};
@@ -36,6 +37,52 @@ use shapes::Part;
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::Path;
 use std::rc::Rc;
+
+/// Deepest nesting of braces, parentheses and brackets accepted in a text layer: the USD
+/// reader parses recursively, so a hostile file could otherwise exhaust the stack.
+pub(crate) const MAX_TEXT_NESTING: usize = 256;
+
+/// The deepest nesting of `{`, `(` and `[` in a text (`#usda`) layer, outside strings and
+/// comments; None for a binary layer.
+pub(crate) fn text_nesting(bytes: &[u8]) -> Option<usize> {
+    if !bytes.starts_with(b"#usda") {
+        return None;
+    }
+    let (mut depth, mut deepest) = (0usize, 0usize);
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'#' => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            q @ (b'"' | b'\'') => {
+                let triple = bytes[i..].starts_with(&[q, q, q]);
+                i += if triple { 3 } else { 1 };
+                while i < bytes.len() {
+                    if bytes[i] == b'\\' {
+                        i += 2;
+                        continue;
+                    }
+                    if bytes[i] == q && (!triple || bytes[i..].starts_with(&[q, q, q])) {
+                        i += if triple { 2 } else { 0 };
+                        break;
+                    }
+                    i += 1;
+                }
+            }
+            b'{' | b'(' | b'[' => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            b'}' | b')' | b']' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        i += 1;
+    }
+    Some(deepest)
+}
 
 /// Deepest nesting of point instancers (a prototype that instances itself is refused).
 const MAX_INSTANCER_DEPTH: usize = 16;
@@ -45,13 +92,63 @@ const MAX_PRIM_VISITS: usize = 20_000_000;
 
 /// Loads a USD file.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
+    load_with(path, options, None)
+}
+
+/// Loads a USD file whose layers, references and payloads may only come from inside the
+/// folder `root` (after following symbolic links): any other asset path is refused, left
+/// unresolved (a composition warning), and listed in the returned vector. Used by
+/// `raycast check`.
+pub fn load_confined(
+    path: &Path,
+    options: &LoadOptions,
+    root: &Path,
+) -> (Result<Scene>, Vec<String>) {
+    let refused = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let confine = root.canonicalize().ok().map(|root| confine::Confined {
+        inner: openusd::ar::DefaultResolver::new(),
+        root,
+        refused: refused.clone(),
+    });
+    let result = match confine {
+        Some(confine) => load_with(path, options, Some(confine)),
+        None => Err(Error::in_file(root, "cannot resolve the asset's folder")),
+    };
+    let refused = refused.lock().map(|r| r.clone()).unwrap_or_default();
+    (result, refused)
+}
+
+fn load_with(
+    path: &Path,
+    options: &LoadOptions,
+    confine: Option<confine::Confined>,
+) -> Result<Scene> {
     std::fs::metadata(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
+    let is_text = {
+        use std::io::Read;
+        let mut head = [0u8; 5];
+        std::fs::File::open(path)
+            .and_then(|mut f| f.read_exact(&mut head))
+            .is_ok()
+            && &head == b"#usda"
+    };
+    if let Some(depth) = is_text
+        .then(|| std::fs::read(path).ok())
+        .flatten()
+        .and_then(|bytes| text_nesting(&bytes))
+        .filter(|&d| d > MAX_TEXT_NESTING)
+    {
+        return Err(Error::in_file(
+            path,
+            format!("the layer nests {depth} levels deep (more than {MAX_TEXT_NESTING}): not read"),
+        ));
+    }
     let text = path
         .to_str()
         .ok_or_else(|| Error::in_file(path, "the file name is not valid UTF-8"))?;
     // openusd is young: a panic inside it on malformed input becomes an error here.
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        load_stage(path, text, options)
+        load_stage(path, text, options, confine)
     }));
     match outcome {
         Ok(result) => result,
@@ -69,9 +166,18 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     }
 }
 
-fn load_stage(path: &Path, text: &str, options: &LoadOptions) -> Result<Scene> {
+fn load_stage(
+    path: &Path,
+    text: &str,
+    options: &LoadOptions,
+    confine: Option<confine::Confined>,
+) -> Result<Scene> {
     let fail = |message: String| Error::in_file(path, message);
-    let stage = Stage::open(text).map_err(|e| fail(format!("cannot open the USD stage: {e:#}")))?;
+    let stage = match confine {
+        None => Stage::open(text),
+        Some(confine) => Stage::builder().resolver(confine).open(text),
+    }
+    .map_err(|e| fail(format!("cannot open the USD stage: {e:#}")))?;
     let mut loader = Loader {
         stage: stage.clone(),
         builder: SceneBuilder::new(),
@@ -110,7 +216,27 @@ fn load_stage(path: &Path, text: &str, options: &LoadOptions) -> Result<Scene> {
     if builder.object_count() == 0 {
         builder.warn("the stage holds no triangles or quadrics");
     }
+    builder.set_stage(stage_info(&stage));
     Ok(builder.finish(path.to_path_buf()))
+}
+
+/// The stage's `upAxis` and `metersPerUnit`, with USD's fallbacks (Y, 0.01) where they are
+/// not authored or not readable.
+fn stage_info(stage: &Stage) -> StageInfo {
+    let up_axis = match stage.stage_metadata("upAxis") {
+        Ok(Some(sdf::Value::Token(t))) => t.as_str().to_string(),
+        Ok(Some(sdf::Value::String(s))) => s,
+        _ => "Y".to_string(),
+    };
+    let meters_per_unit = match stage.stage_metadata("metersPerUnit") {
+        Ok(Some(sdf::Value::Double(m))) => m,
+        Ok(Some(sdf::Value::Float(m))) => f64::from(m),
+        _ => 0.01,
+    };
+    StageInfo {
+        up_axis,
+        meters_per_unit,
+    }
 }
 
 /// What an instance of a point instancer collects while its prototype is walked.

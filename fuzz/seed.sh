@@ -1,0 +1,19 @@
+#!/bin/sh
+# Fills fuzz/corpus/<target>/ with seed inputs from the fixtures (files under 64 KiB) and
+# fuzz/seeds/<target>/. Run from the repository root: fuzz/seed.sh
+set -eu
+seed() {
+    target=$1
+    pattern=$2
+    shift 2
+    mkdir -p "fuzz/corpus/$target"
+    find "$@" -type f -size -64k | grep -E "$pattern" | while read -r f; do
+        cp "$f" "fuzz/corpus/$target/$(echo "$f" | tr '/' '_')"
+    done
+}
+seed gltf '\.(gltf|glb)$' fixtures/gltf fixtures/gltf-validator fixtures/malformed fixtures/bad
+seed obj '\.obj$' fixtures/obj fixtures/bad fixtures/assets fuzz/seeds/obj
+seed usd '\.(usda|usdc|usd)$' fixtures/usd
+for t in gltf obj usd; do
+    echo "$t: $(ls "fuzz/corpus/$t" | wc -l) seeds"
+done

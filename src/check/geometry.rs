@@ -1,0 +1,329 @@
+//! Checks on the loaded scene: an empty scene, degenerate triangles, open or non-manifold
+//! meshes, holes (rays through a mesh that should be closed that cross its surface an odd
+//! number of times), inverted normals (a closed mesh with negative signed volume) and the
+//! scene's size against `--expect-size`.
+//!
+//! Closedness is topological: vertices are welded by their exact stored coordinates, and a
+//! mesh is closed when every edge is shared by exactly two triangles that use it in opposite
+//! directions. A mesh with only a few boundary edges (at most [`NEARLY_CLOSED`] of its edges)
+//! is taken to be meant closed.
+
+use super::{CheckOptions, Findings, SceneStats};
+use crate::geometry::triangle::WatertightRay;
+use crate::scene::{ObjectKind, Scene};
+use glam::{DVec3, Vec3};
+use std::collections::HashMap;
+
+/// Largest fraction of boundary edges for which a mesh counts as meant to be closed.
+pub const NEARLY_CLOSED: f64 = 0.02;
+
+/// Rays cast through each closed or nearly closed mesh.
+pub const HOLE_RAYS: usize = 64;
+
+/// Most ray-triangle tests spent on one mesh's hole check.
+const HOLE_BUDGET: usize = 20_000_000;
+
+/// Topology of one mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Topology {
+    /// Edges (welded vertex pairs).
+    pub edges: usize,
+    /// Edges used by one triangle.
+    pub boundary: usize,
+    /// Edges used by more than two triangles.
+    pub non_manifold: usize,
+    /// Edges used twice in the same direction (inconsistent winding).
+    pub misoriented: usize,
+    /// Triangles with zero area (including repeated corners).
+    pub degenerate: usize,
+}
+
+impl Topology {
+    /// Every edge shared by exactly two triangles in opposite directions.
+    pub fn closed(&self) -> bool {
+        self.edges > 0 && self.boundary == 0 && self.non_manifold == 0 && self.misoriented == 0
+    }
+}
+
+/// Welds vertices by their exact bits and counts edge uses.
+pub fn topology(triangles: &[[Vec3; 3]]) -> Topology {
+    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut id = |v: Vec3| {
+        let key = [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        let next = ids.len() as u32;
+        *ids.entry(key).or_insert(next)
+    };
+    // (low, high) -> (uses low->high, uses high->low)
+    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
+    let mut topo = Topology::default();
+    for tri in triangles {
+        let [a, b, c] = tri.map(|v| v.as_dvec3());
+        if (b - a).cross(c - a).length_squared() == 0.0 {
+            topo.degenerate += 1;
+        }
+        let v = tri.map(&mut id);
+        if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
+            continue;
+        }
+        for k in 0..3 {
+            let (p, q) = (v[k], v[(k + 1) % 3]);
+            let entry = edges.entry((p.min(q), p.max(q))).or_insert((0, 0));
+            if p < q {
+                entry.0 += 1;
+            } else {
+                entry.1 += 1;
+            }
+        }
+    }
+    topo.edges = edges.len();
+    for &(f, b) in edges.values() {
+        match f + b {
+            1 => topo.boundary += 1,
+            2 if f != 1 => topo.misoriented += 1,
+            2 => {}
+            _ => topo.non_manifold += 1,
+        }
+    }
+    topo
+}
+
+/// Signed volume enclosed by the triangles (positive when normals point outward).
+pub fn signed_volume(triangles: &[[Vec3; 3]]) -> f64 {
+    let Some(first) = triangles.first() else {
+        return 0.0;
+    };
+    let o = first[0].as_dvec3();
+    triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| v.as_dvec3() - o);
+            a.dot(b.cross(c))
+        })
+        .sum::<f64>()
+        / 6.0
+}
+
+/// Points spread over the unit sphere (a Fibonacci lattice), deterministic.
+fn directions(n: usize) -> Vec<DVec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let phi = golden * i as f64 + 0.3;
+            DVec3::new(r * phi.cos(), r * phi.sin(), z)
+        })
+        .collect()
+}
+
+/// Casts `rays` lines through the mesh's bounds; returns how many cross its surface an odd
+/// number of times (through a closed surface the count is always even).
+pub fn odd_crossings(triangles: &[[Vec3; 3]], rays: usize) -> (usize, usize) {
+    let (min, max) = triangles.iter().flatten().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), v| (lo.min(v.as_dvec3()), hi.max(v.as_dvec3())),
+    );
+    let centre = (min + max) * 0.5;
+    let half = (max - min) * 0.5;
+    let reach = (max - min).length().max(1e-30) * 2.0;
+    let rays = rays.min(HOLE_BUDGET / triangles.len().max(1)).max(4);
+    let mut odd = 0;
+    for (i, dir) in directions(rays).into_iter().enumerate() {
+        // Aim at points spread through the middle of the box (a Halton-like sequence).
+        let h = |base: usize| {
+            let (mut f, mut r, mut k) = (1.0, 0.0, i + 1);
+            while k > 0 {
+                f /= base as f64;
+                r += f * (k % base) as f64;
+                k /= base;
+            }
+            r * 1.2 - 0.6
+        };
+        let target = centre + half * DVec3::new(h(2), h(3), h(5));
+        let origin = target - dir * reach;
+        let ray = WatertightRay::new(origin, dir);
+        let hits = triangles
+            .iter()
+            .filter(|t| ray.intersect(t, f64::INFINITY).is_some())
+            .count();
+        odd += hits % 2;
+    }
+    (odd, rays)
+}
+
+/// Runs the scene checks; returns the scene's figures.
+pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneStats {
+    let bounds = scene.world_bounds();
+    let size = if bounds.is_empty() {
+        0.0
+    } else {
+        bounds.size().length()
+    };
+    let stats = SceneStats {
+        objects: scene.objects.len(),
+        triangles: scene.triangle_count(),
+        quadrics: scene.quadrics().len(),
+        size,
+    };
+    if scene.objects.is_empty() {
+        f.warn(
+            "EMPTY_SCENE",
+            "",
+            "the scene holds no triangles or quadrics",
+        );
+        return stats;
+    }
+    if !size.is_finite() {
+        f.error(
+            "NON_FINITE_POSITION",
+            "",
+            "the scene's bounds are not finite",
+        );
+    }
+    if let Some((min, max)) = options.expect_size {
+        if !(min..=max).contains(&size) {
+            let hint = if size > max && size / 100.0 <= max && size / 100.0 >= min {
+                " (centimetres instead of metres?)"
+            } else if size < min && size * 100.0 >= min && size * 100.0 <= max {
+                " (metres expected, but this looks 100 times too small)"
+            } else {
+                ""
+            };
+            f.error(
+                "SCENE_SIZE_OUT_OF_RANGE",
+                "",
+                format!("the scene's bounding-box diagonal is {size:.6} units, expected {min}..{max}{hint}"),
+            );
+        }
+    }
+    if !options.geometry {
+        return stats;
+    }
+    for object in &scene.objects {
+        if object.kind != ObjectKind::Mesh {
+            continue;
+        }
+        let triangles = scene.mesh_triangles(object);
+        if triangles.is_empty() {
+            continue;
+        }
+        let at = object.source.clone();
+        let topo = topology(triangles);
+        if topo.degenerate > 0 {
+            f.warn(
+                "DEGENERATE_TRIANGLES",
+                at.clone(),
+                format!(
+                    "{} of {} triangles of '{}' have zero area",
+                    topo.degenerate,
+                    triangles.len(),
+                    object.name
+                ),
+            );
+        }
+        if topo.non_manifold > 0 {
+            f.info(
+                "MESH_NON_MANIFOLD",
+                at.clone(),
+                format!(
+                    "{} edges of '{}' are shared by more than two triangles",
+                    topo.non_manifold, object.name
+                ),
+            );
+        }
+        let nearly = topo.boundary > 0
+            && ((topo.boundary as f64) <= NEARLY_CLOSED * topo.edges as f64
+                || (topo.boundary <= 6 && topo.edges >= 12));
+        if topo.closed() {
+            let (odd, rays) = odd_crossings(triangles, HOLE_RAYS);
+            if odd > 0 {
+                f.warn(
+                    "MESH_HOLES",
+                    at.clone(),
+                    format!(
+                        "'{}' is closed, yet {odd} of {rays} rays cross it an odd number of times",
+                        object.name
+                    ),
+                );
+            }
+            let volume = signed_volume(triangles);
+            if volume < 0.0 {
+                f.warn(
+                    "INVERTED_NORMALS",
+                    at.clone(),
+                    format!(
+                        "'{}' is closed but its normals point inward (signed volume {volume:.6e})",
+                        object.name
+                    ),
+                );
+            }
+        } else if nearly {
+            let (odd, rays) = odd_crossings(triangles, HOLE_RAYS);
+            let escaped = if odd > 0 {
+                format!("; {odd} of {rays} rays through it escape through a hole")
+            } else {
+                String::new()
+            };
+            f.warn(
+                "MESH_HOLES",
+                at.clone(),
+                format!(
+                    "'{}' looks meant to be closed but has {} boundary edges of {}{escaped}",
+                    object.name, topo.boundary, topo.edges
+                ),
+            );
+        } else if topo.misoriented > 0 && topo.boundary == 0 {
+            f.warn(
+                "MESH_INCONSISTENT_WINDING",
+                at.clone(),
+                format!(
+                    "{} edges of '{}' join triangles wound the opposite way",
+                    topo.misoriented, object.name
+                ),
+            );
+        }
+    }
+    stats
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cube() -> Vec<[Vec3; 3]> {
+        let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+        let quads = [
+            [v(0., 0., 0.), v(0., 1., 0.), v(1., 1., 0.), v(1., 0., 0.)],
+            [v(0., 0., 1.), v(1., 0., 1.), v(1., 1., 1.), v(0., 1., 1.)],
+            [v(0., 0., 0.), v(1., 0., 0.), v(1., 0., 1.), v(0., 0., 1.)],
+            [v(0., 1., 0.), v(0., 1., 1.), v(1., 1., 1.), v(1., 1., 0.)],
+            [v(0., 0., 0.), v(0., 0., 1.), v(0., 1., 1.), v(0., 1., 0.)],
+            [v(1., 0., 0.), v(1., 1., 0.), v(1., 1., 1.), v(1., 0., 1.)],
+        ];
+        quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect()
+    }
+
+    #[test]
+    fn closed_cube() {
+        let c = cube();
+        let t = topology(&c);
+        assert!(t.closed(), "{t:?}");
+        assert!((signed_volume(&c) - 1.0).abs() < 1e-12);
+        assert_eq!(odd_crossings(&c, 64).0, 0);
+    }
+
+    #[test]
+    fn inverted_and_holed_cube() {
+        let inverted: Vec<_> = cube().into_iter().map(|[a, b, c]| [a, c, b]).collect();
+        assert!(topology(&inverted).closed());
+        assert!(signed_volume(&inverted) < 0.0);
+        let mut holed = cube();
+        holed.pop();
+        let t = topology(&holed);
+        assert_eq!(t.boundary, 3);
+        assert!(odd_crossings(&holed, 64).0 > 0);
+    }
+}

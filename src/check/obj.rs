@@ -1,0 +1,127 @@
+//! OBJ: a line scanner that reports every bad line (numbers, non-finite vertices, face
+//! indices out of range, short faces, material libraries outside the asset), before `tobj`
+//! loads the file.
+
+use super::{resolve_inside, CheckOptions, Findings};
+use std::path::Path;
+
+/// Checks an OBJ file held in `bytes`; returns whether the importer may run.
+pub fn check(
+    path: &Path,
+    root: &Path,
+    bytes: &[u8],
+    options: &CheckOptions,
+    f: &mut Findings,
+) -> bool {
+    let Ok(text) = std::str::from_utf8(bytes) else {
+        let line = bytes
+            .iter()
+            .take(
+                std::str::from_utf8(bytes)
+                    .err()
+                    .map_or(0, |e| e.valid_up_to()),
+            )
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1;
+        f.error(
+            "OBJ_NOT_TEXT",
+            format!("line {line}"),
+            "the file is not UTF-8 text",
+        );
+        return false;
+    };
+    let base = path.parent().unwrap_or(Path::new("."));
+    let mut vertices = 0usize;
+    let mut faces = 0usize;
+    for (n, raw) in text.lines().enumerate() {
+        let at = format!("line {}", n + 1);
+        let line = raw.split('#').next().unwrap_or("").trim();
+        let mut words = line.split_whitespace();
+        let Some(keyword) = words.next() else {
+            continue;
+        };
+        let args: Vec<&str> = words.collect();
+        match keyword {
+            "v" => {
+                vertices += 1;
+                if args.len() < 3 {
+                    f.error("OBJ_PARSE_ERROR", at, "a vertex needs x y z");
+                    continue;
+                }
+                match args
+                    .iter()
+                    .take(3)
+                    .map(|a| a.parse::<f64>())
+                    .collect::<Result<Vec<f64>, _>>()
+                {
+                    Err(_) => f.error("OBJ_PARSE_ERROR", at, format!("bad vertex '{line}'")),
+                    Ok(v) if v.iter().any(|x| !(*x as f32).is_finite()) => f.error(
+                        "NON_FINITE_POSITION",
+                        at,
+                        "the vertex is NaN or infinite (in f32)",
+                    ),
+                    Ok(_) => {}
+                }
+            }
+            "f" => {
+                faces += 1;
+                if args.len() < 3 {
+                    f.warn(
+                        "DEGENERATE_FACE",
+                        at.clone(),
+                        format!("a face with {} vertices", args.len()),
+                    );
+                }
+                for corner in &args {
+                    let first = corner.split('/').next().unwrap_or("");
+                    match first.parse::<i64>() {
+                        Err(_) => {
+                            f.error(
+                                "OBJ_PARSE_ERROR",
+                                at.clone(),
+                                format!("bad face index '{corner}'"),
+                            );
+                            break;
+                        }
+                        Ok(i) => {
+                            let resolved = if i < 0 { vertices as i64 + i } else { i - 1 };
+                            if i == 0 || resolved < 0 || resolved >= vertices as i64 {
+                                f.error(
+                                    "INDEX_OOB",
+                                    at.clone(),
+                                    format!(
+                                        "face index {i} with {vertices} vertices defined so far"
+                                    ),
+                                );
+                                break;
+                            }
+                        }
+                    }
+                }
+            }
+            "mtllib" => {
+                for name in &args {
+                    match resolve_inside(base, root, name, options.allow_outside) {
+                        Err(why) => f.error("PATH_OUTSIDE_ASSET", at.clone(), why),
+                        Ok(p) if !p.is_file() => f.warn(
+                            "MISSING_REFERENCE",
+                            at.clone(),
+                            format!("material library '{name}' cannot be found (materials are not read)"),
+                        ),
+                        Ok(_) => {}
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    if faces == 0 && vertices == 0 && !text.trim().is_empty() && !f.has_errors() {
+        f.warn(
+            "OBJ_NO_DATA",
+            "",
+            "no vertex or face lines: is this an OBJ file?",
+        );
+    }
+    true
+}

@@ -1,0 +1,696 @@
+//! `raycast check`: the glTF-Validator suite (agreement written to
+//! `reports/validator_agreement.md`), the malformed and bad fixtures, fuzzing regressions,
+//! the command line (exit codes, JSON, JUnit, GitHub annotations, path confinement) and a
+//! run over `../shared/assets` when it is there.
+
+use raycast::check::{check_asset, discover, Asset, AssetReport, CheckOptions, Severity};
+use serde_json::Value;
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// Files of the validator suite whose ERRORs get an error or warning from `check`: the
+/// measured agreement may not fall below this.
+const AGREEMENT_BASELINE: usize = 190;
+
+/// Validator-clean files that `check` gives an error (the importer's limits, listed in the
+/// report): may not grow.
+const FALSE_ERRORS_CEILING: usize = 32;
+
+/// The longest one asset of the fixtures may take.
+const PER_FILE_LIMIT: Duration = Duration::from_secs(20);
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn fixture(relative: &str) -> PathBuf {
+    root().join("fixtures").join(relative)
+}
+
+fn timed(asset: &Asset) -> AssetReport {
+    let report = check_asset(asset, &CheckOptions::default());
+    assert!(
+        Duration::from_secs_f64(report.seconds) < PER_FILE_LIMIT,
+        "{} took {:.1}s",
+        report.path,
+        report.seconds
+    );
+    assert!(
+        !report.findings.iter().any(|f| f.code == "INTERNAL_PANIC"),
+        "{}: {:?}",
+        report.path,
+        report.findings
+    );
+    report
+}
+
+fn codes(report: &AssetReport, severities: &[Severity]) -> BTreeSet<String> {
+    report
+        .findings
+        .iter()
+        .filter(|f| severities.contains(&f.severity))
+        .map(|f| f.code.clone())
+        .collect()
+}
+
+/// Codes that say nothing about the file's validity in the validator's sense.
+fn incidental(code: &str) -> bool {
+    matches!(code, "EMPTY_SCENE" | "LOAD_FAILED")
+}
+
+#[test]
+fn validator_suite_agreement() {
+    let suite = fixture("gltf-validator");
+    let assets = discover(std::slice::from_ref(&suite)).expect("the suite is in fixtures/");
+    assert!(
+        assets.len() >= 250,
+        "only {} files in the suite",
+        assets.len()
+    );
+    let mut rows = Vec::new();
+    let (mut with_errors, mut agree, mut exact, mut specific) = (0, 0, 0, 0);
+    let mut false_errors = Vec::new();
+    for asset in &assets {
+        let report = timed(asset);
+        let report_path = PathBuf::from(format!("{}.report.json", asset.path.display()));
+        let text = std::fs::read_to_string(&report_path)
+            .unwrap_or_else(|e| panic!("{}: {e}", report_path.display()));
+        let verdict: Value = serde_json::from_str(&text).expect("report.json is JSON");
+        let validator: BTreeSet<String> = verdict["issues"]["messages"]
+            .as_array()
+            .map(|m| m.as_slice())
+            .unwrap_or_default()
+            .iter()
+            .filter(|m| m["severity"] == 0)
+            .filter_map(|m| m["code"].as_str().map(String::from))
+            .collect();
+        let ours = codes(&report, &[Severity::Error, Severity::Warning]);
+        let name = asset
+            .path
+            .strip_prefix(&suite)
+            .unwrap_or(&asset.path)
+            .display()
+            .to_string();
+        if validator.is_empty() {
+            let errors = codes(&report, &[Severity::Error]);
+            if !errors.is_empty() {
+                false_errors.push((name, errors));
+            }
+            continue;
+        }
+        with_errors += 1;
+        let agrees = !ours.is_empty();
+        let same_code = validator.iter().any(|c| ours.contains(c));
+        let own = ours.iter().any(|c| !incidental(c));
+        agree += agrees as usize;
+        exact += same_code as usize;
+        specific += own as usize;
+        rows.push((name, validator, ours, agrees, same_code, own));
+    }
+    let mut md = String::new();
+    md.push_str("# glTF-Validator suite: agreement of `raycast check`\n\n");
+    md.push_str(
+        "Written by `tests/check.rs` (`cargo test --test check validator_suite_agreement`) from\n",
+    );
+    md.push_str("`fixtures/gltf-validator/` (the Khronos glTF-Validator `test/base/data`, each file with the\n");
+    md.push_str("validator's own `report.json`). Do not edit by hand.\n\n");
+    md.push_str(&format!(
+        "- Files in the suite: {}; the validator reports an ERROR for {with_errors}.\n",
+        assets.len()
+    ));
+    md.push_str(&format!(
+        "- **Agreement** (the file gets an error or warning from `check`): **{agree} of {with_errors}**.\n"
+    ));
+    md.push_str(&format!(
+        "- Flagged by a finding of its own (not only `LOAD_FAILED` from the importer or `EMPTY_SCENE`): {specific} of {with_errors}.\n"
+    ));
+    md.push_str(&format!(
+        "- Same code as the validator (at least one of its error codes among ours): {exact} of {with_errors}.\n"
+    ));
+    md.push_str(&format!(
+        "- Validator-clean files that `check` gives an error: {} (listed at the end, with the reason).\n\n",
+        false_errors.len()
+    ));
+    md.push_str(
+        "| file | validator's error codes | our errors and warnings | agree? | same code? |\n",
+    );
+    md.push_str("| --- | --- | --- | --- | --- |\n");
+    let join = |s: &BTreeSet<String>| {
+        if s.is_empty() {
+            "—".to_string()
+        } else {
+            s.iter().cloned().collect::<Vec<_>>().join(", ")
+        }
+    };
+    for (name, validator, ours, agrees, same, own) in &rows {
+        let verdict = match (agrees, own) {
+            (false, _) => "**no**",
+            (true, false) => "yes (incidental)",
+            (true, true) => "yes",
+        };
+        md.push_str(&format!(
+            "| `{name}` | {} | {} | {verdict} | {} |\n",
+            join(validator),
+            join(ours),
+            if *same { "yes" } else { "no" }
+        ));
+    }
+    md.push_str("\n## Misses\n\n");
+    let misses: Vec<_> = rows.iter().filter(|r| !r.3).collect();
+    if misses.is_empty() {
+        md.push_str("None: every file with a validator ERROR gets an error or warning.\n");
+    }
+    for (name, validator, ..) in misses {
+        md.push_str(&format!("- `{name}`: {}\n", join(validator)));
+    }
+    md.push_str("\n## Incidental agreement\n\nFiles flagged only because the importer refuses them (`LOAD_FAILED`) or\nbecause the scene is empty; the validator's complaint itself is not detected:\n\n");
+    for (name, validator, ..) in rows.iter().filter(|r| r.3 && !r.5) {
+        md.push_str(&format!("- `{name}`: {}\n", join(validator)));
+    }
+    md.push_str("\n## Validator-clean files that `check` gives an error\n\n");
+    md.push_str(
+        "All are `LOAD_FAILED`: the importer (the `gltf` crate 1.4 underneath) refuses files the\n",
+    );
+    md.push_str(
+        "specification allows — accessors without a `bufferView`, textures without `source`,\n",
+    );
+    md.push_str(
+        "buffers without `uri`, scenes without `nodes`, integers written as `1.0`, GLB files\n",
+    );
+    md.push_str("longer than their declared length, percent-encoded `data:` URIs. `check` says so because\n");
+    md.push_str("`raycast` cannot render these files; they are limits of the importer, not faults of the files.\n\n");
+    for (name, errors) in &false_errors {
+        md.push_str(&format!("- `{name}`: {}\n", join(errors)));
+    }
+    let out = root().join("reports/validator_agreement.md");
+    if std::fs::read_to_string(&out).ok().as_deref() != Some(md.as_str()) {
+        std::fs::write(&out, &md).expect("reports/ is writable");
+    }
+    assert!(
+        agree >= AGREEMENT_BASELINE,
+        "agreement fell to {agree} of {with_errors} (baseline {AGREEMENT_BASELINE}); see reports/validator_agreement.md"
+    );
+    assert!(
+        false_errors.len() <= FALSE_ERRORS_CEILING,
+        "{} validator-clean files get errors (ceiling {FALSE_ERRORS_CEILING}): {false_errors:?}",
+        false_errors.len()
+    );
+}
+
+#[test]
+fn malformed_and_bad_fixtures_are_reported() {
+    for folder in ["malformed", "bad"] {
+        let assets = discover(&[fixture(folder)]).expect("fixtures exist");
+        assert!(!assets.is_empty());
+        for asset in &assets {
+            let report = timed(asset);
+            let name = asset
+                .path
+                .file_name()
+                .and_then(|n| n.to_str())
+                .unwrap_or("");
+            // The tinygltf issue-440 file is valid once its chunk is read correctly.
+            if name.starts_with("zero-sized-bin-chunk") {
+                continue;
+            }
+            assert!(
+                report.errors + report.warnings > 0,
+                "{}: nothing found",
+                report.path
+            );
+        }
+    }
+}
+
+#[test]
+fn specific_codes_on_bad_fixtures() {
+    let expect = [
+        ("bad/node_cycle.gltf", "NODE_LOOP"),
+        ("bad/bad_index.gltf", "ACCESSOR_INDEX_OOB"),
+        ("bad/nan_position.gltf", "ACCESSOR_INVALID_FLOAT"),
+        ("bad/not_json.gltf", "INVALID_JSON"),
+        ("bad/draco_required.gltf", "UNSUPPORTED_EXTENSION"),
+        ("bad/meshopt_required.gltf", "UNSUPPORTED_EXTENSION"),
+        ("bad/missing_buffer.gltf", "IO_ERROR"),
+        ("bad/quadric_not_symmetric.gltf", "QUADRIC_INVALID"),
+        ("bad/quadric_missing_r.gltf", "QUADRIC_INVALID"),
+        ("bad/empty.gltf", "EMPTY_SCENE"),
+        ("malformed/integer-out-of-bounds.gltf", "VALUE_NOT_IN_RANGE"),
+        (
+            "gltf-validator/mesh/unresolved_positions.gltf",
+            "UNRESOLVED_REFERENCE",
+        ),
+        ("fuzz/gltf/unbacked_sparse_bomb.gltf", "ASSET_TOO_LARGE"),
+        ("fuzz/usd/deep_nesting.usda", "LOAD_FAILED"),
+    ];
+    for (file, code) in expect {
+        let report = timed(&Asset::file(fixture(file)));
+        assert!(
+            report.findings.iter().any(|f| f.code == code),
+            "{file}: expected {code}, got {:?}",
+            report.findings
+        );
+    }
+    let clean = ["gltf/cube.gltf", "gltf/cube.glb", "gltf/instances.gltf"];
+    for file in clean {
+        let report = timed(&Asset::file(fixture(file)));
+        assert_eq!(report.errors, 0, "{file}: {:?}", report.findings);
+    }
+}
+
+/// Every input the fuzzers crashed on (fixtures/fuzz/<target>/) is reported without a panic
+/// or a hang. They run through the command line, which checks USD assets in a child process:
+/// some abort inside the USD reader (an allocation failure is not a panic).
+#[test]
+fn fuzzing_regressions() {
+    let dir = fixture("fuzz");
+    let expected = discover(std::slice::from_ref(&dir))
+        .expect("fixtures/fuzz")
+        .len();
+    let out = raycast(&[
+        "check",
+        "--json",
+        "--quiet",
+        dir.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let reports: Vec<Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON per line"))
+        .collect();
+    assert_eq!(reports.len(), expected);
+    for r in &reports {
+        let findings = r["findings"]
+            .as_array()
+            .map(Vec::as_slice)
+            .unwrap_or_default();
+        assert!(r["errors"].as_u64() >= Some(1), "{}: no error", r["path"]);
+        assert!(
+            !findings.iter().any(|f| f["code"] == "INTERNAL_PANIC"),
+            "{}",
+            r["path"]
+        );
+        assert!(r["seconds"].as_f64() < Some(PER_FILE_LIMIT.as_secs_f64()));
+    }
+    let crashed = reports
+        .iter()
+        .find(|r| {
+            r["path"]
+                .as_str()
+                .is_some_and(|p| p.ends_with("openusd_usdc_huge_array.usdc"))
+        })
+        .expect("the abort regression is there");
+    assert!(crashed["findings"]
+        .as_array()
+        .is_some_and(|f| f.iter().any(|f| f["code"] == "USD_READER_CRASHED")));
+}
+
+/// Inputs on which the USD reader never finishes (found by fuzzing): the child process that
+/// reads them is stopped after `--timeout` seconds.
+#[test]
+fn usd_reader_hangs_are_stopped() {
+    let dir = fixture("fuzz-hang");
+    let started = Instant::now();
+    let out = raycast(&[
+        "check",
+        "--json",
+        "--quiet",
+        "--timeout",
+        "2",
+        dir.to_str().unwrap_or_default(),
+    ]);
+    assert!(started.elapsed() < Duration::from_secs(60));
+    assert_eq!(out.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(text.lines().count(), 2, "{text}");
+    for line in text.lines() {
+        let r: Value = serde_json::from_str(line).expect("JSON");
+        assert!(r["findings"]
+            .as_array()
+            .is_some_and(|f| f.iter().any(|f| f["code"] == "USD_READER_CRASHED")));
+    }
+}
+
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("raycast-check-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        Scratch(dir)
+    }
+
+    fn write(&self, name: &str, text: &[u8]) -> PathBuf {
+        let path = self.0.join(name);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).expect("folder");
+        }
+        std::fs::write(&path, text).expect("write");
+        path
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A unit cube as OBJ text; `flip` reverses every face, `drop` leaves faces out.
+fn cube_obj(flip: bool, drop: usize) -> String {
+    let mut text = String::new();
+    for v in 0..8 {
+        text += &format!("v {} {} {}\n", v & 1, (v >> 1) & 1, (v >> 2) & 1);
+    }
+    let faces = [
+        [1, 3, 4, 2],
+        [5, 6, 8, 7],
+        [1, 2, 6, 5],
+        [3, 7, 8, 4],
+        [1, 5, 7, 3],
+        [2, 4, 8, 6],
+    ];
+    for face in faces.iter().skip(drop) {
+        let mut f = face.to_vec();
+        if flip {
+            f.reverse();
+        }
+        text += &format!("f {} {} {} {}\n", f[0], f[1], f[2], f[3]);
+    }
+    text
+}
+
+#[test]
+fn geometric_checks() {
+    let dir = Scratch::new("geometry");
+    let run = |name: &str, text: String| timed(&Asset::file(dir.write(name, text.as_bytes())));
+    let good = run("good.obj", cube_obj(false, 0));
+    assert!(good.findings.is_empty(), "{:?}", good.findings);
+    assert!((good.scene.as_ref().map_or(0.0, |s| s.size) - 3f64.sqrt()).abs() < 1e-12);
+    let inverted = run("inverted.obj", cube_obj(true, 0));
+    assert!(codes(&inverted, &[Severity::Warning]).contains("INVERTED_NORMALS"));
+    let holed = run("holed.obj", cube_obj(false, 1));
+    let hole = holed.findings.iter().find(|f| f.code == "MESH_HOLES");
+    assert!(
+        hole.is_some_and(|f| f.message.contains("escape")),
+        "{:?}",
+        holed.findings
+    );
+    // Scale: a 1.7-unit cube checked as metres against 1..10 passes, against 100..1000 fails.
+    let path = dir.write("scale.obj", cube_obj(false, 0).as_bytes());
+    let with = |min: f64, max: f64| {
+        check_asset(
+            &Asset::file(path.clone()),
+            &CheckOptions {
+                expect_size: Some((min, max)),
+                ..CheckOptions::default()
+            },
+        )
+    };
+    assert_eq!(with(1.0, 10.0).errors, 0);
+    assert!(with(100.0, 1000.0)
+        .findings
+        .iter()
+        .any(|f| f.code == "SCENE_SIZE_OUT_OF_RANGE"));
+    // OBJ lines are located.
+    let bad = run("bad.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 9\n".into());
+    let at: Vec<_> = bad
+        .findings
+        .iter()
+        .map(|f| (f.code.as_str(), f.location.as_str()))
+        .collect();
+    assert!(at.contains(&("NON_FINITE_POSITION", "line 3")), "{at:?}");
+    assert!(at.contains(&("INDEX_OOB", "line 4")), "{at:?}");
+}
+
+#[test]
+fn external_files_stay_inside_the_asset() {
+    let dir = Scratch::new("confine");
+    dir.write("secret.bin", &[0u8; 36]);
+    let gltf = |uri: &str| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"uri":"{uri}","byteLength":36}}],
+            "bufferViews":[{{"buffer":0,"byteLength":36}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[0,0,0]}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+            "nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}]}}"#
+        )
+    };
+    let inside = dir.write("a/inside.gltf", gltf("../secret.bin").as_bytes());
+    let absolute = dir.write(
+        "a/absolute.gltf",
+        gltf(&dir.0.join("secret.bin").display().to_string()).as_bytes(),
+    );
+    let remote = dir.write(
+        "a/remote.gltf",
+        gltf("https://example.com/x.bin").as_bytes(),
+    );
+    for path in [&inside, &absolute] {
+        let report = check_asset(&Asset::file(path.clone()), &CheckOptions::default());
+        assert!(
+            report
+                .findings
+                .iter()
+                .any(|f| f.code == "PATH_OUTSIDE_ASSET"),
+            "{:?}",
+            report.findings
+        );
+        let allowed = check_asset(
+            &Asset::file(path.clone()),
+            &CheckOptions {
+                allow_outside: true,
+                ..CheckOptions::default()
+            },
+        );
+        assert!(
+            !allowed
+                .findings
+                .iter()
+                .any(|f| f.code == "PATH_OUTSIDE_ASSET"),
+            "{:?}",
+            allowed.findings
+        );
+    }
+    // The folder named on the command line is the tree: from there `../secret.bin` is inside.
+    let found = discover(std::slice::from_ref(&dir.0)).expect("scratch exists");
+    let tree = found.iter().find(|a| a.path == inside).expect("found");
+    let report = check_asset(tree, &CheckOptions::default());
+    assert!(!report
+        .findings
+        .iter()
+        .any(|f| f.code == "PATH_OUTSIDE_ASSET"));
+    let report = check_asset(&Asset::file(remote), &CheckOptions::default());
+    assert!(report.findings.iter().any(|f| f.code == "NON_RELATIVE_URI"));
+    // Limits: a buffer larger than --max-memory is refused before it is read.
+    let small = check_asset(
+        &Asset::file(inside.clone()),
+        &CheckOptions {
+            max_bytes: 16,
+            allow_outside: true,
+            ..CheckOptions::default()
+        },
+    );
+    assert!(small
+        .findings
+        .iter()
+        .any(|f| f.code == "ASSET_TOO_LARGE" || f.code == "FILE_TOO_LARGE"));
+}
+
+fn raycast(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raycast"))
+        .args(args)
+        .output()
+        .expect("raycast runs")
+}
+
+#[test]
+fn command_line() {
+    let cube = fixture("gltf/cube.gltf");
+    let cycle = fixture("bad/node_cycle.gltf");
+    let out = raycast(&["check", cube.to_str().unwrap_or_default()]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = raycast(&[
+        "check",
+        "--json",
+        cube.to_str().unwrap_or_default(),
+        cycle.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let lines: Vec<Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
+        .collect();
+    assert_eq!(lines.len(), 2);
+    assert_eq!(lines[0]["status"], "ok");
+    assert!(lines[1]["findings"]
+        .as_array()
+        .is_some_and(|f| f.iter().any(|f| f["code"] == "NODE_LOOP"
+            && f["location"]
+                .as_str()
+                .is_some_and(|l| l.starts_with("/nodes/")))));
+    let out = raycast(&[
+        "check",
+        "--github",
+        "--quiet",
+        cycle.to_str().unwrap_or_default(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("::error file=") && l.contains("title=NODE_LOOP::")),
+        "{text}"
+    );
+    let out = raycast(&["check", "no/such/file.gltf"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = raycast(&[
+        "check",
+        "--expect-size",
+        "5..1",
+        cube.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    // JUnit: written atomically, never over an input.
+    let dir = Scratch::new("cli");
+    let input = dir.write("cube.gltf", &std::fs::read(&cube).expect("fixture"));
+    dir.write(
+        "cube.bin",
+        &std::fs::read(fixture("gltf/cube.bin")).expect("fixture"),
+    );
+    let before = std::fs::read(&input).expect("input");
+    let out = raycast(&[
+        "check",
+        "--junit",
+        input.to_str().unwrap_or_default(),
+        input.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        std::fs::read(&input).expect("input"),
+        before,
+        "the input was overwritten"
+    );
+    let junit = dir.0.join("report.xml");
+    let out = raycast(&[
+        "check",
+        "--quiet",
+        "--junit",
+        junit.to_str().unwrap_or_default(),
+        dir.0.to_str().unwrap_or_default(),
+        cycle.to_str().unwrap_or_default(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let xml = std::fs::read_to_string(&junit).expect("junit written");
+    assert_eq!(xml.matches("<testcase ").count(), 2);
+    assert_eq!(xml.matches("<failure ").count(), 1);
+    let leftovers: Vec<_> = std::fs::read_dir(&dir.0)
+        .expect("dir")
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().contains(".partial-"))
+        .collect();
+    assert!(leftovers.is_empty());
+}
+
+/// `raycast check` over ../shared/assets whole, when it is there: no panic, no hang, exit 1
+/// (the folder holds broken files on purpose), one JSON object and one testcase per asset.
+#[test]
+fn shared_assets() {
+    let shared = root().join("../shared/assets");
+    if !shared.is_dir() {
+        eprintln!("skipped: {} is not here", shared.display());
+        return;
+    }
+    let expected = discover(std::slice::from_ref(&shared))
+        .expect("listable")
+        .len();
+    let dir = Scratch::new("shared");
+    let junit = dir.0.join("junit.xml");
+    let json = dir.0.join("out.jsonl");
+    let started = Instant::now();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_raycast"))
+        .args(["check", "--json", "--jobs", "2", "--junit"])
+        .arg(&junit)
+        .arg(&shared)
+        .stdout(std::fs::File::create(&json).expect("json file"))
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("raycast runs");
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            break status;
+        }
+        if started.elapsed() > Duration::from_secs(600) {
+            let _ = child.kill();
+            panic!("raycast check over ../shared/assets hung (over 10 minutes)");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert_eq!(status.code(), Some(1));
+    let text = std::fs::read_to_string(&json).expect("json");
+    let reports: Vec<Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON per line"))
+        .collect();
+    assert_eq!(reports.len(), expected);
+    for r in &reports {
+        let findings = r["findings"]
+            .as_array()
+            .map(Vec::as_slice)
+            .unwrap_or_default();
+        assert!(
+            !findings.iter().any(|f| f["code"] == "INTERNAL_PANIC"),
+            "{}",
+            r["path"]
+        );
+    }
+    let ok = |path: &str| {
+        reports
+            .iter()
+            .find(|r| r["path"].as_str().is_some_and(|p| p.ends_with(path)))
+            .map(|r| r["errors"] == 0)
+    };
+    for good in [
+        "gltf/DamagedHelmet.glb",
+        "obj/stanford-bunny.obj",
+        "gltf/Box.glb",
+    ] {
+        assert_eq!(ok(good), Some(true), "{good} should have no errors");
+    }
+    let xml = std::fs::read_to_string(&junit).expect("junit");
+    assert_eq!(xml.matches("<testcase ").count(), expected);
+    eprintln!(
+        "checked {expected} assets of ../shared/assets in {:.1}s",
+        started.elapsed().as_secs_f64()
+    );
+}
+
+#[test]
+fn json_output_is_stable() {
+    let report = check_asset(
+        &Asset::file(fixture("bad/node_cycle.gltf")),
+        &CheckOptions::default(),
+    );
+    let value = serde_json::to_value(&report).expect("serialisable");
+    for key in [
+        "path", "format", "status", "errors", "warnings", "infos", "seconds", "findings",
+    ] {
+        assert!(value.get(key).is_some(), "missing {key}");
+    }
+    let finding = &value["findings"][0];
+    for key in ["code", "severity", "location", "message"] {
+        assert!(finding.get(key).is_some(), "missing {key}");
+    }
+    assert!(Path::new(report.path.as_str()).ends_with("node_cycle.gltf"));
+}
