@@ -366,11 +366,7 @@ pub fn check_asset(asset: &Asset, options: &CheckOptions) -> AssetReport {
     let scene = match outcome {
         Ok(scene) => scene,
         Err(panic) => {
-            let what = panic
-                .downcast_ref::<String>()
-                .map(String::as_str)
-                .or_else(|| panic.downcast_ref::<&str>().copied())
-                .unwrap_or("unknown cause");
+            let what = crate::error::panic_message(&*panic);
             findings.error(
                 "INTERNAL_PANIC",
                 "",

@@ -153,11 +153,7 @@ fn load_with(
     match outcome {
         Ok(result) => result,
         Err(panic) => {
-            let what = panic
-                .downcast_ref::<String>()
-                .map(String::as_str)
-                .or_else(|| panic.downcast_ref::<&str>().copied())
-                .unwrap_or("unknown cause");
+            let what = crate::error::panic_message(&*panic);
             Err(Error::in_file(
                 path,
                 format!("the USD reader failed on this file: {what}"),
