@@ -127,19 +127,8 @@ fn axis_parallel_and_grazing_rays_agree() {
     let mut tally = Tally::default();
     for _ in 0..3000 {
         let mut origin = rng.point(-12.0, 12.0);
-        let axis = (rng.next_u64() % 3) as usize;
-        let mut dir = DVec3::ZERO;
-        dir[axis] = if rng.next_u64().is_multiple_of(2) {
-            1.0
-        } else {
-            -1.0
-        };
-        for other in 0..3 {
-            if other != axis {
-                dir[other] =
-                    [0.0, -0.0, 1e-12, rng.uniform(-1.0, 1.0)][(rng.next_u64() % 4) as usize];
-            }
-        }
+        let dir = rng.axis_direction(&[1e-12]);
+        let axis = (0..3).find(|&a| dir[a].abs() == 1.0).unwrap();
         // Half the rays start on a primitive's bounding-box face (grazing its box).
         if rng.next_u64().is_multiple_of(2) {
             let b = scene.bounds((rng.next_u64() % scene.len() as u64) as usize);

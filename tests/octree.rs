@@ -48,19 +48,7 @@ fn rays_on_cell_planes_axis_parallel_and_negative_zero() {
         let mut origin = rng.point(-12.0, 12.0);
         origin.x = planes[(rng.next_u64() % 3) as usize];
         origin.y = [c.y, origin.y][(rng.next_u64() % 2) as usize];
-        let axis = (rng.next_u64() % 3) as usize;
-        let mut dir = DVec3::ZERO;
-        dir[axis] = if rng.next_u64().is_multiple_of(2) {
-            1.0
-        } else {
-            -1.0
-        };
-        // Other components: +0.0, -0.0 or a real value.
-        for other in 0..3 {
-            if other != axis {
-                dir[other] = [0.0, -0.0, rng.uniform(-1.0, 1.0)][(rng.next_u64() % 3) as usize];
-            }
-        }
+        let dir = rng.axis_direction(&[]);
         assert_same_as_brute_force(&scene, &octree, origin, dir);
     }
 }

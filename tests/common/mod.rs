@@ -114,6 +114,28 @@ impl Rng {
             self.uniform(lo, hi),
         )
     }
+    /// A direction along a random axis (±1) whose other components are each +0.0, -0.0, one
+    /// of `tiny` or a uniform value in [-1, 1): rays on cell planes and near-parallel rays.
+    pub fn axis_direction(&mut self, tiny: &[f64]) -> DVec3 {
+        let axis = (self.next_u64() % 3) as usize;
+        let mut dir = DVec3::ZERO;
+        dir[axis] = if self.next_u64().is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
+        for other in (0..3).filter(|&a| a != axis) {
+            let choices = 3 + tiny.len() as u64;
+            dir[other] = match self.next_u64() % choices {
+                0 => 0.0,
+                1 => -0.0,
+                2 => self.uniform(-1.0, 1.0),
+                k => tiny[(k - 3) as usize],
+            };
+        }
+        dir
+    }
+
     /// A random unit vector.
     pub fn direction(&mut self) -> DVec3 {
         loop {
