@@ -71,6 +71,12 @@ impl Camera {
     /// A perspective camera framing all of `bounds` from the front (+Z side, slightly from
     /// the right and above), 0.8 rad vertical field of view.
     pub fn framing(bounds: &Aabb) -> Camera {
+        Camera::framing_from(bounds, DVec3::new(0.4, 0.3, 1.0))
+    }
+
+    /// A perspective camera framing all of `bounds`, looking at its centre from `direction`
+    /// (not parallel to +Y), 0.8 rad vertical field of view.
+    pub fn framing_from(bounds: &Aabb, direction: DVec3) -> Camera {
         let (centre, radius) = if bounds.is_empty() {
             (DVec3::ZERO, 1.0)
         } else {
@@ -78,9 +84,9 @@ impl Camera {
         };
         let yfov: f64 = 0.8;
         let distance = radius / (yfov * 0.5).sin() * 1.05;
-        let eye = centre + DVec3::new(0.4, 0.3, 1.0).normalize() * distance;
+        let eye = centre + direction.normalize() * distance;
         let mut camera = Camera::look_at(eye, centre, DVec3::Y, Projection::Perspective { yfov })
-            .expect("framing direction is never parallel to +Y");
+            .expect("framing directions are never parallel to +Y");
         camera.name = "auto".into();
         camera.source = "auto (frames the whole scene)".into();
         camera.znear = distance - radius;

@@ -688,3 +688,43 @@ fn reports_without_panics(text: &str, expected: usize) -> Vec<Value> {
     }
     reports
 }
+
+/// `--golden`: stored buffers match the same asset, and a changed asset under the same name is
+/// an error with a difference image; missing golden buffers are an error too.
+#[test]
+fn golden_comparison() {
+    let dir = std::env::temp_dir().join(format!("raycast-golden-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let assets = dir.join("assets");
+    let golden = dir.join("golden");
+    std::fs::create_dir_all(&assets).unwrap();
+    for name in ["cube.gltf", "cube.bin"] {
+        std::fs::copy(fixture(&format!("gltf/{name}")), assets.join(name)).unwrap();
+    }
+    let arg = |p: &Path| p.to_str().unwrap().to_string();
+    let run = |extra: &[&str]| {
+        let mut args = vec!["check".to_string(), "--golden".into(), arg(&golden)];
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args.push(arg(&assets));
+        raycast(&args.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    assert_eq!(run(&["--update-golden"]).status.code(), Some(0));
+    assert!(golden.join("cube.gltf/view0.depth.npy").is_file());
+    assert_eq!(
+        run(&[]).status.code(),
+        Some(0),
+        "the same asset matches its golden buffers"
+    );
+    // Another scene under the same name: the comparison fails and says where the image is.
+    std::fs::copy(fixture("gltf/instances.gltf"), assets.join("cube.gltf")).unwrap();
+    let out = run(&[]);
+    assert_eq!(out.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("GOLDEN_MISMATCH"), "{text}");
+    assert!(golden.join("cube.gltf/view0.diff.png").is_file());
+    std::fs::remove_dir_all(&golden).unwrap();
+    let out = run(&[]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("GOLDEN_MISSING"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -43,6 +43,13 @@ pub struct CheckArgs {
     /// Skip the geometric checks (holes, inverted normals, degenerate triangles).
     #[arg(long)]
     pub no_geometry: bool,
+    /// Render three fixed views of each asset (depth and id) and compare them with the golden
+    /// buffers stored in this folder; a mismatch is an error with a difference image
+    #[arg(long, value_name = "DIR")]
+    pub golden: Option<PathBuf>,
+    /// With --golden: store the current buffers as the golden ones instead of comparing
+    #[arg(long, requires = "golden")]
+    pub update_golden: bool,
     /// List infos and assets without findings too.
     #[arg(long, short)]
     pub verbose: bool,
@@ -84,6 +91,10 @@ fn run_inner(args: &CheckArgs) -> Result<bool, String> {
         max_bytes: args.max_memory,
         expect_size: args.expect_size,
         geometry: !args.no_geometry,
+        golden: args.golden.clone().map(|dir| super::golden::GoldenOptions {
+            dir,
+            update: args.update_golden,
+        }),
         usd_timeout: std::time::Duration::try_from_secs_f64(args.timeout).map_err(|_| {
             format!(
                 "--timeout {}: expected a positive number of seconds",

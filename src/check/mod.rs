@@ -15,6 +15,7 @@
 pub mod cli;
 pub mod geometry;
 pub mod gltf;
+pub mod golden;
 pub mod obj;
 pub mod report;
 pub mod usd;
@@ -161,6 +162,8 @@ pub struct CheckOptions {
     pub isolate_usd: Option<PathBuf>,
     /// Longest the child process may take over one USD asset before it is stopped.
     pub usd_timeout: std::time::Duration,
+    /// Compare rendered views with golden buffers (or store them).
+    pub golden: Option<golden::GoldenOptions>,
 }
 
 impl Default for CheckOptions {
@@ -172,6 +175,7 @@ impl Default for CheckOptions {
             geometry: true,
             isolate_usd: None,
             usd_timeout: std::time::Duration::from_secs(120),
+            golden: None,
         }
     }
 }
@@ -475,6 +479,10 @@ fn check_into(
     };
     for warning in &scene.warnings {
         importer_warning(format, warning, findings);
+    }
+    if let Some(golden) = &options.golden {
+        let key = path.strip_prefix(root).unwrap_or(path);
+        golden::check(&scene, key, golden, findings);
     }
     Some(geometry::check(&scene, options, findings))
 }

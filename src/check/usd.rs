@@ -161,6 +161,12 @@ pub fn check_isolated(
     if let Some((min, max)) = options.expect_size {
         command.arg("--expect-size").arg(format!("{min}..{max}"));
     }
+    if let Some(golden) = &options.golden {
+        command.arg("--golden").arg(&golden.dir);
+        if golden.update {
+            command.arg("--update-golden");
+        }
+    }
     command
         .arg(path)
         .stdin(Stdio::null())

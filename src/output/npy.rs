@@ -49,6 +49,38 @@ pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
     parse_rays(&bytes).map_err(|m| Error::in_file(path, m))
 }
 
+/// Reads a float64 (`<f8`) or uint32 (`<u4`) array as written by [`write`]: its shape and its
+/// values as f64.
+pub fn read(path: &Path) -> Result<(Vec<usize>, Vec<f64>)> {
+    let bytes =
+        std::fs::read(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
+    parse_array(&bytes).map_err(|m| Error::in_file(path, m))
+}
+
+fn parse_array(bytes: &[u8]) -> std::result::Result<(Vec<usize>, Vec<f64>), String> {
+    let header = parse_header(bytes)?;
+    let data = &bytes[header.data_offset..];
+    let count: usize = header.shape.iter().product();
+    let values: Vec<f64> = match header.descr.as_str() {
+        "<f8" => data
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))
+            .collect(),
+        "<u4" => data
+            .chunks_exact(4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64)
+            .collect(),
+        other => return Err(format!("expected float64 or uint32 data, found '{other}'")),
+    };
+    if values.len() != count {
+        return Err(format!(
+            "data holds {} values, shape needs {count}",
+            values.len()
+        ));
+    }
+    Ok((header.shape, values))
+}
+
 fn parse_rays(bytes: &[u8]) -> std::result::Result<Vec<Ray>, String> {
     let header = parse_header(bytes)?;
     let rows = match header.shape[..] {
