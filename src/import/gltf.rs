@@ -6,7 +6,7 @@
 //! raw JSON numbers in f64 (the crate stores them as f32). Accessors are bounds-checked before
 //! any read, so a malformed file gives an error, never a panic. Images are never read.
 
-use super::LoadOptions;
+use super::{place, LoadOptions};
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
 use crate::quadric::{Quadric, QuadricSpec};
@@ -267,7 +267,8 @@ impl Loader<'_> {
                 .name()
                 .map_or_else(|| format!("node{index}"), String::from);
             if let Some(mesh) = node.mesh() {
-                let local = self.mesh_triangles(&mesh)?;
+                self.read_mesh(&mesh)?;
+                let local = &self.meshes[&mesh.index()];
                 if !local.is_empty() {
                     let triangles = place(local, &world);
                     self.builder
@@ -366,13 +367,11 @@ impl Loader<'_> {
         });
     }
 
-    /// Object-space triangles of a mesh (all its triangle primitives, in order), cached.
-    fn mesh_triangles(
-        &mut self,
-        mesh: &gltf::Mesh,
-    ) -> std::result::Result<Vec<[DVec3; 3]>, String> {
-        if let Some(cached) = self.meshes.get(&mesh.index()) {
-            return Ok(cached.clone());
+    /// Reads the object-space triangles of a mesh (all its triangle primitives, in order) into
+    /// the cache, once per mesh however many nodes use it.
+    fn read_mesh(&mut self, mesh: &gltf::Mesh) -> std::result::Result<(), String> {
+        if self.meshes.contains_key(&mesh.index()) {
+            return Ok(());
         }
         let mut triangles = Vec::new();
         for primitive in mesh.primitives() {
@@ -389,8 +388,8 @@ impl Loader<'_> {
                 )),
             }
         }
-        self.meshes.insert(mesh.index(), triangles.clone());
-        Ok(triangles)
+        self.meshes.insert(mesh.index(), triangles);
+        Ok(())
     }
 
     fn primitive_triangles(
@@ -417,23 +416,6 @@ impl Loader<'_> {
             })
             .collect())
     }
-}
-
-/// Triangles moved into the world; a mirroring transform flips the winding back so that
-/// counter-clockwise stays the front face (glTF's rule for negative determinants).
-fn place(local: Vec<[DVec3; 3]>, world: &DMat4) -> Vec<[DVec3; 3]> {
-    let flip = world.determinant() < 0.0;
-    local
-        .into_iter()
-        .map(|tri| {
-            let [a, b, c] = tri.map(|p| world.transform_point3(p));
-            if flip {
-                [a, c, b]
-            } else {
-                [a, b, c]
-            }
-        })
-        .collect()
 }
 
 /// Vertex index triples for a triangle list, strip or fan.

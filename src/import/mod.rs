@@ -6,6 +6,7 @@ pub mod usd;
 
 use crate::error::{Error, Result};
 use crate::scene::Scene;
+use glam::{DMat4, DVec3, DVec4};
 use std::path::Path;
 
 /// Choices that affect what is loaded.
@@ -30,4 +31,30 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
             "unsupported file type (expected .gltf, .glb, .obj, .usda, .usdc, .usd or .usdz)",
         )),
     }
+}
+
+/// Local triangles placed in the world by `world`. A mirroring transform flips the winding back
+/// so that counter-clockwise stays the front face (glTF's rule for negative determinants, and
+/// USD's); a projective matrix (USD `matrix4d` ops may have one; usd-core applies it with the
+/// homogeneous divide) maps triangles to triangles, so points are divided by `w`.
+pub(crate) fn place(local: &[[DVec3; 3]], world: &DMat4) -> Vec<[DVec3; 3]> {
+    let flip = world.determinant() < 0.0;
+    let projective = world.row(3) != DVec4::W;
+    local
+        .iter()
+        .map(|tri| {
+            let [a, b, c] = tri.map(|p| {
+                if projective {
+                    world.project_point3(p)
+                } else {
+                    world.transform_point3(p)
+                }
+            });
+            if flip {
+                [a, c, b]
+            } else {
+                [a, b, c]
+            }
+        })
+        .collect()
 }

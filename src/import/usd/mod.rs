@@ -25,7 +25,7 @@ mod shapes;
 mod value;
 mod xform;
 
-use super::LoadOptions;
+use super::{place, LoadOptions};
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
 use crate::quadric::Quadric;
@@ -752,29 +752,4 @@ impl Loader {
         }
         Ok(())
     }
-}
-
-/// Local triangles placed in the world; a mirroring transform keeps the front face. A
-/// projective matrix (`matrix4d` ops may have one; usd-core applies it with the
-/// homogeneous divide) maps triangles to triangles: points are divided by `w`.
-fn place(local: &[[DVec3; 3]], world: &DMat4) -> Vec<[DVec3; 3]> {
-    let flip = world.determinant() < 0.0;
-    let projective = world.row(3) != glam::DVec4::W;
-    local
-        .iter()
-        .map(|tri| {
-            let [a, b, c] = tri.map(|p| {
-                if projective {
-                    world.project_point3(p)
-                } else {
-                    world.transform_point3(p)
-                }
-            });
-            if flip {
-                [a, c, b]
-            } else {
-                [a, b, c]
-            }
-        })
-        .collect()
 }

@@ -256,11 +256,6 @@ fn frustum(bottom: f64, top: f64, h: f64, frame: DMat4) -> Result<Vec<Part>, Str
         spec: Box::new(side(bottom, top, h)?),
         frame,
     }];
-    let place = |t: Vec<[DVec3; 3]>| {
-        t.into_iter()
-            .map(|tri| tri.map(|p| frame.transform_point3(p)))
-            .collect::<Vec<_>>()
-    };
     let mut caps = Vec::new();
     if bottom > 0.0 {
         caps.extend(disc(bottom, -h / 2.0, false));
@@ -270,7 +265,7 @@ fn frustum(bottom: f64, top: f64, h: f64, frame: DMat4) -> Result<Vec<Part>, Str
     }
     parts.push(Part::Mesh {
         suffix: ":caps",
-        triangles: place(caps),
+        triangles: crate::import::place(&caps, &frame),
     });
     Ok(parts)
 }
