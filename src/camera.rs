@@ -120,17 +120,37 @@ impl Camera {
     /// The ray through the centre of pixel (`column`, `row`) of a `width`×`height` image;
     /// row 0 is the top.
     pub fn pixel_ray(&self, column: usize, row: usize, width: usize, height: usize) -> Ray {
+        self.screen_ray(column, row, width, height, self.half_height())
+    }
+
+    /// Half the view height at unit distance (`tan(yfov / 2)`) for a perspective camera, or in
+    /// scene units (`ymag`) for an orthographic one: the constant of [`Camera::screen_ray`].
+    pub fn half_height(&self) -> f64 {
+        match self.projection {
+            Projection::Perspective { yfov } => (yfov * 0.5).tan(),
+            Projection::Orthographic { ymag } => ymag,
+        }
+    }
+
+    /// [`Camera::pixel_ray`] with [`Camera::half_height`] computed once by the caller.
+    pub fn screen_ray(
+        &self,
+        column: usize,
+        row: usize,
+        width: usize,
+        height: usize,
+        half_height: f64,
+    ) -> Ray {
         let aspect = width as f64 / height as f64;
         let sx = 2.0 * (column as f64 + 0.5) / width as f64 - 1.0;
         let sy = 1.0 - 2.0 * (row as f64 + 0.5) / height as f64;
         match self.projection {
-            Projection::Perspective { yfov } => {
-                let tan = (yfov * 0.5).tan();
-                let dir = DVec4::new(sx * tan * aspect, sy * tan, -1.0, 0.0);
+            Projection::Perspective { .. } => {
+                let dir = DVec4::new(sx * half_height * aspect, sy * half_height, -1.0, 0.0);
                 Ray::new(self.eye(), (self.to_world * dir).truncate())
             }
-            Projection::Orthographic { ymag } => {
-                let local = DVec4::new(sx * ymag * aspect, sy * ymag, 0.0, 1.0);
+            Projection::Orthographic { .. } => {
+                let local = DVec4::new(sx * half_height * aspect, sy * half_height, 0.0, 1.0);
                 Ray::new((self.to_world * local).truncate(), self.forward())
             }
         }

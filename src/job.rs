@@ -212,11 +212,7 @@ fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
             "image size {width}x{height} is out of range (1 to {MAX_SIDE} per side)"
         )));
     }
-    Ok(CameraView {
-        camera,
-        width,
-        height,
-    })
+    Ok(CameraView::new(camera, width, height))
 }
 
 fn choose_camera(scene: &Scene, choice: &CameraChoice) -> Result<Camera> {

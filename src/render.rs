@@ -93,6 +93,21 @@ pub struct CameraView {
     pub width: usize,
     /// Image height in pixels.
     pub height: usize,
+    /// The camera's [`Camera::half_height`], computed once rather than per pixel.
+    half_height: f64,
+}
+
+impl CameraView {
+    /// A `width`×`height` image seen by `camera`.
+    pub fn new(camera: Camera, width: usize, height: usize) -> CameraView {
+        let half_height = camera.half_height();
+        CameraView {
+            camera,
+            width,
+            height,
+            half_height,
+        }
+    }
 }
 
 impl RaySource for CameraView {
@@ -100,11 +115,12 @@ impl RaySource for CameraView {
         self.width * self.height
     }
     fn ray(&self, index: usize) -> Ray {
-        self.camera.pixel_ray(
+        self.camera.screen_ray(
             index % self.width,
             index / self.width,
             self.width,
             self.height,
+            self.half_height,
         )
     }
     fn view_axis(&self) -> Option<(DVec3, DVec3)> {

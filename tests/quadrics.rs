@@ -70,11 +70,7 @@ fn render_view(file: &str, eye: DVec3, size: usize) -> render::Buffers {
         Projection::Perspective { yfov: 0.5 },
     )
     .unwrap();
-    let view = CameraView {
-        camera,
-        width: size,
-        height: size,
-    };
+    let view = CameraView::new(camera, size, size);
     render::render(&tracer, &view, &[Aov::Depth, Aov::Normal, Aov::Id], |_| {})
 }
 

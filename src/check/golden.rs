@@ -51,11 +51,7 @@ pub fn check(scene: &Scene, key: &Path, options: &GoldenOptions, findings: &mut 
         bounds.size().length()
     };
     for (index, direction) in VIEWS.into_iter().enumerate() {
-        let view = CameraView {
-            camera: Camera::framing_from(&bounds, direction),
-            width: SIZE,
-            height: SIZE,
-        };
+        let view = CameraView::new(Camera::framing_from(&bounds, direction), SIZE, SIZE);
         let buffers = render::render(&tracer, &view, &[Aov::Depth, Aov::Id], |_| {});
         let outcome = if options.update {
             store(&dir, index, &buffers)
