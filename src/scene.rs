@@ -193,6 +193,18 @@ impl PrimitiveSet for Scene {
         }
     }
 
+    fn clipped_bounds(&self, index: usize, cell: &Aabb) -> Option<Aabb> {
+        let clipped = match self.triangles.get(index) {
+            Some(tri) => triangle::clipped_bounds(tri, cell),
+            None => None,
+        };
+        // Clipping a triangle that only touches the cell can round away to nothing.
+        clipped.or_else(|| {
+            let bounds = self.bounds(index).intersection(*cell);
+            (!bounds.is_empty()).then_some(bounds)
+        })
+    }
+
     fn prepare(&self, local_origin: DVec3, dir: DVec3) -> SceneRay {
         SceneRay {
             triangle: WatertightRay::new(local_origin, dir),

@@ -70,6 +70,13 @@ pub trait PrimitiveSet: Sync {
         octants_by_overlap(self, index, cell, margin)
     }
 
+    /// Bounds of the part of primitive `index` inside `cell`, or `None` when nothing of it is
+    /// there. The default clips the primitive's bounds to the cell.
+    fn clipped_bounds(&self, index: usize, cell: &Aabb) -> Option<Aabb> {
+        let clipped = self.bounds(index).intersection(*cell);
+        (!clipped.is_empty()).then_some(clipped)
+    }
+
     /// Per-ray precomputation for a ray with the given local origin and direction.
     fn prepare(&self, local_origin: DVec3, dir: DVec3) -> Self::RayData;
 

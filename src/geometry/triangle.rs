@@ -40,26 +40,42 @@ impl WatertightRay {
         }
     }
 
-    /// Moves a vertex into the ray's sheared frame (z not yet scaled).
-    fn sheared(&self, v: Vec3) -> DVec3 {
-        let p = v.as_dvec3() - self.origin;
-        let [kx, ky, kz] = self.axes;
-        DVec3::new(
-            p[kx] - self.shear.x * p[kz],
-            p[ky] - self.shear.y * p[kz],
-            p[kz],
-        )
-    }
-
     /// The ray parameter `t` of the hit with triangle `tri`, if `0 < t <= t_max`.
     ///
     /// Watertight: a ray through a shared edge or vertex hits at least one of the triangles
     /// sharing it, because the edge functions of a shared edge are exact negatives of each
     /// other and a zero counts as inside.
     pub fn intersect(&self, tri: &[Vec3; 3], t_max: f64) -> Option<f64> {
-        let a = self.sheared(tri[0]);
-        let b = self.sheared(tri[1]);
-        let c = self.sheared(tri[2]);
+        // One instance per axis permutation, so the permuted components are fixed fields.
+        match self.axes {
+            [1, 2, 0] => self.intersect_in::<1, 2, 0>(tri, t_max),
+            [2, 1, 0] => self.intersect_in::<2, 1, 0>(tri, t_max),
+            [2, 0, 1] => self.intersect_in::<2, 0, 1>(tri, t_max),
+            [0, 2, 1] => self.intersect_in::<0, 2, 1>(tri, t_max),
+            [0, 1, 2] => self.intersect_in::<0, 1, 2>(tri, t_max),
+            _ => self.intersect_in::<1, 0, 2>(tri, t_max),
+        }
+    }
+
+    /// [`WatertightRay::intersect`] for the axis permutation `[KX, KY, KZ]`.
+    #[inline(always)]
+    fn intersect_in<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        tri: &[Vec3; 3],
+        t_max: f64,
+    ) -> Option<f64> {
+        // Moves a vertex into the ray's sheared frame (z not yet scaled).
+        let sheared = |v: Vec3| {
+            let p = (v.as_dvec3() - self.origin).to_array();
+            DVec3::new(
+                p[KX] - self.shear.x * p[KZ],
+                p[KY] - self.shear.y * p[KZ],
+                p[KZ],
+            )
+        };
+        let a = sheared(tri[0]);
+        let b = sheared(tri[1]);
+        let c = sheared(tri[2]);
         let u = c.x * b.y - c.y * b.x;
         let v = a.x * c.y - a.y * c.x;
         let w = b.x * a.y - b.y * a.x;
@@ -107,6 +123,59 @@ pub fn overlaps_box(tri: &[Vec3; 3], aabb: &Aabb) -> bool {
         .iter()
         .flat_map(|e| DVec3::AXES.map(|axis| e.cross(axis)))
         .any(separated)
+}
+
+/// Bounds of the part of the triangle inside `cell` (Sutherland–Hodgman clipping against the
+/// six faces), or `None` when clipping leaves nothing. The clipped vertices carry rounding of
+/// a few ulps of the coordinates; callers grow the box by their margin.
+pub fn clipped_bounds(tri: &[Vec3; 3], cell: &Aabb) -> Option<Aabb> {
+    let mut polygon = Polygon::default();
+    for v in tri {
+        polygon.push(v.as_dvec3());
+    }
+    for axis in 0..3 {
+        polygon = polygon.clipped(axis, cell.min[axis], 1.0);
+        polygon = polygon.clipped(axis, cell.max[axis], -1.0);
+    }
+    let bounds = Aabb::from_points(polygon.vertices().iter().copied());
+    (!bounds.is_empty()).then_some(bounds)
+}
+
+/// A convex polygon of at most nine vertices: a triangle clipped by six planes.
+#[derive(Default)]
+struct Polygon {
+    vertices: [DVec3; 9],
+    len: usize,
+}
+
+impl Polygon {
+    fn push(&mut self, v: DVec3) {
+        self.vertices[self.len] = v;
+        self.len += 1;
+    }
+
+    fn vertices(&self) -> &[DVec3] {
+        &self.vertices[..self.len]
+    }
+
+    /// The part with `side · (p[axis] - plane) >= 0`; crossing points sit exactly on the plane.
+    fn clipped(&self, axis: usize, plane: f64, side: f64) -> Polygon {
+        let mut out = Polygon::default();
+        let inside = |p: DVec3| side * (p[axis] - plane) >= 0.0;
+        for (i, &p) in self.vertices().iter().enumerate() {
+            let q = self.vertices[(i + 1) % self.len];
+            if inside(p) {
+                out.push(p);
+            }
+            if inside(p) != inside(q) {
+                let s = (plane - p[axis]) / (q[axis] - p[axis]);
+                let mut crossing = p + (q - p) * s;
+                crossing[axis] = plane;
+                out.push(crossing);
+            }
+        }
+        out
+    }
 }
 
 /// Which octants of `cell`, each grown by `margin`, the closed triangle touches: bit `i` for
@@ -223,6 +292,24 @@ mod tests {
                 .fold(0u8, |m, i| m | (1 << i));
             assert_eq!(octant_mask(tri, &cell, 1e-9), expected, "{tri:?}");
         }
+    }
+
+    #[test]
+    fn clipping_bounds_the_part_inside_the_cell() {
+        let v = |x, y, z| Vec3::new(x, y, z);
+        // The hypotenuse x + y = 2 leaves the whole unit square inside.
+        let big = [v(-1.0, -1.0, 0.0), v(3.0, -1.0, 0.0), v(-1.0, 3.0, 0.0)];
+        let unit = Aabb::new(DVec3::ZERO, DVec3::ONE);
+        let b = clipped_bounds(&big, &unit).unwrap();
+        assert_eq!((b.min, b.max), (DVec3::ZERO, DVec3::new(1.0, 1.0, 0.0)));
+        // Inside x >= 1 the triangle x, y >= 0, x + y <= 2 spans x in [1, 2], y in [0, 1].
+        let corner = [v(0.0, 0.0, 0.5), v(2.0, 0.0, 0.5), v(0.0, 2.0, 0.5)];
+        let cell = Aabb::new(DVec3::new(1.0, 0.0, 0.0), DVec3::splat(3.0));
+        let b = clipped_bounds(&corner, &cell).unwrap();
+        assert_eq!(b.min, DVec3::new(1.0, 0.0, 0.5));
+        assert_eq!(b.max, DVec3::new(2.0, 1.0, 0.5));
+        let away = Aabb::new(DVec3::splat(5.0), DVec3::splat(6.0));
+        assert!(clipped_bounds(&corner, &away).is_none());
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! Building the octree: the split rule, the exact distribution of primitives over children,
 //! and parallel construction of large subtrees.
 
-use super::{Node, OctreeParams, OctreeStats, INTERIOR};
+use super::{Node, Occupied, OctreeParams, OctreeStats, INTERIOR};
 use crate::accel::PrimitiveSet;
 use crate::geometry::Aabb;
 use glam::DVec3;
@@ -9,13 +9,15 @@ use glam::DVec3;
 /// Cells with more references than this build their children in parallel.
 const PARALLEL_REFS: usize = 8192;
 
-/// A subtree in its own arrays: node 0 is its root; interior nodes point at eight contiguous
-/// children by index into `nodes`, leaves at a run of `refs`.
-#[derive(Debug, Default)]
+/// A subtree in its own arrays: node 0 is its root; interior nodes point at their non-empty
+/// children, stored contiguously, by index into `nodes`, leaves at a run of `refs`. `occupied` bounds the parts of
+/// its primitives inside its cell (grown by the margin).
+#[derive(Debug)]
 pub(super) struct Subtree {
     pub nodes: Vec<Node>,
     pub refs: Vec<u32>,
     pub stats: OctreeStats,
+    pub occupied: Aabb,
 }
 
 /// What every cell of one build shares.
@@ -31,7 +33,7 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     /// The subtree for `cell` holding `refs`, at `depth`.
     pub fn subtree(&self, cell: Aabb, refs: Vec<u32>, depth: u32) -> Subtree {
         let Some(children) = self.split(&cell, &refs, depth) else {
-            return leaf(refs, depth);
+            return self.leaf(&cell, refs, depth);
         };
         drop(refs);
         let build = |(i, child): (usize, Vec<u32>)| self.subtree(cell.octant(i), child, depth + 1);
@@ -41,7 +43,34 @@ impl<P: PrimitiveSet> Builder<'_, P> {
         } else {
             children.into_iter().enumerate().map(build).collect()
         };
-        join(parts)
+        join(&cell, parts)
+    }
+
+    /// A leaf subtree; its occupied box bounds the parts of its primitives inside the (grown)
+    /// cell.
+    fn leaf(&self, cell: &Aabb, refs: Vec<u32>, depth: u32) -> Subtree {
+        let grown = cell.expanded(self.margin);
+        let occupied = refs
+            .iter()
+            .filter_map(|&prim| self.set.clipped_bounds(prim as usize, &grown))
+            .fold(Aabb::EMPTY, Aabb::union)
+            .expanded(self.margin);
+        Subtree {
+            nodes: vec![Node {
+                first: 0,
+                count: refs.len() as u32,
+                occupied: Occupied::around(&occupied, cell),
+            }],
+            stats: OctreeStats {
+                nodes: 1,
+                leaves: 1,
+                empty_leaves: usize::from(refs.is_empty()),
+                depth,
+                references: refs.len(),
+            },
+            refs,
+            occupied,
+        }
     }
 
     /// The children's references if splitting `cell` pays, by the rule in the module docs.
@@ -91,48 +120,38 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     }
 }
 
-/// A leaf subtree.
-fn leaf(refs: Vec<u32>, depth: u32) -> Subtree {
-    Subtree {
-        nodes: vec![Node {
-            first: 0,
-            count: refs.len() as u32,
-        }],
-        stats: OctreeStats {
-            nodes: 1,
-            leaves: 1,
-            empty_leaves: usize::from(refs.is_empty()),
-            depth,
-            references: refs.len(),
-        },
-        refs,
-    }
-}
-
-/// Joins eight child subtrees under a new root: root, then the eight child roots, then the
-/// rest of each child's nodes in order.
-fn join(parts: Vec<Subtree>) -> Subtree {
+/// Joins the eight child subtrees of `cell` under a new root: root, then the roots of the
+/// non-empty children, then the rest of each of their nodes in order. Empty children are not
+/// stored; the root's child mask says which octants the stored children are.
+fn join(cell: &Aabb, parts: Vec<Subtree>) -> Subtree {
     let mut mask = 0u32;
-    for (i, part) in parts.iter().enumerate() {
-        if !part.refs.is_empty() {
+    let mut stats = OctreeStats::default();
+    let mut kept = Vec::with_capacity(8);
+    for (i, part) in parts.into_iter().enumerate() {
+        if part.refs.is_empty() {
+            stats.empty_leaves += part.stats.empty_leaves;
+        } else {
             mask |= 1 << i;
+            kept.push(part);
         }
     }
-    let total: usize = parts.iter().map(|p| p.nodes.len()).sum();
+    let occupied = kept
+        .iter()
+        .map(|p| p.occupied)
+        .fold(Aabb::EMPTY, Aabb::union);
+    let total: usize = kept.iter().map(|p| p.nodes.len()).sum();
     let mut nodes = Vec::with_capacity(total + 1);
     nodes.push(Node {
         first: 1,
         count: INTERIOR | mask,
+        occupied: Occupied::around(&occupied, cell),
     });
-    let mut refs = Vec::with_capacity(parts.iter().map(|p| p.refs.len()).sum());
-    let mut stats = OctreeStats {
-        nodes: total + 1,
-        ..OctreeStats::default()
-    };
+    let mut refs = Vec::with_capacity(kept.iter().map(|p| p.refs.len()).sum());
+    stats.nodes = total + 1;
     // Where each child's non-root nodes start, and where its references start.
-    let mut node_base = 9;
-    let mut bases = Vec::with_capacity(8);
-    for part in &parts {
+    let mut node_base = 1 + kept.len();
+    let mut bases = Vec::with_capacity(kept.len());
+    for part in &kept {
         bases.push((node_base, refs.len()));
         node_base += part.nodes.len() - 1;
         refs.extend_from_slice(&part.refs);
@@ -145,20 +164,25 @@ fn join(parts: Vec<Subtree>) -> Subtree {
     {
         0 => Node {
             first: node.first + ref_base as u32,
-            count: node.count,
+            ..*node
         },
         _ => Node {
             first: node.first - 1 + node_base as u32,
-            count: node.count,
+            ..*node
         },
     };
-    for (part, base) in parts.iter().zip(&bases) {
+    for (part, base) in kept.iter().zip(&bases) {
         nodes.push(relocate(&part.nodes[0], *base));
     }
-    for (part, base) in parts.iter().zip(&bases) {
+    for (part, base) in kept.iter().zip(&bases) {
         nodes.extend(part.nodes[1..].iter().map(|n| relocate(n, *base)));
     }
-    Subtree { nodes, refs, stats }
+    Subtree {
+        nodes,
+        refs,
+        stats,
+        occupied,
+    }
 }
 
 /// The smallest cube holding `bounds` with a little room, or a unit cube for an empty box.

@@ -16,15 +16,22 @@
 //! rounding in the traversal can never lose a primitive lying on a cell face.
 //!
 //! Large cells build their eight subtrees in parallel; the result does not depend on the thread
-//! count. Each interior cell records which children hold any primitive, so traversal never
-//! descends into empty ones.
+//! count. Each interior cell records which children hold any primitive; empty children are not
+//! stored, and traversal never descends into them.
+//!
+//! Every cell also records the box its primitives occupy inside it (for a leaf, the bounds of
+//! its triangles clipped to the cell; for an interior cell, the union of its children's),
+//! grown by the margin and rounded outward onto a grid of 255 steps across the cell, so it
+//! costs six bytes. A ray that misses a cell's occupied box skips the cell: cubic cells hold
+//! much empty space around a surface, and this removes most of it from traversal.
 //!
 //! # Traversal
 //! Front to back after Revelles et al. (2000): the ray is mirrored so all direction components
 //! are non-negative; in a cell, the first child crossed follows from the entry plane and the
 //! midplane parameters, and each next child from the current child's exit plane, so only the
 //! (at most four) children the ray really crosses are visited, in order. The mirror mask maps
-//! them back to the stored children. Slab parameters of child cells come from the cell's
+//! them back to the stored children. A cell's own entry and exit parameters are those of its
+//! cube clipped to its occupied box. Slab parameters of child cells come from the cell's
 //! midplanes, with the `0 · ∞` cases of axis-parallel rays resolved explicitly.
 //!
 //! The lecture's boundary trap: a primitive stored in an early cell can be hit beyond that cell's
@@ -56,7 +63,7 @@ impl Default for OctreeParams {
     fn default() -> Self {
         OctreeParams {
             max_depth: 16,
-            leaf_size: 8,
+            leaf_size: 12,
             traversal_cost: 2.0,
             intersection_cost: 1.0,
         }
@@ -70,7 +77,8 @@ pub struct OctreeStats {
     pub nodes: usize,
     /// Leaf cells.
     pub leaves: usize,
-    /// Leaf cells without any primitive.
+    /// Empty leaves: octants of interior cells without any primitive (not stored), or the
+    /// root of an empty tree.
     pub empty_leaves: usize,
     /// Depth of the deepest leaf.
     pub depth: u32,
@@ -81,14 +89,96 @@ pub struct OctreeStats {
 /// Set in [`Node::count`] for interior cells; the low eight bits then flag non-empty children.
 const INTERIOR: u32 = 1 << 31;
 
+/// `RANK[mask][i]`: how many of the children flagged in `mask` come before child `i`, i.e.
+/// where child `i` is stored among its parent's non-empty children.
+static RANK: [[u8; 8]; 256] = {
+    let mut rank = [[0; 8]; 256];
+    let mut mask = 0;
+    while mask < 256 {
+        let mut i = 0;
+        while i < 8 {
+            rank[mask][i] = (mask & ((1 << i) - 1)).count_ones() as u8;
+            i += 1;
+        }
+        mask += 1;
+    }
+    rank
+};
+
 /// Deepest allowed cell; bounds the recursion of a traversal.
 const DEPTH_CAP: u32 = 24;
 
-/// A cell: interior cells point at eight contiguous children, leaves at a run of references.
+/// A cell: interior cells point at their non-empty children (stored contiguously, in octant
+/// order), leaves at a run of references.
+/// Every cell also bounds the part of it its primitives occupy.
 #[derive(Debug, Clone, Copy)]
 struct Node {
     first: u32,
     count: u32,
+    occupied: Occupied,
+}
+
+/// The occupied part of a cell, as planes on a grid of 255 steps across the cell, rounded
+/// outward: on each axis the box spans `PLANE[lo]..PLANE[hi]` of the cell's edge, where level
+/// 0 and 255 stand for no bound at all (the cell's own faces then limit the ray).
+#[derive(Debug, Clone, Copy)]
+struct Occupied {
+    lo: [u8; 3],
+    hi: [u8; 3],
+}
+
+/// Plane positions of [`Occupied`] levels as fractions of the cell's edge.
+static PLANE: [f64; 256] = {
+    let mut planes = [0.0; 256];
+    let mut level = 1;
+    while level < 255 {
+        planes[level] = level as f64 / 255.0;
+        level += 1;
+    }
+    planes[0] = f64::NEG_INFINITY;
+    planes[255] = f64::INFINITY;
+    planes
+};
+
+impl Occupied {
+    /// The levels of `cell`'s grid that enclose `occupied`. Each level's plane is
+    /// `cell.min + level · edge / 255`; the levels are rounded outward, so the planes
+    /// enclose `occupied` up to one rounding of that sum, far less than the build margin
+    /// `occupied` already carries.
+    fn around(occupied: &Aabb, cell: &Aabb) -> Occupied {
+        let lo = ((occupied.min - cell.min) / cell.size() * 255.0).floor();
+        let hi = ((occupied.max - cell.min) / cell.size() * 255.0).ceil();
+        let level = |v: f64, min: f64, max: f64| v.clamp(min, max) as u8;
+        Occupied {
+            lo: lo.to_array().map(|v| level(v, 0.0, 254.0)),
+            hi: hi.to_array().map(|v| level(v, 1.0, 255.0)),
+        }
+    }
+
+    /// The ray's entry and exit parameters of the box, per axis, in the mirrored frame of
+    /// `ray`, for a cell whose lower corner (in that frame) is `lo` with edge `size`. A
+    /// mirrored axis swaps the levels and reflects them (`255 - level`, a bitwise not). A ray
+    /// lying in a box plane gets NaN there, which `f64::max`/`min` then ignore.
+    fn span(&self, ray: &Mirrored, lo: DVec3, size: f64) -> (DVec3, DVec3) {
+        let level = |axis: usize, keep: u8, reflect: u8| {
+            let flip = ray.flip[axis];
+            PLANE[((keep & !flip) | (!reflect & flip)) as usize]
+        };
+        let low = DVec3::new(
+            level(0, self.lo[0], self.hi[0]),
+            level(1, self.lo[1], self.hi[1]),
+            level(2, self.lo[2], self.hi[2]),
+        );
+        let high = DVec3::new(
+            level(0, self.hi[0], self.lo[0]),
+            level(1, self.hi[1], self.lo[1]),
+            level(2, self.hi[2], self.lo[2]),
+        );
+        (
+            (lo + low * size - ray.origin) * ray.inv_dir,
+            (lo + high * size - ray.origin) * ray.inv_dir,
+        )
+    }
 }
 
 /// An octree over the primitives of a [`PrimitiveSet`].
@@ -106,6 +196,8 @@ struct Mirrored {
     origin: DVec3,
     inv_dir: DVec3,
     mask: usize,
+    /// 0xFF on mirrored axes, else 0.
+    flip: [u8; 3],
 }
 
 /// One cell on the way down, in the mirrored frame: the ray's slab parameters and the cell's
@@ -189,7 +281,7 @@ impl Octree {
     /// Visits the non-empty leaves the ray `origin + t · dir` passes through, front to back.
     ///
     /// `visit` gets the leaf's primitive indices and the ray's entry and exit parameters of the
-    /// leaf, and returns the parameter beyond which nothing interests it any more (the best hit
+    /// leaf's occupied box (clipped to the cell), and returns the parameter beyond which nothing interests it any more (the best hit
     /// so far); cells entered beyond that are skipped. `dir` must have no -0.0 component.
     pub fn traverse(
         &self,
@@ -202,11 +294,13 @@ impl Octree {
             origin,
             inv_dir: DVec3::ZERO,
             mask: 0,
+            flip: [0; 3],
         };
         let mut d = dir;
         for axis in 0..3 {
             if d[axis] < 0.0 {
                 ray.mask |= 1 << axis;
+                ray.flip[axis] = 0xFF;
                 ray.origin[axis] = self.root.min[axis] + self.root.max[axis] - origin[axis];
                 d[axis] = -d[axis];
             }
@@ -233,12 +327,13 @@ impl Octree {
         limit: &mut f64,
         visit: &mut F,
     ) {
-        let enter = cell.t0.max_element().max(0.0);
-        let exit = cell.t1.min_element().min(*limit);
+        let node = self.nodes[cell.node as usize];
+        let (b0, b1) = node.occupied.span(ray, cell.lo, cell.size);
+        let enter = cell.t0.max(b0).max_element().max(0.0);
+        let exit = cell.t1.min(b1).min_element().min(*limit);
         if enter > exit {
             return;
         }
-        let node = self.nodes[cell.node as usize];
         if node.count & INTERIOR == 0 {
             if node.count > 0 {
                 let refs = &self.refs[node.first as usize..(node.first + node.count) as usize];
@@ -261,29 +356,26 @@ impl Octree {
                     if upper[2] { b.z } else { a.z },
                 )
             };
-            let next = Cell {
-                node: 0,
-                t0: pick(cell.t0, tm),
-                t1: pick(tm, cell.t1),
-                lo: cell.lo + pick(DVec3::ZERO, DVec3::splat(half)),
-                size: half,
-            };
+            let t1 = pick(tm, cell.t1);
             let stored = child ^ ray.mask;
             if node.count & (1 << stored) != 0 {
                 let next = Cell {
-                    node: node.first + stored as u32,
-                    ..next
+                    node: node.first + u32::from(RANK[(node.count & 0xFF) as usize][stored]),
+                    t0: pick(cell.t0, tm),
+                    t1,
+                    lo: cell.lo + pick(DVec3::ZERO, DVec3::splat(half)),
+                    size: half,
                 };
                 self.visit_cell(&next, ray, limit, visit);
             }
-            let exit_axis = if next.t1.x <= next.t1.y && next.t1.x <= next.t1.z {
+            let exit_axis = if t1.x <= t1.y && t1.x <= t1.z {
                 0
-            } else if next.t1.y <= next.t1.z {
+            } else if t1.y <= t1.z {
                 1
             } else {
                 2
             };
-            if child & (1 << exit_axis) != 0 || next.t1[exit_axis] > *limit {
+            if child & (1 << exit_axis) != 0 || t1[exit_axis] > *limit {
                 return;
             }
             child |= 1 << exit_axis;
@@ -312,4 +404,64 @@ fn nan_to(v: DVec3, value: f64) -> DVec3 {
         if v.y.is_nan() { value } else { v.y },
         if v.z.is_nan() { value } else { v.z },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plane of `level` for a cell from `lo` with edge `size`.
+    fn plane(lo: f64, size: f64, level: u8) -> f64 {
+        lo + PLANE[level as usize] * size
+    }
+
+    #[test]
+    fn occupied_levels_enclose_the_box() {
+        let cell = Aabb::new(DVec3::new(-3.0, 0.5, 10.0), DVec3::new(-1.0, 2.5, 12.0));
+        let size = 2.0;
+        for k in 0..200 {
+            let f = |i: u32| ((k * 37 + i * 101) % 997) as f64 / 997.0;
+            let a = cell.min + DVec3::new(f(1), f(2), f(3)) * size;
+            let b = cell.min + DVec3::new(f(4), f(5), f(6)) * size;
+            let occupied = Aabb::new(a.min(b), a.max(b));
+            let q = Occupied::around(&occupied, &cell);
+            for axis in 0..3 {
+                assert!(plane(cell.min[axis], size, q.lo[axis]) <= occupied.min[axis]);
+                assert!(plane(cell.min[axis], size, q.hi[axis]) >= occupied.max[axis]);
+                // Rounded outward by less than one step; level 0 (no bound) only within the
+                // first step of the cell.
+                let below = plane(cell.min[axis], size, q.lo[axis]).max(cell.min[axis]);
+                assert!(occupied.min[axis] - below < size / 255.0);
+            }
+        }
+        // Beyond the cell on a side: no bound there.
+        let wide = Aabb::new(DVec3::new(-3.5, 1.0, 10.5), DVec3::new(-2.0, 3.0, 11.0));
+        let q = Occupied::around(&wide, &cell);
+        assert_eq!((q.lo[0], q.hi[1]), (0, 255));
+    }
+
+    #[test]
+    fn mirrored_span_is_the_same_interval() {
+        // The cell [0, 1]^3 of a root [0, 2]^3, occupied box [0.25, 0.5]^3, and a ray going
+        // towards -x: traversal sees the mirrored frame, where the cell spans [1, 2] on x.
+        let cell = Aabb::new(DVec3::ZERO, DVec3::ONE);
+        let q = Occupied::around(&Aabb::new(DVec3::splat(0.25), DVec3::splat(0.5)), &cell);
+        let origin = DVec3::new(0.9, 0.3, 0.3);
+        let dir = DVec3::new(-1.0, 0.05, 0.02);
+        let ray = Mirrored {
+            origin: DVec3::new(2.0 - origin.x, origin.y, origin.z),
+            inv_dir: dir.abs().recip(),
+            mask: 1,
+            flip: [0xFF, 0, 0],
+        };
+        let (t0, t1) = q.span(&ray, DVec3::new(1.0, 0.0, 0.0), 1.0);
+        // Unmirrored, the ray enters the box at its upper x plane and leaves at the lower.
+        let enter_x = origin.x - plane(0.0, 1.0, q.hi[0]);
+        let exit_x = origin.x - plane(0.0, 1.0, q.lo[0]);
+        assert!((t0.x - enter_x).abs() < 1e-15 && (t1.x - exit_x).abs() < 1e-15);
+        assert!(enter_x < exit_x);
+        let enter_y = (plane(0.0, 1.0, q.lo[1]) - origin.y) / dir.y;
+        let exit_y = (plane(0.0, 1.0, q.hi[1]) - origin.y) / dir.y;
+        assert!((t0.y - enter_y).abs() < 1e-13 && (t1.y - exit_y).abs() < 1e-13);
+    }
 }
