@@ -134,8 +134,8 @@ pub fn clipped_bounds(tri: &[Vec3; 3], cell: &Aabb) -> Option<Aabb> {
         polygon.push(v.as_dvec3());
     }
     for axis in 0..3 {
-        polygon = polygon.clipped(axis, cell.min[axis], 1.0);
-        polygon = polygon.clipped(axis, cell.max[axis], -1.0);
+        polygon.clip(axis, cell.min[axis], 1.0);
+        polygon.clip(axis, cell.max[axis], -1.0);
     }
     let bounds = Aabb::from_points(polygon.vertices().iter().copied());
     (!bounds.is_empty()).then_some(bounds)
@@ -158,10 +158,14 @@ impl Polygon {
         &self.vertices[..self.len]
     }
 
-    /// The part with `side · (p[axis] - plane) >= 0`; crossing points sit exactly on the plane.
-    fn clipped(&self, axis: usize, plane: f64, side: f64) -> Polygon {
-        let mut out = Polygon::default();
+    /// Keeps the part with `side · (p[axis] - plane) >= 0`; crossing points sit exactly on the
+    /// plane.
+    fn clip(&mut self, axis: usize, plane: f64, side: f64) {
         let inside = |p: DVec3| side * (p[axis] - plane) >= 0.0;
+        if self.vertices().iter().all(|&p| inside(p)) {
+            return;
+        }
+        let mut out = Polygon::default();
         for (i, &p) in self.vertices().iter().enumerate() {
             let q = self.vertices[(i + 1) % self.len];
             if inside(p) {
@@ -174,7 +178,7 @@ impl Polygon {
                 out.push(crossing);
             }
         }
-        out
+        *self = out;
     }
 }
 
