@@ -123,12 +123,7 @@ fn accel_stats(accel: &AccelStructure, prims: usize) -> Value {
     match accel {
         AccelStructure::Octree(o) => {
             let s = o.stats();
-            // The octree's own figure when its stats carry one; else its layout at the time of
-            // writing: nodes of two u32s, references of one u32.
-            let bytes = serde_json::to_value(s)
-                .ok()
-                .and_then(|v| v.get("bytes").and_then(Value::as_u64))
-                .map_or(s.nodes * 8 + s.references * 4, |b| b as usize);
+            let bytes = o.bytes();
             json!({
                 "octree": s,
                 "params": o.params(),

@@ -119,13 +119,11 @@ struct Node {
 }
 
 /// The occupied part of a cell, as planes on a grid of 255 steps across the cell, rounded
-/// outward: on each axis the box spans `PLANE[lo]..PLANE[hi]` of the cell's edge, where level
-/// 0 and 255 stand for no bound at all (the cell's own faces then limit the ray).
+/// outward: levels `[lo x, lo y, lo z, hi x, hi y, hi z]`; on each axis the box spans
+/// `PLANE[lo]..PLANE[hi]` of the cell's edge, where level 0 and 255 stand for no bound at all
+/// (the cell's own faces then limit the ray).
 #[derive(Debug, Clone, Copy)]
-struct Occupied {
-    lo: [u8; 3],
-    hi: [u8; 3],
-}
+struct Occupied([u8; 6]);
 
 /// Plane positions of [`Occupied`] levels as fractions of the cell's edge.
 static PLANE: [f64; 256] = {
@@ -140,6 +138,18 @@ static PLANE: [f64; 256] = {
     planes
 };
 
+/// [`PLANE`] seen from a mirrored axis: the plane of level `l` at `1 - PLANE[l]`, which is
+/// `PLANE[255 - l]`.
+static PLANE_MIRRORED: [f64; 256] = {
+    let mut planes = [0.0; 256];
+    let mut level = 0;
+    while level < 256 {
+        planes[level] = PLANE[255 - level];
+        level += 1;
+    }
+    planes
+};
+
 impl Occupied {
     /// The levels of `cell`'s grid that enclose `occupied`. Each level's plane is
     /// `cell.min + level · edge / 255`; the levels are rounded outward, so the planes
@@ -149,31 +159,23 @@ impl Occupied {
         let lo = ((occupied.min - cell.min) / cell.size() * 255.0).floor();
         let hi = ((occupied.max - cell.min) / cell.size() * 255.0).ceil();
         let level = |v: f64, min: f64, max: f64| v.clamp(min, max) as u8;
-        Occupied {
-            lo: lo.to_array().map(|v| level(v, 0.0, 254.0)),
-            hi: hi.to_array().map(|v| level(v, 1.0, 255.0)),
-        }
+        let lo = lo.to_array().map(|v| level(v, 0.0, 254.0));
+        let hi = hi.to_array().map(|v| level(v, 1.0, 255.0));
+        Occupied([lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]])
     }
 
     /// The ray's entry and exit parameters of the box, per axis, in the mirrored frame of
     /// `ray`, for a cell whose lower corner (in that frame) is `lo` with edge `size`. A
-    /// mirrored axis swaps the levels and reflects them (`255 - level`, a bitwise not). A ray
-    /// lying in a box plane gets NaN there, which `f64::max`/`min` then ignore.
+    /// mirrored axis takes its lower plane from the stored upper level and the other way
+    /// round, reflected (see [`Mirrored::planes`]). A ray lying in a box plane gets NaN there,
+    /// which `f64::max`/`min` then ignore.
     fn span(&self, ray: &Mirrored, lo: DVec3, size: f64) -> (DVec3, DVec3) {
-        let level = |axis: usize, keep: u8, reflect: u8| {
-            let flip = ray.flip[axis];
-            PLANE[((keep & !flip) | (!reflect & flip)) as usize]
+        let plane = |axis: usize, side: usize| {
+            let (level, table) = ray.planes[axis];
+            table[self.0[level[side]] as usize]
         };
-        let low = DVec3::new(
-            level(0, self.lo[0], self.hi[0]),
-            level(1, self.lo[1], self.hi[1]),
-            level(2, self.lo[2], self.hi[2]),
-        );
-        let high = DVec3::new(
-            level(0, self.hi[0], self.lo[0]),
-            level(1, self.hi[1], self.lo[1]),
-            level(2, self.hi[2], self.lo[2]),
-        );
+        let low = DVec3::new(plane(0, 0), plane(1, 0), plane(2, 0));
+        let high = DVec3::new(plane(0, 1), plane(1, 1), plane(2, 1));
         (
             (lo + low * size - ray.origin) * ray.inv_dir,
             (lo + high * size - ray.origin) * ray.inv_dir,
@@ -196,8 +198,9 @@ struct Mirrored {
     origin: DVec3,
     inv_dir: DVec3,
     mask: usize,
-    /// 0xFF on mirrored axes, else 0.
-    flip: [u8; 3],
+    /// Per axis: which stored [`Occupied`] levels give the ray's lower and upper plane, and
+    /// the table placing them ([`PLANE_MIRRORED`] with the levels swapped on mirrored axes).
+    planes: [([usize; 2], &'static [f64; 256]); 3],
 }
 
 /// One cell on the way down, in the mirrored frame: the ray's slab parameters and the cell's
@@ -294,13 +297,13 @@ impl Octree {
             origin,
             inv_dir: DVec3::ZERO,
             mask: 0,
-            flip: [0; 3],
+            planes: [0, 1, 2].map(|axis| ([axis, axis + 3], &PLANE)),
         };
         let mut d = dir;
         for axis in 0..3 {
             if d[axis] < 0.0 {
                 ray.mask |= 1 << axis;
-                ray.flip[axis] = 0xFF;
+                ray.planes[axis] = ([axis + 3, axis], &PLANE_MIRRORED);
                 ray.origin[axis] = self.root.min[axis] + self.root.max[axis] - origin[axis];
                 d[axis] = -d[axis];
             }
@@ -426,18 +429,18 @@ mod tests {
             let occupied = Aabb::new(a.min(b), a.max(b));
             let q = Occupied::around(&occupied, &cell);
             for axis in 0..3 {
-                assert!(plane(cell.min[axis], size, q.lo[axis]) <= occupied.min[axis]);
-                assert!(plane(cell.min[axis], size, q.hi[axis]) >= occupied.max[axis]);
+                assert!(plane(cell.min[axis], size, q.0[axis]) <= occupied.min[axis]);
+                assert!(plane(cell.min[axis], size, q.0[axis + 3]) >= occupied.max[axis]);
                 // Rounded outward by less than one step; level 0 (no bound) only within the
                 // first step of the cell.
-                let below = plane(cell.min[axis], size, q.lo[axis]).max(cell.min[axis]);
+                let below = plane(cell.min[axis], size, q.0[axis]).max(cell.min[axis]);
                 assert!(occupied.min[axis] - below < size / 255.0);
             }
         }
         // Beyond the cell on a side: no bound there.
         let wide = Aabb::new(DVec3::new(-3.5, 1.0, 10.5), DVec3::new(-2.0, 3.0, 11.0));
         let q = Occupied::around(&wide, &cell);
-        assert_eq!((q.lo[0], q.hi[1]), (0, 255));
+        assert_eq!((q.0[0], q.0[4]), (0, 255));
     }
 
     #[test]
@@ -452,16 +455,20 @@ mod tests {
             origin: DVec3::new(2.0 - origin.x, origin.y, origin.z),
             inv_dir: dir.abs().recip(),
             mask: 1,
-            flip: [0xFF, 0, 0],
+            planes: [
+                ([3, 0], &PLANE_MIRRORED),
+                ([1, 4], &PLANE),
+                ([2, 5], &PLANE),
+            ],
         };
         let (t0, t1) = q.span(&ray, DVec3::new(1.0, 0.0, 0.0), 1.0);
         // Unmirrored, the ray enters the box at its upper x plane and leaves at the lower.
-        let enter_x = origin.x - plane(0.0, 1.0, q.hi[0]);
-        let exit_x = origin.x - plane(0.0, 1.0, q.lo[0]);
+        let enter_x = origin.x - plane(0.0, 1.0, q.0[3]);
+        let exit_x = origin.x - plane(0.0, 1.0, q.0[0]);
         assert!((t0.x - enter_x).abs() < 1e-15 && (t1.x - exit_x).abs() < 1e-15);
         assert!(enter_x < exit_x);
-        let enter_y = (plane(0.0, 1.0, q.lo[1]) - origin.y) / dir.y;
-        let exit_y = (plane(0.0, 1.0, q.hi[1]) - origin.y) / dir.y;
+        let enter_y = (plane(0.0, 1.0, q.0[1]) - origin.y) / dir.y;
+        let exit_y = (plane(0.0, 1.0, q.0[4]) - origin.y) / dir.y;
         assert!((t0.y - enter_y).abs() < 1e-13 && (t1.y - exit_y).abs() < 1e-13);
     }
 }
