@@ -101,7 +101,43 @@ impl Quadric {
 
     /// Smallest `t` with `0 < t <= t_max` where `origin + t·dir` lies on the surface inside the
     /// clip box. `origin` and `dir` are in world coordinates; `dir` need not be unit length.
+    ///
+    /// Rays that miss [`Quadric::bounds`] are rejected by a slab test before the exact test,
+    /// with the same answer (see [`Quadric::may_reach_bounds`]).
     pub fn intersect(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<f64> {
+        if !self.may_reach_bounds(origin, dir, t_max) {
+            return None;
+        }
+        self.intersect_exact(origin, dir, t_max)
+    }
+
+    /// False only when `origin + t·dir` for `0 <= t <= t_max` stays outside the bounds grown by
+    /// `1e-9 · (box size + the origin's distance from the box centre)`. Every hit the exact test
+    /// can return lies inside the bounds, and the margin is some six orders of magnitude above
+    /// the rounding of the slab parameters, so no hit is ever rejected.
+    pub(super) fn may_reach_bounds(&self, origin: DVec3, dir: DVec3, t_max: f64) -> bool {
+        let [min, max] = self.bounds;
+        let centre = (min + max) * 0.5;
+        let margin = 1e-9 * ((max - min).max_element() + (origin - centre).abs().max_element());
+        let (mut near, mut far) = (0.0f64, t_max);
+        for axis in 0..3 {
+            let (lo, hi) = (min[axis] - margin, max[axis] + margin);
+            let (o, d) = (origin[axis], dir[axis]);
+            if d == 0.0 {
+                if o < lo || o > hi {
+                    return false;
+                }
+                continue;
+            }
+            let (a, b) = ((lo - o) / d, (hi - o) / d);
+            near = near.max(a.min(b));
+            far = far.min(a.max(b));
+        }
+        near <= far
+    }
+
+    /// [`Quadric::intersect`] without the bounds pre-test.
+    pub(super) fn intersect_exact(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<f64> {
         let x0 = self.to_local * (origin - self.anchor);
         let v = self.to_local * dir;
         let roots = self.local.ray_roots(x0, v)?;

@@ -691,3 +691,59 @@ fn box_overlap_rejects_cells_without_surface() {
         }
     }
 }
+
+#[test]
+fn bounds_pre_test_never_changes_the_answer() {
+    // Rays aimed at the bounding box's faces, edges and corners (and just beside them) of
+    // randomly placed, clipped and unclipped quadrics: the pre-test must agree with the exact
+    // test on every ray, and it must reject some (else it tests nothing).
+    let specs = [
+        coefficients([1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0], None),
+        coefficients(
+            [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
+            cube(1.5),
+        ),
+        coefficients(
+            [1.0, 1.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            cube(1.0),
+        ),
+        coefficients(
+            [1.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0],
+            cube(2.0),
+        ),
+    ];
+    let mut rng = Rng(99);
+    let mut rejected = 0;
+    for spec in &specs {
+        for _ in 0..10 {
+            let quadric = Quadric::new(spec, rng.transform()).unwrap();
+            let [min, max] = quadric.bounds();
+            for _ in 0..500 {
+                // A target on the box surface (one coordinate pinned to a face), nudged by up to
+                // 1e-6 of the box size inwards or outwards.
+                let mut target = min + (max - min) * rng.vec3(0.0, 1.0);
+                let axis = (rng.uniform(0.0, 3.0) as usize).min(2);
+                let face = if rng.uniform(0.0, 1.0) < 0.5 {
+                    min
+                } else {
+                    max
+                };
+                target[axis] = face[axis] + rng.uniform(-1e-6, 1e-6) * (max - min)[axis];
+                let origin = target + rng.vec3(-1.0, 1.0).normalize() * rng.uniform(1.0, 50.0);
+                let mut dir = target - origin;
+                if rng.uniform(0.0, 1.0) < 0.2 {
+                    dir[axis] = 0.0; // parallel to a face
+                }
+                let t_max = if rng.uniform(0.0, 1.0) < 0.3 {
+                    rng.uniform(0.0, 2.0)
+                } else {
+                    f64::INFINITY
+                };
+                let exact = quadric.intersect_exact(origin, dir, t_max);
+                assert_eq!(quadric.intersect(origin, dir, t_max), exact);
+                rejected += usize::from(!quadric.may_reach_bounds(origin, dir, t_max));
+            }
+        }
+    }
+    assert!(rejected > 1000, "only {rejected} rays rejected");
+}
