@@ -26,6 +26,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 BUNNY = ROOT / "fixtures/assets/stanford-bunny.obj"
 HELMET = ROOT / "fixtures/assets/DamagedHelmet.glb"
+# Too big for fixtures/: read from the shared assets next to the checkout when they are there.
+CHESS = ROOT.parent / "shared/assets/usd/full_assets/OpenChessSet/chess_set.usda"
 
 
 # ----------------------------------------------------------------------------- scenes
@@ -40,6 +42,18 @@ def load_triangles(path):
         scene = trimesh.load(path, force="scene")
         mesh = scene.to_geometry() if hasattr(scene, "to_geometry") else scene.dump(concatenate=True)
     return np.asarray(mesh.triangles, dtype=np.float64)
+
+
+def usd_triangles(path):
+    """World-space triangles (N, 3, 3) float64 of a USD stage's meshes, placed by usd-core with
+    raycast's drawing rules (tools/export_usd_fixtures.py `flatten`)."""
+    sys.path.insert(0, str(ROOT / "tools"))
+    from export_usd_fixtures import flatten
+    from validate_usd import open_stage
+
+    parts = [np.asarray(t, dtype=np.float64).reshape(-1, 3, 3)
+             for _, t in flatten(open_stage(path)) if len(t)]
+    return np.concatenate(parts)
 
 
 def write_gltf(path, mesh_tris, nodes, quadrics=()):
@@ -322,6 +336,15 @@ def main():
     scenes = []  # (key, title, path, triangles for peers or None, size-sweep member)
     scenes.append(("bunny", "stanford-bunny (OBJ)", BUNNY, bunny))
     scenes.append(("helmet", "DamagedHelmet (glb)", HELMET, load_triangles(HELMET)))
+    missing = []
+    if quick:
+        pass
+    elif CHESS.exists():
+        scenes.append(("chess", "OpenChessSet (USD: payloads, crate geometry, instanced pawns)",
+                       CHESS, usd_triangles(CHESS)))
+    else:
+        missing.append(f"OpenChessSet ({CHESS} not found: ../shared/assets is missing)")
+        print(f"bench: {missing[-1]}; skipped", file=sys.stderr)
     gen = [(15, "1M"), (72, "5M")] if not quick else [(15, "1M")]
     if a.big:
         gen.append((288, "20M"))
@@ -347,7 +370,7 @@ def main():
         write_gltf(path, bunny[:n], [(np.zeros(3), 1.0)])
         sweep.append((f"patch{n}", f"bunny patch {n}", path, bunny[:n]))
 
-    results = {"machine": machine(), "quick": quick, "scenes": [], "sweep": []}
+    results = {"machine": machine(), "quick": quick, "scenes": [], "sweep": [], "missing": missing}
     for group, items in (("scenes", scenes), ("sweep", sweep)):
         for key, title, path, tris in items:
             t0 = time.time()
@@ -430,7 +453,9 @@ def report(r):
              f"Machine: {m['nproc']} cores, {m['cpu']} ({m['mhz']} MHz), {m['memory_gib']} GiB, "
              f"{m['rustc']}, Python {m['python']}, kernel {m['kernel']}. "
              f"Run: {'quick' if r['quick'] else 'full'}, {r['total_s']:.0f} s. "
-             "The machine is a shared VM: expect ±15% run to run.", "",
+             "The machine is a shared VM: two full runs an hour apart on the same triangle code "
+             "differed by up to 30% in single ratios.", "",
+             *([f"Skipped: {', '.join(r['missing'])}.", ""] if r.get("missing") else []),
              "Method: one process per scene for the Rust backends (benches/trace.rs) and one for the "
              "Python peers, on the same float32 rays (`coherent` = pinhole camera, one ray per pixel; "
              "`incoherent` = origins uniform in the scene box, directions uniform). Warm-up run, then "
