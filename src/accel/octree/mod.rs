@@ -203,15 +203,26 @@ struct Mirrored {
     planes: [([usize; 2], &'static [f64; 256]); 3],
 }
 
-/// One cell on the way down, in the mirrored frame: the ray's slab parameters and the cell's
-/// lower corner and edge length.
+/// One cell on the way down, in the mirrored frame: its node, the ray's slab parameters and
+/// the cell's lower corner and edge length.
 #[derive(Clone, Copy)]
 struct Cell {
-    node: u32,
+    node: Node,
     t0: DVec3,
     t1: DVec3,
     lo: DVec3,
     size: f64,
+}
+
+impl Cell {
+    /// The ray's entry and exit parameters of the cell clipped to its occupied box, with
+    /// `0 <= t <= limit`, or `None` when that is empty.
+    fn span(&self, ray: &Mirrored, limit: f64) -> Option<(f64, f64)> {
+        let (b0, b1) = self.node.occupied.span(ray, self.lo, self.size);
+        let enter = self.t0.max(b0).max_element().max(0.0);
+        let exit = self.t1.min(b1).min_element().min(limit);
+        (enter <= exit).then_some((enter, exit))
+    }
 }
 
 impl Octree {
@@ -310,7 +321,7 @@ impl Octree {
         }
         ray.inv_dir = d.recip();
         let root = Cell {
-            node: 0,
+            node: self.nodes[0],
             t0: nan_to(
                 (self.root.min - ray.origin) * ray.inv_dir,
                 f64::NEG_INFINITY,
@@ -320,23 +331,25 @@ impl Octree {
             size: self.root.size().x,
         };
         let mut limit = t_max;
-        self.visit_cell(&root, &ray, &mut limit, &mut visit);
+        if let Some((enter, exit)) = root.span(&ray, limit) {
+            self.visit_cell(&root, enter, exit, &ray, &mut limit, &mut visit);
+        }
     }
 
+    /// Visits `cell`, which the ray enters at `enter` and leaves at `exit` (its cube clipped
+    /// to its occupied box and to the limit): a leaf goes to `visit`; an interior cell visits
+    /// those of its children the ray crosses, front to back, computing each child's span
+    /// before descending so that children whose occupied box the ray misses cost no call.
     fn visit_cell<F: FnMut(&[u32], f64, f64) -> f64>(
         &self,
         cell: &Cell,
+        enter: f64,
+        exit: f64,
         ray: &Mirrored,
         limit: &mut f64,
         visit: &mut F,
     ) {
-        let node = self.nodes[cell.node as usize];
-        let (b0, b1) = node.occupied.span(ray, cell.lo, cell.size);
-        let enter = cell.t0.max(b0).max_element().max(0.0);
-        let exit = cell.t1.min(b1).min_element().min(*limit);
-        if enter > exit {
-            return;
-        }
+        let node = cell.node;
         if node.count & INTERIOR == 0 {
             if node.count > 0 {
                 let refs = &self.refs[node.first as usize..(node.first + node.count) as usize];
@@ -362,14 +375,17 @@ impl Octree {
             let t1 = pick(tm, cell.t1);
             let stored = child ^ ray.mask;
             if node.count & (1 << stored) != 0 {
+                let index = node.first + u32::from(RANK[(node.count & 0xFF) as usize][stored]);
                 let next = Cell {
-                    node: node.first + u32::from(RANK[(node.count & 0xFF) as usize][stored]),
+                    node: self.nodes[index as usize],
                     t0: pick(cell.t0, tm),
                     t1,
                     lo: cell.lo + pick(DVec3::ZERO, DVec3::splat(half)),
                     size: half,
                 };
-                self.visit_cell(&next, ray, limit, visit);
+                if let Some((enter, exit)) = next.span(ray, *limit) {
+                    self.visit_cell(&next, enter, exit, ray, limit, visit);
+                }
             }
             let exit_axis = if t1.x <= t1.y && t1.x <= t1.z {
                 0
