@@ -199,10 +199,7 @@ impl PrimitiveSet for Scene {
             None => None,
         };
         // Clipping a triangle that only touches the cell can round away to nothing.
-        clipped.or_else(|| {
-            let bounds = self.bounds(index).intersection(*cell);
-            (!bounds.is_empty()).then_some(bounds)
-        })
+        clipped.or_else(|| self.bounds(index).common(*cell))
     }
 
     fn prepare(&self, local_origin: DVec3, dir: DVec3) -> SceneRay {

@@ -73,8 +73,7 @@ pub trait PrimitiveSet: Sync {
     /// Bounds of the part of primitive `index` inside `cell`, or `None` when nothing of it is
     /// there. The default clips the primitive's bounds to the cell.
     fn clipped_bounds(&self, index: usize, cell: &Aabb) -> Option<Aabb> {
-        let clipped = self.bounds(index).intersection(*cell);
-        (!clipped.is_empty()).then_some(clipped)
+        self.bounds(index).common(*cell)
     }
 
     /// Per-ray precomputation for a ray with the given local origin and direction.

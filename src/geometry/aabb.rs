@@ -38,9 +38,10 @@ impl Aabb {
         Aabb::new(self.min.min(other.min), self.max.max(other.max))
     }
 
-    /// The common part of both boxes (possibly empty).
-    pub fn intersection(self, other: Aabb) -> Self {
-        Aabb::new(self.min.max(other.min), self.max.min(other.max))
+    /// The common part of both boxes, or `None` when they share no point.
+    pub fn common(self, other: Aabb) -> Option<Aabb> {
+        let both = Aabb::new(self.min.max(other.min), self.max.min(other.max));
+        (!both.is_empty()).then_some(both)
     }
 
     /// True when the box holds no point.
