@@ -194,10 +194,10 @@ impl PrimitiveSet for Scene {
     }
 
     fn clipped_bounds(&self, index: usize, cell: &Aabb) -> Option<Aabb> {
-        let clipped = match self.triangles.get(index) {
-            Some(tri) => triangle::clipped_bounds(tri, cell),
-            None => None,
-        };
+        let clipped = self
+            .triangles
+            .get(index)
+            .and_then(|tri| triangle::clipped_bounds(tri, cell));
         // Clipping a triangle that only touches the cell can round away to nothing.
         clipped.or_else(|| self.bounds(index).common(*cell))
     }

@@ -337,12 +337,10 @@ def main():
     scenes.append(("bunny", "stanford-bunny (OBJ)", BUNNY, bunny))
     scenes.append(("helmet", "DamagedHelmet (glb)", HELMET, load_triangles(HELMET)))
     missing = []
-    if quick:
-        pass
-    elif CHESS.exists():
+    if not quick and CHESS.exists():
         scenes.append(("chess", "OpenChessSet (USD: payloads, crate geometry, instanced pawns)",
                        CHESS, usd_triangles(CHESS)))
-    else:
+    elif not quick:
         missing.append(f"OpenChessSet ({CHESS} not found: ../shared/assets is missing)")
         print(f"bench: {missing[-1]}; skipped", file=sys.stderr)
     gen = [(15, "1M"), (72, "5M")] if not quick else [(15, "1M")]

@@ -10,8 +10,8 @@ use glam::DVec3;
 const PARALLEL_REFS: usize = 8192;
 
 /// A subtree in its own arrays: node 0 is its root; interior nodes point at their non-empty
-/// children, stored contiguously, by index into `nodes`, leaves at a run of `refs`. `occupied` bounds the parts of
-/// its primitives inside its cell (grown by the margin).
+/// children, stored contiguously, by index into `nodes`, leaves at a run of `refs`.
+/// `occupied` bounds the parts of its primitives inside its cell (grown by the margin).
 #[derive(Debug)]
 pub(super) struct Subtree {
     pub nodes: Vec<Node>,

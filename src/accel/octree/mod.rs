@@ -109,8 +109,8 @@ static RANK: [[u8; 8]; 256] = {
 const DEPTH_CAP: u32 = 24;
 
 /// A cell: interior cells point at their non-empty children (stored contiguously, in octant
-/// order), leaves at a run of references.
-/// Every cell also bounds the part of it its primitives occupy.
+/// order), leaves at a run of references; every cell also bounds the part of it that its
+/// primitives occupy.
 #[derive(Debug, Clone, Copy)]
 struct Node {
     first: u32,
@@ -295,8 +295,9 @@ impl Octree {
     /// Visits the non-empty leaves the ray `origin + t · dir` passes through, front to back.
     ///
     /// `visit` gets the leaf's primitive indices and the ray's entry and exit parameters of the
-    /// leaf's occupied box (clipped to the cell), and returns the parameter beyond which nothing interests it any more (the best hit
-    /// so far); cells entered beyond that are skipped. `dir` must have no -0.0 component.
+    /// leaf's occupied box (clipped to the cell), and returns the parameter beyond which
+    /// nothing interests it any more (the best hit so far); cells entered beyond that are
+    /// skipped. `dir` must have no -0.0 component.
     pub fn traverse(
         &self,
         origin: DVec3,
