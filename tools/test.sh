@@ -20,4 +20,4 @@ echo "== python tests"
 .venv/bin/python -m pytest tests/python -q
 
 echo "== validation against trimesh and the quadric reference"
-.venv/bin/python tools/validate.py fixtures
+.venv/bin/python tools/raycast_tools/validate.py fixtures

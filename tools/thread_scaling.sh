@@ -2,7 +2,7 @@
 # Thread scaling of raycast's octree and of the obvhs BVH2 backend: 2048x2048 primary rays,
 # depth only, for 1, 2, 4, 8 and 16 threads, three runs each; trace and build times come from
 # the sidecar. Meant for a machine with many cores (reports/thread_scaling.md was made on a
-# 16-core machine); BIG_SCENE adds a scene such as the 1M-triangle one tools/bench.py writes.
+# 16-core machine); BIG_SCENE adds a scene such as the 1M-triangle one tools/raycast_tools/bench.py writes.
 #
 # PINNING=1 adds a pinning experiment on the bunny and the helmet: one thread on CPU 0, two
 # threads on CPU 0 and its hyperthread sibling (CPU 0 alone when it has none), two threads on

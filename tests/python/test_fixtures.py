@@ -348,7 +348,7 @@ def test_fixtures_are_reproducible(tmp_path):
     """Rerunning the generator gives byte-identical files."""
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("make_fixtures", ROOT / "tools" / "make_fixtures.py")
+    spec = importlib.util.spec_from_file_location("make_fixtures", ROOT / "tools" / "raycast_tools" / "make_fixtures.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     for attr in ("FIX", "GLTF_DIR", "OBJ_DIR", "BAD_DIR"):

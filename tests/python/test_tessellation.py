@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tools"))
+sys.path.insert(0, str(ROOT / "tools" / "raycast_tools"))
 import quadric_reference as qr  # noqa: E402
 import tessellate as tess  # noqa: E402
 import tessellation_check as tc  # noqa: E402

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tools"))
+sys.path.insert(0, str(ROOT / "tools" / "raycast_tools"))
 import quadric_reference as qr  # noqa: E402
 import validate  # noqa: E402
 
@@ -292,7 +292,7 @@ def test_cli_exit_codes(tmp_path, fake_raycast):
     scene = FIXTURES / "gltf" / "cube.gltf"
     if not scene.exists():
         pytest.skip("fixture missing")
-    cmd = [sys.executable, str(ROOT / "tools" / "validate.py"), str(scene), "--rays", "100",
+    cmd = [sys.executable, str(ROOT / "tools" / "raycast_tools" / "validate.py"), str(scene), "--rays", "100",
            "--raycast", str(fake_raycast), "--json"]
     p = subprocess.run(cmd, capture_output=True, text=True)
     assert p.returncode == 0, p.stderr

@@ -57,7 +57,7 @@ import quadric_reference as qref  # noqa: E402
 import tessellate as tess  # noqa: E402
 import validate  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 QFIX = ROOT / "fixtures" / "quadrics"
 SLOPE_RANGE = (1.6, 2.4)
 NORMAL_SLOPE_RANGE = (0.7, 1.3)   # reported, not enforced

@@ -45,7 +45,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from make_quadric_fixtures import tri_hit  # noqa: E402
 from usd_counts import GPRIMS, drawn_prims, hidden_purpose, mesh_triangles  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "fixtures" / "usd"
 EXPECTED: dict[str, list] = {}
 

@@ -895,7 +895,7 @@ def default_raycast():
     env = os.environ.get("RAYCAST")
     if env:
         return env
-    root = Path(__file__).resolve().parent.parent
+    root = Path(__file__).resolve().parents[2]
     for p in (root / "target" / "release" / "raycast", root / "target" / "debug" / "raycast"):
         if p.exists():
             return str(p)

@@ -34,7 +34,7 @@ import make_fixtures as mf  # noqa: E402
 import quadric_reference as qref  # noqa: E402
 from make_fixtures import json_text  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 QDIR = ROOT / "fixtures" / "quadrics"
 BAD_DIR = ROOT / "fixtures" / "bad"
 GENERATOR = "raycast tools/make_quadric_fixtures.py"

@@ -57,7 +57,7 @@ import tessellate as tess  # noqa: E402
 import tessellation_check as tc  # noqa: E402
 import validate  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 FLOOR = 1e-17      # exact agreement is plotted here (log axis)
 MP_PREC = 120
 

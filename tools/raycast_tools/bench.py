@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 BUNNY = ROOT / "fixtures/assets/stanford-bunny.obj"
 HELMET = ROOT / "fixtures/assets/DamagedHelmet.glb"
 # Too big for fixtures/: read from the shared assets next to the checkout when they are there.
@@ -47,7 +47,7 @@ def load_triangles(path):
 def usd_triangles(path):
     """World-space triangles (N, 3, 3) float64 of a USD stage's meshes, placed by usd-core with
     raycast's drawing rules (tools/export_usd_fixtures.py `flatten`)."""
-    sys.path.insert(0, str(ROOT / "tools"))
+    sys.path.insert(0, str(ROOT / "tools" / "raycast_tools"))
     from export_usd_fixtures import flatten
     from validate_usd import open_stage
 

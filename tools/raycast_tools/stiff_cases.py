@@ -50,7 +50,7 @@ NORMAL_FLOOR = 1e-12  # smallest normal bound (radians) written
 SINGULAR_DETERMINANT = 1e-14  # docs/RAYCAST_quadric.md: det below 1e-14 * longest column**3
 CLIP_REL = 1e-6  # a root's local point outside the box by less than this * side is ambiguous
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "fixtures" / "stiff" / "cases.json"
 
 
