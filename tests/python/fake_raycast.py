@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A test double for the raycast binary, used only to test tools/validate.py's plumbing.
+"""A test double for the raycast binary, used only to test `raycast_tools validate`'s plumbing.
 
 It implements the rays-mode and camera-mode output contract of docs/buffers-and-cli.md
 (depth/normal/id/prim .npy and a raycast.json with `objects` and `camera`) on top of
@@ -10,16 +10,15 @@ tests can check that validate.py notices.
 
 import argparse
 import json
-import math
 import os
 import sys
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools" / "raycast_tools"))
-import validate  # noqa: E402
-import quadric_reference as qref  # noqa: E402
+from raycast_tools import quadric_reference as qref
+from raycast_tools import validate
+from raycast_tools.rays import camera_rays
 
 
 def main():
@@ -47,14 +46,15 @@ def main():
         c = 0.5 * (lo + hi)
         eye = c + np.array([0.3, 0.4, 1.0]) * np.linalg.norm(hi - lo)
         f = (c - eye) / np.linalg.norm(c - eye)
-        r = np.cross(f, [0, 1, 0.0]); r /= np.linalg.norm(r)
+        r = np.cross(f, [0, 1, 0.0])
+        r /= np.linalg.norm(r)
         u = np.cross(r, f)
         C = np.eye(4)
         C[:3, 0], C[:3, 1], C[:3, 2], C[:3, 3] = r, u, -f, eye
         cam = {"source": "auto", "type": "perspective", "yfov": 0.6,
                "aspect_ratio": a.width / a.height, "znear": 0.01, "zfar": None,
                "camera_to_world": C.tolist()}
-        o, _, d = validate.camera_rays(cam, a.width, a.height)
+        o, _, d = camera_rays(cam, a.width, a.height)
         shape = (a.height, a.width)
         side.update(mode="camera", width=a.width, height=a.height, camera=cam)
     n = len(o)

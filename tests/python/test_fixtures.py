@@ -14,8 +14,6 @@ from __future__ import annotations
 
 import base64
 import json
-import math
-import struct
 from pathlib import Path
 
 import numpy as np
@@ -344,16 +342,14 @@ def test_bad_npy_shapes():
     assert nan.shape == (2, 6) and nan.dtype == np.float64 and np.isnan(nan).sum() == 1
 
 
-def test_fixtures_are_reproducible(tmp_path):
+def test_fixtures_are_reproducible(tmp_path, monkeypatch):
     """Rerunning the generator gives byte-identical files."""
-    import importlib.util
+    from raycast_tools import make_fixtures as mod
+    from raycast_tools.fixture_files import FixtureFiles
 
-    spec = importlib.util.spec_from_file_location("make_fixtures", ROOT / "tools" / "raycast_tools" / "make_fixtures.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    monkeypatch.setattr(mod, "FILES", FixtureFiles(tmp_path))
     for attr in ("FIX", "GLTF_DIR", "OBJ_DIR", "BAD_DIR"):
-        setattr(mod, attr, tmp_path / getattr(mod, attr).relative_to(FIX))
-    mod.ROOT = tmp_path
+        monkeypatch.setattr(mod, attr, tmp_path / getattr(mod, attr).relative_to(FIX))
     for fn in (mod.make_cube, mod.make_plane, mod.make_modes, mod.make_sparse, mod.make_quantized,
                mod.make_instances, mod.make_scenes, mod.make_cameras, mod.make_far, mod.make_trap,
                mod.make_obj, mod.make_bad):

@@ -2,21 +2,19 @@
 
 The quadric issue's acceptance check: on random scenes (scale 0.5..2, shear up to 0.3, random
 clip boxes, random rotations of the coefficient frame) and random rays, raycast agrees with
-tools/quadric_reference.py on hit/miss and id for every ray that is not within 1e-6 of a
+tools/raycast_tools/quadric_reference.py on hit/miss and id for every ray that is not within 1e-6 of a
 clip-box face or a tangent, with relative depth error <= 1e-9 and normal angle <= 1e-6 rad
-(the tolerances live in tools/validate.py's TOL).
+(the tolerances live in tools/raycast_tools/validate.py's TOL).
 """
 
 import os
-import sys
 from pathlib import Path
 
 import pytest
 
+from raycast_tools import random_quadric_scenes, validate
+
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tools" / "raycast_tools"))
-import random_quadric_scenes  # noqa: E402
-import validate  # noqa: E402
 
 RAYCAST = Path(os.environ.get("RAYCAST", ROOT / "target" / "release" / "raycast"))
 

@@ -1,4 +1,4 @@
-"""Tests of tools/tessellate.py and the tessellation convergence check.
+"""Tests of tools/raycast_tools/tessellate.py and the tessellation convergence check.
 
 Run: .venv/bin/python -m pytest tests/python/test_tessellation.py
 The raycast part of the convergence check skips when target/release/raycast is absent.
@@ -7,17 +7,16 @@ The raycast part of the convergence check skips when target/release/raycast is a
 import json
 import math
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from raycast_tools import quadric_reference as qr
+from raycast_tools import tessellate as tess
+from raycast_tools import tessellation_check as tc
+
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tools" / "raycast_tools"))
-import quadric_reference as qr  # noqa: E402
-import tessellate as tess  # noqa: E402
-import tessellation_check as tc  # noqa: E402
 
 RAYCAST = Path(os.environ.get("RAYCAST", ROOT / "target" / "release" / "raycast"))
 QFIX = ROOT / "fixtures" / "quadrics"

@@ -1,8 +1,9 @@
-"""Tests of tools/validate.py and tools/quadric_reference.py.
+"""Tests of `python -m raycast_tools validate` (tools/raycast_tools/validate.py) and
+the quadric reference (tools/raycast_tools/quadric_reference.py).
 
 Run: .venv/bin/python -m pytest tests/python
 The end-to-end checks against the real binary skip when target/release/raycast
-does not exist; validate.py's own plumbing is exercised with tests/python/fake_raycast.py.
+does not exist; validate's own plumbing is exercised with tests/python/fake_raycast.py.
 """
 
 import json
@@ -16,10 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from raycast_tools import quadric_reference as qr
+from raycast_tools import validate
+from raycast_tools.rays import camera_rays
+
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tools" / "raycast_tools"))
-import quadric_reference as qr  # noqa: E402
-import validate  # noqa: E402
 
 RAYCAST = Path(os.environ.get("RAYCAST", ROOT / "target" / "release" / "raycast"))
 FIXTURES = ROOT / "fixtures"
@@ -209,20 +211,20 @@ def test_merge_with_mesh_hits():
     assert m["depth"][0] == 1.0 and m["node"][0] == 7 and m["depth"][1] == pytest.approx(3.0)
 
 
-# ------------------------------------------------------------------ validate.py internals
+# ------------------------------------------------------------------ validate internals
 
 def test_camera_rays_contract():
     C = np.eye(4)
     C[2, 3] = 5
     cam = {"type": "perspective", "yfov": math.pi / 2, "camera_to_world": C.tolist()}
-    o, u, d = validate.camera_rays(cam, 4, 2)
+    o, u, d = camera_rays(cam, 4, 2)
     assert o.shape == (8, 3) and np.allclose(o, [0, 0, 5])
     # pixel (i=0, j=0): sx = -0.75, sy = 0.5; tan(45°) = 1, aspect 2
     assert np.allclose(d[0], [-0.75 * 2, 0.5, -1])
     # row 0 is the top row: y > 0; last pixel bottom right
     assert np.allclose(d[7], [0.75 * 2, -0.5, -1])
     cam = {"type": "orthographic", "xmag": 9, "ymag": 1.0, "camera_to_world": C.tolist()}
-    o, u, d = validate.camera_rays(cam, 4, 2)
+    o, u, d = camera_rays(cam, 4, 2)
     assert np.allclose(o[0], [-0.75 * 2, 0.5, 5])  # xmag recomputed as ymag * W / H
     assert np.allclose(d, [0, 0, -1])
 
@@ -292,7 +294,7 @@ def test_cli_exit_codes(tmp_path, fake_raycast):
     scene = FIXTURES / "gltf" / "cube.gltf"
     if not scene.exists():
         pytest.skip("fixture missing")
-    cmd = [sys.executable, str(ROOT / "tools" / "raycast_tools" / "validate.py"), str(scene), "--rays", "100",
+    cmd = [sys.executable, "-m", "raycast_tools", "validate", str(scene), "--rays", "100",
            "--raycast", str(fake_raycast), "--json"]
     p = subprocess.run(cmd, capture_output=True, text=True)
     assert p.returncode == 0, p.stderr
@@ -300,7 +302,7 @@ def test_cli_exit_codes(tmp_path, fake_raycast):
     p = subprocess.run(cmd, capture_output=True, text=True,
                        env=dict(os.environ, FAKE_RAYCAST_BREAK="depth"))
     assert p.returncode == 1
-    p = subprocess.run(cmd[:2] + [str(scene), "--raycast", str(tmp_path / "nope")],
+    p = subprocess.run(cmd[:4] + [str(scene), "--raycast", str(tmp_path / "nope")],
                        capture_output=True, text=True)
     assert p.returncode == 2
 

@@ -1,4 +1,4 @@
-"""tools/validate_usd.py on USD fixtures: usd-core flattening + tessellated gprims vs raycast.
+"""`python -m raycast_tools validate-usd` on USD fixtures: usd-core flattening + tessellated gprims vs raycast.
 
 Run: .venv/bin/python -m pytest tests/python/test_validate_usd.py
 Skips when target/release/raycast (or $RAYCAST) does not exist, or without usd-core.
@@ -15,9 +15,9 @@ import pytest
 
 pytest.importorskip("pxr")
 
+from raycast_tools import validate_usd
+
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tools" / "raycast_tools"))
-import validate_usd  # noqa: E402
 
 RAYCAST = Path(os.environ.get("RAYCAST", ROOT / "target" / "release" / "raycast"))
 USD = ROOT / "fixtures" / "usd"
@@ -45,7 +45,7 @@ def test_scene_within_tolerance(scene):
 
 @needs_binary
 def test_command_line_json_and_exit_status(tmp_path):
-    p = subprocess.run([sys.executable, str(ROOT / "tools" / "raycast_tools" / "validate_usd.py"),
+    p = subprocess.run([sys.executable, "-m", "raycast_tools", "validate-usd",
                         str(USD / "gltf_cube.usda"), str(USD / "bad"), "--rays", "200",
                         "--segments", "32", "--json", "--raycast", str(RAYCAST)],
                        capture_output=True, text=True)
@@ -62,7 +62,7 @@ def test_wrong_answers_fail(tmp_path):
     # draw gprims.usda's xforms twin: same prim kinds, other places
     fake.write_text(f"#!/bin/sh\nscene=$1; shift\nexec {RAYCAST} {USD / 'xforms.usda'} \"$@\"\n")
     fake.chmod(0o755)
-    p = subprocess.run([sys.executable, str(ROOT / "tools" / "raycast_tools" / "validate_usd.py"),
+    p = subprocess.run([sys.executable, "-m", "raycast_tools", "validate-usd",
                         str(USD / "composition.usda"), "--rays", "100", "--raycast", str(fake)],
                        capture_output=True, text=True)
     assert p.returncode == 1, p.stdout + p.stderr

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Benchmark raycast's octree against its obvhs backends, Embree (embreex) and trimesh.
 
     .venv/bin/python tools/bench.py [--quick] [--big] [--out reports/bench.md]
@@ -11,8 +10,6 @@ writes reports/bench.md plus the raw figures as reports/bench.json.
 import argparse
 import json
 import os
-import platform
-import re
 import resource
 import subprocess
 import sys
@@ -23,7 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
+from .cli import prog
+from .gltf_writer import UNSIGNED_INT, Gltf
+from .machine import machine as machine_base
+from .paths import RELEASE, ROOT
+from .rays import pinhole_rays, random_rays
+from .runner import raycast_info
+
 BUNNY = ROOT / "fixtures/assets/stanford-bunny.obj"
 HELMET = ROOT / "fixtures/assets/DamagedHelmet.glb"
 # Too big for fixtures/: read from the shared assets next to the checkout when they are there.
@@ -46,10 +49,8 @@ def load_triangles(path):
 
 def usd_triangles(path):
     """World-space triangles (N, 3, 3) float64 of a USD stage's meshes, placed by usd-core with
-    raycast's drawing rules (tools/export_usd_fixtures.py `flatten`)."""
-    sys.path.insert(0, str(ROOT / "tools" / "raycast_tools"))
-    from export_usd_fixtures import flatten
-    from validate_usd import open_stage
+    raycast's drawing rules (usd_stage.flatten)."""
+    from .usd_stage import flatten, open_stage
 
     parts = [np.asarray(t, dtype=np.float64).reshape(-1, 3, 3)
              for _, t in flatten(open_stage(path)) if len(t)]
@@ -57,40 +58,29 @@ def usd_triangles(path):
 
 
 def write_gltf(path, mesh_tris, nodes, quadrics=()):
-    """A glTF with one mesh (`mesh_tris`, (N,3,3)) instanced at `nodes` (translation, scale)
-    and `quadrics` nodes (coefficients, translation, scale)."""
-    gltf = {"asset": {"version": "2.0"}, "scenes": [{"nodes": []}], "scene": 0, "nodes": []}
+    """A glTF (+ .bin) with one mesh (`mesh_tris`, (N,3,3), vertices shared where equal in
+    float32) instanced at `nodes` (translation, scale) and `quadrics` nodes (coefficients,
+    translation, scale)."""
+    g = Gltf("raycast bench")
+    roots = []
     if len(mesh_tris) and len(nodes):
         flat = mesh_tris.reshape(-1, 3).astype(np.float32)
         verts, index = np.unique(flat, axis=0, return_inverse=True)
-        index = index.reshape(-1).astype(np.uint32)
-        blob = verts.tobytes() + index.tobytes()
-        bin_path = path.with_suffix(".bin")
-        bin_path.write_bytes(blob)
-        gltf["buffers"] = [{"uri": bin_path.name, "byteLength": len(blob)}]
-        gltf["bufferViews"] = [
-            {"buffer": 0, "byteOffset": 0, "byteLength": verts.nbytes},
-            {"buffer": 0, "byteOffset": verts.nbytes, "byteLength": index.nbytes},
-        ]
-        gltf["accessors"] = [
-            {"bufferView": 0, "componentType": 5126, "count": len(verts), "type": "VEC3",
-             "min": verts.min(0).tolist(), "max": verts.max(0).tolist()},
-            {"bufferView": 1, "componentType": 5125, "count": len(index), "type": "SCALAR"},
-        ]
-        gltf["meshes"] = [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}]
-        for i, (t, s) in enumerate(nodes):
-            gltf["scenes"][0]["nodes"].append(len(gltf["nodes"]))
-            gltf["nodes"].append({"name": f"copy{i}", "mesh": 0,
-                                  "translation": [float(x) for x in t], "scale": [s, s, s]})
+        m = g.mesh("mesh", [{"attributes": {"POSITION": g.positions(verts)},
+                             "indices": g.indices(index.reshape(-1), UNSIGNED_INT)}])
+        roots += [g.node(f"copy{i}", mesh=m, translation=[float(x) for x in t], scale=[s, s, s])
+                  for i, (t, s) in enumerate(nodes)]
     if len(quadrics):
-        gltf["extensionsUsed"] = ["RAYCAST_quadric"]
-        for i, (coeffs, t, s) in enumerate(quadrics):
-            gltf["scenes"][0]["nodes"].append(len(gltf["nodes"]))
-            gltf["nodes"].append({
-                "name": f"q{i}", "translation": [float(x) for x in t],
-                "scale": [float(x) for x in s],
-                "extensions": {"RAYCAST_quadric": {"coefficients": coeffs}}})
-    path.write_text(json.dumps(gltf))
+        g.doc["extensionsUsed"].append("RAYCAST_quadric")
+        roots += [g.node(f"q{i}", translation=[float(x) for x in t], scale=[float(x) for x in s],
+                         extensions={"RAYCAST_quadric": {"coefficients": coeffs}})
+                  for i, (coeffs, t, s) in enumerate(quadrics)]
+    g.scene(roots)
+    bin_path = path.with_suffix(".bin")
+    doc, data = g.finish(bin_path.name)
+    if data:
+        bin_path.write_bytes(data)
+    path.write_text(json.dumps(doc))
 
 
 def instances(tris, copies, rng):
@@ -118,34 +108,6 @@ def random_quadrics(count, rng, extent):
 
 def bounds_of(rust_info):
     return np.array(rust_info["bounds"][0]), np.array(rust_info["bounds"][1])
-
-
-def camera_rays(lo, hi, side):
-    """A pinhole camera framing the box from a diagonal, one ray per pixel centre."""
-    centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo) / 2
-    fov = np.radians(40.0)
-    forward = -np.array([0.45, 0.35, 0.82])
-    forward /= np.linalg.norm(forward)
-    eye = centre - forward * radius / np.sin(fov / 2)
-    right = np.cross(forward, [0.0, 1.0, 0.0])
-    right /= np.linalg.norm(right)
-    up = np.cross(right, forward)
-    s = np.tan(fov / 2)
-    px = (np.arange(side) + 0.5) / side * 2 - 1
-    xs, ys = np.meshgrid(px * s, -px * s)
-    dirs = forward + xs[..., None] * right + ys[..., None] * up
-    dirs = dirs.reshape(-1, 3)
-    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
-    origins = np.broadcast_to(eye, dirs.shape)
-    return np.hstack([origins, dirs]).astype(np.float32)
-
-
-def random_rays(lo, hi, count, rng):
-    """Origins uniform in the scene box, directions uniform on the sphere."""
-    origins = rng.uniform(lo, hi, (count, 3))
-    dirs = rng.normal(size=(count, 3))
-    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
-    return np.hstack([origins, dirs]).astype(np.float32)
 
 
 # ----------------------------------------------------------------------------- peers
@@ -209,7 +171,7 @@ def peer_worker(spec):
                            "mrays_per_s": len(rays) / m / 1e6, "hit_ratio": hits})
     out["methods"].append({"backend": "embreex", "build_s": commit, "traces": traces,
                            "peak_rss_mib": peak_mib(), "rss_base_mib": base})
-    del scene
+    scene = None  # releases Embree's scene before trimesh builds its own
 
     mesh = trimesh.Trimesh(vertices=tris.reshape(-1, 3).astype(np.float64),
                            faces=np.arange(len(tris) * 3).reshape(-1, 3), process=False)
@@ -270,15 +232,6 @@ def cargo_bench_binary():
     raise SystemExit("bench: no trace executable from cargo")
 
 
-def raycast_info(path):
-    exe = ROOT / "target/release/raycast"
-    if not exe.exists():
-        subprocess.run(["cargo", "build", "--release"], cwd=ROOT, check=True)
-    res = subprocess.run([str(exe), "info", str(path), "--json"], capture_output=True,
-                         text=True, check=True)
-    return json.loads(res.stdout)
-
-
 def run_rust(exe, scene, rays, args):
     cmd = [exe, str(scene)] + [x for n, p in rays.items() for x in ("--rays", f"{n}={p}")] + args
     res = subprocess.run(cmd, capture_output=True, text=True)
@@ -290,7 +243,8 @@ def run_rust(exe, scene, rays, args):
 def run_peers(spec, tmp):
     spec_path = tmp / "peer_spec.json"
     spec_path.write_text(json.dumps(spec))
-    res = subprocess.run([sys.executable, __file__, "--peer-worker", str(spec_path)],
+    res = subprocess.run([sys.executable, "-m", "raycast_tools", "bench", "--peer-worker",
+                          str(spec_path)],
                          capture_output=True, text=True)
     if res.returncode != 0:
         return {"methods": [], "error": res.stderr[-2000:]}
@@ -298,32 +252,26 @@ def run_peers(spec, tmp):
 
 
 def machine():
-    model = "unknown"
-    for line in Path("/proc/cpuinfo").read_text().splitlines():
-        if line.startswith("model name"):
-            model = line.split(":", 1)[1].strip()
-            break
-    mhz = re.findall(r"cpu MHz\s*:\s*([\d.]+)", Path("/proc/cpuinfo").read_text())
+    """machine.machine() and the Rust compiler's version."""
     rustc = subprocess.run(["rustc", "--version"], capture_output=True, text=True).stdout.strip()
-    mem = Path("/proc/meminfo").read_text().splitlines()[0].split()[1]
-    return {"nproc": os.cpu_count(), "cpu": model, "mhz": mhz[0] if mhz else "?",
-            "memory_gib": round(int(mem) / 2**20, 1), "rustc": rustc,
-            "python": platform.python_version(), "kernel": platform.release()}
+    return {**machine_base(), "rustc": rustc}
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog=prog("bench"), description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="smaller ray sets, fewer runs and scenes")
     ap.add_argument("--big", action="store_true", help="add the 20M-triangle scene (slow)")
     ap.add_argument("--out", default=str(ROOT / "reports/bench.md"))
     ap.add_argument("--peer-worker", help=argparse.SUPPRESS)
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     if a.peer_worker:
         peer_worker(json.loads(Path(a.peer_worker).read_text()))
-        return
+        return 0
 
     started = time.time()
     exe = cargo_bench_binary()
+    if not RELEASE.exists():
+        subprocess.run(["cargo", "build", "--release"], cwd=ROOT, check=True)
     rng = np.random.default_rng(1234)
     quick = a.quick
     cam_side = 512 if quick else 1024
@@ -372,10 +320,10 @@ def main():
     for group, items in (("scenes", scenes), ("sweep", sweep)):
         for key, title, path, tris in items:
             t0 = time.time()
-            info = raycast_info(path)
+            info = raycast_info(RELEASE, path)
             lo, hi = bounds_of(info)
             rays = {"coherent": tmp / f"{key}_cam.npy"}
-            np.save(rays["coherent"], camera_rays(lo, hi, cam_side))
+            np.save(rays["coherent"], pinhole_rays(lo, hi, cam_side))
             if group == "scenes":
                 rays["incoherent"] = tmp / f"{key}_rnd.npy"
                 np.save(rays["incoherent"], random_rays(lo, hi, n_random, rng))
@@ -408,6 +356,7 @@ def main():
     out.with_suffix(".json").write_text(json.dumps(results, indent=1))
     out.write_text(report(results))
     print(f"bench: wrote {out} in {results['total_s']:.0f}s", file=sys.stderr)
+    return 0
 
 
 # ----------------------------------------------------------------------------- report
@@ -448,7 +397,7 @@ def report(r):
     lines = ["# Benchmark: octree vs obvhs vs Embree", "",
              "Regenerate with `.venv/bin/python tools/bench.py` (`--quick` for a short run, `--big` "
              "adds the 20M-triangle scene); raw figures in `reports/bench.json`.", "",
-             f"Machine: {m['nproc']} cores, {m['cpu']} ({m['mhz']} MHz), {m['memory_gib']} GiB, "
+             f"Machine: {m['nproc']} cores, {m['cpu']} ({m['mhz'] or '?'} MHz), {m['memory_gib']} GiB, "
              f"{m['rustc']}, Python {m['python']}, kernel {m['kernel']}. "
              f"Run: {'quick' if r['quick'] else 'full'}, {r['total_s']:.0f} s. "
              "The machine is a shared VM: two full runs an hour apart on the same triangle code "
@@ -627,6 +576,3 @@ def gap_section(entries):
             "backend's trace instructions, so faster triangle tests alone cannot close the "
             "gap; traversal is the larger share.", ""]
 
-
-if __name__ == "__main__":
-    main()

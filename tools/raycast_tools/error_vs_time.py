@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Depth error versus run time per ray: analytic quadrics, tessellations, world form, trimesh.
 
     .venv/bin/python tools/error_vs_time.py [--rays N] [--segments 16 32 ...] [--out reports]
@@ -41,23 +40,25 @@ import argparse
 import json
 import math
 import os
-import platform
 import shutil
 import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import quadric_reference as qref  # noqa: E402
-import tessellate as tess  # noqa: E402
-import tessellation_check as tc  # noqa: E402
-import validate  # noqa: E402
+from . import quadric_reference as qref
+from . import tessellate as tess
+from . import validate
+from .cast import embree_intersector, embree_nearest, trace_ray_triangle, tri_mesh
+from .cli import prog
+from .machine import machine
+from .metrics import edge_distance
+from .paths import ROOT, raycast_or_exit
+from .rays import make_rays
+from .runner import run_rays
 
-ROOT = Path(__file__).resolve().parents[2]
 FLOOR = 1e-17      # exact agreement is plotted here (log axis)
 MP_PREC = 120
 
@@ -117,7 +118,7 @@ def mesh_reference(ref, o, u, idx):
     if len(ref.tris) == 0:
         return depth, normal, node, amb, f64, 0.0
     t0 = time.perf_counter()
-    d, _, tri = tc.trace_ray_triangle(ref.tris, o[idx], u[idx])
+    d, _, tri = trace_ray_triangle(ref.tris, o[idx], u[idx])
     t_rt = time.perf_counter() - t0
     f64[idx] = d
     lo, hi = ref.bounds()
@@ -132,7 +133,7 @@ def mesh_reference(ref, o, u, idx):
         normal[i] = nrm
         node[i] = ref.objects[ref.tri_obj[tri[k]]].node
         p = o[i] + dep * u[i]
-        edge = validate._edge_distance(T[None], p[None])[0]
+        edge = edge_distance(T[None], p[None])[0]
         if edge < validate.AMBIG["edge_rel"] * size or abs(float(nrm @ u[i])) < 1e-5:
             amb[i] = True
     return depth, normal, node, amb, f64, t_rt
@@ -238,6 +239,17 @@ def timed(fn, repeat):
     return best, res
 
 
+def time_embree(tris, o, u, repeat):
+    """Embree on the soup: (build seconds, timed by a first one-ray query; best query seconds
+    over `repeat` runs; depths of that query)."""
+    inter = embree_intersector(tris)
+    tb0 = time.perf_counter()
+    inter.intersects_id(o[:1], u[:1], multiple_hits=False)
+    tbuild = time.perf_counter() - tb0
+    te, (de, _) = timed(lambda: embree_nearest(inter, o, u), repeat)
+    return tbuild, te, de
+
+
 def errors(refd, depth, mask):
     """p99/max relative depth error on rays both hit (reference non-ambiguous, in mask)."""
     ok = mask & ~refd["ambiguous"]
@@ -271,7 +283,7 @@ def mp_errors(refd, depth):
 def run_scene(label, path, args, raycast, tmp: Path, log):
     rng = np.random.default_rng(1)
     ref = validate.load_reference(path)
-    o, u, _ = validate.make_rays(ref, args.rays, seed=0)
+    o, u, _ = make_rays(ref, args.rays, seed=0)
     big_mesh = len(ref.tris) > 1000
     n_mesh = min(args.rays, args.mesh_ref_rays) if big_mesh else args.rays
     mesh_idx = np.arange(n_mesh)
@@ -297,8 +309,7 @@ def run_scene(label, path, args, raycast, tmp: Path, log):
     def raycast_run(scene_file, name, family, extra=None):
         best_trace, best_wall, res = math.inf, math.inf, None
         for k in range(args.repeat):
-            res = tc.run_raycast(raycast, scene_file, o, u, tmp / f"rc_{label}", threads=1,
-                                 aov="depth")
+            res = run_rays(raycast, scene_file, o, u, tmp / f"rc_{label}", threads=1, aov="depth")
             best_trace = min(best_trace, res["sidecar"]["timings"]["trace"])
             best_wall = min(best_wall, res["wall"])
             if res["wall"] > 5.0:  # long runs: one is enough (and keeps the script short)
@@ -345,19 +356,7 @@ def run_scene(label, path, args, raycast, tmp: Path, log):
             extra = {"segments": n, "triangles": int(len(tris))}
             raycast_run(g, f"raycast tess {n}", "raycast tessellated", extra)
             # embree: build on a first call, then time the query
-            from trimesh.ray.ray_pyembree import RayMeshIntersector
-            inter = RayMeshIntersector(tc._mesh(tris))
-            tb0 = time.perf_counter()
-            inter.intersects_id(o[:1], u[:1], multiple_hits=False)
-            tbuild = time.perf_counter() - tb0
-
-            def q_embree():
-                it, ir, loc = inter.intersects_id(o, u, multiple_hits=False,
-                                                  return_locations=True)
-                d = np.full(len(o), np.inf)
-                d[ir] = np.linalg.norm(loc - o[ir], axis=1)
-                return d
-            te, de = timed(q_embree, args.repeat)
+            tbuild, te, de = time_embree(tris, o, u, args.repeat)
             add(f"embree tess {n}", "trimesh+embree tessellated", te / len(o), de,
                 {**extra, "build_s": tbuild})
             if n <= args.f64_max_segments:
@@ -365,12 +364,12 @@ def run_scene(label, path, args, raycast, tmp: Path, log):
                 sub = np.zeros(len(o), bool)
                 sub[:k] = True
                 from trimesh.ray.ray_triangle import RayMeshIntersector as RT
-                rt = RT(tc._mesh(tris))
+                rt = RT(tri_mesh(tris))
                 tb0 = time.perf_counter()
                 rt.intersects_id(o[:1], u[:1], multiple_hits=False)
                 tbuild = time.perf_counter() - tb0
                 t0 = time.perf_counter()
-                d64, _, _ = tc.trace_ray_triangle(tris, o[:k], u[:k])
+                d64, _, _ = trace_ray_triangle(tris, o[:k], u[:k])
                 trt = time.perf_counter() - t0
                 dd = np.full(len(o), np.inf)
                 dd[:k] = d64
@@ -383,18 +382,7 @@ def run_scene(label, path, args, raycast, tmp: Path, log):
         sub[:k] = True
         add("ray_triangle (mesh)", "trimesh ray_triangle", refd["ray_triangle_seconds"] / k,
             refd["mesh_f64"], {"rays_timed": k, "triangles": int(len(ref.tris))}, sub=sub)
-        from trimesh.ray.ray_pyembree import RayMeshIntersector
-        inter = RayMeshIntersector(tc._mesh(ref.tris))
-        tb0 = time.perf_counter()
-        inter.intersects_id(o[:1], u[:1], multiple_hits=False)
-        tbuild = time.perf_counter() - tb0
-
-        def q_embree():
-            it, ir, loc = inter.intersects_id(o, u, multiple_hits=False, return_locations=True)
-            d = np.full(len(o), np.inf)
-            d[ir] = np.linalg.norm(loc - o[ir], axis=1)
-            return d
-        te, de = timed(q_embree, args.repeat)
+        tbuild, te, de = time_embree(ref.tris, o, u, args.repeat)
         add("embree (mesh)", "trimesh+embree", te / len(o), de,
             {"build_s": tbuild, "triangles": int(len(ref.tris))})
     info = {"scene": label, "path": str(path.relative_to(ROOT)) if path.is_relative_to(ROOT)
@@ -482,22 +470,6 @@ def plot(rows, infos, png):
     fig.tight_layout()
     fig.savefig(png, dpi=130)
     plt.close(fig)
-
-
-def machine():
-    model = "?"
-    mhz = None
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name") and model == "?":
-                model = line.split(":", 1)[1].strip()
-            if line.startswith("cpu MHz") and mhz is None:
-                mhz = float(line.split(":", 1)[1])
-    except OSError:
-        pass
-    return {"nproc": os.cpu_count(), "cpu": model, "mhz": mhz,
-            "loadavg": os.getloadavg() if hasattr(os, "getloadavg") else None,
-            "python": platform.python_version(), "numpy": np.__version__}
 
 
 def binary_id(path: Path):
@@ -721,7 +693,7 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog=prog("error-vs-time"), description=__doc__.split("\n")[0])
     ap.add_argument("--rays", type=int, default=20000)
     ap.add_argument("--segments", nargs="+", type=int, default=[16, 32, 64, 128, 256, 512])
     ap.add_argument("--f64-rays", type=int, default=100)
@@ -737,10 +709,7 @@ def main(argv=None):
     if a.quick:
         a.rays, a.segments, a.f64_rays, a.mesh_ref_rays, a.mp_rays, a.repeat = \
             2000, [16, 64], 30, 60, 20, 1
-    raycast = Path(a.raycast) if a.raycast else tc.default_raycast()
-    if not raycast.exists():
-        print(f"raycast binary not found: {raycast}", file=sys.stderr)
-        return 1
+    raycast = raycast_or_exit(a.raycast, "error-vs-time")
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     mach = machine()
@@ -775,6 +744,3 @@ def main(argv=None):
     print(f"wrote {out / 'error_vs_time.md'}, {png} ({elapsed:.0f} s)")
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Write the USD fixtures under fixtures/usd/ with usd-core (pxr) and their expected answers.
 
 Run with the repo's venv (usd-core 26.11, numpy):
@@ -29,23 +28,21 @@ How the answers are made:
 
 from __future__ import annotations
 
+import argparse
 import base64
 import json
 import math
 import re
-import shutil
-import struct
-import sys
 from pathlib import Path
 
 import numpy as np
 from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from make_quadric_fixtures import tri_hit  # noqa: E402
-from usd_counts import GPRIMS, drawn_prims, hidden_purpose, mesh_triangles  # noqa: E402
+from .cli import prog
+from .make_quadric_fixtures import tri_hit
+from .paths import ROOT
+from .usd_stage import flatten
 
-ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "fixtures" / "usd"
 EXPECTED: dict[str, list] = {}
 
@@ -247,7 +244,6 @@ def export_gprims():
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
     UsdGeom.Xform.Define(stage, "/World")
     rays = []
-    column = 0
 
     def place(prim, centre):
         UsdGeom.Xformable(prim).AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(*centre))
@@ -521,85 +517,6 @@ def export_composition():
                                         quadric_at=("/World/Quadric", [0, 14, 0]))
 
 
-def flatten(stage, gprim=None):
-    """(object name, world triangles) drawn, by raycast's rules, with usd-core placing them.
-
-    Meshes only by default. `gprim`, when given, is called as `gprim(prim, world matrix,
-    object name)` for each drawn intrinsic gprim (usd_counts.GPRIMS), in place and in
-    point-instancer prototypes, and returns a list of (object name, triangles) to add
-    (tools/validate_usd.py tessellates them). Meshes whose topology raycast rejects
-    (usd_counts.mesh_triangles is None) give no triangles."""
-    objects = []
-
-    def mesh_tris(prim, matrix):
-        if mesh_triangles(prim) is None:
-            return []
-        mesh = UsdGeom.Mesh(prim)
-        points = mesh.GetPointsAttr().Get()
-        counts = mesh.GetFaceVertexCountsAttr().Get()
-        indices = mesh.GetFaceVertexIndicesAttr().Get()
-        if not points or not counts:
-            return []
-        left = mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded
-        flip = matrix.GetDeterminant() < 0
-        world = [np.array(matrix.Transform(Gf.Vec3d(p))) for p in points]
-        tris, start = [], 0
-        for c in counts:
-            face = indices[start:start + c]
-            start += c
-            for k in range(1, c - 1):
-                t = [world[face[0]], world[face[k]], world[face[k + 1]]]
-                if left != flip:
-                    t = [t[0], t[2], t[1]]
-                tris.append(t)
-        return tris
-
-    excluded = set()
-    for prim in drawn_prims(stage.GetPseudoRoot(), excluded):
-        if hidden_purpose(prim):
-            continue
-        if prim.IsA(UsdGeom.Mesh):
-            matrix = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
-            objects.append((str(prim.GetPath()), mesh_tris(prim, matrix)))
-        elif gprim is not None and prim.GetTypeName() in GPRIMS:
-            matrix = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
-            objects += gprim(prim, matrix, str(prim.GetPath()))
-        elif prim.IsA(UsdGeom.PointInstancer):
-            instancer = UsdGeom.PointInstancer(prim)
-            targets = instancer.GetPrototypesRel().GetTargets()
-            excluded.update(t for t in targets if t.HasPrefix(prim.GetPath()))
-            transforms = instancer.ComputeInstanceTransformsAtTime(
-                Usd.TimeCode.Default(), Usd.TimeCode.Default(),
-                UsdGeom.PointInstancer.IncludeProtoXform, UsdGeom.PointInstancer.IgnoreMask)
-            mask = instancer.ComputeMaskAtTime(Usd.TimeCode.Default())
-            indices = instancer.GetProtoIndicesAttr().Get()
-            parent = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
-            for i, (m, k) in enumerate(zip(transforms, indices)):
-                if mask and not mask[i]:
-                    continue
-                proto = stage.GetPrimAtPath(targets[k])
-                tris, extra = [], []
-                for sub in drawn_prims(proto, set()):
-                    is_gprim = gprim is not None and sub.GetTypeName() in GPRIMS
-                    if (sub.IsA(UsdGeom.Mesh) or is_gprim) and not hidden_purpose(sub):
-                        # the prototype root's own transform is in m (IncludeProtoXform);
-                        # below it, the path from the root
-                        below = Gf.Matrix4d(1)
-                        p = sub
-                        while p.GetPath() != proto.GetPath():
-                            below = below * UsdGeom.Xformable(p).GetLocalTransformation()
-                            p = p.GetParent()
-                        world = below * m * parent if sub != proto else m * parent
-                        if is_gprim:
-                            relative = str(sub.GetPath())[len(str(proto.GetPath())):]
-                            extra += gprim(sub, world, f"{prim.GetPath()}[{i}]{relative}")
-                        else:
-                            tris += mesh_tris(sub, world)
-                objects.append((f"{prim.GetPath()}[{i}]", tris))
-                objects += extra
-    return objects
-
-
 def intersect(origin, direction, objects):
     """Nearest hit over all triangles: (name, t, triangle index, unit normal) or None."""
     best = None
@@ -682,7 +599,9 @@ def export_bad():
     print(f"wrote {len(bad)} files in fixtures/usd/bad/")
 
 
-def main():
+def main(argv=None):
+    argparse.ArgumentParser(prog=prog("usd-fixtures"),
+                            description=__doc__.split("\n\n")[0]).parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)
     export_gltf_scenes()
     export_gprims()
@@ -692,7 +611,4 @@ def main():
     text = json.dumps(EXPECTED, indent=1, sort_keys=True, allow_nan=False)
     (OUT / "expected_rays.json").write_text(text + "\n")
     print(f"wrote fixtures/usd/expected_rays.json ({sum(map(len, EXPECTED.values()))} rays)")
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+    return 0

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Write the hand-checkable test fixtures under fixtures/.
 
 Run with the repo's venv:  .venv/bin/python tools/make_fixtures.py
@@ -17,19 +16,35 @@ are kept as they are.
 
 from __future__ import annotations
 
-import base64
-import hashlib
-import json
+import argparse
 import math
 import os
-import shutil
 import struct
 import sys
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[2]
+from .cli import prog
+from .fixture_files import FixtureFiles
+from .gltf_writer import (
+    ARRAY_BUFFER,
+    FLOAT,
+    LINES,
+    POINTS,
+    SHORT,
+    TRIANGLE_FAN,
+    TRIANGLE_STRIP,
+    TRIANGLES,
+    UNSIGNED_BYTE,
+    UNSIGNED_INT,
+    UNSIGNED_SHORT,
+    Gltf,
+    fminmax,
+    iminmax,
+)
+from .paths import ROOT
+
 FIX = ROOT / "fixtures"
 GLTF_DIR = FIX / "gltf"
 OBJ_DIR = FIX / "obj"
@@ -39,223 +54,12 @@ SHARED_ASSETS = Path(os.environ.get("RAYCAST_SHARED_ASSETS", ROOT.parent / "shar
 
 GENERATOR = "raycast tools/make_fixtures.py"
 
-# glTF enums
-BYTE, UNSIGNED_BYTE, SHORT, UNSIGNED_SHORT, UNSIGNED_INT, FLOAT = 5120, 5121, 5122, 5123, 5125, 5126
-ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
-POINTS, LINES, TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN = 0, 1, 4, 5, 6
-
-NP_TYPE = {
-    BYTE: np.int8,
-    UNSIGNED_BYTE: np.uint8,
-    SHORT: np.int16,
-    UNSIGNED_SHORT: np.uint16,
-    UNSIGNED_INT: np.uint32,
-    FLOAT: np.float32,
-}
-
 # sin(45 deg) == cos(45 deg) in double precision; the quaternion (0, S, 0, S)
 # is a 90 degree rotation about +Y: it maps +X -> -Z and +Z -> +X.
 S45 = math.sqrt(0.5)
 ROT_Y90 = [0.0, S45, 0.0, S45]
 
-written: list[Path] = []
-
-
-# --------------------------------------------------------------------------
-# output helpers
-
-
-def write_bytes(path: Path, data: bytes) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if path.exists() and path.read_bytes() == data:
-        status = "same"
-    else:
-        path.write_bytes(data)
-        status = "wrote"
-    written.append(path)
-    print(f"  {status:5} {path.relative_to(ROOT)} ({len(data)} bytes)")
-
-
-def json_text(value, indent: int = 0) -> str:
-    """json.dumps(indent=2), except that lists of plain numbers/strings stay on
-    one line. Python's float repr is the shortest string that round-trips the
-    double, so transforms keep full double precision (see far.gltf)."""
-    pad, inner = "  " * indent, "  " * (indent + 1)
-    if isinstance(value, dict) and value:
-        items = [f"{inner}{json.dumps(k)}: {json_text(v, indent + 1)}" for k, v in value.items()]
-        return "{\n" + ",\n".join(items) + "\n" + pad + "}"
-    if isinstance(value, list) and value and any(isinstance(v, (dict, list)) for v in value):
-        items = [inner + json_text(v, indent + 1) for v in value]
-        return "[\n" + ",\n".join(items) + "\n" + pad + "]"
-    return json.dumps(value, allow_nan=False)
-
-
-def json_bytes(doc: dict) -> bytes:
-    return (json_text(doc) + "\n").encode("utf-8")
-
-
-def write_json(path: Path, doc: dict) -> None:
-    write_bytes(path, json_bytes(doc))
-
-
-def write_npy(path: Path, array: np.ndarray) -> None:
-    import io
-
-    buf = io.BytesIO()
-    np.save(buf, array, allow_pickle=False)
-    write_bytes(path, buf.getvalue())
-
-
-def pad4(data: bytes, fill: bytes = b"\0") -> bytes:
-    return data + fill * ((-len(data)) % 4)
-
-
-# --------------------------------------------------------------------------
-# a tiny glTF writer
-
-
-class Gltf:
-    """Accumulates one binary buffer plus the JSON that describes it."""
-
-    def __init__(self) -> None:
-        self.bin = bytearray()
-        self.doc: dict = {
-            "asset": {"version": "2.0", "generator": GENERATOR},
-            "extensionsUsed": [],
-            "extensionsRequired": [],
-            "scene": 0,
-            "scenes": [],
-            "nodes": [],
-            "meshes": [],
-            "cameras": [],
-            "accessors": [],
-            "bufferViews": [],
-            "buffers": [],
-        }
-
-    # -- buffer data -------------------------------------------------------
-    def view(self, data: bytes, target: int | None = None, stride: int | None = None) -> int:
-        self.bin += b"\0" * ((-len(self.bin)) % 4)
-        view = {"buffer": 0, "byteOffset": len(self.bin), "byteLength": len(data)}
-        if stride is not None:
-            view["byteStride"] = stride
-        if target is not None:
-            view["target"] = target
-        self.bin += data
-        self.doc["bufferViews"].append(view)
-        return len(self.doc["bufferViews"]) - 1
-
-    def accessor(self, view: int | None, ctype: int, count: int, atype: str, **extra) -> int:
-        acc = {}
-        if view is not None:
-            acc["bufferView"] = view
-        acc.update({"componentType": ctype, "count": count, "type": atype})
-        acc.update(extra)
-        self.doc["accessors"].append(acc)
-        return len(self.doc["accessors"]) - 1
-
-    def positions(self, pts) -> int:
-        """float32 VEC3 positions, tightly packed, with min/max."""
-        a = np.asarray(pts, dtype=np.float32).reshape(-1, 3)
-        v = self.view(a.tobytes(), ARRAY_BUFFER)
-        return self.accessor(v, FLOAT, len(a), "VEC3", min=fminmax(a, 0), max=fminmax(a, 1))
-
-    def indices(self, idx, ctype: int = UNSIGNED_SHORT) -> int:
-        a = np.asarray(idx, dtype=NP_TYPE[ctype]).reshape(-1)
-        v = self.view(a.tobytes(), ELEMENT_ARRAY_BUFFER)
-        return self.accessor(v, ctype, len(a), "SCALAR")
-
-    # -- scene structure ---------------------------------------------------
-    def mesh(self, name: str, primitives: list[dict]) -> int:
-        self.doc["meshes"].append({"name": name, "primitives": primitives})
-        return len(self.doc["meshes"]) - 1
-
-    def node(self, name: str, **props) -> int:
-        n = {"name": name}
-        n.update(props)
-        self.doc["nodes"].append(n)
-        return len(self.doc["nodes"]) - 1
-
-    def scene(self, nodes: list[int], name: str | None = None) -> int:
-        s = {"name": name} if name else {}
-        s["nodes"] = nodes
-        self.doc["scenes"].append(s)
-        return len(self.doc["scenes"]) - 1
-
-    def perspective(self, name: str, yfov: float, aspect: float | None = None, znear: float = 0.1,
-                    zfar: float | None = None) -> int:
-        p = {}
-        if aspect is not None:
-            p["aspectRatio"] = aspect
-        p["yfov"] = yfov
-        p["znear"] = znear
-        if zfar is not None:
-            p["zfar"] = zfar
-        self.doc["cameras"].append({"name": name, "type": "perspective", "perspective": p})
-        return len(self.doc["cameras"]) - 1
-
-    def orthographic(self, name: str, xmag: float, ymag: float, znear: float, zfar: float) -> int:
-        o = {"xmag": xmag, "ymag": ymag, "znear": znear, "zfar": zfar}
-        self.doc["cameras"].append({"name": name, "type": "orthographic", "orthographic": o})
-        return len(self.doc["cameras"]) - 1
-
-    def require(self, ext: str) -> None:
-        self.doc["extensionsUsed"].append(ext)
-        self.doc["extensionsRequired"].append(ext)
-
-    # -- output ------------------------------------------------------------
-    def finish(self, uri: str | None, byte_length: int | None = None, **top) -> tuple[dict, bytes]:
-        """Return (json document, binary buffer). uri None = GLB BIN chunk,
-        "data" = base64 data URI, else the external file name. `top` replaces
-        top-level entries of the document (in place, before empty arrays are dropped)."""
-        data = bytes(self.bin)
-        doc = json.loads(json.dumps(self.doc))  # deep copy
-        doc.update(json.loads(json.dumps(top)))
-        if data:
-            buf = {"byteLength": len(data) if byte_length is None else byte_length}
-            if uri == "data":
-                buf["uri"] = "data:application/octet-stream;base64," + base64.b64encode(data).decode("ascii")
-            elif uri is not None:
-                buf["uri"] = uri
-            doc["buffers"] = [buf]
-        # glTF arrays must not be empty when present
-        for key in [k for k, v in doc.items() if isinstance(v, list) and not v]:
-            del doc[key]
-        return doc, data
-
-    def write_embedded(self, path: Path) -> None:
-        doc, _ = self.finish("data")
-        write_json(path, doc)
-
-    def write_external(self, path: Path, bin_name: str) -> None:
-        doc, data = self.finish(bin_name)
-        write_json(path, doc)
-        write_bytes(path.parent / bin_name, data)
-
-    def glb_bytes(self) -> bytes:
-        doc, data = self.finish(None)
-        return glb(doc, data)
-
-
-def glb(doc: dict, data: bytes) -> bytes:
-    js = pad4(json.dumps(doc, separators=(",", ":"), allow_nan=False).encode("utf-8"), b" ")
-    out = struct.pack("<II", len(js), 0x4E4F534A) + js  # "JSON"
-    if data:
-        bn = pad4(data)
-        out += struct.pack("<II", len(bn), 0x004E4942) + bn  # "BIN\0"
-    return struct.pack("<III", 0x46546C67, 2, 12 + len(out)) + out  # "glTF"
-
-
-def fminmax(a: np.ndarray, which: int) -> list[float]:
-    a = np.asarray(a, dtype=np.float64)
-    a = a[~np.isnan(a).any(axis=1)]
-    v = a.min(axis=0) if which == 0 else a.max(axis=0)
-    return [float(x) for x in v]
-
-
-def iminmax(a: np.ndarray, which: int) -> list[int]:
-    v = a.min(axis=0) if which == 0 else a.max(axis=0)
-    return [int(x) for x in v]
+FILES = FixtureFiles(ROOT)
 
 
 # --------------------------------------------------------------------------
@@ -317,7 +121,7 @@ def add_quad_mesh(g: Gltf, name: str, z: float = 0.0, ctype: int = UNSIGNED_SHOR
 
 def make_cube() -> None:
     def build() -> Gltf:
-        g = Gltf()
+        g = Gltf(GENERATOR)
         m = add_cube_mesh(g)
         c = g.perspective("cam", yfov=0.5, aspect=1.0, znear=0.1)
         n0 = g.node("cube", mesh=m)
@@ -325,20 +129,22 @@ def make_cube() -> None:
         g.scene([n0, n1])
         return g
 
-    build().write_external(GLTF_DIR / "cube.gltf", "cube.bin")
-    write_bytes(GLTF_DIR / "cube.glb", build().glb_bytes())
-    build().write_embedded(GLTF_DIR / "cube_embedded.gltf")
+    doc, data = build().finish("cube.bin")
+    FILES.write_json(GLTF_DIR / "cube.gltf", doc)
+    FILES.write_bytes(GLTF_DIR / "cube.bin", data)
+    FILES.write_bytes(GLTF_DIR / "cube.glb", build().glb_bytes())
+    FILES.write_json(GLTF_DIR / "cube_embedded.gltf", build().embedded())
 
 
 def make_plane() -> None:
-    g = Gltf()
+    g = Gltf(GENERATOR)
     m = add_quad_mesh(g, "plane", ctype=UNSIGNED_INT)
     g.scene([g.node("plane", mesh=m)])
-    g.write_embedded(GLTF_DIR / "plane.gltf")
+    FILES.write_json(GLTF_DIR / "plane.gltf", g.embedded())
 
 
 def make_modes() -> None:
-    g = Gltf()
+    g = Gltf(GENERATOR)
     # TRIANGLES, non-indexed: the quad's two triangles as 6 vertices.
     tris = g.mesh("tris", [{"attributes": {"POSITION": g.positions(QUAD_V[QUAD_F.reshape(-1)])},
                             "mode": TRIANGLES}])
@@ -362,11 +168,11 @@ def make_modes() -> None:
         g.node("lines", mesh=lines, translation=[0.0, -3.0, 0.0]),
     ]
     g.scene(nodes)
-    g.write_embedded(GLTF_DIR / "modes.gltf")
+    FILES.write_json(GLTF_DIR / "modes.gltf", g.embedded())
 
 
 def make_sparse() -> None:
-    g = Gltf()
+    g = Gltf(GENERATOR)
     base = np.asarray(QUAD_V, np.float32)
     final = base.copy()
     final[1] = [1, -1, 1]
@@ -386,11 +192,11 @@ def make_sparse() -> None:
     idx = g.indices(QUAD_F, UNSIGNED_SHORT)
     m = g.mesh("sparse", [{"attributes": {"POSITION": pos}, "indices": idx}])
     g.scene([g.node("sparse", mesh=m)])
-    g.write_embedded(GLTF_DIR / "sparse.gltf")
+    FILES.write_json(GLTF_DIR / "sparse.gltf", g.embedded())
 
 
 def make_quantized() -> None:
-    g = Gltf()
+    g = Gltf(GENERATOR)
     g.require("KHR_mesh_quantization")
     unit = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.int64)
 
@@ -415,11 +221,11 @@ def make_quantized() -> None:
     n0 = g.node("short", mesh=meshes[0], translation=[-1.0, -1.0, 0.0], scale=[2.0, 2.0, 1.0])
     n1 = g.node("ubyte", mesh=meshes[1], translation=[2.0, -1.0, 0.0], scale=[2.0, 2.0, 1.0])
     g.scene([n0, n1])
-    g.write_embedded(GLTF_DIR / "quantized.gltf")
+    FILES.write_json(GLTF_DIR / "quantized.gltf", g.embedded())
 
 
 def make_instances() -> None:
-    g = Gltf()
+    g = Gltf(GENERATOR)
     m = add_cube_mesh(g, "half_cube", 0.5)
     a = g.node("a", mesh=m, translation=[3.0, 0.0, 0.0])
     b = g.node("b", mesh=m, rotation=ROT_Y90, translation=[-3.0, 0.0, 0.0])
@@ -430,22 +236,22 @@ def make_instances() -> None:
     g.doc["nodes"][c]["children"] = [d]
     mirror = g.node("mirror", mesh=m, translation=[0.0, -3.0, 0.0], scale=[-1.0, 1.0, 1.0])
     g.scene([a, b, c, mirror])
-    g.write_embedded(GLTF_DIR / "instances.gltf")
+    FILES.write_json(GLTF_DIR / "instances.gltf", g.embedded())
 
 
 def make_scenes() -> None:
-    g = Gltf()
+    g = Gltf(GENERATOR)
     m = add_quad_mesh(g, "quad")
     n0 = g.node("first_quad", mesh=m)
     n1 = g.node("second_quad", mesh=m, translation=[0.0, 0.0, -2.0])
     g.scene([n0], "first")
     g.scene([n1], "second")
     g.doc["scene"] = 1
-    g.write_embedded(GLTF_DIR / "scenes.gltf")
+    FILES.write_json(GLTF_DIR / "scenes.gltf", g.embedded())
 
 
 def make_cameras() -> None:
-    g = Gltf()
+    g = Gltf(GENERATOR)
     m = add_cube_mesh(g)
     cp = g.perspective("persp", yfov=0.8, aspect=2.0, znear=0.1)
     co = g.orthographic("ortho", xmag=2.0, ymag=1.0, znear=0.1, zfar=100.0)
@@ -455,7 +261,7 @@ def make_cameras() -> None:
         g.node("ortho", camera=co, rotation=ROT_Y90, translation=[5.0, 0.0, 0.0]),
     ]
     g.scene(nodes)
-    g.write_embedded(GLTF_DIR / "cameras.gltf")
+    FILES.write_json(GLTF_DIR / "cameras.gltf", g.embedded())
 
 
 FAR = (10000000.25, -3000000.5, 12345678.125)
@@ -464,13 +270,13 @@ FAR = (10000000.25, -3000000.5, 12345678.125)
 def make_far() -> None:
     # x and z are not representable in f32 (they round to 10000000 and 12345678); y is.
     assert [float(np.float32(x)) == x for x in FAR] == [False, True, False]
-    g = Gltf()
+    g = Gltf(GENERATOR)
     m = add_cube_mesh(g)
     c = g.perspective("cam", yfov=0.5, aspect=1.0, znear=0.1)
     n0 = g.node("cube", mesh=m, translation=list(FAR))
     n1 = g.node("cam", camera=c, translation=[FAR[0], FAR[1], FAR[2] + 5.0])
     g.scene([n0, n1])
-    g.write_embedded(GLTF_DIR / "far.gltf")
+    FILES.write_json(GLTF_DIR / "far.gltf", g.embedded())
 
 
 # trap.gltf constants (all exact in f32)
@@ -501,7 +307,7 @@ def corner_filler() -> tuple[np.ndarray, np.ndarray]:
 
 
 def make_trap() -> None:
-    g = Gltf()
+    g = Gltf(GENERATOR)
     big_v = np.array([[-9.5, -0.5, trap_z(-9.5)], [9.5, 0.25, trap_z(9.5)], [-9.5, 1.0, trap_z(-9.5)]])
     # counter-clockwise seen from +Z: normal points up (+Z side, tilted slightly toward -X)
     big = g.mesh("big", [{"attributes": {"POSITION": g.positions(big_v)}}])
@@ -514,7 +320,7 @@ def make_trap() -> None:
                                  "indices": g.indices(ff, UNSIGNED_SHORT)}])
     nodes = [g.node("big", mesh=big), g.node("near", mesh=near), g.node("corners", mesh=filler)]
     g.scene(nodes)
-    g.write_embedded(GLTF_DIR / "trap.gltf")
+    FILES.write_json(GLTF_DIR / "trap.gltf", g.embedded())
 
 
 # --------------------------------------------------------------------------
@@ -559,16 +365,12 @@ f -4 -2 -1
 
 
 def make_obj() -> None:
-    write_bytes(OBJ_DIR / "two_objects.obj", TWO_OBJECTS_OBJ.encode())
-    write_bytes(OBJ_DIR / "groups.obj", GROUPS_OBJ.encode())
+    FILES.write_bytes(OBJ_DIR / "two_objects.obj", TWO_OBJECTS_OBJ.encode())
+    FILES.write_bytes(OBJ_DIR / "groups.obj", GROUPS_OBJ.encode())
 
 
 # --------------------------------------------------------------------------
 # bad inputs
-
-
-def data_uri(data: bytes) -> str:
-    return "data:application/octet-stream;base64," + base64.b64encode(data).decode("ascii")
 
 
 def plane_doc(g: Gltf) -> Gltf:
@@ -579,44 +381,44 @@ def plane_doc(g: Gltf) -> Gltf:
 
 def make_bad() -> None:
     # truncated.glb: header claims the full length, file ends halfway through the JSON chunk
-    full = Gltf()
+    full = Gltf(GENERATOR)
     m = add_cube_mesh(full)
     full.scene([full.node("cube", mesh=m)])
     data = full.glb_bytes()
     json_len = struct.unpack_from("<I", data, 12)[0]
-    write_bytes(BAD_DIR / "truncated.glb", data[: 20 + json_len // 2])
+    FILES.write_bytes(BAD_DIR / "truncated.glb", data[: 20 + json_len // 2])
 
     # bad_index.gltf: 4 vertices, an index of 99
-    g = Gltf()
+    g = Gltf(GENERATOR)
     pos = g.positions(QUAD_V)
     idx = g.indices([0, 1, 2, 0, 2, 99], UNSIGNED_SHORT)
     m = g.mesh("bad_index", [{"attributes": {"POSITION": pos}, "indices": idx}])
     g.scene([g.node("bad_index", mesh=m)])
-    g.write_embedded(BAD_DIR / "bad_index.gltf")
+    FILES.write_json(BAD_DIR / "bad_index.gltf", g.embedded())
 
     # nan_position.gltf: vertex 2 is (NaN, 1, 0); min/max computed from the other vertices
-    g = Gltf()
+    g = Gltf(GENERATOR)
     v = QUAD_V.copy()
     v[2, 0] = np.nan
     pos = g.positions(v)
     idx = g.indices(QUAD_F, UNSIGNED_SHORT)
     m = g.mesh("nan_position", [{"attributes": {"POSITION": pos}, "indices": idx}])
     g.scene([g.node("nan_position", mesh=m)])
-    g.write_embedded(BAD_DIR / "nan_position.gltf")
+    FILES.write_json(BAD_DIR / "nan_position.gltf", g.embedded())
 
     # missing_buffer.gltf: the cube, external buffer that does not exist
-    g = Gltf()
+    g = Gltf(GENERATOR)
     m = add_cube_mesh(g)
     g.scene([g.node("cube", mesh=m)])
     doc, _ = g.finish("missing_buffer.bin")
-    write_json(BAD_DIR / "missing_buffer.gltf", doc)
+    FILES.write_json(BAD_DIR / "missing_buffer.gltf", doc)
 
     # not_json.gltf
-    write_bytes(BAD_DIR / "not_json.gltf",
+    FILES.write_bytes(BAD_DIR / "not_json.gltf",
                 b"this is not a glTF file {\n  \"asset\": oops\n}}}\n\x01\x02\x03 garbage\n")
 
     # draco_required.gltf: Draco-compressed primitive (payload is not real Draco data)
-    g = Gltf()
+    g = Gltf(GENERATOR)
     g.require("KHR_draco_mesh_compression")
     payload = g.view(b"DRACO\x02\x02\x01\x01\x00\x00\x00" + bytes(20))
     pos = g.accessor(None, FLOAT, 4, "VEC3", min=[-1.0, -1.0, 0.0], max=[1.0, 1.0, 0.0])
@@ -625,10 +427,10 @@ def make_bad() -> None:
                           "extensions": {"KHR_draco_mesh_compression": {
                               "bufferView": payload, "attributes": {"POSITION": 0}}}}])
     g.scene([g.node("draco", mesh=m)])
-    g.write_embedded(BAD_DIR / "draco_required.gltf")
+    FILES.write_json(BAD_DIR / "draco_required.gltf", g.embedded())
 
     # meshopt_required.gltf: meshopt-compressed bufferView (payload is not real meshopt data)
-    g = Gltf()
+    g = Gltf(GENERATOR)
     g.require("EXT_meshopt_compression")
     g.bin += b"\xa0" + bytes(47)  # 48 bytes of "compressed" data
     g.doc["bufferViews"].append({
@@ -640,26 +442,26 @@ def make_bad() -> None:
     pos = g.accessor(0, FLOAT, 4, "VEC3", min=[-1.0, -1.0, 0.0], max=[1.0, 1.0, 0.0])
     m = g.mesh("meshopt", [{"attributes": {"POSITION": pos}, "mode": TRIANGLE_FAN}])
     g.scene([g.node("meshopt", mesh=m)])
-    g.write_embedded(BAD_DIR / "meshopt_required.gltf")
+    FILES.write_json(BAD_DIR / "meshopt_required.gltf", g.embedded())
 
     # buffer_too_short.gltf: non-indexed POSITION with count 6 (72 bytes) over a 48-byte view/buffer
-    g = Gltf()
+    g = Gltf(GENERATOR)
     v = g.view(np.asarray(QUAD_V, np.float32).tobytes(), ARRAY_BUFFER)
     pos = g.accessor(v, FLOAT, 6, "VEC3", min=[-1.0, -1.0, 0.0], max=[1.0, 1.0, 0.0])
     m = g.mesh("too_short", [{"attributes": {"POSITION": pos}}])
     g.scene([g.node("too_short", mesh=m)])
-    g.write_embedded(BAD_DIR / "buffer_too_short.gltf")
+    FILES.write_json(BAD_DIR / "buffer_too_short.gltf", g.embedded())
 
     # node_cycle.gltf: node 0 -> node 1 -> node 0
-    g = Gltf()
+    g = Gltf(GENERATOR)
     m = add_quad_mesh(g, "plane")
     n0 = g.node("loop_a", mesh=m, children=[1])
     g.node("loop_b", mesh=m, children=[0], translation=[0.0, 0.0, -1.0])
     g.scene([n0])
-    g.write_embedded(BAD_DIR / "node_cycle.gltf")
+    FILES.write_json(BAD_DIR / "node_cycle.gltf", g.embedded())
 
     # empty.gltf: valid, one scene with one node that has no mesh (no meshes at all)
-    write_json(BAD_DIR / "empty.gltf", {
+    FILES.write_json(BAD_DIR / "empty.gltf", {
         "asset": {"version": "2.0", "generator": GENERATOR},
         "scene": 0,
         "scenes": [{"name": "empty", "nodes": [0]}],
@@ -667,11 +469,11 @@ def make_bad() -> None:
     })
 
     # rays with the wrong shape / a NaN
-    write_npy(BAD_DIR / "bad_rays.npy", np.arange(15, dtype=np.float64).reshape(3, 5))
-    write_npy(BAD_DIR / "nan_rays.npy", np.array([[0, 0, 5, 0, 0, -1], [0, 0, 5, np.nan, 0, -1]], np.float64))
+    FILES.write_npy(BAD_DIR / "bad_rays.npy", np.arange(15, dtype=np.float64).reshape(3, 5))
+    FILES.write_npy(BAD_DIR / "nan_rays.npy", np.array([[0, 0, 5, 0, 0, -1], [0, 0, 5, np.nan, 0, -1]], np.float64))
 
     # garbage.obj: three vertices, a face that references vertex 100
-    write_bytes(BAD_DIR / "garbage.obj", b"o broken\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 100\n")
+    FILES.write_bytes(BAD_DIR / "garbage.obj", b"o broken\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 100\n")
 
 
 # --------------------------------------------------------------------------
@@ -737,13 +539,13 @@ def copy_assets() -> None:
         dst = ASSET_DIR / Path(rel).name
         if src.is_file():
             data = src.read_bytes()
-            write_bytes(dst, data)
+            FILES.write_bytes(dst, data)
         elif dst.is_file():
-            written.append(dst)
+            FILES.kept(dst)
             print(f"  kept  {dst.relative_to(ROOT)} (source {src} missing)")
         else:
             missing.append(rel)
-    write_bytes(ASSET_DIR / "LICENSES.md", LICENSES_MD.encode())
+    FILES.write_bytes(ASSET_DIR / "LICENSES.md", LICENSES_MD.encode())
     if missing:
         sys.exit(f"make_fixtures.py: assets missing from {SHARED_ASSETS} and from {ASSET_DIR}: {missing}")
 
@@ -751,7 +553,8 @@ def copy_assets() -> None:
 # --------------------------------------------------------------------------
 
 
-def main() -> None:
+def main(argv=None) -> int:
+    argparse.ArgumentParser(prog=prog("fixtures"), description=__doc__.split("\n\n")[0]).parse_args(argv)
     print(f"make_fixtures.py: writing into {FIX.relative_to(ROOT)}/")
     make_cube()
     make_plane()
@@ -766,11 +569,5 @@ def main() -> None:
     make_obj()
     make_bad()
     copy_assets()
-    digest = hashlib.sha256()
-    for p in sorted(written):
-        digest.update(str(p.relative_to(ROOT)).encode() + b"\0" + p.read_bytes())
-    print(f"make_fixtures.py: {len(written)} files, sha256 of all: {digest.hexdigest()[:16]}")
-
-
-if __name__ == "__main__":
-    main()
+    print(f"make_fixtures.py: {len(FILES.written)} files, sha256 of all: {FILES.digest()}")
+    return 0

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Write the RAYCAST_quadric glTF fixtures under fixtures/quadrics/ and the
 invalid ones under fixtures/bad/quadric_*.gltf.
 
@@ -22,43 +21,26 @@ Options: --check-only (verify, write nothing).
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import make_fixtures as mf  # noqa: E402
-import quadric_reference as qref  # noqa: E402
-from make_fixtures import json_text  # noqa: E402
+from . import gltf_writer
+from . import quadric_reference as qref
+from .cli import prog
+from .fixture_files import FixtureFiles
+from .gltf_writer import json_text
+from .paths import ROOT
 
-ROOT = Path(__file__).resolve().parents[2]
 QDIR = ROOT / "fixtures" / "quadrics"
 BAD_DIR = ROOT / "fixtures" / "bad"
 GENERATOR = "raycast tools/make_quadric_fixtures.py"
 EXT = "RAYCAST_quadric"
 
-CHECK_ONLY = "--check-only" in sys.argv
+FILES = FixtureFiles(ROOT)
 EXPECTED: dict[str, dict] = {}
-
-
-# --------------------------------------------------------------------------
-# output helpers (tools/make_fixtures.py's, so the JSON layout is the same)
-
-
-def write_bytes(path: Path, data: bytes) -> None:
-    if not CHECK_ONLY:
-        mf.write_bytes(path, data)
-
-
-def write_json(path: Path, doc: dict, raw: dict[str, str] | None = None) -> None:
-    text = json_text(doc) + "\n"
-    for placeholder, literal in (raw or {}).items():
-        assert text.count(json.dumps(placeholder)) == 1, placeholder
-        text = text.replace(json.dumps(placeholder), literal)
-    write_bytes(path, text.encode("utf-8"))
 
 
 def fl(v):
@@ -72,13 +54,12 @@ def fl(v):
 # a tiny glTF writer
 
 
-class Gltf(mf.Gltf):
-    """tools/make_fixtures.py's writer, plus RAYCAST_quadric nodes and the mesh
-    triangles kept for the self-check."""
+class Gltf(gltf_writer.Gltf):
+    """gltf_writer's writer, plus RAYCAST_quadric nodes and the mesh triangles kept for
+    the self-check."""
 
     def __init__(self) -> None:
-        super().__init__()
-        self.doc["asset"]["generator"] = GENERATOR
+        super().__init__(GENERATOR)
         # geometry kept for the self-check: mesh index -> (n, 3, 3) float64 triangles
         self.mesh_tris: dict[int, np.ndarray] = {}
 
@@ -219,26 +200,7 @@ def mp_check(doc: dict, node_name: str, o, d, depth: float) -> float:
     i = [k for k, n in enumerate(doc["nodes"]) if n["name"] == node_name][0]
     node = doc["nodes"][i]
     Q, P, R, bmin, bmax = qref.parse_quadric(node["extensions"][EXT])
-    # exact node matrix from the JSON numbers (quaternion normalised in mpmath)
-    if "matrix" in node:
-        T = mp.matrix(4, 4)
-        for c in range(4):
-            for r in range(4):
-                T[r, c] = mp.mpf(node["matrix"][4 * c + r])
-    else:
-        x, y, z, w = (mp.mpf(c) for c in node.get("rotation", [0, 0, 0, 1]))
-        n = mp.sqrt(x * x + y * y + z * z + w * w)
-        x, y, z, w = x / n, y / n, z / n, w / n
-        Rm = mp.matrix([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-        s = [mp.mpf(c) for c in node.get("scale", [1, 1, 1])]
-        tr = [mp.mpf(c) for c in node.get("translation", [0, 0, 0])]
-        T = mp.eye(4)
-        for r in range(3):
-            for c in range(3):
-                T[r, c] = Rm[r, c] * s[c]
-            T[r, 3] = tr[r]
+    T = qref.mp_local_matrix(mp, node)  # exact node matrix from the JSON numbers
     assert np.allclose(np.array(T.tolist(), dtype=float), mats[i], atol=1e-12)  # root nodes only
     Ti = mp.inverse(T)
     ol = [sum(Ti[r, c] * mp.mpf(([*o, 1.0])[c]) for c in range(4)) for r in range(3)]
@@ -321,7 +283,7 @@ def write_fixture(g: Gltf, fname: str, required: bool, build_rays, description: 
     rays = Rays(g, doc, fname)
     build_rays(rays, doc)
     EXPECTED[fname] = {"description": description, "rays": rays.rows}
-    write_json(QDIR / fname, doc)
+    FILES.write_json(QDIR / fname, doc)
     return doc
 
 
@@ -733,7 +695,7 @@ def make_bad() -> list[tuple[str, str, str]]:
                 dict({"name": "bad"}, **(node_props or {}), extensions={EXT: ext}),
             ],
         }
-        write_json(BAD_DIR / fname, doc, raw)
+        FILES.write_json(BAD_DIR / fname, doc, raw)
         rows.append((fname, what, message))
 
     unit = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0]
@@ -769,7 +731,14 @@ def make_bad() -> list[tuple[str, str, str]]:
 # --------------------------------------------------------------------------
 
 
-def main() -> int:
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog=prog("quadric-fixtures"),
+                                 description=__doc__.split("\n\n")[0].replace("\n", " "))
+    ap.add_argument("--check-only", action="store_true", help="verify the expectations, write nothing")
+    ap.add_argument("--print-cells", action="store_true", help="print the trap fixture's cells")
+    ap.add_argument("--print-bad", action="store_true", help="print the bad fixtures' rows")
+    a = ap.parse_args(argv)
+    FILES.check_only = a.check_only
     print("quadric fixtures:")
     make_spheres()
     make_families()
@@ -780,10 +749,10 @@ def main() -> int:
     zs = make_trap()
     cells = trap_cells(zs)
     bad_rows = make_bad()
-    write_bytes(QDIR / "expected_rays.json", (json_text(EXPECTED) + "\n").encode("utf-8"))
-    if "--print-cells" in sys.argv:
+    FILES.write_bytes(QDIR / "expected_rays.json", (json_text(EXPECTED) + "\n").encode("utf-8"))
+    if a.print_cells:
         print("\n".join(cells))
-    if "--print-bad" in sys.argv:
+    if a.print_bad:
         for r in bad_rows:
             print(r)
     n = sum(len(v["rays"]) for v in EXPECTED.values())
@@ -799,6 +768,3 @@ def _has_mpmath() -> bool:
     except ImportError:
         return False
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Independent object-space reference intersector for RAYCAST_quadric glTF nodes.
 
 Written from the formulas in shared/notes/numerics.md, sharing no code with the
@@ -58,11 +57,12 @@ import argparse
 import json
 import math
 import struct
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from .cli import prog
 
 EXT = "RAYCAST_quadric"
 CLIP_REL = 1e-6
@@ -453,7 +453,9 @@ def _mp():
     return mpmath
 
 
-def _mp_local_matrix(mp, node):
+def mp_local_matrix(mp, node):
+    """A node's local matrix in mpmath from its JSON numbers (matrix, or TRS with the
+    quaternion normalised in mpmath; a zero quaternion is the identity)."""
     if "matrix" in node:
         m = [mp.mpf(x) for x in node["matrix"]]
         return mp.matrix([[m[c * 4 + r] for c in range(4)] for r in range(4)])
@@ -485,7 +487,7 @@ def intersect_quadric_mp(q: Quadric, origin, direction, prec: int = 100):
     with mp.workprec(prec):
         world = mp.eye(4)
         for nd in q.node_json:
-            world = world * _mp_local_matrix(mp, nd)
+            world = world * mp_local_matrix(mp, nd)
         A = mp.matrix([[world[r, c] for c in range(3)] for r in range(3)])
         tt = mp.matrix([world[r, 3] for r in range(3)])
         Ai = A ** -1
@@ -563,7 +565,7 @@ def trace_mp(quadrics: list[Quadric], origins, dirs, prec: int = 100):
 # ---------------------------------------------------------------- command line
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog=prog("quadric-reference"), description=__doc__.split("\n")[0])
     ap.add_argument("scene", help=".gltf/.glb with RAYCAST_quadric nodes")
     ap.add_argument("rays", help="(N,6) .npy: origin xyz, direction xyz")
     ap.add_argument("--out", help="write depth.npy, normal.npy, node.npy, ambiguous.npy here")
@@ -589,6 +591,3 @@ def main(argv=None):
         np.save(out / "ambiguous.npy", r["ambiguous"])
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Random quadric scenes for the validation against the independent reference.
 
     .venv/bin/python tools/random_quadric_scenes.py OUT_DIR [--scenes K] [--seed S]
@@ -18,6 +17,8 @@ import json
 from pathlib import Path
 
 import numpy as np
+
+from .cli import prog
 
 # Canonical forms (Q diagonal, P, R) of each type; scaled later by random semi-axes.
 CANONICAL = {
@@ -100,15 +101,13 @@ def write_scenes(out: Path, count: int, seed: int) -> list[Path]:
     return paths
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog=prog("random-quadrics"), description=__doc__.split("\n\n")[0])
     ap.add_argument("out", type=Path)
     ap.add_argument("--scenes", type=int, default=10)
     ap.add_argument("--seed", type=int, default=1)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     for path in write_scenes(args.out, args.scenes, args.seed):
         print(path)
+    return 0
 
-
-if __name__ == "__main__":
-    main()

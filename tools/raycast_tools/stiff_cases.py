@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Stiff and extreme ray/quadric cases with 200-bit reference answers.
 
 Writes ``fixtures/stiff/cases.json`` (see ``fixtures/stiff/README.md``), read by the Rust test
@@ -34,11 +33,15 @@ import argparse
 import json
 import math
 import sys
-from pathlib import Path
 
 import mpmath
 import numpy as np
 from mpmath import mp, mpf
+
+from .cli import prog
+from .metrics import angle
+from .paths import ROOT
+from .quadric_reference import parse_quadric
 
 mp.prec = 200
 
@@ -50,7 +53,6 @@ NORMAL_FLOOR = 1e-12  # smallest normal bound (radians) written
 SINGULAR_DETERMINANT = 1e-14  # docs/RAYCAST_quadric.md: det below 1e-14 * longest column**3
 CLIP_REL = 1e-6  # a root's local point outside the box by less than this * side is ambiguous
 
-ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "fixtures" / "stiff" / "cases.json"
 
 
@@ -454,17 +456,8 @@ def estimate(info, robust_double=False):
 
 def numpy_intersect(case):
     """Plain float64: returns ('error',), ('miss',) or ('hit', t, depth, normal)."""
-    qd = case["quadric"]
-    if "coefficients" in qd:
-        a, b, c, d, e, f, gg, h, i, j = qd["coefficients"]
-        Q = np.array([[a, d / 2, e / 2], [d / 2, b, f / 2], [e / 2, f / 2, c]])
-        P = np.array([gg, h, i])
-        R = j
-    else:
-        Q = np.array(qd["Q"]).reshape(3, 3)
-        Q = (Q + Q.T) / 2
-        P = np.array(qd["P"])
-        R = qd["R"]
+    Q, P, R, _, _ = parse_quadric(case["quadric"])
+    Q = (Q + Q.T) / 2
     if not Q.any() and not P.any():
         return ("error",)
     if case["bounds"] is None:
@@ -518,11 +511,6 @@ def numpy_intersect(case):
     return ("miss",)
 
 
-def angle(a, b):
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    return math.atan2(np.linalg.norm(np.cross(a, b)), float(a @ b))
-
-
 # --------------------------------------------------------------------------------------------
 # The cases
 # --------------------------------------------------------------------------------------------
@@ -558,13 +546,12 @@ def add(name, family, description, quadric, bounds, world, origin, direction, *,
 
 
 def build_cases():
-    I = world_cols(IDENTITY)
+    identity = world_cols(IDENTITY)
 
     # ---- 1. exact binary scaling by 2^k ---------------------------------------------------
     base_sphere_c = (0.25, 0.5, -0.75)
     base_sphere_o = (0.75, 0.375, 63.0)
     base_sphere_d = (-0.0078125, 0.001953125, -1.0)
-    base_cyl_lin = diag(1.0, 1.0, 1.0)
     base_cyl_t = (-1.5, 0.25, 0.5)
     base_cyl_o = (-2.125, -80.0, 0.75)
     base_cyl_d = (0.0078125, 1.0, 0.00390625)
@@ -663,15 +650,15 @@ def build_cases():
 
     # ---- 5. exactly tangent rays (ambiguous) ------------------------------------------------
     tangents = [
-        ("tangent_sphere_y1", "unit sphere, ray along +x at y = 1 exactly", SPHERE, None, I,
+        ("tangent_sphere_y1", "unit sphere, ray along +x at y = 1 exactly", SPHERE, None, identity,
          (-5.0, 1.0, 0.0), (1.0, 0.0, 0.0)),
         ("tangent_sphere_z1_far", "unit sphere at (100.5,0,0), ray along -y at z = 1 from 1e3",
          SPHERE, None, world_cols(IDENTITY, (100.5, 0.0, 0.0)), (100.5, 1e3, 1.0),
          (0.0, -1.0, 0.0)),
         ("tangent_ellipsoid", "ellipsoid x^2/4+y^2+z^2/16=1, ray along +z at x = 2 exactly",
-         coeffs(0.25, 1, 0.0625, j=-1), None, I, (2.0, 0.0, -10.0), (0.0, 0.0, 1.0)),
+         coeffs(0.25, 1, 0.0625, j=-1), None, identity, (2.0, 0.0, -10.0), (0.0, 0.0, 1.0)),
         ("tangent_cylinder", "cylinder x^2+y^2=1 |z|<=2, ray along -y at x = 1 exactly",
-         CYL_Z, box([-1, -1, -2], [1, 1, 2]), I, (1.0, 5.0, 0.5), (0.0, -1.0, 0.0)),
+         CYL_Z, box([-1, -1, -2], [1, 1, 2]), identity, (1.0, 5.0, 0.5), (0.0, -1.0, 0.0)),
     ]
     for name, desc, qd, bd, wd, o, d in tangents:
         add(name, "tangent_exact", desc, qd, bd, wd, o, d, ambiguous=True,
@@ -681,10 +668,10 @@ def build_cases():
     for delta, tag in ((1e-3, "1e-3"), (1e-5, "1e-5"), (1e-7, "1e-7")):
         add(f"near_tangent_in_{tag}", "near_tangent",
             f"unit sphere, ray along +x from x=-5 at y = 1 - {tag} (hits, chord half-length "
-            f"sqrt(2*{tag}))", SPHERE, None, I, (-5.0, 1.0 - delta, 0.0), (1.0, 0.0, 0.0))
+            f"sqrt(2*{tag}))", SPHERE, None, identity, (-5.0, 1.0 - delta, 0.0), (1.0, 0.0, 0.0))
         add(f"near_tangent_out_{tag}", "near_tangent",
             f"unit sphere, ray along +x from x=-5 at y = 1 + {tag}: misses by {tag}",
-            SPHERE, None, I, (-5.0, 1.0 + delta, 0.0), (1.0, 0.0, 0.0))
+            SPHERE, None, identity, (-5.0, 1.0 + delta, 0.0), (1.0, 0.0, 0.0))
     rot = rot_axis_angle((0.2, 0.3, 0.9), 0.7)
     for sign, tag in ((-1, "in"), (1, "out")):
         # cylinder rotated: world ray built in local space then mapped with the float matrix
@@ -701,7 +688,7 @@ def build_cases():
     ell = coeffs(1 / 9, 0.25, 1, j=-1)  # semi-axes 3, 2, 1
     add("inside_ellipsoid_a", "inside", "camera at the centre of ellipsoid (3,2,1), oblique ray: "
         "exits through the far wall; normal points outward (f > 0), i.e. along the ray",
-        ell, None, I, (0.0, 0.0, 0.0), (0.6, -0.3, 0.2), bound=1e-9,
+        ell, None, identity, (0.0, 0.0, 0.0), (0.6, -0.3, 0.2), bound=1e-9,
         reason="well-conditioned exit root (only one positive root, steep incidence); 1e-9 is the "
                "default bound for well-conditioned cases.")
     add("inside_ellipsoid_b", "inside", "camera inside a rotated, translated ellipsoid (3,2,1), "
@@ -710,42 +697,42 @@ def build_cases():
         reason="well-conditioned exit root; default 1e-9.")
     add("inside_cylinder_wall", "inside", "camera inside cylinder x^2+y^2=1 |z|<=2, ray hits the "
         "inside wall at |z| < 2; normal points outward (away from the axis)",
-        CYL_Z, box([-1, -1, -2], [1, 1, 2]), I, (0.2, 0.1, 0.5), (1.0, 0.3, 0.2), bound=1e-9,
+        CYL_Z, box([-1, -1, -2], [1, 1, 2]), identity, (0.2, 0.1, 0.5), (1.0, 0.3, 0.2), bound=1e-9,
         reason="well-conditioned exit root; default 1e-9.")
     add("inside_cylinder_open_end", "inside", "camera inside cylinder x^2+y^2=1 |z|<=2, ray "
         "leaves through the open top (wall crossing at z > 2 is clipped): miss",
-        CYL_Z, box([-1, -1, -2], [1, 1, 2]), I, (0.2, 0.1, 0.5), (0.3, 0.1, 1.0), bound=1e-9,
+        CYL_Z, box([-1, -1, -2], [1, 1, 2]), identity, (0.2, 0.1, 0.5), (0.3, 0.1, 1.0), bound=1e-9,
         reason="the only positive root lies well outside the clip box (z about 3.3): robust miss.")
     add("outside_through_open_end", "inside", "camera above and beside an open cylinder "
         "x^2+y^2=1 |z|<=1: the near wall crossing (z=2) is clipped, the far root (inside wall, "
-        "z=0) is the hit", CYL_Z, box([-1, -1, -1], [1, 1, 1]), I, (-3.0, 0.0, 4.0),
+        "z=0) is the hit", CYL_Z, box([-1, -1, -1], [1, 1, 1]), identity, (-3.0, 0.0, 4.0),
         (1.0, 0.0, -1.0), bound=1e-9,
         reason="near root clipped by a wide margin, far root well-conditioned; default 1e-9.")
 
     # ---- 8. rays along / nearly along a cylinder axis ----------------------------------------
     tall = box([-1, -1, -1e9], [1, 1, 1e9])
     add("axis_on_axis", "cylinder_axis", "ray along the axis of x^2+y^2=1 (K = L = 0, M = -1): "
-        "never meets the surface", CYL_Z, tall, I, (0.0, 0.0, -5.0), (0.0, 0.0, 1.0),
+        "never meets the surface", CYL_Z, tall, identity, (0.0, 0.0, -5.0), (0.0, 0.0, 1.0),
         bound=1e-9, reason="K = L = 0 exactly and M = -1: no root at all; robust miss.")
     add("axis_parallel_inside", "cylinder_axis", "ray parallel to the axis at radius 0.5: miss",
-        CYL_Z, tall, I, (0.5, 0.0, -5.0), (0.0, 0.0, 1.0), bound=1e-9,
+        CYL_Z, tall, identity, (0.5, 0.0, -5.0), (0.0, 0.0, 1.0), bound=1e-9,
         reason="K = L = 0 exactly, M = -0.75: robust miss.")
     add("axis_parallel_outside", "cylinder_axis", "ray parallel to the axis at radius 2: miss",
-        CYL_Z, tall, I, (2.0, 0.0, -5.0), (0.0, 0.0, 1.0), bound=1e-9,
+        CYL_Z, tall, identity, (2.0, 0.0, -5.0), (0.0, 0.0, 1.0), bound=1e-9,
         reason="K = L = 0 exactly, M = 3: robust miss.")
     add("axis_parallel_on_surface", "cylinder_axis", "ray parallel to the axis at radius 1: the "
         "whole ray lies on the surface (K = L = M = 0); any answer accepted",
-        CYL_Z, tall, I, (1.0, 0.0, -5.0), (0.0, 0.0, 1.0), ambiguous=True,
+        CYL_Z, tall, identity, (1.0, 0.0, -5.0), (0.0, 0.0, 1.0), ambiguous=True,
         ambiguous_kind="on_surface",
         reason="the ray lies in the surface: every t > 0 is a root, hit or miss both acceptable.")
     add("axis_tilt_1e-8", "cylinder_axis", "ray from the axis tilted by 1e-8 (dir (1e-8,0,1)): "
         "meets x = 1 at t = 1e8, z about 1e8 inside |z| <= 1e9",
-        CYL_Z, tall, I, (0.0, 0.0, -5.0), (1e-8, 0.0, 1.0), bound=1e-9,
+        CYL_Z, tall, identity, (0.0, 0.0, -5.0), (1e-8, 0.0, 1.0), bound=1e-9,
         reason="t = 1/1e-8 depends only on the transverse component, known to relative 1e-16 "
                "under an identity transform; default 1e-9.")
     add("axis_tilt_1e-8_offaxis", "cylinder_axis", "ray from (0.5,0.25,-5) with dir "
         "(1e-8,2e-8,1): hits far up the tube (t about 3.9e7)",
-        CYL_Z, tall, I, (0.5, 0.25, -5.0), (1e-8, 2e-8, 1.0), bound=1e-9,
+        CYL_Z, tall, identity, (0.5, 0.25, -5.0), (1e-8, 2e-8, 1.0), bound=1e-9,
         reason="K = 5e-16 exactly scaled, root relative condition about 1; default 1e-9.")
     Rt = rot_axis_angle((0.3, -0.5, 0.2), 0.9)
     Rn = np.array(Rt)
@@ -759,11 +746,11 @@ def build_cases():
     parab = coeffs(1, 1, 0, i=-1)  # x^2 + y^2 - z
     pb = box([-3, -3, -1], [3, 3, 9])
     add("paraboloid_vertex", "paraboloid_axis", "z = x^2+y^2 (f = x^2+y^2-z), from (0,0,5) along "
-        "-z: linear case K = 0, hits the vertex at t = 5, normal (0,0,-1)", parab, pb, I,
+        "-z: linear case K = 0, hits the vertex at t = 5, normal (0,0,-1)", parab, pb, identity,
         (0.0, 0.0, 5.0), (0.0, 0.0, -1.0), bound=1e-9,
         reason="linear root -M/L with L = 1: exact; default 1e-9.")
     add("paraboloid_offaxis", "paraboloid_axis", "z = x^2+y^2 from (0.5,0,5) along -z: hits z = "
-        "0.25 at t = 4.75, normal (1,0,-1)/sqrt2", parab, pb, I, (0.5, 0.0, 5.0),
+        "0.25 at t = 4.75, normal (1,0,-1)/sqrt2", parab, pb, identity, (0.5, 0.0, 5.0),
         (0.0, 0.0, -1.0), bound=1e-9, reason="linear root, exact in binary; default 1e-9.")
     add("paraboloid_axis_scaled_dir", "paraboloid_axis", "as paraboloid_offaxis with dir (0,0,-1e3) "
         "and a rotated, translated node", parab, pb,
@@ -777,17 +764,17 @@ def build_cases():
     cone = coeffs(1, 1, -1)
     cb = cube(1.0)
     add("cone_apex_axis", "cone_apex", "cone x^2+y^2-z^2=0 |z|<=1, ray along -z through the apex "
-        "(double root t = 5, zero gradient: any unit normal)", cone, cb, I, (0.0, 0.0, 5.0),
+        "(double root t = 5, zero gradient: any unit normal)", cone, cb, identity, (0.0, 0.0, 5.0),
         (0.0, 0.0, -1.0), robust_double=True, reason=None)
     add("cone_apex_oblique", "cone_apex", "cone, ray through the apex from (0.3,0.2,2) inside the "
-        "nappe (|v_xy| < |v_z|): double root at the apex", cone, cb, I, (0.3, 0.2, 2.0),
+        "nappe (|v_xy| < |v_z|): double root at the apex", cone, cb, identity, (0.3, 0.2, 2.0),
         (-0.3, -0.2, -2.0), robust_double=True, reason=None)
     add("cone_apex_grazing", "cone_apex", "cone, ray through the apex from outside the nappes "
         "(direction (1,0,0.5)): touches only at the apex, a perturbed ray misses or hits twice",
-        cone, cb, I, (-2.0, 0.0, -1.0), (1.0, 0.0, 0.5), ambiguous=True, ambiguous_kind="tangent",
+        cone, cb, identity, (-2.0, 0.0, -1.0), (1.0, 0.0, 0.5), ambiguous=True, ambiguous_kind="tangent",
         reason=None)
     add("cone_generator_parallel", "cone_apex", "cone, ray parallel to the generator (1,0,1) from "
-        "(0,0.5,-1.5): K = 0, linear root", cone, box([-2, -2, -2], [2, 2, 2]), I,
+        "(0,0.5,-1.5): K = 0, linear root", cone, box([-2, -2, -2], [2, 2, 2]), identity,
         (0.0, 0.5, -1.5), (1.0, 0.0, 1.0), bound=1e-9,
         reason="K = 0 exactly, linear root with |L| = 3; default 1e-9.")
 
@@ -795,25 +782,25 @@ def build_cases():
     hyp = coeffs(1, 1, -1, j=-1)
     hb = cube(2.0)
     add("hyperboloid_waist_out", "hyperboloid", "x^2+y^2-z^2=1, ray along +y in z = 0 at x = "
-        "1+1e-9: misses the waist circle by 1e-9", hyp, hb, I, (1.0 + 1e-9, -5.0, 0.0),
+        "1+1e-9: misses the waist circle by 1e-9", hyp, hb, identity, (1.0 + 1e-9, -5.0, 0.0),
         (0.0, 1.0, 0.0), bound=1e-9,
         reason="the minimum of f along the ray is 2e-9, about 1e5 times its rounding: robust miss.")
     add("hyperboloid_waist_in", "hyperboloid", "x^2+y^2-z^2=1, ray along +y in z = 0 at x = "
-        "1-1e-9: grazing hit, chord half-length about 4.5e-5", hyp, hb, I,
+        "1-1e-9: grazing hit, chord half-length about 4.5e-5", hyp, hb, identity,
         (1.0 - 1e-9, -5.0, 0.0), (0.0, 1.0, 0.0))
     s2 = 1 / math.sqrt(2)
     add("hyperboloid_asymptote_a", "hyperboloid", "x^2+y^2-z^2=1 with dir (1,0,1)/sqrt2 (K = 0 "
-        "exactly) from (0,0.5,-3)", hyp, hb, I, (0.0, 0.5, -3.0), (s2, 0.0, s2), bound=1e-9,
+        "exactly) from (0,0.5,-3)", hyp, hb, identity, (0.0, 0.5, -3.0), (s2, 0.0, s2), bound=1e-9,
         reason="K = 0 exactly (equal components), linear root with |L| about 4.2; default 1e-9.")
     add("hyperboloid_asymptote_b", "hyperboloid", "x^2+y^2-z^2=1 with dir (1,0,1)/sqrt2 from "
-        "(0.5,0,0): hits at (1.25,0,0.75)", hyp, hb, I, (0.5, 0.0, 0.0), (s2, 0.0, s2), bound=1e-9,
+        "(0.5,0,0): hits at (1.25,0,0.75)", hyp, hb, identity, (0.5, 0.0, 0.0), (s2, 0.0, s2), bound=1e-9,
         reason="K = 0 exactly, linear root; default 1e-9.")
     add("hyperboloid_asymptote_line", "hyperboloid", "x^2+y^2-z^2=1, ray along the asymptote "
-        "line x = z through the centre: f = -1 all along (K = L = 0): miss", hyp, hb, I,
+        "line x = z through the centre: f = -1 all along (K = L = 0): miss", hyp, hb, identity,
         (-1.5, 0.0, -1.5), (1.0, 0.0, 1.0), bound=1e-9,
         reason="K = L = 0 exactly with M = -1: no root, robust miss.")
     add("hyperboloid_ruling", "hyperboloid", "x^2+y^2-z^2=1, ray along the ruling x = 1, y = z: "
-        "lies on the surface (K = L = M = 0); any answer accepted", hyp, hb, I,
+        "lies on the surface (K = L = M = 0); any answer accepted", hyp, hb, identity,
         (1.0, -1.5, -1.5), (0.0, 1.0, 1.0), ambiguous=True, ambiguous_kind="on_surface",
         reason="the ray lies in the surface: hit or miss both acceptable.")
 
@@ -827,7 +814,7 @@ def build_cases():
         ("span_middle", (0.0002, -4.0, 300.0), (0.0, 1.0, 0.0), "along y at x=2e-4, z=300"),
     ]:
         add(name, "coefficient_span", "ellipsoid 1e6 x^2 + y^2 + 1e-6 z^2 = 1 (semi-axes 1e-3, "
-            f"1, 1e3), ray {desc}", span, None, I, o, d)
+            f"1, 1e3), ray {desc}", span, None, identity, o, d)
 
     # ---- 13. ill-conditioned transforms -------------------------------------------------------
     flat_lin, flat_t = diag(1.0, 1.0, 1e-4), (0.1, 0.2, 0.3)
@@ -854,44 +841,44 @@ def build_cases():
     # ---- 14. degenerate quadrics ------------------------------------------------------------
     plane = matrices([0] * 9, [0, 0, 1], 0)
     add("plane_hit", "degenerate", "plane z = 0 (Q = 0, P = (0,0,1)) clipped to [-1,1]^3, ray "
-        "from above", plane, cube(1.0), I, (0.25, 0.125, 3.0), (0.1, 0.2, -1.0), bound=1e-9,
+        "from above", plane, cube(1.0), identity, (0.25, 0.125, 3.0), (0.1, 0.2, -1.0), bound=1e-9,
         reason="linear root, |L| = 1; default 1e-9.")
     add("plane_hit_from_below", "degenerate", "plane z = 0 seen from below: normal still +z",
-        plane, cube(1.0), I, (-0.5, 0.3, -2.0), (0.05, -0.1, 1.0), bound=1e-9,
+        plane, cube(1.0), identity, (-0.5, 0.3, -2.0), (0.05, -0.1, 1.0), bound=1e-9,
         reason="linear root; default 1e-9.")
     add("plane_parallel", "degenerate", "ray parallel to the plane z = 0 at z = 0.5: miss",
-        plane, cube(1.0), I, (-3.0, 0.0, 0.5), (1.0, 0.2, 0.0), bound=1e-9,
+        plane, cube(1.0), identity, (-3.0, 0.0, 0.5), (1.0, 0.2, 0.0), bound=1e-9,
         reason="K = L = 0 exactly with M = 0.5: robust miss.")
     add("plane_in_plane", "degenerate", "ray inside the plane z = 0: on the surface; any answer "
-        "accepted", plane, cube(1.0), I, (-3.0, 0.0, 0.0), (1.0, 0.2, 0.0), ambiguous=True,
+        "accepted", plane, cube(1.0), identity, (-3.0, 0.0, 0.0), (1.0, 0.2, 0.0), ambiguous=True,
         ambiguous_kind="on_surface", reason="the ray lies in the surface: hit or miss accepted.")
     add("plane_outside_bounds", "degenerate", "plane z = 0 crossed at (2.5, 0, 0), outside the "
-        "clip box [-1,1]^3: miss", plane, cube(1.0), I, (2.5, 0.0, 4.0), (0.0, 0.0, -1.0),
+        "clip box [-1,1]^3: miss", plane, cube(1.0), identity, (2.5, 0.0, 4.0), (0.0, 0.0, -1.0),
         bound=1e-9, reason="the only root lies 1.5 outside the clip box: robust miss.")
     pair = coeffs(1, -1, 0)
     add("plane_pair_hit", "degenerate", "plane pair x^2-y^2=0, [-2,2]^3, ray crosses the plane "
-        "x = y away from the crossing line", pair, cube(2.0), I, (1.0, -0.5, 0.0),
+        "x = y away from the crossing line", pair, cube(2.0), identity, (1.0, -0.5, 0.0),
         (0.0, 1.0, 0.1), bound=1e-9, reason="simple root, |g'| = 2 at x = 1; default 1e-9.")
     add("plane_pair_crossing_line", "degenerate", "plane pair x^2-y^2=0, ray along +x in y = 0 "
-        "through the crossing line x = y = 0 (double root, zero gradient)", pair, cube(2.0), I,
+        "through the crossing line x = y = 0 (double root, zero gradient)", pair, cube(2.0), identity,
         (-1.5, 0.0, 0.5), (1.0, 0.0, 0.0), ambiguous=True, ambiguous_kind="tangent",
         reason=None)
     add("double_plane", "degenerate", "coincident planes z^2 = 0: every crossing is a double "
-        "root (tangent everywhere, zero gradient)", coeffs(0, 0, 1), cube(1.0), I,
+        "root (tangent everywhere, zero gradient)", coeffs(0, 0, 1), cube(1.0), identity,
         (0.2, 0.3, 2.0), (0.1, -0.1, -1.0), ambiguous=True, ambiguous_kind="tangent",
         reason=None)
     empty = coeffs(1, 1, 1, j=1)
-    add("empty_sphere", "degenerate", "empty quadric x^2+y^2+z^2+1=0: miss", empty, None, I,
+    add("empty_sphere", "degenerate", "empty quadric x^2+y^2+z^2+1=0: miss", empty, None, identity,
         (0.0, 0.0, 5.0), (0.0, 0.0, -1.0), bound=1e-9, reason="f >= 1 everywhere: robust miss.")
     add("empty_cylinder", "degenerate", "empty x^2+y^2+1=0 with bounds: miss", coeffs(1, 1, 0, j=1),
-        cube(1.0), I, (3.0, 0.2, 0.1), (-1.0, 0.0, 0.0), bound=1e-9,
+        cube(1.0), identity, (3.0, 0.2, 0.1), (-1.0, 0.0, 0.0), bound=1e-9,
         reason="f >= 1 everywhere: robust miss.")
     point = coeffs(1, 1, 1)
     add("point_through", "degenerate", "point quadric x^2+y^2+z^2=0, ray through the point "
-        "(double root, zero gradient)", point, None, I, (0.0, 0.0, 5.0), (0.0, 0.0, -1.0),
+        "(double root, zero gradient)", point, None, identity, (0.0, 0.0, 5.0), (0.0, 0.0, -1.0),
         ambiguous=True, ambiguous_kind="tangent", reason=None)
     add("point_miss", "degenerate", "point quadric, ray passing 0.5 from the point: miss", point,
-        None, I, (0.5, 0.0, 5.0), (0.0, 0.0, -1.0), bound=1e-9,
+        None, identity, (0.5, 0.0, 5.0), (0.0, 0.0, -1.0), bound=1e-9,
         reason="f >= 0.25 along the ray: robust miss.")
 
     # ---- 15. errors ---------------------------------------------------------------------------
@@ -903,10 +890,10 @@ def build_cases():
         world_cols([[1, 1, 0], [0, 0, 1], [2, 2, 0]], (1, 2, 3)), (0, 0, 5), (0, 0, -1),
         reason="error case: no bound.")
     add("spec_unbounded", "error", "cylinder without bounds: QuadricSpec construction (or "
-        "Quadric::new) must fail", CYL_Z, None, I, (3, 0, 0), (-1, 0, 0),
+        "Quadric::new) must fail", CYL_Z, None, identity, (3, 0, 0), (-1, 0, 0),
         reason="error case: no bound.")
     add("spec_zero", "error", "Q and P all zero (R = 1): QuadricSpec construction must fail",
-        coeffs(j=1), cube(1.0), I, (3, 0, 0), (-1, 0, 0), reason="error case: no bound.")
+        coeffs(j=1), cube(1.0), identity, (3, 0, 0), (-1, 0, 0), reason="error case: no bound.")
 
     # ---- 16. non-unit directions --------------------------------------------------------------
     ud = (-0.0078125, 0.001953125, -1.0)
@@ -927,13 +914,13 @@ def build_cases():
 
     # ---- 17. negative zeros -------------------------------------------------------------------
     add("negzero_sphere", "negative_zero", "unit sphere, origin (-0,-0,5), dir (-0,-0,-1): t = 4, "
-        "normal (0,0,1)", SPHERE, None, I, (-0.0, -0.0, 5.0), (-0.0, -0.0, -1.0), bound=1e-9,
+        "normal (0,0,1)", SPHERE, None, identity, (-0.0, -0.0, 5.0), (-0.0, -0.0, -1.0), bound=1e-9,
         reason="head-on hit, exact in binary; default 1e-9.")
     add("negzero_cylinder", "negative_zero", "cylinder x^2+y^2=1 |z|<=1, dir (-1,-0,-0) from "
-        "(3,0.5,-0): hits x = sqrt(0.75)", CYL_Z, cube(1.0), I, (3.0, 0.5, -0.0),
+        "(3,0.5,-0): hits x = sqrt(0.75)", CYL_Z, cube(1.0), identity, (3.0, 0.5, -0.0),
         (-1.0, -0.0, -0.0), bound=1e-9, reason="well-conditioned hit; default 1e-9.")
     add("negzero_plane", "negative_zero", "plane z = 0, dir (0.5,-0,-1) from (0,-0,2)", plane,
-        cube(1.0), I, (0.0, -0.0, 2.0), (0.5, -0.0, -1.0), bound=1e-9,
+        cube(1.0), identity, (0.0, -0.0, 2.0), (0.5, -0.0, -1.0), bound=1e-9,
         reason="linear root, exact; default 1e-9.")
 
 
@@ -1083,10 +1070,10 @@ def dump(cases) -> str:
     return "[\n" + ",\n".join(out) + "\n]\n"
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog=prog("stiff-cases"), description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true", help="do not write; fail if the file differs")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     build_cases()
     names = [c["name"] for c in CASES]
     assert len(names) == len(set(names)), "duplicate case names"
@@ -1111,11 +1098,8 @@ def main():
     if args.check:
         if not OUT.exists() or OUT.read_text() != text:
             sys.exit(f"{OUT} is out of date")
-        return
+        return 0
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text(text)
     print(f"wrote {OUT.relative_to(ROOT)}")
-
-
-if __name__ == "__main__":
-    main()
+    return 0

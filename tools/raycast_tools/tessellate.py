@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Tessellate RAYCAST_quadric nodes into triangles (and write them as a glTF mesh).
 
     tools/tessellate.py SCENE.gltf OUT.gltf [--segments N | --edge E] [--rows M]
@@ -51,18 +50,16 @@ precision (float32 spacing is 1.0 at 1e7).
 from __future__ import annotations
 
 import argparse
-import base64
 import json
 import math
-import struct
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import quadric_reference as qref  # noqa: E402
+from . import quadric_reference as qref
+from .cli import prog
+from .gltf_writer import data_uri
 
 EIG_REL = 1e-10     # eigenvalues below this fraction of the largest count as zero
 TERM_REL = 1e-9     # linear/constant terms below this of the function scale count as zero
@@ -163,8 +160,7 @@ def _canonical(q: qref.Quadric):
             # two of one sign (i, j), one of the other (axis)
             ij, kk = (pos, neg[0]) if len(pos) == 2 else (neg, pos[0])
             i, j = ij
-            si, sj, sk = (1 / math.sqrt(abs(w[i])), 1 / math.sqrt(abs(w[j])),
-                          1 / math.sqrt(abs(w[kk])))
+            si, sk = 1 / math.sqrt(abs(w[i])), 1 / math.sqrt(abs(w[kk]))
             rho_max = max(abs(ylo[kk]), abs(yhi[kk])) / sk
             perm = [i, j, kk]
             patches = []
@@ -414,7 +410,7 @@ def _clip_to_box(V, F, lo, hi):
                     break
                 res = []
                 for k in range(len(poly)):
-                    (p, ip), (q, iq) = poly[k], poly[(k + 1) % len(poly)]
+                    (p, ip), (q, _) = poly[k], poly[(k + 1) % len(poly)]
                     dp, dq = sgn * (p[ax] - bound), sgn * (q[ax] - bound)
                     if dp >= 0:
                         res.append((p, ip))
@@ -557,7 +553,7 @@ def _embed_buffers(header: dict, src_dir: Path):
         if uri is None or uri.startswith("data:"):
             continue
         data = (src_dir / uri).read_bytes()
-        b["uri"] = "data:application/octet-stream;base64," + base64.b64encode(data).decode()
+        b["uri"] = data_uri(data)
 
 
 def write_tessellated_gltf(src, out, segments=None, edge=None, rows=None, only=None,
@@ -638,7 +634,7 @@ def write_tessellated_gltf(src, out, segments=None, edge=None, rows=None, only=N
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description="Tessellate RAYCAST_quadric nodes into a glTF mesh")
+    ap = argparse.ArgumentParser(prog=prog("tessellate"), description="Tessellate RAYCAST_quadric nodes into a glTF mesh")
     ap.add_argument("scene")
     ap.add_argument("out")
     g = ap.add_mutually_exclusive_group(required=True)
@@ -655,6 +651,3 @@ def main(argv=None):
               f"max vertex residual {t.info['residual']:.1e}")
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Tessellation convergence: depth and normal error of tessellated quadrics vs the exact surface.
 
     tools/tessellation_check.py [--fixtures NAME ...] [--segments 8 16 32 64 128 256]
@@ -42,22 +41,21 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
-import os
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import quadric_reference as qref  # noqa: E402
-import tessellate as tess  # noqa: E402
-import validate  # noqa: E402
+from . import quadric_reference as qref
+from . import tessellate as tess
+from .cast import trace_embree, trace_ray_triangle
+from .cli import prog
+from .metrics import angle, fit_slope
+from .paths import ROOT, find_raycast
+from .rays import quadric_rays
+from .runner import run_rays
 
-ROOT = Path(__file__).resolve().parents[2]
 QFIX = ROOT / "fixtures" / "quadrics"
 SLOPE_RANGE = (1.6, 2.4)
 NORMAL_SLOPE_RANGE = (0.7, 1.3)   # reported, not enforced
@@ -81,119 +79,6 @@ def load_quadrics(path, only=None):
     if only is not None:
         qs = [q for q in qs if q.name in set(only)]
     return qs
-
-
-def quadric_rays(quadrics, n, seed=0, frac_aimed=1.0):
-    """Deterministic rays (origins, unit dirs) from a sphere around the quadrics' world box,
-    aimed at uniform points inside a random quadric's local box (mapped to world)."""
-    rng = np.random.default_rng(seed)
-    boxes = [q.world_bounds() for q in quadrics]
-    lo = np.min([b[0] for b in boxes], axis=0)
-    hi = np.max([b[1] for b in boxes], axis=0)
-    center = 0.5 * (lo + hi)
-    size = float(np.linalg.norm(hi - lo)) or 1.0
-    u = rng.normal(size=(n, 3))
-    u /= np.linalg.norm(u, axis=1)[:, None]
-    origins = center + 0.75 * size * u
-    targets = lo + rng.random((n, 3)) * (hi - lo)
-    aimed = rng.random(n) < frac_aimed
-    which = rng.integers(0, len(quadrics), n)
-    for i in np.flatnonzero(aimed):
-        q = quadrics[which[i]]
-        llo, lhi = q.local_bounds()
-        pl = llo + rng.random(3) * (lhi - llo)
-        targets[i] = q.A @ pl + q.t
-    d = targets - origins
-    d /= np.linalg.norm(d, axis=1)[:, None]
-    return origins, d
-
-
-def _tri_normals(tris):
-    n = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
-    ln = np.linalg.norm(n, axis=1)
-    return n / np.where(ln > 0, ln, 1.0)[:, None]
-
-
-_mesh = validate.tri_mesh
-
-
-def trace_ray_triangle(tris, origins, unit, chunk=64):
-    """trimesh ray_triangle (float64): nearest hit depth (inf miss), normal, triangle."""
-    n = len(origins)
-    depth = np.full(n, np.inf)
-    tri = np.full(n, -1, np.int64)
-    if len(tris):
-        for s, it, ir, dist, first in validate.ray_triangle_hits(tris, origins, unit, chunk):
-            depth[s + ir[first]] = dist[first]
-            tri[s + ir[first]] = it[first]
-    normal = np.zeros((n, 3))
-    h = tri >= 0
-    normal[h] = _tri_normals(tris[tri[h]])
-    return depth, normal, tri
-
-
-def trace_embree(tris, origins, unit):
-    """trimesh + embreex (float32 traversal): nearest hit depth, normal, triangle."""
-    from trimesh.ray.ray_pyembree import RayMeshIntersector
-    n = len(origins)
-    depth = np.full(n, np.inf)
-    tri = np.full(n, -1, np.int64)
-    if len(tris):
-        inter = RayMeshIntersector(_mesh(tris))
-        it, ir, loc = inter.intersects_id(origins, unit, multiple_hits=False,
-                                          return_locations=True)
-        if len(ir):
-            depth[ir] = np.linalg.norm(loc - origins[ir], axis=1)
-            tri[ir] = it
-    normal = np.zeros((n, 3))
-    h = tri >= 0
-    normal[h] = _tri_normals(tris[tri[h]])
-    return depth, normal, tri
-
-
-def default_raycast():
-    env = os.environ.get("RAYCAST")
-    if env:
-        return Path(env)
-    return ROOT / "target" / "release" / "raycast"
-
-
-def run_raycast(raycast, scene, origins, dirs, workdir, threads=None, aov="depth,normal,id,prim"):
-    """raycast in rays mode; returns dict of arrays + sidecar + whole-process wall time."""
-    workdir = Path(workdir)
-    workdir.mkdir(parents=True, exist_ok=True)
-    rays = workdir / "rays.npy"
-    np.save(rays, np.concatenate([origins, dirs], axis=1).astype(np.float64))
-    out = workdir / "out"
-    cmd = [str(raycast), str(scene), "--rays", str(rays), "--aov", aov, "--out", str(out),
-           "--quiet"]
-    if threads:
-        cmd += ["--threads", str(threads)]
-    t0 = time.perf_counter()
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    if p.returncode != 0:
-        raise RuntimeError(f"raycast {scene}: exit {p.returncode}: "
-                           f"{(p.stderr or p.stdout).strip()[-300:]}")
-    res = {"wall": wall, "sidecar": json.loads((out / "raycast.json").read_text())}
-    for a in aov.split(","):
-        f = out / f"{a}.npy"
-        if f.exists():
-            res[a] = np.load(f)
-    return res
-
-
-def angle(a, b):
-    """Angle between unit vectors, atan2(|a×b|, a·b) (accurate near 0)."""
-    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.einsum("ij,ij->i", a, b))
-
-
-def fit_slope(x, y):
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    ok = (x > 0) & (y > 0) & np.isfinite(y)
-    if ok.sum() < 2:
-        return float("nan")
-    return float(np.polyfit(np.log(x[ok]), np.log(y[ok]), 1)[0])
 
 
 def compare(ref, depth, normal, unit, min_cos, subset=None, jump=np.inf):
@@ -261,7 +146,7 @@ def check_fixture(spec, segments, nrays, nrays_f64, seed, raycast, min_cos, work
                 g = Path(workdir) / f"{path.stem}_{n}.gltf"
                 tess.write_tessellated_gltf(path, g, only=[q.name for q in qs],
                                             drop_other_quadrics=True, tessellations=ts)
-                r = run_raycast(raycast, g, o, d, Path(workdir) / f"rc_{path.stem}_{n}",
+                r = run_rays(raycast, g, o, d, Path(workdir) / f"rc_{path.stem}_{n}",
                                 aov="depth,normal")
                 st = compare(ref, r["depth"], r["normal"], d, min_cos, jump=e)
             st.update({"fixture": spec, "segments": n, "edge": e, "triangles": len(tris),
@@ -314,7 +199,7 @@ def run_check(fixtures=DEFAULT_FIXTURES, segments=DEFAULT_SEGMENTS, nrays=2000, 
               f64_max_segments=128):
     """Returns (rows, slopes, ok)."""
     methods = ["ray_triangle", "embree"]
-    rc = Path(raycast) if raycast else default_raycast()
+    rc = Path(raycast) if raycast else find_raycast()
     if use_raycast:
         if not rc.exists():
             raise FileNotFoundError(f"raycast binary not found: {rc}")
@@ -332,7 +217,7 @@ def run_check(fixtures=DEFAULT_FIXTURES, segments=DEFAULT_SEGMENTS, nrays=2000, 
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog=prog("tessellation-check"), description=__doc__.split("\n")[0])
     ap.add_argument("--fixtures", nargs="+", default=DEFAULT_FIXTURES,
                     help="fixture files (in fixtures/quadrics unless a path), "
                          "optionally FILE:node,node")
@@ -361,6 +246,3 @@ def main(argv=None):
                                       for k, v in sl.items()], "ok": ok}, indent=1))
     return 0 if ok else 1
 
-
-if __name__ == "__main__":
-    sys.exit(main())

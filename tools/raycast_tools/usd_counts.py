@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Counts what a USD stage draws, with usd-core (pxr), to check raycast's USD importer.
 
 For each file: the number of mesh triangles (polygons fan-triangulated, every instance
@@ -14,13 +13,13 @@ Usage:
     .venv/bin/python tools/usd_counts.py FILE_OR_DIR... [--json]
 """
 
+import argparse
 import json
-import os
-import sys
 
 from pxr import Gf, Usd, UsdGeom
 
-GPRIMS = {"Sphere", "Cube", "Cylinder", "Cylinder_1", "Cone", "Capsule", "Capsule_1", "Plane"}
+from .cli import prog
+from .usd_stage import GPRIMS, drawn_prims, hidden_purpose, mesh_triangles, open_stage, usd_files
 
 # raycast draws gprims as quadrics plus triangles (docs/usd.md): a cube is 12 triangles, each
 # cap disc of a cylinder or cone a fan of CAP_SEGMENTS triangles.
@@ -30,7 +29,11 @@ CAP_SEGMENTS = 512
 def gprim_cost(prim):
     """(triangles, quadrics) raycast draws for an intrinsic gprim (fallbacks applied)."""
     type_name = prim.GetTypeName()
-    get = lambda name, fallback: prim.GetAttribute(name).Get() if prim.GetAttribute(name).HasAuthoredValue() else fallback
+
+    def get(name, fallback):
+        attribute = prim.GetAttribute(name)
+        return attribute.Get() if attribute.HasAuthoredValue() else fallback
+
     if type_name == "Sphere":
         return (0, 1) if get("radius", 1.0) > 0 else (0, 0)
     if type_name == "Cube":
@@ -58,58 +61,6 @@ def gprim_cost(prim):
             return (0, 0)
         return (0, 3 if get("height", 1.0) > 0 else 2)
     return (0, 0)
-
-
-def mesh_triangles(prim):
-    """Fan triangles of a mesh at the default time, None when it is not drawn."""
-    try:
-        return checked_mesh_triangles(prim)
-    except TypeError:
-        # A value of the wrong type (usd-wg pointsTypes.usda) is not drawn.
-        return None
-
-
-def checked_mesh_triangles(prim):
-    mesh = UsdGeom.Mesh(prim)
-    points = mesh.GetPointsAttr().Get()
-    counts = mesh.GetFaceVertexCountsAttr().Get()
-    indices = mesh.GetFaceVertexIndicesAttr().Get()
-    if points is None or counts is None or indices is None:
-        return None
-    if len(points) == 0 or len(counts) == 0 or len(indices) == 0:
-        return None
-    if len(points[0]) != 3:
-        return None
-    if any(c < 0 for c in counts) or sum(counts) != len(indices):
-        return None
-    if any(i < 0 or i >= len(points) for i in indices):
-        return None
-    triangles = sum(c - 2 for c in counts if c >= 3)
-    return triangles or None
-
-
-def hidden_purpose(prim):
-    imageable = UsdGeom.Imageable(prim)
-    if not imageable:
-        return False
-    return imageable.ComputePurpose() in (UsdGeom.Tokens.guide, UsdGeom.Tokens.proxy)
-
-
-def drawn_prims(root, excluded):
-    """Prims of the subtree at `root`, instance proxies included, without invisible
-    subtrees or the subtrees at the paths in `excluded`, a set the caller may add to
-    while iterating (a point instancer's own prototypes)."""
-    predicate = Usd.TraverseInstanceProxies(Usd.PrimDefaultPredicate)
-    it = iter(Usd.PrimRange(root, predicate))
-    for prim in it:
-        if prim.GetPath() in excluded:
-            it.PruneChildren()
-            continue
-        imageable = UsdGeom.Imageable(prim)
-        if imageable and imageable.GetVisibilityAttr().Get() == UsdGeom.Tokens.invisible:
-            it.PruneChildren()
-            continue
-        yield prim
 
 
 def world_bounds(prim):
@@ -182,14 +133,7 @@ class Counter:
 
 
 def count(path):
-    with open(os.devnull, "w") as devnull:
-        saved = os.dup(2)
-        os.dup2(devnull.fileno(), 2)
-        try:
-            stage = Usd.Stage.Open(path)
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
+    stage = open_stage(path)
 
     counter = Counter()
     counter.walk(stage.GetPseudoRoot(), 1)
@@ -207,33 +151,19 @@ def count(path):
     }
 
 
-def files(arguments):
-    """(path to open, name to report): files under a folder are named relative to it."""
-    for argument in arguments:
-        if os.path.isdir(argument):
-            for folder, _, names in sorted(os.walk(argument)):
-                for name in sorted(names):
-                    if name.rsplit(".", 1)[-1].lower() in ("usd", "usda", "usdc", "usdz"):
-                        path = os.path.join(folder, name)
-                        yield path, os.path.relpath(path, argument)
-        else:
-            yield argument, argument
-
-
-def main(argv):
-    as_json = "--json" in argv
-    arguments = [a for a in argv if a != "--json"]
-    if not arguments:
-        print(__doc__, file=sys.stderr)
-        return 2
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog=prog("usd-counts"), description=__doc__.split("\n\n")[0])
+    ap.add_argument("paths", nargs="+", help="USD files or folders (searched recursively)")
+    ap.add_argument("--json", action="store_true", help="machine-readable output")
+    a = ap.parse_args(argv)
     results = []
-    for path, name in files(arguments):
+    for path, name in usd_files(a.paths):
         try:
             result = count(path)
         except Exception as error:  # noqa: BLE001 - report and go on
             result = {"error": str(error).strip().splitlines()[-1].strip()}
         results.append({**result, "file": name})
-    if as_json:
+    if a.json:
         print(json.dumps(results, indent=1))
     else:
         for r in results:
@@ -244,6 +174,3 @@ def main(argv):
                       f"{r['gprims']} gprims")
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))

@@ -1,7 +1,6 @@
-#!/usr/bin/env python3
 """Validate raycast against independent references.
 
-    tools/validate.py SCENE_OR_DIR... [--rays N] [--seed S] [--json] [--raycast PATH]
+    python -m raycast_tools validate SCENE_OR_DIR... [--rays N] [--seed S] [--json] [--raycast PATH]
                       [--max-rays-f64 N] [--camera]
 
 For each scene (.gltf/.glb/.obj; directories are searched recursively; files in a
@@ -36,23 +35,24 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import shutil
-import subprocess
-import sys
 import tempfile
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import warnings
-
 import numpy as np
 
-warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"trimesh\.visual.*")
+from . import quadric_reference as qref
+from .cast import ray_triangle_hits, trace_embree
+from .cli import prog
+from .metrics import angle, edge_distance, stats
+from .paths import raycast_or_exit
+from .rays import camera_rays, make_rays
+from .runner import run_raycast, run_rays
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import quadric_reference as qref  # noqa: E402
+warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"trimesh\.visual.*")
 
 U32 = 2.0 ** -24  # unit roundoff of float32
 
@@ -332,113 +332,7 @@ class SkipScene(Exception):
 
 # ------------------------------------------------------------------ rays
 
-def make_rays(ref: RefScene, n: int, seed: int):
-    """(origins, unit dirs, raycast dirs (random lengths)) deterministic from seed."""
-    rng = np.random.default_rng(seed)
-    lo, hi = ref.bounds()
-    center = 0.5 * (lo + hi)
-    size = float(np.linalg.norm(hi - lo)) or 1.0
-    radius = 0.75 * size  # 1.5x the half diagonal: outside the box
-    u = rng.normal(size=(n, 3))
-    u /= np.linalg.norm(u, axis=1)[:, None]
-    origins = center + radius * u
-    targets = lo + rng.random((n, 3)) * (hi - lo)  # box rays (some miss)
-    kind = rng.random(n)
-    ntri = len(ref.tris)
-    if ntri:
-        # 35%: uniform triangle index (small triangles, edges); 35%: area-weighted
-        aim = kind < 0.7
-        area = 0.5 * np.linalg.norm(np.cross(ref.tris[:, 1] - ref.tris[:, 0],
-                                             ref.tris[:, 2] - ref.tris[:, 0]), axis=1)
-        by_index = rng.integers(0, ntri, n)
-        p = area / area.sum() if area.sum() > 0 else None
-        by_area = rng.choice(ntri, n, p=p)
-        tri = np.where(kind < 0.35, by_index, by_area)
-        r1, r2 = rng.random(n), rng.random(n)
-        s = np.sqrt(r1)
-        b = np.stack([1 - s, s * (1 - r2), s * r2], axis=1)
-        pts = np.einsum("ij,ijk->ik", b, ref.tris[tri])
-        targets[aim] = pts[aim]
-    if ref.quadrics:
-        # 30% aimed at a point inside a quadric's local box (world-transformed)
-        qa = (kind >= 0.7) & (kind < 1.0) if ntri == 0 else (kind >= 0.4) & (kind < 0.7)
-        for i in np.flatnonzero(qa):
-            q = ref.quadrics[rng.integers(len(ref.quadrics))]
-            lb = q.local_bounds()
-            if lb is None:
-                continue
-            pl = lb[0] + rng.random(3) * (lb[1] - lb[0])
-            targets[i] = q.A @ pl + q.t
-    d = targets - origins
-    dn = np.linalg.norm(d, axis=1)
-    dn[dn == 0] = 1
-    unit = d / dn[:, None]
-    scale = np.exp(rng.uniform(np.log(0.5), np.log(2.0), n))  # raycast must not assume |d| = 1
-    return origins, unit, unit * scale[:, None]
-
-
-def camera_rays(cam: dict, width: int, height: int):
-    """Per-pixel (origins, dirs) from the sidecar's camera block (docs/buffers-and-cli.md)."""
-    C = np.array(cam["camera_to_world"], dtype=np.float64).reshape(4, 4)
-    i = np.arange(width) + 0.5
-    j = np.arange(height) + 0.5
-    sx = 2.0 * i / width - 1.0
-    sy = 1.0 - 2.0 * j / height
-    SX, SY = np.meshgrid(sx, sy)  # (H, W): row j, column i
-    SX, SY = SX.ravel(), SY.ravel()
-    n = SX.size
-    if cam.get("type", "perspective") == "perspective":
-        tan = math.tan(float(cam["yfov"]) / 2.0)
-        aspect = width / height
-        local = np.stack([SX * tan * aspect, SY * tan, -np.ones(n), np.zeros(n)], axis=1)
-        dirs = local @ C.T
-        origins = np.repeat(C[None, :3, 3], n, axis=0)
-    else:
-        ymag = float(cam["ymag"])
-        xmag = ymag * width / height
-        local = np.stack([SX * xmag, SY * ymag, np.zeros(n), np.ones(n)], axis=1)
-        origins = (local @ C.T)[:, :3]
-        dirs = np.repeat((C @ np.array([0, 0, -1.0, 0]))[None], n, axis=0)
-    dirs = dirs[:, :3]
-    unit = dirs / np.linalg.norm(dirs, axis=1)[:, None]
-    return origins, unit, dirs
-
-
 # ------------------------------------------------------------------ references
-
-def tri_mesh(tris):
-    """An (n, 3, 3) triangle soup as an unprocessed trimesh.Trimesh (face i = tris[i])."""
-    import trimesh
-    v = tris.reshape(-1, 3)
-    f = np.arange(len(v)).reshape(-1, 3)
-    return trimesh.Trimesh(vertices=v, faces=f, process=False, validate=False)
-
-
-def _mesh(ref: RefScene):
-    return tri_mesh(ref.tris)
-
-
-def ray_triangle_hits(tris, origins, unit, chunk):
-    """All hits of trimesh's float64 ray_triangle, chunk rays at a time.
-
-    Yields (s, it, ir, dist, first) for each chunk starting at ray s that hits
-    anything: triangle, chunk-relative ray and distance of every hit, sorted by ray
-    then distance, and `first`, the index of each ray's nearest hit in those arrays
-    (the one multiple_hits=False would return).  `tris` must be non-empty.
-    """
-    from trimesh.ray.ray_triangle import RayMeshIntersector
-    inter = RayMeshIntersector(tri_mesh(tris))
-    for s in range(0, len(origins), chunk):
-        o, d = origins[s:s + chunk], unit[s:s + chunk]
-        it, ir, loc = inter.intersects_id(o, d, multiple_hits=True, return_locations=True)
-        if len(it) == 0:
-            continue
-        dist = np.linalg.norm(loc - o[ir], axis=1)
-        order = np.lexsort((dist, ir))
-        it, ir, dist = it[order], ir[order], dist[order]
-        first = np.flatnonzero(np.r_[True, ir[1:] != ir[:-1]])
-        yield s, it, ir, dist, first
-
 
 def trace_f64(ref: RefScene, origins, unit, chunk=32):
     """ray_triangle (float64) with all hits kept, so ties can be found.
@@ -469,66 +363,7 @@ def trace_f64(ref: RefScene, origins, unit, chunk=32):
     return depth, tri, tie
 
 
-def trace_embree(ref: RefScene, origins, unit):
-    n = len(origins)
-    depth = np.full(n, np.inf)
-    tri = np.full(n, -1, dtype=np.int64)
-    if len(ref.tris) == 0:
-        return depth, tri
-    from trimesh.ray.ray_pyembree import RayMeshIntersector
-    inter = RayMeshIntersector(_mesh(ref))
-    loc, ir, it = inter.intersects_location(origins, unit, multiple_hits=False)
-    if len(ir):
-        depth[ir] = np.linalg.norm(loc - origins[ir], axis=1)
-        tri[ir] = it
-    return depth, tri
-
-
-def _edge_distance(tris, p):
-    """Distance from points p (n,3) to the nearest edge segment of tris (n,3,3)."""
-    best = np.full(len(p), np.inf)
-    for a, b in ((0, 1), (1, 2), (2, 0)):
-        A, B = tris[:, a], tris[:, b]
-        ab = B - A
-        ll = np.einsum("ij,ij->i", ab, ab)
-        with np.errstate(all="ignore"):
-            t = np.clip(np.einsum("ij,ij->i", p - A, ab) / ll, 0, 1)
-        t = np.where(ll > 0, t, 0)
-        c = A + t[:, None] * ab
-        best = np.minimum(best, np.linalg.norm(p - c, axis=1))
-    return best
-
-
-def _angle(a, b):
-    cr = np.linalg.norm(np.cross(a, b), axis=1)
-    return np.arctan2(cr, np.einsum("ij,ij->i", a, b))
-
-
-def _stats(x):
-    x = np.asarray(x, dtype=np.float64)
-    if x.size == 0:
-        return {"max": None, "p99": None, "mean": None}
-    return {"max": float(x.max()), "p99": float(np.percentile(x, 99)), "mean": float(x.mean())}
-
-
 # ------------------------------------------------------------------ raycast
-
-def run_raycast(raycast, scene, args, out):
-    cmd = [str(raycast), str(scene), *args, "--out", str(out), "--quiet"]
-    t0 = time.perf_counter()
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    dt = time.perf_counter() - t0
-    if p.returncode != 0:
-        msg = (p.stderr.strip() or p.stdout.strip()).splitlines()
-        raise RuntimeError(f"raycast exit {p.returncode}: {msg[-1] if msg else ''}")
-    res = {"wall": dt}
-    for a in ("depth", "normal", "id", "prim"):
-        f = Path(out) / f"{a}.npy"
-        if f.exists():
-            res[a] = np.load(f)
-    res["sidecar"] = json.loads((Path(out) / "raycast.json").read_text())
-    return res
-
 
 def map_objects(ref: RefScene, sidecar_objects):
     """raycast object id (1-based) -> reference object index (-1 unknown).
@@ -600,7 +435,7 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
     rep["rays_f64"] = nf
     t0 = time.perf_counter()
     try:
-        dem, triem = trace_embree(ref, origins, unit)
+        dem, _, triem = trace_embree(ref.tris, origins, unit)
         rep["time_embree"] = time.perf_counter() - t0
         have_embree = True
     except ImportError as e:
@@ -695,7 +530,7 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
         ok = (trisel >= 0) & np.isfinite(dep)
         if ok.any():
             p = origins[ok] + dep[ok, None] * unit[ok]
-            reasons["edge"][np.flatnonzero(ok)[_edge_distance(ref.tris[trisel[ok]], p) < band]] = True
+            reasons["edge"][np.flatnonzero(ok)[edge_distance(ref.tris[trisel[ok]], p) < band]] = True
 
     amb = np.zeros(n, dtype=bool)
     for v in reasons.values():
@@ -746,10 +581,10 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
                     check("prim_agreement", pok, pok >= TOL["prim_agreement"])
             err = np.abs(rdepth[bh] - ref_depth[bh])
             rel = err / ref_depth[bh]
-            ang = _angle(rnormal[bh], ref_normal[bh])
-            rep[f"{label_}_depth_abs"] = _stats(err)
-            rep[f"{label_}_depth_rel"] = _stats(rel)
-            rep[f"{label_}_normal_angle"] = _stats(ang)
+            ang = angle(rnormal[bh], ref_normal[bh])
+            rep[f"{label_}_depth_abs"] = stats(err)
+            rep[f"{label_}_depth_rel"] = stats(rel)
+            rep[f"{label_}_normal_angle"] = stats(ang)
             flipped = int((ang > math.pi / 2).sum())
             rep[f"{label_}_normal_flipped"] = flipped
             if label_ == "mesh":
@@ -799,11 +634,8 @@ def validate_scene(path, raycast, nrays=2000, seed=0, max_f64=2000, camera=False
     tmp = Path(tempfile.mkdtemp(prefix="validate-"))
     try:
         origins, unit, rdirs = make_rays(ref, nrays, seed)
-        rays_file = tmp / "rays.npy"
-        np.save(rays_file, np.concatenate([origins, rdirs], axis=1).astype(np.float64))
         try:
-            rc = run_raycast(raycast, path, ["--rays", str(rays_file),
-                                             "--aov", "depth,normal,id,prim"], tmp / "rays")
+            rc = run_rays(raycast, path, origins, rdirs, tmp, out_name="rays")
         except Exception as e:
             reports.append(dict(base, mode="rays", status="error", reason=str(e), ok=False))
         else:
@@ -891,35 +723,23 @@ def table(reports):
     return "\n".join(lines)
 
 
-def default_raycast():
-    env = os.environ.get("RAYCAST")
-    if env:
-        return env
-    root = Path(__file__).resolve().parents[2]
-    for p in (root / "target" / "release" / "raycast", root / "target" / "debug" / "raycast"):
-        if p.exists():
-            return str(p)
-    return shutil.which("raycast") or str(root / "target" / "release" / "raycast")
-
-
 def main(argv=None):
-    ap = argparse.ArgumentParser(description="Validate raycast against trimesh and the "
+    ap = argparse.ArgumentParser(prog=prog("validate"),
+                                 description="Validate raycast against trimesh and the "
                                              "quadric reference.")
     ap.add_argument("scenes", nargs="+", help="scene files or directories")
     ap.add_argument("--rays", type=int, default=2000, help="rays per scene (default 2000)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json", action="store_true", help="machine-readable output")
-    ap.add_argument("--raycast", default=None, help="raycast binary (default target/release)")
+    ap.add_argument("--raycast", default=None, help="raycast binary (default: $RAYCAST, target/release, "
+                                                    "target/debug, PATH)")
     ap.add_argument("--max-rays-f64", type=int, default=2000,
                     help="rays given to trimesh's slow float64 ray_triangle (the rest use "
                          "embree's triangle choice with a float64 plane hit; default 2000)")
     ap.add_argument("--camera", action="store_true", help="also check camera mode (64x64)")
     ap.add_argument("--keep", default=None, help="keep rays and raycast outputs in this folder")
     a = ap.parse_args(argv)
-    raycast = a.raycast or default_raycast()
-    if not Path(raycast).exists() and not shutil.which(raycast):
-        print(f"validate.py: raycast binary not found: {raycast}", file=sys.stderr)
-        return 2
+    raycast = raycast_or_exit(a.raycast, "validate")
     reports = []
     for path, skip in find_scenes(a.scenes):
         if skip:
@@ -947,6 +767,3 @@ def _json_default(o):
         return sorted(o)
     return str(o)
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Validate raycast's USD import against usd-core + trimesh.
 
     tools/validate_usd.py SCENE_OR_DIR... [--rays N] [--seed S] [--segments N] [--json]
@@ -38,20 +37,21 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
+from pxr import Usd, UsdGeom
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import quadric_reference as qref  # noqa: E402
-import validate  # noqa: E402
-from export_usd_fixtures import flatten  # noqa: E402
-from usd_counts import drawn_prims, files, hidden_purpose  # noqa: E402
-
-from pxr import Usd, UsdGeom  # noqa: E402
+from . import quadric_reference as qref
+from . import validate
+from .cli import prog
+from .metrics import edge_distance
+from .paths import raycast_or_exit
+from .rays import make_rays
+from .runner import run_rays
+from .usd_stage import USD_EXTS, drawn_prims, flatten, hidden_purpose, open_stage, usd_files
 
 SEGMENTS = 256  # default angular resolution of the gprim tessellation (around the axis)
 
@@ -82,7 +82,6 @@ TOL_USD = {
 AMBIG = validate.AMBIG
 
 SUFFIXES = (":caps", ":top", ":bottom")
-USD_EXTS = {".usd", ".usda", ".usdc", ".usdz"}
 
 
 def strip_suffix(name: str) -> str:
@@ -303,17 +302,6 @@ def quadric_prims(stage):
 
 # ------------------------------------------------------------------ one scene
 
-def open_stage(path):
-    with open(os.devnull, "w") as devnull:
-        saved = os.dup(2)
-        os.dup2(devnull.fileno(), 2)
-        try:
-            return Usd.Stage.Open(str(path))
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
-
-
 def ref_scene(path, objects):
     objs = [validate.RefObject(f"usd:{name}", name, -1,
                                np.asarray(tris, dtype=np.float64).reshape(-1, 3, 3), False)
@@ -346,7 +334,7 @@ def validate_scene(path, raycast, nrays=500, seed=0, segments=SEGMENTS):
     if inner.bounds() is None:
         report["skipped"] = "nothing drawn"
         return report
-    origins, unit, dirs = validate.make_rays(inner, nrays, seed)
+    origins, unit, dirs = make_rays(inner, nrays, seed)
     lo, hi = inner.bounds()
     size = float(np.linalg.norm(hi - lo)) or 1.0
     sag = tess.sagitta
@@ -383,17 +371,14 @@ def validate_scene(path, raycast, nrays=500, seed=0, segments=SEGMENTS):
     m = ti >= 0
     if m.any():
         p = origins[m] + unit[m] * di[m, None]
-        ed = validate._edge_distance(inner.tris[ti[m]], p)
+        ed = edge_distance(inner.tris[ti[m]], p)
         for i in np.flatnonzero(m)[ed <= AMBIG["edge_rel"] * size]:
             reasons[i].add("edge")
         for i in np.flatnonzero(m)[cos[m] <= AMBIG["graze_cos"]]:
             reasons[i].add("graze")
 
     with tempfile.TemporaryDirectory() as tmp:
-        rays_file = Path(tmp) / "rays.npy"
-        np.save(rays_file, np.concatenate([origins, dirs], axis=1))
-        rc = validate.run_raycast(raycast, path, ["--rays", str(rays_file), "--aov",
-                                                  "depth,normal,id,prim"], Path(tmp) / "out")
+        rc = run_rays(raycast, path, origins, dirs, tmp)
     rdepth = np.asarray(rc["depth"], dtype=np.float64).reshape(-1)
     rid = np.asarray(rc["id"]).reshape(-1).astype(np.int64)
     id_name = {int(o["id"]): o["name"] for o in rc["sidecar"].get("objects", [])}
@@ -405,7 +390,7 @@ def validate_scene(path, raycast, nrays=500, seed=0, segments=SEGMENTS):
     for i in np.flatnonzero(rhit & ~np.isfinite(di) & ~np.isfinite(do)):
         if len(inner.tris):
             p = origins[i] + unit[i] * rdepth[i]
-            ed = validate._edge_distance(inner.tris, np.repeat(p[None], len(inner.tris), 0))
+            ed = edge_distance(inner.tris, np.repeat(p[None], len(inner.tris), 0))
             if ed.min() <= AMBIG["edge_rel"] * size:
                 reasons[i].add("edge")
     amb = np.array([bool(r) for r in reasons])
@@ -465,10 +450,10 @@ def validate_scene(path, raycast, nrays=500, seed=0, segments=SEGMENTS):
 # ------------------------------------------------------------------ command line
 
 def find_usd(arguments):
-    for path, name in files(arguments):
+    for path, name in usd_files(arguments):
         if "bad" in Path(path).parts:
             continue
-        if Path(path).suffix.lower() in USD_EXTS:
+        if Path(path).suffix.lower()[1:] in USD_EXTS:
             yield path, name
 
 
@@ -489,7 +474,7 @@ def line(r):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog=prog("validate-usd"), description=__doc__.split("\n\n")[0])
     ap.add_argument("paths", nargs="+")
     ap.add_argument("--rays", type=int, default=500)
     ap.add_argument("--seed", type=int, default=0)
@@ -497,10 +482,7 @@ def main(argv=None):
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--raycast", default=None)
     args = ap.parse_args(argv)
-    raycast = Path(args.raycast) if args.raycast else validate.default_raycast()
-    if raycast is None or not Path(raycast).exists():
-        print(f"raycast binary not found ({raycast})", file=sys.stderr)
-        return 2
+    raycast = raycast_or_exit(args.raycast, "validate-usd")
     reports = []
     status = 0
     for path, name in find_usd(args.paths):
@@ -522,6 +504,3 @@ def main(argv=None):
         return 2
     return status
 
-
-if __name__ == "__main__":
-    sys.exit(main())

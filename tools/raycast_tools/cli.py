@@ -1,0 +1,58 @@
+"""`python -m raycast_tools COMMAND [ARGS...]`: one command line for every Python tool.
+
+Each command lives in its own module with a `main(argv)`; the module is imported only
+when its command runs, so `--help` and the standard-library-only commands (thread-scaling)
+start without numpy, trimesh, usd-core or mpmath.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+PROG = "python -m raycast_tools"
+
+# command -> (module, one line on what it does)
+COMMANDS = {
+    "validate": ("validate", "compare raycast with trimesh and the quadric reference, ray by ray"),
+    "validate-usd": ("validate_usd", "compare raycast's USD import with usd-core + trimesh"),
+    "bench": ("bench", "octree vs obvhs vs Embree vs trimesh (reports/bench.md)"),
+    "error-vs-time": ("error_vs_time", "depth error against run time (reports/error_vs_time.md)"),
+    "fixtures": ("make_fixtures", "write the glTF/OBJ fixtures under fixtures/"),
+    "quadric-fixtures": ("make_quadric_fixtures", "write the RAYCAST_quadric fixtures"),
+    "usd-fixtures": ("export_usd_fixtures", "write the USD fixtures under fixtures/usd/"),
+    "stiff-cases": ("stiff_cases", "write fixtures/stiff/cases.json (200-bit mpmath answers)"),
+    "tessellate": ("tessellate", "tessellate a glTF's quadric nodes into a glTF mesh"),
+    "tessellation-check": ("tessellation_check", "tessellation error against the exact quadric"),
+    "quadric-reference": ("quadric_reference", "trace rays with the object-space quadric reference"),
+    "random-quadrics": ("random_quadric_scenes", "write random quadric scenes for validation"),
+    "usd-counts": ("usd_counts", "count what a USD stage draws, with usd-core"),
+    "thread-scaling": ("thread_scaling", "octree and BVH2 trace time from 1 to 16 threads"),
+}
+
+
+def usage() -> str:
+    width = max(map(len, COMMANDS))
+    lines = [f"usage: {PROG} COMMAND [ARGS...]   ({PROG} COMMAND --help for its options)", "",
+             "commands:"]
+    lines += [f"  {name:<{width}}  {about}" for name, (_, about) in COMMANDS.items()]
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command named by argv[0] with the remaining arguments; its exit status."""
+    argv = sys.argv[1:] if argv is None else argv
+    if not argv or argv[0] in ("-h", "--help"):
+        print(usage())
+        return 0 if argv else 2
+    name, rest = argv[0], argv[1:]
+    if name not in COMMANDS:
+        print(f"{PROG}: unknown command {name!r}\n\n{usage()}", file=sys.stderr)
+        return 2
+    module = importlib.import_module(f"raycast_tools.{COMMANDS[name][0]}")
+    return module.main(rest) or 0
+
+
+def prog(command: str) -> str:
+    """The program name a command's argument parser shows in its usage line."""
+    return f"{PROG} {command}"
