@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
-# The whole test suite: formatting and lints, the Rust tests, then the Python side (fixture
-# checks with trimesh and tools/validate.py over every fixture) in a virtual environment
-# created from tools/requirements.txt.
+# The whole test suite: formatting and lints (Rust, and Python with ruff), the Rust tests, then
+# the Python side (fixture checks with trimesh, and `python -m raycast_tools validate` over every
+# fixture) in the virtual environment tools/venv.sh creates from tools/requirements.txt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 echo "== virtual environment"
 tools/venv.sh
+
+echo "== ruff check / ruff format --check (ruff.toml)"
+.venv/bin/ruff check
+.venv/bin/ruff format --check
 
 echo "== cargo fmt / clippy"
 cargo fmt --all -- --check
@@ -20,4 +24,4 @@ echo "== python tests"
 .venv/bin/python -m pytest tests/python -q
 
 echo "== validation against trimesh and the quadric reference"
-.venv/bin/python tools/raycast_tools/validate.py fixtures
+.venv/bin/python -m raycast_tools validate fixtures
