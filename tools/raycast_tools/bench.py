@@ -1,6 +1,6 @@
 """Benchmark raycast's octree against its obvhs backends, Embree (embreex) and trimesh.
 
-    .venv/bin/python tools/bench.py [--quick] [--big] [--out reports/bench.md]
+    .venv/bin/python -m raycast_tools bench [--quick] [--big] [--out reports/bench.md]
 
 Builds the Rust benchmark binary (benches/trace.rs), generates the scenes and ray sets in a
 temporary folder, runs every method on the same rays (one process per scene and side), and
@@ -395,7 +395,7 @@ def fmt(x, spec=".2f"):
 def report(r):
     m = r["machine"]
     lines = ["# Benchmark: octree vs obvhs vs Embree", "",
-             "Regenerate with `.venv/bin/python tools/bench.py` (`--quick` for a short run, `--big` "
+             "Regenerate with `.venv/bin/python -m raycast_tools bench` (`--quick` for a short run, `--big` "
              "adds the 20M-triangle scene); raw figures in `reports/bench.json`.", "",
              f"Machine: {m['nproc']} cores, {m['cpu']} ({m['mhz'] or '?'} MHz), {m['memory_gib']} GiB, "
              f"{m['rustc']}, Python {m['python']}, kernel {m['kernel']}. "

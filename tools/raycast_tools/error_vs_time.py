@@ -1,7 +1,7 @@
 """Depth error versus run time per ray: analytic quadrics, tessellations, world form, trimesh.
 
-    .venv/bin/python tools/error_vs_time.py [--rays N] [--segments 16 32 ...] [--out reports]
-                                            [--raycast PATH] [--quick]
+    .venv/bin/python -m raycast_tools error-vs-time [--rays N] [--segments 16 32 ...] [--out reports]
+                                                [--raycast PATH] [--quick]
 
 Writes reports/error_vs_time.md, reports/error_vs_time.png and reports/error_vs_time.json.
 
@@ -9,9 +9,9 @@ Scenes: fixtures/quadrics/ellipsoid.gltf (five transformed ellipsoids, quadrics 
 fixtures/quadrics/mixed.gltf (meshes and quadrics), fixtures/assets/stanford-bunny.obj
 (69,451 triangles) and unit spheres far from the origin: fixtures/quadrics/far_sphere.gltf
 (6.4e6) plus the same sphere translated to 1e5 and 1e7 (written to a temporary folder).
-Rays: tools/validate.py `make_rays` (deterministic, seed 0), unit directions.
+Rays: rays.py `make_rays` (deterministic, seed 0), unit directions.
 
-Reference ("ref"): quadrics, tools/quadric_reference.py `trace` (float64, object space, stable
+Reference ("ref"): quadrics, quadric_reference.py `trace` (float64, object space, stable
 roots + one Newton step), checked against `trace_mp` (mpmath, 120 bits) on a subset of
 quadric hits; triangles, trimesh `ray_triangle` (float64) picks the nearest triangle and the
 depth is recomputed on that triangle's plane with mpmath (120 bits) from the float64 vertex
@@ -20,7 +20,7 @@ values.  Rays the references flag as ambiguous (quadric tangent/clip face, ties,
 
 Methods (all single-threaded; raycast gets --threads 1):
 * raycast, analytic quadrics (or the mesh itself for the bunny);
-* raycast on tools/tessellate.py tessellations (glTF mesh, float32 positions about an anchor);
+* raycast on tessellate.py's tessellations (glTF mesh, float32 positions about an anchor);
 * trimesh + embree (embreex, float32) on the float64 world-space tessellation;
 * trimesh ray_triangle (float64, numpy + rtree) on the tessellation, on a small ray subset;
 * numpy "world form": the plain world-space quadric (Q, P, R baked with the node
@@ -594,7 +594,7 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
     L = []
     L.append("# Depth error versus run time per ray")
     L.append("")
-    L.append("Regenerate: `.venv/bin/python tools/error_vs_time.py` (writes this file, "
+    L.append("Regenerate: `.venv/bin/python -m raycast_tools error-vs-time` (writes this file, "
              f"`{png_path.name}` and `error_vs_time.json`; took {elapsed:.0f} s).")
     L.append("")
     la = mach["loadavg"]
@@ -624,7 +624,7 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
              "for quadrics is shown with the numpy world form instead. The tessellation error "
              "is the chordal (sagitta) error, ≈ e²/(8r) for edge length e on curvature radius "
              "r, divided by the incidence cosine; it falls as e² (see "
-             "`tools/tessellation_check.py` for the fitted slopes), so each halving of the "
+             "`python -m raycast_tools tessellation-check` for the fitted slopes), so each halving of the "
              "error costs about 1.4× the segments and 2× the triangles. p99 includes the "
              "silhouette and open-rim rays where a chord sends the ray to another facet; hit/"
              "miss disagreements are counted separately (column h/m) and not in the error. "
@@ -636,7 +636,7 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
              "whenever the triangle is right (bunny: the same p99 as ray_triangle; far "
              "spheres: the same as raycast's tessellation, the sagitta dominating). raycast "
              "stores triangle vertices in float32 about an anchor, which is the ~1e-7 error on "
-             "the bunny (tools/validate.py allows a p99 of 1e-6).")
+             "the bunny (`python -m raycast_tools validate` allows a p99 of 1e-6).")
     L.append("")
     L.append("## Scenes and references")
     L.append("")
@@ -672,7 +672,7 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
                  f"{r['hitmiss']} | {fmt(r['median'])} | {fmt(r['p99'])} | {fmt(r['max'])} | "
                  f"{fmt(r.get('mp_p99'))} | {fmt(r.get('mp_max'))} |")
     L.append("")
-    L.append(f"Settings: {args.rays} rays per scene (validate.py `make_rays`, seed 0), "
+    L.append(f"Settings: {args.rays} rays per scene (raycast_tools.rays `make_rays`, seed 0), "
              f"tessellations {args.segments} segments around (ellipsoids: half as many rings), "
              f"ray_triangle on {args.f64_rays} rays up to {args.f64_max_segments} segments, "
              f"bunny reference on {args.mesh_ref_rays} rays, mpmath on {args.mp_rays} quadric "
@@ -682,7 +682,7 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
     L.append("")
     L.append("From `cargo test --release --test stiff` (tests/stiff.rs), which checks each case of "
              "`fixtures/stiff/cases.json` against its expected value, computed offline in mpmath "
-             "at 200 bits by `tools/stiff_cases.py`, and against the case's own bound (derivations "
+             "at 200 bits by `python -m raycast_tools stiff-cases`, and against the case's own bound (derivations "
              "in `fixtures/stiff/README.md`; near tangency the bound scales with the root's "
              "condition, and ambiguous cases accept either a hit or a miss). *result* is the "
              "depth raycast computed, or what happened; the test fails if any case leaves its "

@@ -2,7 +2,7 @@
 
 Run with the repo's venv (usd-core 26.11, numpy):
 
-    .venv/bin/python tools/export_usd_fixtures.py
+    .venv/bin/python -m raycast_tools usd-fixtures
 
 Every scene is written twice, as text (`.usda`) and as binary crate (`.usdc`), from the same
 stage. fixtures/usd/README.md documents the scenes; fixtures/usd/expected_rays.json holds
@@ -177,6 +177,7 @@ def write_quadric(prim, extension: dict):
 def save(stage, stem: str):
     OUT.mkdir(parents=True, exist_ok=True)
     layer = stage.GetRootLayer()
+    # the old script path: fixture content, kept so that the fixtures stay byte-identical
     layer.documentation = "written by tools/export_usd_fixtures.py; do not edit"
     layer.Export(str(OUT / f"{stem}.usda"))
     layer.Export(str(OUT / f"{stem}.usdc"))
@@ -251,25 +252,27 @@ def export_gprims():
     def centre_of(row, col):
         return np.array([col * SPACING, row * SPACING, 0.0])
 
+    def define(schema, row, col, name, create, value):
+        """A gprim at grid cell (row, col), authoring `value` through the schema's `create`
+        method unless it is None (the fallback); returns the cell's centre."""
+        prim = schema.Define(stage, name)
+        if value is not None:
+            getattr(prim, create)(value)
+        c = centre_of(row, col)
+        place(prim, c)
+        return c
+
     # Sphere: authored radius and the fallback radius 1.
     for col, radius in enumerate([1.5, None]):
-        c = centre_of(0, col)
         name = f"/World/Sphere{col}"
-        prim = UsdGeom.Sphere.Define(stage, name)
-        if radius is not None:
-            prim.CreateRadiusAttr(radius)
-        place(prim, c)
+        c = define(UsdGeom.Sphere, 0, col, name, "CreateRadiusAttr", radius)
         r = radius or 1.0
         rays.append(ray(f"{name} from +Z", c + [0, 0, 10], [0, 0, -1], name, 10 - r, [0, 0, 1]))
         rays.append(ray(f"{name} from -X", c - [10, 0, 0], [1, 0, 0], name, 10 - r, [-1, 0, 0]))
     # Cube: size 3 and the fallback size 2.
     for col, size in enumerate([3.0, None]):
-        c = centre_of(1, col)
         name = f"/World/Cube{col}"
-        prim = UsdGeom.Cube.Define(stage, name)
-        if size is not None:
-            prim.CreateSizeAttr(size)
-        place(prim, c)
+        c = define(UsdGeom.Cube, 1, col, name, "CreateSizeAttr", size)
         h = (size or 2.0) / 2
         rays.append(ray(f"{name} +Z face", c + [0.5 * h, -0.25 * h, 10], [0, 0, -1], name, 10 - h,
                         [0, 0, 1], prim=[0]))

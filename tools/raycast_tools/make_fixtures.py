@@ -1,6 +1,6 @@
 """Write the hand-checkable test fixtures under fixtures/.
 
-Run with the repo's venv:  .venv/bin/python tools/make_fixtures.py
+Run with the repo's venv:  .venv/bin/python -m raycast_tools fixtures
 
 Only numpy and the standard library are used. The glTF JSON and binary buffers
 are written directly (struct/base64), so every byte is under our control and a
@@ -52,6 +52,8 @@ BAD_DIR = FIX / "bad"
 ASSET_DIR = FIX / "assets"
 SHARED_ASSETS = Path(os.environ.get("RAYCAST_SHARED_ASSETS", ROOT.parent / "shared" / "assets"))
 
+# Fixture content: it names the script's path before the tools became one package, and stays
+# as it is so that the fixtures regenerate byte-identical.
 GENERATOR = "raycast tools/make_fixtures.py"
 
 # sin(45 deg) == cos(45 deg) in double precision; the quaternion (0, S, 0, S)
@@ -494,6 +496,8 @@ ASSETS = [
     "obj/suzanne.obj",
 ]
 
+# Fixture content: it names the script's path before the tools became one package, and stays
+# as it is so that the fixtures regenerate byte-identical.
 LICENSES_MD = """\
 # Third-party assets in this folder
 
@@ -547,7 +551,7 @@ def copy_assets() -> None:
             missing.append(rel)
     FILES.write_bytes(ASSET_DIR / "LICENSES.md", LICENSES_MD.encode())
     if missing:
-        sys.exit(f"make_fixtures.py: assets missing from {SHARED_ASSETS} and from {ASSET_DIR}: {missing}")
+        sys.exit(f"fixtures: assets missing from {SHARED_ASSETS} and from {ASSET_DIR}: {missing}")
 
 
 # --------------------------------------------------------------------------
@@ -555,7 +559,7 @@ def copy_assets() -> None:
 
 def main(argv=None) -> int:
     argparse.ArgumentParser(prog=prog("fixtures"), description=__doc__.split("\n\n")[0]).parse_args(argv)
-    print(f"make_fixtures.py: writing into {FIX.relative_to(ROOT)}/")
+    print(f"fixtures: writing into {FIX.relative_to(ROOT)}/")
     make_cube()
     make_plane()
     make_modes()
@@ -569,5 +573,5 @@ def main(argv=None) -> int:
     make_obj()
     make_bad()
     copy_assets()
-    print(f"make_fixtures.py: {len(FILES.written)} files, sha256 of all: {FILES.digest()}")
+    print(f"fixtures: {len(FILES.written)} files, sha256 of all: {FILES.digest()}")
     return 0

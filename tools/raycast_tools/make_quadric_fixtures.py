@@ -1,7 +1,7 @@
 """Write the RAYCAST_quadric glTF fixtures under fixtures/quadrics/ and the
 invalid ones under fixtures/bad/quadric_*.gltf.
 
-Run with the repo's venv:  .venv/bin/python tools/make_quadric_fixtures.py
+Run with the repo's venv:  .venv/bin/python -m raycast_tools quadric-fixtures
 
 Only numpy and the standard library are used (mpmath, when installed, is used
 for an extra high-precision check of the expectations). A rerun gives
@@ -36,6 +36,8 @@ from .paths import ROOT
 
 QDIR = ROOT / "fixtures" / "quadrics"
 BAD_DIR = ROOT / "fixtures" / "bad"
+# Fixture content: it names the script's path before the tools became one package, and stays
+# as it is so that the fixtures regenerate byte-identical.
 GENERATOR = "raycast tools/make_quadric_fixtures.py"
 EXT = "RAYCAST_quadric"
 
@@ -93,7 +95,7 @@ class Gltf(gltf_writer.Gltf):
 
 # --------------------------------------------------------------------------
 # math: an object-space reference intersector (node matrices and quadric
-# parsing are tools/quadric_reference.py's)
+# parsing are quadric_reference.py's)
 
 
 def q_f(Q, P, R, p):

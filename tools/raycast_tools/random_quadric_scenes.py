@@ -1,13 +1,13 @@
 """Random quadric scenes for the validation against the independent reference.
 
-    .venv/bin/python tools/random_quadric_scenes.py OUT_DIR [--scenes K] [--seed S]
+    .venv/bin/python -m raycast_tools random-quadrics OUT_DIR [--scenes K] [--seed S]
 
 Writes K glTF files, each holding one quadric of every type (the lecture's six plus the
 elliptic, hyperbolic and parabolic cylinders) under a random node transform (rotation,
 non-uniform scale 0.5..2, shear up to 0.3, translation), with the coefficient frame itself
 rotated at random (Q' = R Q R^T, P' = R P: the surface turns inside its own axis-aligned clip
-box) and a random clip box. Deterministic for a seed. tools/validate.py compares raycast on
-them with tools/quadric_reference.py (object-space float64).
+box) and a random clip box. Deterministic for a seed. validate.py compares raycast on them with
+quadric_reference.py (object-space float64).
 """
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def scene(rng) -> dict:
             "extensions": {"RAYCAST_quadric": random_quadric(kind, rng)},
         })
     return {
-        "asset": {"version": "2.0", "generator": "raycast tools/random_quadric_scenes.py"},
+        "asset": {"version": "2.0", "generator": "raycast_tools random-quadrics"},
         "extensionsUsed": ["RAYCAST_quadric"],
         "extensionsRequired": ["RAYCAST_quadric"],
         "scene": 0,

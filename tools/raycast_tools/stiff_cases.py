@@ -3,8 +3,8 @@
 Writes ``fixtures/stiff/cases.json`` (see ``fixtures/stiff/README.md``), read by the Rust test
 suite so that ``cargo test`` needs no Python.  Run from the repository root:
 
-    .venv/bin/python tools/stiff_cases.py            # rebuild, check, write
-    .venv/bin/python tools/stiff_cases.py --check    # rebuild and check only; fail if the file differs
+    .venv/bin/python -m raycast_tools stiff-cases           # rebuild, check, write
+    .venv/bin/python -m raycast_tools stiff-cases --check   # rebuild and check only; fail if the file differs
 
 Method (per case), all in mpmath at 200 bits on the EXACT binary values of the float64 inputs
 (``mpf(float)`` is exact):

@@ -1,9 +1,9 @@
 """Tessellate RAYCAST_quadric nodes into triangles (and write them as a glTF mesh).
 
-    tools/tessellate.py SCENE.gltf OUT.gltf [--segments N | --edge E] [--rows M]
-                        [--only NAME ...]
+    python -m raycast_tools tessellate SCENE.gltf OUT.gltf [--segments N | --edge E] [--rows M]
+                                      [--only NAME ...]
 
-A quadric node (docs/RAYCAST_quadric.md) is read with tools/quadric_reference.py
+A quadric node (docs/RAYCAST_quadric.md) is read with quadric_reference.py
 (`quadrics_from_gltf`), brought to its principal axes in the node's LOCAL space and
 parametrised there, so that every generated vertex satisfies f(p) = 0 up to float64
 rounding; the node's world matrix is applied afterwards in float64.

@@ -1,15 +1,15 @@
 """Tessellation convergence: depth and normal error of tessellated quadrics vs the exact surface.
 
-    tools/tessellation_check.py [--fixtures NAME ...] [--segments 8 16 32 64 128 256]
-                                [--rays N] [--rays-f64 N] [--seed S] [--no-raycast]
-                                [--raycast PATH] [--json OUT.json] [--min-cos C]
+    python -m raycast_tools tessellation-check [--fixtures NAME ...] [--segments 8 16 32 64 128 256]
+        [--rays N] [--rays-f64 N] [--seed S] [--no-raycast] [--raycast PATH] [--json OUT.json]
+        [--min-cos C]
 
 For each fixture (default: sphere_coefficients.gltf, the `canonical` node of
 cylinder.gltf, all five nodes of ellipsoid.gltf) the same rays are cast with
 
-* (a) tools/quadric_reference.py `trace` (object-space float64, stable roots and a
+* (a) quadric_reference.py `trace` (object-space float64, stable roots and a
   Newton step): the reference;
-* (b) trimesh on tools/tessellate.py's world-space float64 triangles at each
+* (b) trimesh on tessellate.py's world-space float64 triangles at each
   resolution: `ray_triangle` (float64, numpy + rtree) on the first --rays-f64 rays
   up to --f64-max-segments, and `ray_pyembree` (embreex, float32) on all rays;
 * (c) raycast on the tessellation written as a glTF mesh (tessellate.write_tessellated_gltf),

@@ -10,7 +10,7 @@ time code; meshes with malformed topology are not drawn; point-instancer prototy
 live under their instancer are drawn only through it.
 
 Usage:
-    .venv/bin/python tools/usd_counts.py FILE_OR_DIR... [--json]
+    .venv/bin/python -m raycast_tools usd-counts FILE_OR_DIR... [--json]
 """
 
 import argparse

@@ -95,7 +95,7 @@ def flatten(stage, gprim=None):
     Meshes only by default. `gprim`, when given, is called as `gprim(prim, world matrix,
     object name)` for each drawn intrinsic gprim (GPRIMS), in place and in
     point-instancer prototypes, and returns a list of (object name, triangles) to add
-    (tools/validate_usd.py tessellates them). Meshes whose topology raycast rejects
+    (validate_usd.py tessellates them). Meshes whose topology raycast rejects
     (mesh_triangles is None) give no triangles."""
     objects = []
 

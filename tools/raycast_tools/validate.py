@@ -1,7 +1,7 @@
 """Validate raycast against independent references.
 
     python -m raycast_tools validate SCENE_OR_DIR... [--rays N] [--seed S] [--json] [--raycast PATH]
-                      [--max-rays-f64 N] [--camera]
+                                   [--max-rays-f64 N] [--camera] [--keep DIR]
 
 For each scene (.gltf/.glb/.obj; directories are searched recursively; files in a
 `bad/` folder, files trimesh cannot load and files trimesh is known to load wrongly
@@ -13,7 +13,7 @@ compares its depth, normal, id and prim per ray against
   reference, on the first --max-rays-f64 rays) and `ray_pyembree` (embreex, fast,
   float32 traversal; the reference for rays beyond --max-rays-f64), both on the
   scene's world-space triangles built in float64 from trimesh's scene graph;
-* tools/quadric_reference.py for glTF nodes carrying RAYCAST_quadric (trimesh
+* quadric_reference.py for glTF nodes carrying RAYCAST_quadric (trimesh
   does not see them), merged with the mesh hits by nearest depth.
 
 Rays whose answer is not well defined are counted as ambiguous and left out of the

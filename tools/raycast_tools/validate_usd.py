@@ -1,7 +1,7 @@
 """Validate raycast's USD import against usd-core + trimesh.
 
-    tools/validate_usd.py SCENE_OR_DIR... [--rays N] [--seed S] [--segments N] [--json]
-                          [--raycast PATH]
+    python -m raycast_tools validate-usd SCENE_OR_DIR... [--rays N] [--seed S] [--segments N] [--json]
+                                       [--raycast PATH]
 
 For each USD scene (.usd/.usda/.usdc/.usdz; folders are searched recursively, files in a
 `bad/` folder are skipped) the stage is opened with usd-core and flattened into world-space
@@ -17,7 +17,7 @@ Capsule_1, Plane; axis and schema fallbacks) are tessellated here, caps included
 
 Both tessellations are cast with trimesh's float64 ray_triangle (validate.py's
 `trace_f64`); general quadric prims (`raycast:quadric:*`) are intersected exactly with
-tools/quadric_reference.py and merged by nearest depth. The same rays (validate.py's
+quadric_reference.py and merged by nearest depth. The same rays (rays.py's
 `make_rays`) go through `raycast SCENE --rays R.npy`.
 
 Per scene: rays, hits, hit/miss disagreements, depth error against the tessellation
