@@ -1,4 +1,4 @@
-//! Benchmark driver for the acceleration backends (not a timed test; `tools/bench.py` runs it).
+//! Benchmark driver for the acceleration backends (not a timed test; run by `raycast_tools bench`).
 //!
 //! ```text
 //! cargo bench --bench trace -- SCENE --rays NAME=FILE.npy [--rays ...] [--backends octree,bvh,cwbvh]

@@ -1,5 +1,5 @@
 //! Quadric surfaces end to end: every documented ray of fixtures/quadrics (answers computed
-//! analytically by tools/make_quadric_fixtures.py and checked there against mpmath), both
+//! analytically by `raycast_tools quadric-fixtures` and checked there against mpmath), both
 //! coefficient forms, the clip box, cameras inside surfaces, the far sphere, the boundary trap
 //! with a large quadric, the mixed octree against brute force, and the extension's errors.
 

@@ -1,5 +1,5 @@
 //! The stiff and extreme cases of fixtures/stiff/cases.json: expected values computed offline
-//! in mpmath at 200 bits (tools/stiff_cases.py), each with its own error bound and ambiguous
+//! in mpmath at 200 bits (`raycast_tools stiff-cases`), each with its own error bound and ambiguous
 //! band (derivations in fixtures/stiff/README.md). No output may be NaN; bad data must be
 //! refused.
 //!

@@ -1,5 +1,5 @@
 //! USD importer: analytic answers on the fixtures in `fixtures/usd/` (written by
-//! `tools/export_usd_fixtures.py`, answers in `fixtures/usd/README.md`), the cross-format
+//! `raycast_tools usd-fixtures`, answers in `fixtures/usd/README.md`), the cross-format
 //! comparison with the glTF fixtures, and the real usd-wg assets against usd-core's counts.
 
 mod common;
@@ -22,7 +22,7 @@ fn load_path(path: &Path) -> Scene {
 }
 
 /// Every usd-wg asset loads, and draws as many triangles and quadrics as usd-core counts
-/// (`tools/usd_counts.py`, stored in `fixtures/usd/asset_counts.json`), with its meshes where
+/// (`raycast_tools usd-counts`, stored in `fixtures/usd/asset_counts.json`), with its meshes where
 /// usd-core places them. Uses ../shared/assets/usd when present, else the few assets copied
 /// into fixtures/usd/assets/usd-wg.
 #[test]
@@ -105,7 +105,7 @@ fn real_assets_match_usd_core_counts() {
     assert!(mismatches.is_empty(), "{}", mismatches.join("\n"));
 }
 
-/// The expected answers written by `tools/export_usd_fixtures.py`.
+/// The expected answers written by `raycast_tools usd-fixtures`.
 fn expected_rays() -> serde_json::Map<String, serde_json::Value> {
     let text = std::fs::read_to_string(fixture("usd/expected_rays.json")).unwrap();
     serde_json::from_str::<serde_json::Value>(&text)
