@@ -51,9 +51,15 @@ def main():
         u = np.cross(r, f)
         C = np.eye(4)
         C[:3, 0], C[:3, 1], C[:3, 2], C[:3, 3] = r, u, -f, eye
-        cam = {"source": "auto", "type": "perspective", "yfov": 0.6,
-               "aspect_ratio": a.width / a.height, "znear": 0.01, "zfar": None,
-               "camera_to_world": C.tolist()}
+        cam = {
+            "source": "auto",
+            "type": "perspective",
+            "yfov": 0.6,
+            "aspect_ratio": a.width / a.height,
+            "znear": 0.01,
+            "zfar": None,
+            "camera_to_world": C.tolist(),
+        }
         o, _, d = camera_rays(cam, a.width, a.height)
         shape = (a.height, a.width)
         side.update(mode="camera", width=a.width, height=a.height, camera=cam)
@@ -67,14 +73,28 @@ def main():
     prim = np.full(n, 4294967295, dtype=np.uint32)
     ids[ok] = ref.tri_obj[tri[ok]] + 1
     prim[ok] = ref.tri_local[tri[ok]]
-    objects = [{"id": k + 1, "name": ob.name, "kind": "mesh", "source": ob.key,
-                "triangles": int(len(ob.tris))} for k, ob in enumerate(ref.objects)]
+    objects = [
+        {
+            "id": k + 1,
+            "name": ob.name,
+            "kind": "mesh",
+            "source": ob.key,
+            "triangles": int(len(ob.tris)),
+        }
+        for k, ob in enumerate(ref.objects)
+    ]
     if ref.quadrics:
         qr = qref.trace(ref.quadrics, o, d)
         base = len(objects)
         for k, q in enumerate(ref.quadrics):
-            objects.append({"id": base + k + 1, "name": q.name, "kind": "quadric",
-                            "source": f"/nodes/{q.node}"})
+            objects.append(
+                {
+                    "id": base + k + 1,
+                    "name": q.name,
+                    "kind": "quadric",
+                    "source": f"/nodes/{q.node}",
+                }
+            )
         use = qr["depth"] < depth
         depth = np.where(use, qr["depth"], depth)
         normal[use] = qr["normal"][use]
@@ -92,10 +112,17 @@ def main():
     for k in aovs:
         v = data[k]
         np.save(out / f"{k}.npy", v.reshape(shape + v.shape[1:]))
-    side.update(aovs=aovs, objects=objects, warnings=[],
-                stats={"triangles": int(len(ref.tris)), "quadrics": len(ref.quadrics),
-                       "objects": len(objects)},
-                timings={"load": 0, "build": 0, "trace": 0, "write": 0})
+    side.update(
+        aovs=aovs,
+        objects=objects,
+        warnings=[],
+        stats={
+            "triangles": int(len(ref.tris)),
+            "quadrics": len(ref.quadrics),
+            "objects": len(objects),
+        },
+        timings={"load": 0, "build": 0, "trace": 0, "write": 0},
+    )
     (out / "raycast.json").write_text(json.dumps(side))
     return 0
 

@@ -228,7 +228,9 @@ def test_modes(case):
 
 def test_modes_points_lines_present():
     doc = load_gltf(FIX / "gltf" / "modes.gltf")
-    modes = {n["name"]: doc["meshes"][n["mesh"]]["primitives"][0].get("mode", 4) for n in doc["nodes"]}
+    modes = {
+        n["name"]: doc["meshes"][n["mesh"]]["primitives"][0].get("mode", 4) for n in doc["nodes"]
+    }
     assert modes == {"tris": 4, "strip": 5, "fan": 6, "points": 0, "lines": 1}
 
 
@@ -239,7 +241,9 @@ def test_sparse_positions():
     doc = load_gltf(FIX / "gltf" / "sparse.gltf")
     v = read_accessor(doc, doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"])
     assert v.tolist() == [[-1, -1, 0], [1, -1, 1], [1, 1, 1], [-1, 1, 0]]
-    base = read_accessor(doc, doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"], sparse=False)
+    base = read_accessor(
+        doc, doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"], sparse=False
+    )
     assert base[:, 2].tolist() == [0, 0, 0, 0]
 
 
@@ -252,7 +256,9 @@ def test_quantized_positions():
     doc = load_gltf(FIX / "gltf" / "quantized.gltf")
     assert doc["extensionsRequired"] == ["KHR_mesh_quantization"]
     assert doc["extensionsUsed"] == ["KHR_mesh_quantization"]
-    world = {name: m.vertices.tolist() for name, m in decoded_meshes(FIX / "gltf" / "quantized.gltf")}
+    world = {
+        name: m.vertices.tolist() for name, m in decoded_meshes(FIX / "gltf" / "quantized.gltf")
+    }
     assert world == {
         "short": [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]],
         "ubyte": [[2, -1, 0], [4, -1, 0], [4, 1, 0], [2, 1, 0]],
@@ -268,21 +274,27 @@ def test_quantized(case):
 # order), so the object is found from the face index.
 
 OBJ_RAYS = {
-    "two_objects.obj": ([("quad", 2), ("penta", 3)], [
-        ((0.5, -0.25, 5), (0, 0, -1), ("quad", 5.0, PZ, 0)),
-        ((-0.5, 0.25, 5), (0, 0, -1), ("quad", 5.0, PZ, 1)),
-        ((3.5, -0.5, 5), (0, 0, -1), ("penta", 6.0, PZ, 0)),
-        ((3, 0, 5), (0, 0, -1), ("penta", 6.0, PZ, 1)),
-        ((2.25, 0.25, 5), (0, 0, -1), ("penta", 6.0, PZ, 2)),
-        ((3.5, 1.25, 5), (0, 0, -1), MISS),
-    ]),
-    "groups.obj": ([("left", 2), ("right", 2)], [
-        ((-1.5, -0.5, 5), (0, 0, -1), ("left", 5.0, PZ, 0)),
-        ((-2.5, 0.5, 5), (0, 0, -1), ("left", 5.0, PZ, 1)),
-        ((2.5, -0.75, 5), (0, 0, -1), ("right", 4.5, PZ, 0)),
-        ((1.5, 0.5, 5), (0, 0, -1), ("right", 4.5, PZ, 1)),
-        ((0, 0, 5), (0, 0, -1), MISS),
-    ]),
+    "two_objects.obj": (
+        [("quad", 2), ("penta", 3)],
+        [
+            ((0.5, -0.25, 5), (0, 0, -1), ("quad", 5.0, PZ, 0)),
+            ((-0.5, 0.25, 5), (0, 0, -1), ("quad", 5.0, PZ, 1)),
+            ((3.5, -0.5, 5), (0, 0, -1), ("penta", 6.0, PZ, 0)),
+            ((3, 0, 5), (0, 0, -1), ("penta", 6.0, PZ, 1)),
+            ((2.25, 0.25, 5), (0, 0, -1), ("penta", 6.0, PZ, 2)),
+            ((3.5, 1.25, 5), (0, 0, -1), MISS),
+        ],
+    ),
+    "groups.obj": (
+        [("left", 2), ("right", 2)],
+        [
+            ((-1.5, -0.5, 5), (0, 0, -1), ("left", 5.0, PZ, 0)),
+            ((-2.5, 0.5, 5), (0, 0, -1), ("left", 5.0, PZ, 1)),
+            ((2.5, -0.75, 5), (0, 0, -1), ("right", 4.5, PZ, 0)),
+            ((1.5, 0.5, 5), (0, 0, -1), ("right", 4.5, PZ, 1)),
+            ((0, 0, 5), (0, 0, -1), MISS),
+        ],
+    ),
 }
 
 
@@ -315,9 +327,14 @@ def test_cameras():
     doc = load_gltf(FIX / "gltf" / "cameras.gltf")
     cams = {c["name"]: c for c in doc["cameras"]}
     assert cams["persp"]["perspective"] == {"aspectRatio": 2.0, "yfov": 0.8, "znear": 0.1}
-    assert cams["ortho"]["orthographic"]["xmag"] == 2.0 and cams["ortho"]["orthographic"]["ymag"] == 1.0
+    assert (
+        cams["ortho"]["orthographic"]["xmag"] == 2.0
+        and cams["ortho"]["orthographic"]["ymag"] == 1.0
+    )
     ortho = next(n for n in doc["nodes"] if n["name"] == "ortho")
-    r = trimesh.transformations.quaternion_matrix([ortho["rotation"][3], *ortho["rotation"][:3]])[:3, :3]
+    r = trimesh.transformations.quaternion_matrix([ortho["rotation"][3], *ortho["rotation"][:3]])[
+        :3, :3
+    ]
     assert np.allclose(r @ [0, 0, -1], [-1, 0, 0])  # looks down -X
     assert np.allclose(r @ [0, 1, 0], [0, 1, 0])  # +Y up
     assert np.allclose(r @ [1, 0, 0], [0, 0, -1])  # image right is world -Z
@@ -350,9 +367,20 @@ def test_fixtures_are_reproducible(tmp_path, monkeypatch):
     monkeypatch.setattr(mod, "FILES", FixtureFiles(tmp_path))
     for attr in ("FIX", "GLTF_DIR", "OBJ_DIR", "BAD_DIR"):
         monkeypatch.setattr(mod, attr, tmp_path / getattr(mod, attr).relative_to(FIX))
-    for fn in (mod.make_cube, mod.make_plane, mod.make_modes, mod.make_sparse, mod.make_quantized,
-               mod.make_instances, mod.make_scenes, mod.make_cameras, mod.make_far, mod.make_trap,
-               mod.make_obj, mod.make_bad):
+    for fn in (
+        mod.make_cube,
+        mod.make_plane,
+        mod.make_modes,
+        mod.make_sparse,
+        mod.make_quantized,
+        mod.make_instances,
+        mod.make_scenes,
+        mod.make_cameras,
+        mod.make_far,
+        mod.make_trap,
+        mod.make_obj,
+        mod.make_bad,
+    ):
         fn()
     fresh = sorted(p for p in tmp_path.rglob("*") if p.is_file())
     assert fresh
@@ -384,7 +412,7 @@ def load_gltf(path: Path) -> dict:
 def view_bytes(doc, index):
     v = doc["bufferViews"][index]
     off = v.get("byteOffset", 0)
-    return doc["_buffers"][v["buffer"]][off: off + v["byteLength"]], v.get("byteStride")
+    return doc["_buffers"][v["buffer"]][off : off + v["byteLength"]], v.get("byteStride")
 
 
 def read_accessor(doc, index, sparse=True) -> np.ndarray:
@@ -402,10 +430,16 @@ def read_accessor(doc, index, sparse=True) -> np.ndarray:
     if sparse and "sparse" in a:
         s = a["sparse"]
         idata, _ = view_bytes(doc, s["indices"]["bufferView"])
-        idx = np.frombuffer(idata, COMPONENT[s["indices"]["componentType"]], s["count"],
-                            s["indices"].get("byteOffset", 0))
+        idx = np.frombuffer(
+            idata,
+            COMPONENT[s["indices"]["componentType"]],
+            s["count"],
+            s["indices"].get("byteOffset", 0),
+        )
         vdata, _ = view_bytes(doc, s["values"]["bufferView"])
-        out[idx] = np.frombuffer(vdata, dt, s["count"] * n, s["values"].get("byteOffset", 0)).reshape(-1, n)
+        out[idx] = np.frombuffer(
+            vdata, dt, s["count"] * n, s["values"].get("byteOffset", 0)
+        ).reshape(-1, n)
     res = out.astype(np.float64)
     if a.get("normalized"):
         if dt.kind == "u":

@@ -62,8 +62,10 @@ def test_sphere_area_and_sagitta():
         t = tess.tessellate_quadric(q, segments=n)
         assert t.rows == n // 2
         tri = t.triangles
-        area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]),
-                                    axis=1).sum()
+        area = (
+            0.5
+            * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+        )
         assert area < 4 * math.pi * 4 and area > 4 * math.pi * 4 * (1 - 2 * (math.pi / n) ** 2)
         # farthest inward point of a facet: the centroid distance from the centre
         dmin = np.linalg.norm(tri.mean(axis=1), axis=1).min()
@@ -101,9 +103,15 @@ def test_write_gltf_roundtrip(tmp_path):
 
 
 def _small_check(use_raycast):
-    return tc.run_check(fixtures=["sphere_coefficients.gltf", "cylinder.gltf:canonical"],
-                        segments=[8, 16, 32, 64], nrays=300, nrays_f64=150, seed=1,
-                        raycast=str(RAYCAST), use_raycast=use_raycast)
+    return tc.run_check(
+        fixtures=["sphere_coefficients.gltf", "cylinder.gltf:canonical"],
+        segments=[8, 16, 32, 64],
+        nrays=300,
+        nrays_f64=150,
+        seed=1,
+        raycast=str(RAYCAST),
+        use_raycast=use_raycast,
+    )
 
 
 def test_convergence_slope_trimesh():

@@ -27,14 +27,20 @@ RAYCAST = Path(os.environ.get("RAYCAST", ROOT / "target" / "release" / "raycast"
 FIXTURES = ROOT / "fixtures"
 needs_binary = pytest.mark.skipif(
     not RAYCAST.exists(),
-    reason=f"raycast binary not built ({RAYCAST}); run cargo build --release first")
+    reason=f"raycast binary not built ({RAYCAST}); run cargo build --release first",
+)
 
 
 # ------------------------------------------------------------------ helpers
 
+
 def header(*nodes):
-    return {"asset": {"version": "2.0"}, "scenes": [{"nodes": list(range(len(nodes)))}],
-            "scene": 0, "nodes": list(nodes)}
+    return {
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": list(range(len(nodes)))}],
+        "scene": 0,
+        "nodes": list(nodes),
+    }
 
 
 def qnode(name, ext, **trs):
@@ -49,8 +55,9 @@ SPHERE2 = {"coefficients": [1, 1, 1, 0, 0, 0, 0, 0, 0, -4]}
 @pytest.fixture
 def fake_raycast(tmp_path):
     script = tmp_path / "raycast"
-    script.write_text(f"#!/bin/sh\nexec {sys.executable} "
-                      f"{ROOT / 'tests' / 'python' / 'fake_raycast.py'} \"$@\"\n")
+    script.write_text(
+        f'#!/bin/sh\nexec {sys.executable} {ROOT / "tests" / "python" / "fake_raycast.py"} "$@"\n'
+    )
     script.chmod(script.stat().st_mode | stat.S_IEXEC)
     return script
 
@@ -58,9 +65,18 @@ def fake_raycast(tmp_path):
 def quadric_scene(tmp_path):
     h = header(
         qnode("ball", SPHERE2),
-        qnode("tube", {"Q": [1, 0, 0, 0, 1, 0, 0, 0, 0], "P": [0, 0, 0], "R": -1,
-                       "bounds": {"min": [-1, -1, -2], "max": [1, 1, 2]}},
-              translation=[6, 0, 0], rotation=[0.2, 0.3, 0.1, 0.927], scale=[1, 1.5, 0.7]),
+        qnode(
+            "tube",
+            {
+                "Q": [1, 0, 0, 0, 1, 0, 0, 0, 0],
+                "P": [0, 0, 0],
+                "R": -1,
+                "bounds": {"min": [-1, -1, -2], "max": [1, 1, 2]},
+            },
+            translation=[6, 0, 0],
+            rotation=[0.2, 0.3, 0.1, 0.927],
+            scale=[1, 1.5, 0.7],
+        ),
     )
     h["asset"] = {"version": "2.0"}
     h["extensionsUsed"] = [qr.EXT]
@@ -71,18 +87,19 @@ def quadric_scene(tmp_path):
 
 # ------------------------------------------------------------------ quadric reference
 
+
 def test_sphere_hand_computed():
     q = qr.quadrics_from_header(header(qnode("s", SPHERE2)))[0]
     o = np.array([[0, 0, 5.0], [0, 0, 5.0], [0, 0, 0.0], [0, 3, 5.0], [0, 0, 5.0]])
     d = np.array([[0, 0, -1.0], [0, 0, -10.0], [1, 0, 0.0], [0, 0, -1.0], [0, 0, 1.0]])
     r = qr.intersect_quadric(q, o, d)
     assert r["depth"][0] == pytest.approx(3.0, rel=1e-15)
-    assert r["depth"][1] == pytest.approx(3.0, rel=1e-15)   # |d| = 10: depth = t|d|
+    assert r["depth"][1] == pytest.approx(3.0, rel=1e-15)  # |d| = 10: depth = t|d|
     assert r["t"][1] == pytest.approx(0.3, rel=1e-15)
-    assert r["depth"][2] == pytest.approx(2.0, rel=1e-15)   # from inside: far root
-    assert np.allclose(r["normal"][2], [1, 0, 0])            # toward f > 0 (outward)
-    assert not np.isfinite(r["depth"][3])                    # passes at distance 3 > 2
-    assert not np.isfinite(r["depth"][4])                    # sphere behind the origin
+    assert r["depth"][2] == pytest.approx(2.0, rel=1e-15)  # from inside: far root
+    assert np.allclose(r["normal"][2], [1, 0, 0])  # toward f > 0 (outward)
+    assert not np.isfinite(r["depth"][3])  # passes at distance 3 > 2
+    assert not np.isfinite(r["depth"][4])  # sphere behind the origin
     assert np.allclose(r["normal"][0], [0, 0, 1])
     assert not r["tangent"][:3].any()
 
@@ -107,8 +124,12 @@ def test_transformed_sphere_and_translation_far_away():
 
 def test_clipped_cylinder_near_then_far_root():
     # infinite cylinder x²+y² = 1 clipped to z in [-1, 1]
-    cyl = {"Q": [1, 0, 0, 0, 1, 0, 0, 0, 0], "P": [0, 0, 0], "R": -1,
-           "bounds": {"min": [-2, -2, -1], "max": [2, 2, 1]}}
+    cyl = {
+        "Q": [1, 0, 0, 0, 1, 0, 0, 0, 0],
+        "P": [0, 0, 0],
+        "R": -1,
+        "bounds": {"min": [-2, -2, -1], "max": [2, 2, 1]},
+    }
     q = qr.quadrics_from_header(header(qnode("c", cyl)))[0]
     # slanted ray: near root at z > 1 (clipped away), far root inside the box
     o = np.array([[-5.0, 0, 3.5]])
@@ -123,29 +144,47 @@ def test_clipped_cylinder_near_then_far_root():
 
 
 def test_clip_face_flagged():
-    cyl = {"coefficients": [1, 1, 0, 0, 0, 0, 0, 0, 0, -1],
-           "bounds": {"min": [-2, -2, -1], "max": [2, 2, 1]}}
+    cyl = {
+        "coefficients": [1, 1, 0, 0, 0, 0, 0, 0, 0, -1],
+        "bounds": {"min": [-2, -2, -1], "max": [2, 2, 1]},
+    }
     q = qr.quadrics_from_header(header(qnode("c", cyl)))[0]
-    r = qr.intersect_quadric(q, np.array([[-5.0, 0, 1.0], [-5.0, 0, 0.0]]),
-                             np.array([[1.0, 0, 0], [1.0, 0, 0]]))
+    r = qr.intersect_quadric(
+        q, np.array([[-5.0, 0, 1.0], [-5.0, 0, 0.0]]), np.array([[1.0, 0, 0], [1.0, 0, 0]])
+    )
     assert r["clip"][0] and not r["clip"][1]
 
 
 def test_cross_terms_enter_halved():
     # x² + y² + z² + 2xy - 4 = (x+y)² + z² - 4: the ray along y=-x lies in a cylinder
     # of radius 2 around that line; from (0,0,5) straight down hits z = 2
-    q = qr.quadrics_from_header(header(qnode("s", {"coefficients": [1, 1, 1, 2, 0, 0, 0, 0, 0, -4],
-                                                   "bounds": {"min": [-5, -5, -5],
-                                                              "max": [5, 5, 5]}})))[0]
+    q = qr.quadrics_from_header(
+        header(
+            qnode(
+                "s",
+                {
+                    "coefficients": [1, 1, 1, 2, 0, 0, 0, 0, 0, -4],
+                    "bounds": {"min": [-5, -5, -5], "max": [5, 5, 5]},
+                },
+            )
+        )
+    )[0]
     r = qr.intersect_quadric(q, np.array([[0.0, 0, 5]]), np.array([[0, 0, -1.0]]))
     assert r["depth"][0] == pytest.approx(3.0, rel=1e-15)
 
 
 def test_matrix_node_and_children():
-    h = {"scenes": [{"nodes": [0]}], "nodes": [
-        {"name": "parent", "matrix": [2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 10, 0, 0, 1],
-         "children": [1]},
-        qnode("child", SPHERE2, translation=[0, 1, 0])]}
+    h = {
+        "scenes": [{"nodes": [0]}],
+        "nodes": [
+            {
+                "name": "parent",
+                "matrix": [2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 10, 0, 0, 1],
+                "children": [1],
+            },
+            qnode("child", SPHERE2, translation=[0, 1, 0]),
+        ],
+    }
     q = qr.quadrics_from_header(h)[0]
     assert np.allclose(q.world[:3, 3], [10, 2, 0])
     r = qr.trace([q], np.array([[10.0, 2, 10]]), np.array([[0, 0, -1.0]]))
@@ -154,8 +193,7 @@ def test_matrix_node_and_children():
 
 
 def test_ellipsoid_bounds():
-    h = header(qnode("e", {"coefficients": [1, 4, 9, 0, 0, 0, 0, 0, 0, -1]},
-                     translation=[1, 2, 3]))
+    h = header(qnode("e", {"coefficients": [1, 4, 9, 0, 0, 0, 0, 0, 0, -1]}, translation=[1, 2, 3]))
     lo, hi = qr.quadrics_from_header(h)[0].world_bounds()
     assert np.allclose(lo, [0, 1.5, 3 - 1 / 3]) and np.allclose(hi, [2, 2.5, 3 + 1 / 3])
 
@@ -169,8 +207,15 @@ def test_float64_matches_mpmath(seed):
     ext = {"coefficients": c.tolist(), "bounds": {"min": [-3, -3, -3], "max": [3, 3, 3]}}
     quat = rng.normal(size=4)
     quat /= np.linalg.norm(quat)
-    h = header(qnode("q", ext, translation=(rng.normal(size=3) * 100).tolist(),
-                     rotation=quat.tolist(), scale=rng.uniform(0.3, 3, 3).tolist()))
+    h = header(
+        qnode(
+            "q",
+            ext,
+            translation=(rng.normal(size=3) * 100).tolist(),
+            rotation=quat.tolist(),
+            scale=rng.uniform(0.3, 3, 3).tolist(),
+        )
+    )
     q = qr.quadrics_from_header(h)[0]
     n = 40
     origins = q.t + rng.normal(size=(n, 3)) * 20
@@ -186,15 +231,17 @@ def test_float64_matches_mpmath(seed):
         if np.isfinite(depth):
             hits += 1
             assert f["depth"][i] == pytest.approx(depth, rel=1e-12)
-            ang = math.atan2(np.linalg.norm(np.cross(normal, f["normal"][i])),
-                             np.dot(normal, f["normal"][i]))
+            ang = math.atan2(
+                np.linalg.norm(np.cross(normal, f["normal"][i])), np.dot(normal, f["normal"][i])
+            )
             assert ang < 1e-10
     assert hits > 0
 
 
 def test_trace_nearest_and_ties():
-    h = header(qnode("a", SPHERE2), qnode("b", SPHERE2, translation=[0, 0, -10]),
-               qnode("c", SPHERE2))  # c coincides with a: a tie
+    h = header(
+        qnode("a", SPHERE2), qnode("b", SPHERE2, translation=[0, 0, -10]), qnode("c", SPHERE2)
+    )  # c coincides with a: a tie
     qs = qr.quadrics_from_header(h)
     r = qr.trace(qs, np.array([[0, 0, 5.0], [0, 0, -20.0]]), np.array([[0, 0, -1.0], [0, 0, 1.0]]))
     assert r["depth"][0] == pytest.approx(3.0) and "tie" in r["reasons"][0]
@@ -205,13 +252,15 @@ def test_trace_nearest_and_ties():
 def test_merge_with_mesh_hits():
     qs = qr.quadrics_from_header(header(qnode("a", SPHERE2)))
     r = qr.trace(qs, np.array([[0, 0, 5.0], [0, 0, 5.0]]), np.array([[0, 0, -1.0]] * 2))
-    m = qr.merge_hits(r, np.array([1.0, np.inf]), np.array([[0, 0, 1.0], [0, 0, 0]]),
-                      np.array([7, -1]))
+    m = qr.merge_hits(
+        r, np.array([1.0, np.inf]), np.array([[0, 0, 1.0], [0, 0, 0]]), np.array([7, -1])
+    )
     assert list(m["kind"]) == ["mesh", "quadric"]
     assert m["depth"][0] == 1.0 and m["node"][0] == 7 and m["depth"][1] == pytest.approx(3.0)
 
 
 # ------------------------------------------------------------------ validate internals
+
 
 def test_camera_rays_contract():
     C = np.eye(4)
@@ -245,19 +294,25 @@ def test_find_scenes_skips_bad_folder():
 
 def test_node_names_reproduce_trimesh():
     import trimesh
+
     p = FIXTURES / "gltf" / "instances.gltf"
     if not p.exists():
         pytest.skip("fixtures/gltf/instances.gltf missing")
     ref = validate.load_reference(p)
     scene = trimesh.load(str(p), force="scene")
     assert sum(len(o.tris) for o in ref.objects) == sum(
-        len(scene.geometry[scene.graph[f][1]].faces) for f in scene.graph.nodes_geometry)
+        len(scene.geometry[scene.graph[f][1]].faces) for f in scene.graph.nodes_geometry
+    )
     assert all(o.node >= 0 for o in ref.objects)
 
 
 def scenes_for_plumbing():
-    names = ["gltf/cube.gltf", "gltf/instances.gltf", "obj/two_objects.obj",
-             "assets/ShapeCollection.glb"]
+    names = [
+        "gltf/cube.gltf",
+        "gltf/instances.gltf",
+        "obj/two_objects.obj",
+        "assets/ShapeCollection.glb",
+    ]
     return [FIXTURES / n for n in names if (FIXTURES / n).exists()]
 
 
@@ -275,8 +330,11 @@ def test_validate_notices_broken_outputs(fake_raycast, monkeypatch):
     scene = FIXTURES / "assets" / "ShapeCollection.glb"
     if not scene.exists():
         pytest.skip("fixture missing")
-    for brk, check in (("depth", "depth_rel_p99"), ("id", "id_agreement"),
-                       ("normal", "normal_flipped_max")):
+    for brk, check in (
+        ("depth", "depth_rel_p99"),
+        ("id", "id_agreement"),
+        ("normal", "normal_flipped_max"),
+    ):
         monkeypatch.setenv("FAKE_RAYCAST_BREAK", brk)
         r = validate.validate_scene(scene, fake_raycast, nrays=200, seed=2)[0]
         assert r["status"] == "FAIL" and not r["checks"][check]["ok"], (brk, r["checks"])
@@ -294,20 +352,33 @@ def test_cli_exit_codes(tmp_path, fake_raycast):
     scene = FIXTURES / "gltf" / "cube.gltf"
     if not scene.exists():
         pytest.skip("fixture missing")
-    cmd = [sys.executable, "-m", "raycast_tools", "validate", str(scene), "--rays", "100",
-           "--raycast", str(fake_raycast), "--json"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "raycast_tools",
+        "validate",
+        str(scene),
+        "--rays",
+        "100",
+        "--raycast",
+        str(fake_raycast),
+        "--json",
+    ]
     p = subprocess.run(cmd, capture_output=True, text=True)
     assert p.returncode == 0, p.stderr
     assert json.loads(p.stdout)["ok"] is True
-    p = subprocess.run(cmd, capture_output=True, text=True,
-                       env=dict(os.environ, FAKE_RAYCAST_BREAK="depth"))
+    p = subprocess.run(
+        cmd, capture_output=True, text=True, env=dict(os.environ, FAKE_RAYCAST_BREAK="depth")
+    )
     assert p.returncode == 1
-    p = subprocess.run(cmd[:4] + [str(scene), "--raycast", str(tmp_path / "nope")],
-                       capture_output=True, text=True)
+    p = subprocess.run(
+        cmd[:4] + [str(scene), "--raycast", str(tmp_path / "nope")], capture_output=True, text=True
+    )
     assert p.returncode == 2
 
 
 # ------------------------------------------------------------------ the real binary
+
 
 def real_scenes():
     out = []
@@ -337,6 +408,7 @@ def mixed_scene(tmp_path):
     """fixtures/gltf/cube.gltf plus two quadric nodes: a sphere beside the cube and an
     ellipsoid half-buried in it."""
     import shutil
+
     src = FIXTURES / "gltf" / "cube.gltf"
     if not src.exists():
         pytest.skip("fixtures/gltf/cube.gltf missing")
@@ -344,8 +416,9 @@ def mixed_scene(tmp_path):
     shutil.copy(FIXTURES / "gltf" / "cube.bin", tmp_path / "cube.bin")
     n = len(h["nodes"])
     h["nodes"].append(qnode("ball", SPHERE2, translation=[4, 0, 0]))
-    h["nodes"].append(qnode("egg", {"coefficients": [1, 4, 1, 0, 0, 0, 0, 0, 0, -1]},
-                            translation=[0, 1, 0]))
+    h["nodes"].append(
+        qnode("egg", {"coefficients": [1, 4, 1, 0, 0, 0, 0, 0, 0, -1]}, translation=[0, 1, 0])
+    )
     h["scenes"][0]["nodes"] += [n, n + 1]
     h.setdefault("extensionsUsed", []).append(qr.EXT)
     p = tmp_path / "mixed.gltf"

@@ -23,12 +23,19 @@ RAYCAST = Path(os.environ.get("RAYCAST", ROOT / "target" / "release" / "raycast"
 USD = ROOT / "fixtures" / "usd"
 needs_binary = pytest.mark.skipif(
     not RAYCAST.exists(),
-    reason=f"raycast binary not built ({RAYCAST}); run cargo build --release first")
+    reason=f"raycast binary not built ({RAYCAST}); run cargo build --release first",
+)
 
 # 64 segments keeps the tessellated gprims small (about 30k triangles for gprims.usda);
 # the bound scales with the resolution, so the check is as strict relative to it.
-SCENES = ["gprims.usda", "gprims.usdc", "composition.usda", "xforms.usda", "gltf_cube.usda",
-          "gltf_mixed.usda"]
+SCENES = [
+    "gprims.usda",
+    "gprims.usdc",
+    "composition.usda",
+    "xforms.usda",
+    "gltf_cube.usda",
+    "gltf_mixed.usda",
+]
 
 
 @needs_binary
@@ -45,10 +52,25 @@ def test_scene_within_tolerance(scene):
 
 @needs_binary
 def test_command_line_json_and_exit_status(tmp_path):
-    p = subprocess.run([sys.executable, "-m", "raycast_tools", "validate-usd",
-                        str(USD / "gltf_cube.usda"), str(USD / "bad"), "--rays", "200",
-                        "--segments", "32", "--json", "--raycast", str(RAYCAST)],
-                       capture_output=True, text=True)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "raycast_tools",
+            "validate-usd",
+            str(USD / "gltf_cube.usda"),
+            str(USD / "bad"),
+            "--rays",
+            "200",
+            "--segments",
+            "32",
+            "--json",
+            "--raycast",
+            str(RAYCAST),
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert p.returncode == 0, p.stderr
     reports = json.loads(p.stdout)
     assert [r["scene"] for r in reports] == [str(USD / "gltf_cube.usda")]  # bad/ skipped
@@ -60,11 +82,23 @@ def test_wrong_answers_fail(tmp_path):
     """A raycast that answers for a different scene leaves the tolerance: exit 1."""
     fake = tmp_path / "raycast"
     # draw gprims.usda's xforms twin: same prim kinds, other places
-    fake.write_text(f"#!/bin/sh\nscene=$1; shift\nexec {RAYCAST} {USD / 'xforms.usda'} \"$@\"\n")
+    fake.write_text(f'#!/bin/sh\nscene=$1; shift\nexec {RAYCAST} {USD / "xforms.usda"} "$@"\n')
     fake.chmod(0o755)
-    p = subprocess.run([sys.executable, "-m", "raycast_tools", "validate-usd",
-                        str(USD / "composition.usda"), "--rays", "100", "--raycast", str(fake)],
-                       capture_output=True, text=True)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "raycast_tools",
+            "validate-usd",
+            str(USD / "composition.usda"),
+            "--rays",
+            "100",
+            "--raycast",
+            str(fake),
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert p.returncode == 1, p.stdout + p.stderr
     assert "FAIL" in p.stdout
 
@@ -72,6 +106,7 @@ def test_wrong_answers_fail(tmp_path):
 def test_gprim_tessellation_brackets_the_surface():
     """Inner vertices on the surface, outer faces outside it (unit sphere, cylinder)."""
     from pxr import Usd, UsdGeom
+
     stage = Usd.Stage.CreateInMemory()
     sphere = UsdGeom.Sphere.Define(stage, "/S").GetPrim()
     cylinder = UsdGeom.Cylinder.Define(stage, "/C")

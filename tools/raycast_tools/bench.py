@@ -35,6 +35,7 @@ CHESS = ROOT.parent / "shared/assets/usd/full_assets/OpenChessSet/chess_set.usda
 
 # ----------------------------------------------------------------------------- scenes
 
+
 def load_triangles(path):
     """World-space triangles (N, 3, 3) float64 of an OBJ or glTF, through trimesh."""
     import trimesh
@@ -43,7 +44,9 @@ def load_triangles(path):
         mesh = trimesh.load(path, process=False)
     else:
         scene = trimesh.load(path, force="scene")
-        mesh = scene.to_geometry() if hasattr(scene, "to_geometry") else scene.dump(concatenate=True)
+        mesh = (
+            scene.to_geometry() if hasattr(scene, "to_geometry") else scene.dump(concatenate=True)
+        )
     return np.asarray(mesh.triangles, dtype=np.float64)
 
 
@@ -52,8 +55,11 @@ def usd_triangles(path):
     raycast's drawing rules (usd_stage.flatten)."""
     from .usd_stage import flatten, open_stage
 
-    parts = [np.asarray(t, dtype=np.float64).reshape(-1, 3, 3)
-             for _, t in flatten(open_stage(path)) if len(t)]
+    parts = [
+        np.asarray(t, dtype=np.float64).reshape(-1, 3, 3)
+        for _, t in flatten(open_stage(path))
+        if len(t)
+    ]
     return np.concatenate(parts)
 
 
@@ -66,15 +72,30 @@ def write_gltf(path, mesh_tris, nodes, quadrics=()):
     if len(mesh_tris) and len(nodes):
         flat = mesh_tris.reshape(-1, 3).astype(np.float32)
         verts, index = np.unique(flat, axis=0, return_inverse=True)
-        m = g.mesh("mesh", [{"attributes": {"POSITION": g.positions(verts)},
-                             "indices": g.indices(index.reshape(-1), UNSIGNED_INT)}])
-        roots += [g.node(f"copy{i}", mesh=m, translation=[float(x) for x in t], scale=[s, s, s])
-                  for i, (t, s) in enumerate(nodes)]
+        m = g.mesh(
+            "mesh",
+            [
+                {
+                    "attributes": {"POSITION": g.positions(verts)},
+                    "indices": g.indices(index.reshape(-1), UNSIGNED_INT),
+                }
+            ],
+        )
+        roots += [
+            g.node(f"copy{i}", mesh=m, translation=[float(x) for x in t], scale=[s, s, s])
+            for i, (t, s) in enumerate(nodes)
+        ]
     if len(quadrics):
         g.doc["extensionsUsed"].append("RAYCAST_quadric")
-        roots += [g.node(f"q{i}", translation=[float(x) for x in t], scale=[float(x) for x in s],
-                         extensions={"RAYCAST_quadric": {"coefficients": coeffs}})
-                  for i, (coeffs, t, s) in enumerate(quadrics)]
+        roots += [
+            g.node(
+                f"q{i}",
+                translation=[float(x) for x in t],
+                scale=[float(x) for x in s],
+                extensions={"RAYCAST_quadric": {"coefficients": coeffs}},
+            )
+            for i, (coeffs, t, s) in enumerate(quadrics)
+        ]
     g.scene(roots)
     bin_path = path.with_suffix(".bin")
     doc, data = g.finish(bin_path.name)
@@ -100,17 +121,20 @@ def instances(tris, copies, rng):
 def random_quadrics(count, rng, extent):
     sphere = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0]
     size = extent / count ** (1 / 3) * 0.35
-    return [(sphere, rng.uniform(0, extent, 3), rng.uniform(0.3, 1.0, 3) * size)
-            for _ in range(count)]
+    return [
+        (sphere, rng.uniform(0, extent, 3), rng.uniform(0.3, 1.0, 3) * size) for _ in range(count)
+    ]
 
 
 # ----------------------------------------------------------------------------- rays
+
 
 def bounds_of(rust_info):
     return np.array(rust_info["bounds"][0]), np.array(rust_info["bounds"][1])
 
 
 # ----------------------------------------------------------------------------- peers
+
 
 def peak_mib():
     """This process's peak RSS (VmHWM; ru_maxrss would carry the parent's peak across exec)."""
@@ -158,23 +182,43 @@ def peer_worker(spec):
                 if threads == 1:
                     scene.run(o, d, output=1)
                     return
-                workers = [threading.Thread(target=scene.run, args=(o[p], d[p]),
-                                            kwargs={"output": 1}) for p in parts]
+                workers = [
+                    threading.Thread(target=scene.run, args=(o[p], d[p]), kwargs={"output": 1})
+                    for p in parts
+                ]
                 for w in workers:
                     w.start()
                 for w in workers:
                     w.join()
 
             m, times = median_time(run_all, spec["runs"])
-            traces.append({"rays": name, "count": len(rays), "threads": threads,
-                           "median_s": m, "runs_s": times,
-                           "mrays_per_s": len(rays) / m / 1e6, "hit_ratio": hits})
-    out["methods"].append({"backend": "embreex", "build_s": commit, "traces": traces,
-                           "peak_rss_mib": peak_mib(), "rss_base_mib": base})
+            traces.append(
+                {
+                    "rays": name,
+                    "count": len(rays),
+                    "threads": threads,
+                    "median_s": m,
+                    "runs_s": times,
+                    "mrays_per_s": len(rays) / m / 1e6,
+                    "hit_ratio": hits,
+                }
+            )
+    out["methods"].append(
+        {
+            "backend": "embreex",
+            "build_s": commit,
+            "traces": traces,
+            "peak_rss_mib": peak_mib(),
+            "rss_base_mib": base,
+        }
+    )
     scene = None  # releases Embree's scene before trimesh builds its own
 
-    mesh = trimesh.Trimesh(vertices=tris.reshape(-1, 3).astype(np.float64),
-                           faces=np.arange(len(tris) * 3).reshape(-1, 3), process=False)
+    mesh = trimesh.Trimesh(
+        vertices=tris.reshape(-1, 3).astype(np.float64),
+        faces=np.arange(len(tris) * 3).reshape(-1, 3),
+        process=False,
+    )
     try:
         from trimesh.ray.ray_pyembree import RayMeshIntersector as EmbreeRMI
 
@@ -189,11 +233,25 @@ def peer_worker(spec):
             del first
             m, times = median_time(lambda: rmi.intersects_first(o, d), max(1, spec["runs"] - 1))
             hits = float((rmi.intersects_first(o, d) >= 0).mean())
-            traces.append({"rays": name, "count": len(rays), "threads": 1, "median_s": m,
-                           "runs_s": times, "mrays_per_s": len(rays) / m / 1e6,
-                           "hit_ratio": hits})
-        out["methods"].append({"backend": "trimesh-embree", "build_s": build,
-                               "traces": traces, "peak_rss_mib": peak_mib()})
+            traces.append(
+                {
+                    "rays": name,
+                    "count": len(rays),
+                    "threads": 1,
+                    "median_s": m,
+                    "runs_s": times,
+                    "mrays_per_s": len(rays) / m / 1e6,
+                    "hit_ratio": hits,
+                }
+            )
+        out["methods"].append(
+            {
+                "backend": "trimesh-embree",
+                "build_s": build,
+                "traces": traces,
+                "peak_rss_mib": peak_mib(),
+            }
+        )
     except Exception as e:  # noqa: BLE001
         out["methods"].append({"backend": "trimesh-embree", "error": repr(e)})
 
@@ -211,23 +269,41 @@ def peer_worker(spec):
             t = time.perf_counter()
             hit = rmi.intersects_first(o, d)
             s = time.perf_counter() - t
-            traces.append({"rays": name, "count": len(sub), "threads": 1, "median_s": s,
-                           "mrays_per_s": len(sub) / s / 1e6,
-                           "hit_ratio": float((hit >= 0).mean()), "subset": True})
-        out["methods"].append({"backend": "trimesh-f64", "build_s": build, "traces": traces,
-                               "peak_rss_mib": peak_mib()})
+            traces.append(
+                {
+                    "rays": name,
+                    "count": len(sub),
+                    "threads": 1,
+                    "median_s": s,
+                    "mrays_per_s": len(sub) / s / 1e6,
+                    "hit_ratio": float((hit >= 0).mean()),
+                    "subset": True,
+                }
+            )
+        out["methods"].append(
+            {
+                "backend": "trimesh-f64",
+                "build_s": build,
+                "traces": traces,
+                "peak_rss_mib": peak_mib(),
+            }
+        )
     print(json.dumps(out))
 
 
 # ----------------------------------------------------------------------------- driver
+
 
 def cargo_bench_binary():
     cmd = ["cargo", "bench", "--bench", "trace", "--no-run", "--message-format=json"]
     res = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, check=True)
     for line in res.stdout.splitlines():
         msg = json.loads(line)
-        if msg.get("reason") == "compiler-artifact" and msg.get("executable") \
-                and msg["target"]["name"] == "trace":
+        if (
+            msg.get("reason") == "compiler-artifact"
+            and msg.get("executable")
+            and msg["target"]["name"] == "trace"
+        ):
             return msg["executable"]
     raise SystemExit("bench: no trace executable from cargo")
 
@@ -243,9 +319,11 @@ def run_rust(exe, scene, rays, args):
 def run_peers(spec, tmp):
     spec_path = tmp / "peer_spec.json"
     spec_path.write_text(json.dumps(spec))
-    res = subprocess.run([sys.executable, "-m", "raycast_tools", "bench", "--peer-worker",
-                          str(spec_path)],
-                         capture_output=True, text=True)
+    res = subprocess.run(
+        [sys.executable, "-m", "raycast_tools", "bench", "--peer-worker", str(spec_path)],
+        capture_output=True,
+        text=True,
+    )
     if res.returncode != 0:
         return {"methods": [], "error": res.stderr[-2000:]}
     return json.loads(res.stdout.strip().splitlines()[-1])
@@ -286,8 +364,14 @@ def main(argv=None):
     scenes.append(("helmet", "DamagedHelmet (glb)", HELMET, load_triangles(HELMET)))
     missing = []
     if not quick and CHESS.exists():
-        scenes.append(("chess", "OpenChessSet (USD: payloads, crate geometry, instanced pawns)",
-                       CHESS, usd_triangles(CHESS)))
+        scenes.append(
+            (
+                "chess",
+                "OpenChessSet (USD: payloads, crate geometry, instanced pawns)",
+                CHESS,
+                usd_triangles(CHESS),
+            )
+        )
     elif not quick:
         missing.append(f"OpenChessSet ({CHESS} not found: ../shared/assets is missing)")
         print(f"bench: {missing[-1]}; skipped", file=sys.stderr)
@@ -298,8 +382,14 @@ def main(argv=None):
         nodes, world = instances(bunny, copies, rng)
         path = tmp / f"bunnies_{label}.gltf"
         write_gltf(path, bunny, nodes)
-        scenes.append((f"gen{label}", f"{copies} bunny instances ({len(world)/1e6:.2f}M triangles)",
-                       path, world))
+        scenes.append(
+            (
+                f"gen{label}",
+                f"{copies} bunny instances ({len(world) / 1e6:.2f}M triangles)",
+                path,
+                world,
+            )
+        )
     q_count = 10_000
     path = tmp / "quadrics_10k.gltf"
     write_gltf(path, bunny[:0], [], random_quadrics(q_count, rng, 10.0))
@@ -311,7 +401,7 @@ def main(argv=None):
     scenes.append(("mixed", "mixed: 4 bunnies (278k triangles) + 1000 ellipsoids", path, None))
     # Size sweep extras: patches of the bunny.
     sweep = []
-    for n in ([1_000, 10_000] if not quick else [1_000]):
+    for n in [1_000, 10_000] if not quick else [1_000]:
         path = tmp / f"patch_{n}.gltf"
         write_gltf(path, bunny[:n], [(np.zeros(3), 1.0)])
         sweep.append((f"patch{n}", f"bunny patch {n}", path, bunny[:n]))
@@ -328,9 +418,14 @@ def main(argv=None):
                 rays["incoherent"] = tmp / f"{key}_rnd.npy"
                 np.save(rays["incoherent"], random_rays(lo, hi, n_random, rng))
             big = info["triangles"] >= 1_000_000
-            args = ["--threads", ",".join(map(str, threads if group == "scenes" else [1])),
-                    "--runs", str(1 if big else runs),
-                    "--build-runs", str(0 if big else runs)]
+            args = [
+                "--threads",
+                ",".join(map(str, threads if group == "scenes" else [1])),
+                "--runs",
+                str(1 if big else runs),
+                "--build-runs",
+                str(0 if big else runs),
+            ]
             if key in ("bunny", "mixed"):
                 args += ["--aov-compare", "coherent"]
             rust = run_rust(exe, path, rays, args)
@@ -338,15 +433,28 @@ def main(argv=None):
             if tris is not None:
                 tri_path = tmp / f"{key}_tris.npy"
                 np.save(tri_path, tris.astype(np.float32))
-                peers = run_peers({"triangles": str(tri_path),
-                                   "rays": {k: str(v) for k, v in rays.items()},
-                                   "threads": threads if group == "scenes" else [1],
-                                   "runs": 1 if big else runs,
-                                   "f64_rays": (200 if quick else 1000) if group == "scenes" else 0,
-                                   "f64_max_triangles": 100_000}, tmp)
+                peers = run_peers(
+                    {
+                        "triangles": str(tri_path),
+                        "rays": {k: str(v) for k, v in rays.items()},
+                        "threads": threads if group == "scenes" else [1],
+                        "runs": 1 if big else runs,
+                        "f64_rays": (200 if quick else 1000) if group == "scenes" else 0,
+                        "f64_max_triangles": 100_000,
+                    },
+                    tmp,
+                )
                 peers["triangles_loaded"] = int(len(tris))
-            results[group].append({"key": key, "title": title, "info_triangles": info["triangles"],
-                                   "rust": rust, "peers": peers, "seconds": time.time() - t0})
+            results[group].append(
+                {
+                    "key": key,
+                    "title": title,
+                    "info_triangles": info["triangles"],
+                    "rust": rust,
+                    "peers": peers,
+                    "seconds": time.time() - t0,
+                }
+            )
             print(f"bench: {key} done in {time.time() - t0:.0f}s", file=sys.stderr)
             for p in rays.values():
                 p.unlink()
@@ -361,23 +469,44 @@ def main(argv=None):
 
 # ----------------------------------------------------------------------------- report
 
-NAMES = {"octree": "raycast octree", "bvh": "raycast + obvhs BVH2", "cwbvh": "raycast + obvhs CWBVH",
-         "embreex": "Embree 4 (embreex)", "trimesh-embree": "trimesh + embree",
-         "trimesh-f64": "trimesh ray_triangle (f64)"}
+NAMES = {
+    "octree": "raycast octree",
+    "bvh": "raycast + obvhs BVH2",
+    "cwbvh": "raycast + obvhs CWBVH",
+    "embreex": "Embree 4 (embreex)",
+    "trimesh-embree": "trimesh + embree",
+    "trimesh-f64": "trimesh ray_triangle (f64)",
+}
 
 
 def methods_of(entry):
     out = []
     for b in entry["rust"]["backends"]:
         st = b["stats"]
-        out.append({"name": b["backend"], "build_s": b["build_s"], "traces": b["traces"],
-                    "bpp": st.get("bytes_per_prim"), "peak": b.get("peak_rss_mib"), "raw": b})
+        out.append(
+            {
+                "name": b["backend"],
+                "build_s": b["build_s"],
+                "traces": b["traces"],
+                "bpp": st.get("bytes_per_prim"),
+                "peak": b.get("peak_rss_mib"),
+                "raw": b,
+            }
+        )
     if entry["peers"]:
         for m in entry["peers"].get("methods", []):
             if "error" in m:
                 continue
-            out.append({"name": m["backend"], "build_s": m["build_s"], "traces": m["traces"],
-                        "bpp": None, "peak": m.get("peak_rss_mib"), "raw": m})
+            out.append(
+                {
+                    "name": m["backend"],
+                    "build_s": m["build_s"],
+                    "traces": m["traces"],
+                    "bpp": None,
+                    "peak": m.get("peak_rss_mib"),
+                    "raw": m,
+                }
+            )
     return out
 
 
@@ -394,41 +523,54 @@ def fmt(x, spec=".2f"):
 
 def report(r):
     m = r["machine"]
-    lines = ["# Benchmark: octree vs obvhs vs Embree", "",
-             "Regenerate with `.venv/bin/python -m raycast_tools bench` (`--quick` for a short run, `--big` "
-             "adds the 20M-triangle scene); raw figures in `reports/bench.json`.", "",
-             f"Machine: {m['nproc']} cores, {m['cpu']} ({m['mhz'] or '?'} MHz), {m['memory_gib']} GiB, "
-             f"{m['rustc']}, Python {m['python']}, kernel {m['kernel']}. "
-             f"Run: {'quick' if r['quick'] else 'full'}, {r['total_s']:.0f} s. "
-             "The machine is a shared VM: two full runs an hour apart on the same triangle code "
-             "differed by up to 30% in single ratios.", "",
-             *([f"Skipped: {', '.join(r['missing'])}.", ""] if r.get("missing") else []),
-             "Method: one process per scene for the Rust backends (benches/trace.rs) and one for the "
-             "Python peers, on the same float32 rays (`coherent` = pinhole camera, one ray per pixel; "
-             "`incoherent` = origins uniform in the scene box, directions uniform). Warm-up run, then "
-             "the median of several; builds likewise (one build without warm-up for scenes of 1M "
-             "triangles and more). Rust tracing goes through the CLI's `render` path with `--aov depth` "
-             "(f64 exact primitive tests in every raycast backend). Embree: one `run()` call for all "
-             "rays (two Python threads over halves for 2 threads); its build is the `rtcCommitScene` "
-             "of the first call and always uses all cores (embreex exposes no thread setting). "
-             "trimesh's f64 path runs on a ray subset and is scaled per ray. Bytes/prim: the "
-             "acceleration structure only (octree nodes + references; obvhs nodes + indices), not "
-             "the primitives. Peak: the process's VmHWM (Rust: reset per backend; Python: one process "
-             "for all peers, so trimesh rows include Embree's peak), scene and rays included. "
-             "Two-thread figures are only as good as the machine is idle: other jobs share its "
-             "2 cores.", ""]
+    lines = [
+        "# Benchmark: octree vs obvhs vs Embree",
+        "",
+        "Regenerate with `.venv/bin/python -m raycast_tools bench` (`--quick` for a short run, `--big` "
+        "adds the 20M-triangle scene); raw figures in `reports/bench.json`.",
+        "",
+        f"Machine: {m['nproc']} cores, {m['cpu']} ({m['mhz'] or '?'} MHz), {m['memory_gib']} GiB, "
+        f"{m['rustc']}, Python {m['python']}, kernel {m['kernel']}. "
+        f"Run: {'quick' if r['quick'] else 'full'}, {r['total_s']:.0f} s. "
+        "The machine is a shared VM: two full runs an hour apart on the same triangle code "
+        "differed by up to 30% in single ratios.",
+        "",
+        *([f"Skipped: {', '.join(r['missing'])}.", ""] if r.get("missing") else []),
+        "Method: one process per scene for the Rust backends (benches/trace.rs) and one for the "
+        "Python peers, on the same float32 rays (`coherent` = pinhole camera, one ray per pixel; "
+        "`incoherent` = origins uniform in the scene box, directions uniform). Warm-up run, then "
+        "the median of several; builds likewise (one build without warm-up for scenes of 1M "
+        "triangles and more). Rust tracing goes through the CLI's `render` path with `--aov depth` "
+        "(f64 exact primitive tests in every raycast backend). Embree: one `run()` call for all "
+        "rays (two Python threads over halves for 2 threads); its build is the `rtcCommitScene` "
+        "of the first call and always uses all cores (embreex exposes no thread setting). "
+        "trimesh's f64 path runs on a ray subset and is scaled per ray. Bytes/prim: the "
+        "acceleration structure only (octree nodes + references; obvhs nodes + indices), not "
+        "the primitives. Peak: the process's VmHWM (Rust: reset per backend; Python: one process "
+        "for all peers, so trimesh rows include Embree's peak), scene and rays included. "
+        "Two-thread figures are only as good as the machine is idle: other jobs share its "
+        "2 cores.",
+        "",
+    ]
     targets = []
     for e in r["scenes"]:
         ms = methods_of(e)
         by = {x["name"]: x for x in ms}
         rust = e["rust"]
-        lines += [f"## {e['title']}", "",
-                  f"{rust['triangles']} triangles, {rust['quadrics']} quadrics; load "
-                  f"{rust['load_s']:.2f} s.", ""]
+        lines += [
+            f"## {e['title']}",
+            "",
+            f"{rust['triangles']} triangles, {rust['quadrics']} quadrics; load "
+            f"{rust['load_s']:.2f} s.",
+            "",
+        ]
         if e["peers"] and e["peers"].get("triangles_loaded") not in (None, rust["triangles"]):
             lines += [f"Note: the peers loaded {e['peers']['triangles_loaded']} triangles.", ""]
-        lines += ["| method | rays | threads | build s | Mrays/s | hits | bytes/prim | peak MiB "
-                  "| × embreex | × obvhs BVH2 |", "|---|---|---|---|---|---|---|---|---|---|"]
+        lines += [
+            "| method | rays | threads | build s | Mrays/s | hits | bytes/prim | peak MiB "
+            "| × embreex | × obvhs BVH2 |",
+            "|---|---|---|---|---|---|---|---|---|---|",
+        ]
         for x in ms:
             for t in x["traces"]:
                 ref_e = rate(by["embreex"], t["rays"], t["threads"]) if "embreex" in by else None
@@ -437,25 +579,32 @@ def report(r):
                 lines.append(
                     f"| {NAMES.get(x['name'], x['name'])} | {t['rays']}{sub} ({t['count']}) | "
                     f"{t['threads']} | {fmt(x['build_s'], '.3f')} | {fmt(t['mrays_per_s'], '.3g')} | "
-                    f"{t['hit_ratio']*100:.0f}% | {fmt(x['bpp'], '.1f')} | {fmt(x['peak'], '.0f')} | "
-                    f"{fmt(t['mrays_per_s']/ref_e['mrays_per_s'] if ref_e else None)} | "
-                    f"{fmt(t['mrays_per_s']/ref_b['mrays_per_s'] if ref_b else None)} |")
+                    f"{t['hit_ratio'] * 100:.0f}% | {fmt(x['bpp'], '.1f')} | {fmt(x['peak'], '.0f')} | "
+                    f"{fmt(t['mrays_per_s'] / ref_e['mrays_per_s'] if ref_e else None)} | "
+                    f"{fmt(t['mrays_per_s'] / ref_b['mrays_per_s'] if ref_b else None)} |"
+                )
         oc = by.get("octree")
         if oc:
             s = oc["raw"]["stats"]
             o = s.get("octree", {})
-            lines += ["", f"Octree: {o.get('nodes')} stored cells, {o.get('leaves')} leaves "
-                      f"(plus {o.get('empty_leaves')} empty octants, not stored), "
-                      f"depth {o.get('depth')}, "
-                      f"{s.get('refs_per_prim', 0):.2f} references per primitive; params "
-                      f"`{json.dumps(s.get('params'))}`."]
+            lines += [
+                "",
+                f"Octree: {o.get('nodes')} stored cells, {o.get('leaves')} leaves "
+                f"(plus {o.get('empty_leaves')} empty octants, not stored), "
+                f"depth {o.get('depth')}, "
+                f"{s.get('refs_per_prim', 0):.2f} references per primitive; params "
+                f"`{json.dumps(s.get('params'))}`.",
+            ]
             aov = oc["raw"].get("aov")
             if aov:
                 d, a = aov["depth"], aov["all"]
-                lines += ["", f"Depth only vs all AOVs (octree, {aov['rays']} rays, "
-                          f"{aov['threads']} threads): {d['median_s']*1e3:.0f} ms vs "
-                          f"{a['median_s']*1e3:.0f} ms; extra peak memory {fmt(d['peak_extra_mib'], '.0f')} "
-                          f"MiB vs {fmt(a['peak_extra_mib'], '.0f')} MiB ({', '.join(a['aovs'])})."]
+                lines += [
+                    "",
+                    f"Depth only vs all AOVs (octree, {aov['rays']} rays, "
+                    f"{aov['threads']} threads): {d['median_s'] * 1e3:.0f} ms vs "
+                    f"{a['median_s'] * 1e3:.0f} ms; extra peak memory {fmt(d['peak_extra_mib'], '.0f')} "
+                    f"MiB vs {fmt(a['peak_extra_mib'], '.0f')} MiB ({', '.join(a['aovs'])}).",
+                ]
         lines.append("")
         targets.append((e, by))
     lines += sweep_section(r)
@@ -471,17 +620,24 @@ def sweep_section(r):
         by = {x["name"]: x for x in methods_of(e)}
         pts.append((e["rust"]["triangles"], by))
     pts.sort(key=lambda p: p[0])
-    lines = ["## Cost versus scene size (bunny patches and instances, coherent rays, 1 thread)", "",
-             "| triangles | " + " | ".join(f"{n} build s | {n} µs/ray" for n in ("octree", "bvh", "embreex"))
-             + " |", "|---|" + "---|" * 6]
+    lines = [
+        "## Cost versus scene size (bunny patches and instances, coherent rays, 1 thread)",
+        "",
+        "| triangles | "
+        + " | ".join(f"{n} build s | {n} µs/ray" for n in ("octree", "bvh", "embreex"))
+        + " |",
+        "|---|" + "---|" * 6,
+    ]
     series = {n: ([], [], []) for n in ("octree", "bvh", "embreex")}
     for n, by in pts:
         row = [str(n)]
         for name in ("octree", "bvh", "embreex"):
             x = by.get(name)
             t = rate(x, "coherent", 1) if x else None
-            row += [fmt(x["build_s"] if x else None, ".3f"),
-                    fmt(1e6 * t["median_s"] / t["count"] if t else None, ".3f")]
+            row += [
+                fmt(x["build_s"] if x else None, ".3f"),
+                fmt(1e6 * t["median_s"] / t["count"] if t else None, ".3f"),
+            ]
             if x and t:
                 series[name][0].append(n)
                 series[name][1].append(x["build_s"])
@@ -492,20 +648,32 @@ def sweep_section(r):
         if len(n) >= 3:
             sb = np.polyfit(np.log(n), np.log(b), 1)[0]
             sp = np.polyfit(np.log(n), np.log(p), 1)[0]
-            lines.append(f"- {name}: log-log slope of build time {sb:.2f}, of time per ray {sp:.2f}.")
-    lines += ["", "Camera framing changes with the scene (instances spread out), so per-ray cost "
-              "mixes structure depth with hit ratio; the slopes are indicative.", ""]
+            lines.append(
+                f"- {name}: log-log slope of build time {sb:.2f}, of time per ray {sp:.2f}."
+            )
+    lines += [
+        "",
+        "Camera framing changes with the scene (instances spread out), so per-ray cost "
+        "mixes structure depth with hit ratio; the slopes are indicative.",
+        "",
+    ]
     return lines
 
 
 def targets_section(entries):
-    lines = ["## The issue's targets (octree, ratios measured in this run)", "",
-             "| target | scene | measured | met |", "|---|---|---|---|"]
+    lines = [
+        "## The issue's targets (octree, ratios measured in this run)",
+        "",
+        "| target | scene | measured | met |",
+        "|---|---|---|---|",
+    ]
 
     def add(name, scene, value, goal, text=None):
         ok = value is not None and value >= goal
-        lines.append(f"| {name} | {scene} | {text or fmt(value)} | "
-                     f"{'met' if ok else ('not met' if value is not None else 'n/a')} |")
+        lines.append(
+            f"| {name} | {scene} | {text or fmt(value)} | "
+            f"{'met' if ok else ('not met' if value is not None else 'n/a')} |"
+        )
 
     for e, by in entries:
         oc = by.get("octree")
@@ -515,35 +683,68 @@ def targets_section(entries):
         for th in (1, 2):
             t = rate(oc, "coherent", th)
             if tri and "embreex" in by and t:
-                add(f"coherent ≥ 1.0× embreex ({th}t)", e["key"],
-                    t["mrays_per_s"] / rate(by["embreex"], "coherent", th)["mrays_per_s"], 1.0)
+                add(
+                    f"coherent ≥ 1.0× embreex ({th}t)",
+                    e["key"],
+                    t["mrays_per_s"] / rate(by["embreex"], "coherent", th)["mrays_per_s"],
+                    1.0,
+                )
             if tri and "bvh" in by and t:
-                add(f"coherent ≥ 1.5× obvhs BVH2 ({th}t)", e["key"],
-                    t["mrays_per_s"] / rate(by["bvh"], "coherent", th)["mrays_per_s"], 1.5)
+                add(
+                    f"coherent ≥ 1.5× obvhs BVH2 ({th}t)",
+                    e["key"],
+                    t["mrays_per_s"] / rate(by["bvh"], "coherent", th)["mrays_per_s"],
+                    1.5,
+                )
         t = rate(oc, "incoherent", 1)
         if tri and "embreex" in by and t:
-            add("incoherent ≥ 0.8× embreex (1t)", e["key"],
-                t["mrays_per_s"] / rate(by["embreex"], "incoherent", 1)["mrays_per_s"], 0.8)
+            add(
+                "incoherent ≥ 0.8× embreex (1t)",
+                e["key"],
+                t["mrays_per_s"] / rate(by["embreex"], "incoherent", 1)["mrays_per_s"],
+                0.8,
+            )
         if e["key"] == "quadrics" and "bvh" in by:
             for rays in ("coherent", "incoherent"):
-                add(f"10k quadrics ≥ 1.0× obvhs BVH2 ({rays}, 1t)", e["key"],
-                    rate(oc, rays, 1)["mrays_per_s"] / rate(by["bvh"], rays, 1)["mrays_per_s"], 1.0)
+                add(
+                    f"10k quadrics ≥ 1.0× obvhs BVH2 ({rays}, 1t)",
+                    e["key"],
+                    rate(oc, rays, 1)["mrays_per_s"] / rate(by["bvh"], rays, 1)["mrays_per_s"],
+                    1.0,
+                )
         if tri and "embreex" in by:
             ratio = by["embreex"]["build_s"] / oc["build_s"]
-            add("build no slower than embreex commit", e["key"], ratio, 1.0,
-                f"{oc['build_s']:.3f} s vs {by['embreex']['build_s']:.3f} s ({ratio:.2f}×)")
+            add(
+                "build no slower than embreex commit",
+                e["key"],
+                ratio,
+                1.0,
+                f"{oc['build_s']:.3f} s vs {by['embreex']['build_s']:.3f} s ({ratio:.2f}×)",
+            )
         if tri and "bvh" in by:
             allowed = by["bvh"]["bpp"] + 36.0
-            add("memory ≤ obvhs BVH2 + triangles (B/tri)", e["key"],
-                allowed / oc["bpp"], 1.0,
-                f"{oc['bpp']:.1f} vs {by['bvh']['bpp']:.1f} + 36 = {allowed:.1f}")
+            add(
+                "memory ≤ obvhs BVH2 + triangles (B/tri)",
+                e["key"],
+                allowed / oc["bpp"],
+                1.0,
+                f"{oc['bpp']:.1f} vs {by['bvh']['bpp']:.1f} + 36 = {allowed:.1f}",
+            )
         t1, t2 = rate(oc, "coherent", 1), rate(oc, "coherent", 2)
         if t1 and t2:
-            add("2 threads ≥ 1.8× one (coherent)", e["key"],
-                t2["mrays_per_s"] / t1["mrays_per_s"], 1.8)
-    lines += ["", "Triangles are counted at 36 bytes (three f32 vertices, as the scene stores them). "
-              "Targets marked not met are gaps of the octree at the time of this run; see the "
-              "ratios above for their size.", ""]
+            add(
+                "2 threads ≥ 1.8× one (coherent)",
+                e["key"],
+                t2["mrays_per_s"] / t1["mrays_per_s"],
+                1.8,
+            )
+    lines += [
+        "",
+        "Triangles are counted at 36 bytes (three f32 vertices, as the scene stores them). "
+        "Targets marked not met are gaps of the octree at the time of this run; see the "
+        "ratios above for their size.",
+        "",
+    ]
     return lines
 
 
@@ -558,21 +759,29 @@ def gap_section(entries):
             continue
         o, b, m = (rate(x, "coherent", 1) for x in (oc, bvh, emb))
         if o and b and m:
-            rows.append(f"| {e['key']} | {m['mrays_per_s'] / b['mrays_per_s']:.2f} | "
-                        f"{b['mrays_per_s'] / o['mrays_per_s']:.2f} | "
-                        f"{m['mrays_per_s'] / o['mrays_per_s']:.2f} |")
+            rows.append(
+                f"| {e['key']} | {m['mrays_per_s'] / b['mrays_per_s']:.2f} | "
+                f"{b['mrays_per_s'] / o['mrays_per_s']:.2f} | "
+                f"{m['mrays_per_s'] / o['mrays_per_s']:.2f} |"
+            )
     if not rows:
         return []
-    return ["## What limits the octree", "",
-            "| scene | Embree / BVH2 (Embree's SIMD BVH and tests vs exact scalar) | "
-            "BVH2 / octree (structures, same exact tests) | "
-            "Embree / octree (total) |", "|---|---|---|---|", *rows, "",
-            "Coherent rays, one thread. The first column compares Embree (an 8-wide BVH whose "
-            "boxes and triangles are tested in f32 SIMD) with obvhs BVH2 (a binary BVH, one "
-            "ray at a time) running raycast's exact f64 primitive tests; the second compares "
-            "that BVH with the octree on the same tests. Where the instructions go inside "
-            "raycast (cell traversal, primitive tests, ray set-up) is measured with callgrind "
-            "in reports/octree_profile.md: primitive tests are about 14-18% of either "
-            "backend's trace instructions, so faster triangle tests alone cannot close the "
-            "gap; traversal is the larger share.", ""]
-
+    return [
+        "## What limits the octree",
+        "",
+        "| scene | Embree / BVH2 (Embree's SIMD BVH and tests vs exact scalar) | "
+        "BVH2 / octree (structures, same exact tests) | "
+        "Embree / octree (total) |",
+        "|---|---|---|---|",
+        *rows,
+        "",
+        "Coherent rays, one thread. The first column compares Embree (an 8-wide BVH whose "
+        "boxes and triangles are tested in f32 SIMD) with obvhs BVH2 (a binary BVH, one "
+        "ray at a time) running raycast's exact f64 primitive tests; the second compares "
+        "that BVH with the octree on the same tests. Where the instructions go inside "
+        "raycast (cell traversal, primitive tests, ray set-up) is measured with callgrind "
+        "in reports/octree_profile.md: primitive tests are about 14-18% of either "
+        "backend's trace instructions, so faster triangle tests alone cannot close the "
+        "gap; traversal is the larger share.",
+        "",
+    ]

@@ -35,7 +35,7 @@ def ray_triangle_hits(tris, origins, unit, chunk):
 
     inter = RayMeshIntersector(tri_mesh(tris))
     for s in range(0, len(origins), chunk):
-        o, d = origins[s:s + chunk], unit[s:s + chunk]
+        o, d = origins[s : s + chunk], unit[s : s + chunk]
         it, ir, loc = inter.intersects_id(o, d, multiple_hits=True, return_locations=True)
         if len(it) == 0:
             continue

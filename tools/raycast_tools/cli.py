@@ -24,7 +24,10 @@ COMMANDS = {
     "stiff-cases": ("stiff_cases", "write fixtures/stiff/cases.json (200-bit mpmath answers)"),
     "tessellate": ("tessellate", "tessellate a glTF's quadric nodes into a glTF mesh"),
     "tessellation-check": ("tessellation_check", "tessellation error against the exact quadric"),
-    "quadric-reference": ("quadric_reference", "trace rays with the object-space quadric reference"),
+    "quadric-reference": (
+        "quadric_reference",
+        "trace rays with the object-space quadric reference",
+    ),
     "random-quadrics": ("random_quadric_scenes", "write random quadric scenes for validation"),
     "usd-counts": ("usd_counts", "count what a USD stage draws, with usd-core"),
     "thread-scaling": ("thread_scaling", "octree and BVH2 trace time from 1 to 16 threads"),
@@ -33,8 +36,11 @@ COMMANDS = {
 
 def usage() -> str:
     width = max(map(len, COMMANDS))
-    lines = [f"usage: {PROG} COMMAND [ARGS...]   ({PROG} COMMAND --help for its options)", "",
-             "commands:"]
+    lines = [
+        f"usage: {PROG} COMMAND [ARGS...]   ({PROG} COMMAND --help for its options)",
+        "",
+        "commands:",
+    ]
     lines += [f"  {name:<{width}}  {about}" for name, (_, about) in COMMANDS.items()]
     return "\n".join(lines)
 

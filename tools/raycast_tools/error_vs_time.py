@@ -59,19 +59,29 @@ from .paths import ROOT, raycast_or_exit
 from .rays import make_rays
 from .runner import run_rays
 
-FLOOR = 1e-17      # exact agreement is plotted here (log axis)
+FLOOR = 1e-17  # exact agreement is plotted here (log axis)
 MP_PREC = 120
 
 
 # ------------------------------------------------------------------ scenes
 
+
 def far_sphere_gltf(path: Path, d: float):
     """A unit sphere at (d, 0, 0), like fixtures/quadrics/far_sphere.gltf."""
-    h = {"asset": {"version": "2.0"}, "extensionsUsed": [qref.EXT],
-         "extensionsRequired": [qref.EXT], "scene": 0, "scenes": [{"nodes": [0]}],
-         "nodes": [{"name": "sphere", "translation": [float(d), 0.0, 0.0],
-                    "extensions": {qref.EXT: {"coefficients": [1.0, 1.0, 1.0, 0, 0, 0, 0, 0, 0,
-                                                               -1.0]}}}]}
+    h = {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": [qref.EXT],
+        "extensionsRequired": [qref.EXT],
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [
+            {
+                "name": "sphere",
+                "translation": [float(d), 0.0, 0.0],
+                "extensions": {qref.EXT: {"coefficients": [1.0, 1.0, 1.0, 0, 0, 0, 0, 0, 0, -1.0]}},
+            }
+        ],
+    }
     path.write_text(json.dumps(h, indent=1))
     return path
 
@@ -90,17 +100,22 @@ def scene_list(tmp: Path):
 
 # ------------------------------------------------------------------ references
 
+
 def _mp_plane_depth(tri, o, u):
     """Depth along unit u from o to the plane of tri, mpmath at MP_PREC bits."""
     import mpmath as mp
+
     with mp.workprec(MP_PREC):
         v = [[mp.mpf(float(x)) for x in p] for p in tri]
         oo = [mp.mpf(float(x)) for x in o]
         dd = [mp.mpf(float(x)) for x in u]
         e1 = [v[1][k] - v[0][k] for k in range(3)]
         e2 = [v[2][k] - v[0][k] for k in range(3)]
-        n = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-             e1[0] * e2[1] - e1[1] * e2[0]]
+        n = [
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ]
         num = sum((v[0][k] - oo[k]) * n[k] for k in range(3))
         den = sum(dd[k] * n[k] for k in range(3))
         t = num / den
@@ -147,16 +162,29 @@ def build_reference(ref, o, u, mesh_idx, n_mp, rng):
     if ref.quadrics:
         qres = qref.trace(ref.quadrics, o, u)
     else:
-        qres = {"depth": np.full(n, np.inf), "normal": np.zeros((n, 3)),
-                "node": np.full(n, -1), "name": np.array([""] * n, object),
-                "index": np.full(n, -1), "ambiguous": np.zeros(n, bool),
-                "reasons": [set() for _ in range(n)]}
+        qres = {
+            "depth": np.full(n, np.inf),
+            "normal": np.zeros((n, 3)),
+            "node": np.full(n, -1),
+            "name": np.array([""] * n, object),
+            "index": np.full(n, -1),
+            "ambiguous": np.zeros(n, bool),
+            "reasons": [set() for _ in range(n)],
+        }
     md, mn, mnode, mamb, mf64, t_rt = mesh_reference(ref, o, u, mesh_idx)
     with np.errstate(invalid="ignore"):  # inf - inf in merge_hits' tie test on misses
         merged = qref.merge_hits(qres, md, mn, mnode, mamb)
-    out = {"depth": merged["depth"], "normal": merged["normal"], "ambiguous": merged["ambiguous"],
-           "kind": merged["kind"], "eval": evalset, "mesh_depth": md, "mesh_f64": mf64,
-           "ray_triangle_seconds": t_rt, "quadric_depth": qres["depth"]}
+    out = {
+        "depth": merged["depth"],
+        "normal": merged["normal"],
+        "ambiguous": merged["ambiguous"],
+        "kind": merged["kind"],
+        "eval": evalset,
+        "mesh_depth": md,
+        "mesh_f64": mf64,
+        "ray_triangle_seconds": t_rt,
+        "quadric_depth": qres["depth"],
+    }
     # mpmath check of the float64 object-space quadric reference on a subset of quadric hits
     qh = np.flatnonzero(evalset & (merged["kind"] == "quadric") & ~merged["ambiguous"])
     out["mp_idx"] = np.array([], np.int64)
@@ -174,6 +202,7 @@ def build_reference(ref, o, u, mesh_idx, n_mp, rng):
 
 
 # ------------------------------------------------------------------ methods
+
 
 def world_form(quadrics):
     """Plain world-space coefficients (Q_w, P_w, R_w) of each quadric, about the world origin."""
@@ -258,10 +287,14 @@ def errors(refd, depth, mask):
     both = rh & mh
     rel = np.abs(depth[both] - refd["depth"][both]) / refd["depth"][both]
     hm = int(((np.isfinite(refd["depth"]) != mh) & ok).sum())
-    return {"hits": int(both.sum()), "rays_compared": int(ok.sum()), "hitmiss": hm,
-            "p99": float(np.percentile(rel, 99)) if len(rel) else float("nan"),
-            "max": float(rel.max()) if len(rel) else float("nan"),
-            "median": float(np.median(rel)) if len(rel) else float("nan")}
+    return {
+        "hits": int(both.sum()),
+        "rays_compared": int(ok.sum()),
+        "hitmiss": hm,
+        "p99": float(np.percentile(rel, 99)) if len(rel) else float("nan"),
+        "max": float(rel.max()) if len(rel) else float("nan"),
+        "median": float(np.median(rel)) if len(rel) else float("nan"),
+    }
 
 
 def mp_errors(refd, depth):
@@ -274,11 +307,15 @@ def mp_errors(refd, depth):
     rel = np.abs(d[ok] - refd["mp_depth"][ok]) / refd["mp_depth"][ok]
     if not len(rel):
         return {}
-    return {"mp_p99": float(np.percentile(rel, 99)), "mp_max": float(rel.max()),
-            "mp_n": int(ok.sum())}
+    return {
+        "mp_p99": float(np.percentile(rel, 99)),
+        "mp_max": float(rel.max()),
+        "mp_n": int(ok.sum()),
+    }
 
 
 # ------------------------------------------------------------------ per scene
+
 
 def run_scene(label, path, args, raycast, tmp: Path, log):
     rng = np.random.default_rng(1)
@@ -289,21 +326,31 @@ def run_scene(label, path, args, raycast, tmp: Path, log):
     mesh_idx = np.arange(n_mesh)
     t0 = time.perf_counter()
     refd = build_reference(ref, o, u, mesh_idx, args.mp_rays, rng)
-    log(f"  reference: {time.perf_counter() - t0:.1f} s, {int(np.isfinite(refd['depth']).sum())} "
+    log(
+        f"  reference: {time.perf_counter() - t0:.1f} s, {int(np.isfinite(refd['depth']).sum())} "
         f"hits, {int(refd['ambiguous'].sum())} ambiguous, f64 vs mpmath max "
-        f"{refd['mp_vs_f64_max']:.1e}")
+        f"{refd['mp_vs_f64_max']:.1e}"
+    )
     mask = refd["eval"]
     rows = []
 
     def add(method, family, seconds_per_ray, depth, extra=None, sub=None):
         m = mask if sub is None else (mask & sub)
-        r = {"scene": label, "method": method, "family": family,
-             "time_per_ray": seconds_per_ray, **errors(refd, depth, m), **mp_errors(refd, depth)}
+        r = {
+            "scene": label,
+            "method": method,
+            "family": family,
+            "time_per_ray": seconds_per_ray,
+            **errors(refd, depth, m),
+            **mp_errors(refd, depth),
+        }
         if extra:
             r.update(extra)
         rows.append(r)
-        log(f"  {method:28s} {seconds_per_ray * 1e9:12.0f} ns/ray  p99 {r['p99']:.2e}  "
-            f"max {r['max']:.2e}  h/m {r['hitmiss']}")
+        log(
+            f"  {method:28s} {seconds_per_ray * 1e9:12.0f} ns/ray  p99 {r['p99']:.2e}  "
+            f"max {r['max']:.2e}  h/m {r['hitmiss']}"
+        )
         return r
 
     def raycast_run(scene_file, name, family, extra=None):
@@ -315,36 +362,56 @@ def run_scene(label, path, args, raycast, tmp: Path, log):
             if res["wall"] > 5.0:  # long runs: one is enough (and keeps the script short)
                 break
         tm = res["sidecar"]["timings"]
-        ex = {"whole_process_per_ray": best_wall / len(o), "trace_s": best_trace,
-              "wall_s": best_wall, "load_s": tm.get("load"), "build_s": tm.get("build"),
-              "triangles": res["sidecar"].get("stats", {}).get("triangles"),
-              "accel": res["sidecar"].get("stats", {}).get("accel")}
+        ex = {
+            "whole_process_per_ray": best_wall / len(o),
+            "trace_s": best_trace,
+            "wall_s": best_wall,
+            "load_s": tm.get("load"),
+            "build_s": tm.get("build"),
+            "triangles": res["sidecar"].get("stats", {}).get("triangles"),
+            "accel": res["sidecar"].get("stats", {}).get("accel"),
+        }
         if extra:
             ex.update(extra)
         return add(name, family, best_trace / len(o), res["depth"], ex)
 
     # raycast on the scene itself
-    raycast_run(path, "raycast analytic" if ref.quadrics else "raycast (mesh)",
-                "raycast analytic" if ref.quadrics else "raycast mesh")
+    raycast_run(
+        path,
+        "raycast analytic" if ref.quadrics else "raycast (mesh)",
+        "raycast analytic" if ref.quadrics else "raycast mesh",
+    )
 
     if ref.quadrics:
         # numpy object space (the f64 reference itself) and the plain world form
         def merged(dq):
             d = np.minimum(dq, refd["mesh_depth"])
             return d
+
         t_obj, r_obj = timed(lambda: qref.trace(ref.quadrics, o, u), args.repeat)
-        r = add("numpy object space (reference)", "numpy object space", t_obj / len(o),
-                merged(r_obj["depth"]),
-                {"note": "quadric part timed; mesh hits from the reference; error = vs mpmath "
-                         "on the subset (against itself it is 0)"})
+        r = add(
+            "numpy object space (reference)",
+            "numpy object space",
+            t_obj / len(o),
+            merged(r_obj["depth"]),
+            {
+                "note": "quadric part timed; mesh hits from the reference; error = vs mpmath "
+                "on the subset (against itself it is 0)"
+            },
+        )
         # the reference cannot measure itself: its error is the one against mpmath
         if "mp_p99" in r:
             r["p99"], r["max"], r["median"] = r["mp_p99"], r["mp_max"], float("nan")
             r["hits"] = r["mp_n"]
         wf = world_form(ref.quadrics)
         t_w, (dw, _) = timed(lambda: trace_world_form(wf, o, u), args.repeat)
-        add("numpy world form", "numpy world form", t_w / len(o), merged(dw),
-            {"note": "quadric part timed; mesh hits from the reference"})
+        add(
+            "numpy world form",
+            "numpy world form",
+            t_w / len(o),
+            merged(dw),
+            {"note": "quadric part timed; mesh hits from the reference"},
+        )
 
         # tessellations
         for n in args.segments:
@@ -357,13 +424,19 @@ def run_scene(label, path, args, raycast, tmp: Path, log):
             raycast_run(g, f"raycast tess {n}", "raycast tessellated", extra)
             # embree: build on a first call, then time the query
             tbuild, te, de = time_embree(tris, o, u, args.repeat)
-            add(f"embree tess {n}", "trimesh+embree tessellated", te / len(o), de,
-                {**extra, "build_s": tbuild})
+            add(
+                f"embree tess {n}",
+                "trimesh+embree tessellated",
+                te / len(o),
+                de,
+                {**extra, "build_s": tbuild},
+            )
             if n <= args.f64_max_segments:
                 k = min(args.f64_rays, len(o))
                 sub = np.zeros(len(o), bool)
                 sub[:k] = True
                 from trimesh.ray.ray_triangle import RayMeshIntersector as RT
+
                 rt = RT(tri_mesh(tris))
                 tb0 = time.perf_counter()
                 rt.intersects_id(o[:1], u[:1], multiple_hits=False)
@@ -373,28 +446,52 @@ def run_scene(label, path, args, raycast, tmp: Path, log):
                 trt = time.perf_counter() - t0
                 dd = np.full(len(o), np.inf)
                 dd[:k] = d64
-                add(f"ray_triangle tess {n}", "trimesh ray_triangle tessellated", trt / k, dd,
-                    {**extra, "rays_timed": k, "build_s": tbuild}, sub=sub)
+                add(
+                    f"ray_triangle tess {n}",
+                    "trimesh ray_triangle tessellated",
+                    trt / k,
+                    dd,
+                    {**extra, "rays_timed": k, "build_s": tbuild},
+                    sub=sub,
+                )
     else:
         # a real mesh: ray_triangle (the reference run itself) and embree
         k = len(mesh_idx)
         sub = np.zeros(len(o), bool)
         sub[:k] = True
-        add("ray_triangle (mesh)", "trimesh ray_triangle", refd["ray_triangle_seconds"] / k,
-            refd["mesh_f64"], {"rays_timed": k, "triangles": int(len(ref.tris))}, sub=sub)
+        add(
+            "ray_triangle (mesh)",
+            "trimesh ray_triangle",
+            refd["ray_triangle_seconds"] / k,
+            refd["mesh_f64"],
+            {"rays_timed": k, "triangles": int(len(ref.tris))},
+            sub=sub,
+        )
         tbuild, te, de = time_embree(ref.tris, o, u, args.repeat)
-        add("embree (mesh)", "trimesh+embree", te / len(o), de,
-            {"build_s": tbuild, "triangles": int(len(ref.tris))})
-    info = {"scene": label, "path": str(path.relative_to(ROOT)) if path.is_relative_to(ROOT)
-            else path.name, "rays": len(o), "eval_rays": int(mask.sum()),
-            "ref_hits": int((np.isfinite(refd["depth"]) & mask & ~refd["ambiguous"]).sum()),
-            "ambiguous": int((refd["ambiguous"] & mask).sum()),
-            "mp_rays": int(len(refd["mp_idx"])), "mp_vs_f64_max": refd["mp_vs_f64_max"],
-            "quadrics": len(ref.quadrics), "mesh_triangles": int(len(ref.tris))}
+        add(
+            "embree (mesh)",
+            "trimesh+embree",
+            te / len(o),
+            de,
+            {"build_s": tbuild, "triangles": int(len(ref.tris))},
+        )
+    info = {
+        "scene": label,
+        "path": str(path.relative_to(ROOT)) if path.is_relative_to(ROOT) else path.name,
+        "rays": len(o),
+        "eval_rays": int(mask.sum()),
+        "ref_hits": int((np.isfinite(refd["depth"]) & mask & ~refd["ambiguous"]).sum()),
+        "ambiguous": int((refd["ambiguous"] & mask).sum()),
+        "mp_rays": int(len(refd["mp_idx"])),
+        "mp_vs_f64_max": refd["mp_vs_f64_max"],
+        "quadrics": len(ref.quadrics),
+        "mesh_triangles": int(len(ref.tris)),
+    }
     return rows, info
 
 
 # ------------------------------------------------------------------ report
+
 
 def pareto(rows):
     """Rows on the Pareto front (no other row both faster and more accurate), by time."""
@@ -409,18 +506,25 @@ def pareto(rows):
 
 
 FAMILY_MARKER = {
-    "raycast analytic": "*", "raycast mesh": "*", "raycast tessellated": "o",
-    "trimesh+embree tessellated": "s", "trimesh+embree": "s",
-    "trimesh ray_triangle tessellated": "^", "trimesh ray_triangle": "^",
-    "numpy world form": "x", "numpy object space": "D",
+    "raycast analytic": "*",
+    "raycast mesh": "*",
+    "raycast tessellated": "o",
+    "trimesh+embree tessellated": "s",
+    "trimesh+embree": "s",
+    "trimesh ray_triangle tessellated": "^",
+    "trimesh ray_triangle": "^",
+    "numpy world form": "x",
+    "numpy object space": "D",
 }
 
 
 def plot(rows, infos, png):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
+
     scenes = [i["scene"] for i in infos]
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     col = {s: colors[k % len(colors)] for k, s in enumerate(scenes)}
@@ -432,40 +536,89 @@ def plot(rows, infos, png):
             x = [r["time_per_ray"] for r in fr]
             y = [max(r["p99"], FLOOR) for r in fr]
             mk = FAMILY_MARKER.get(fam, "o")
-            ax.scatter(x, y, marker=mk, s=90 if mk == "*" else 36, color=col[s],
-                       facecolors=col[s] if mk not in ("o", "s", "^", "D") else "none",
-                       linewidths=1.3, zorder=3)
+            ax.scatter(
+                x,
+                y,
+                marker=mk,
+                s=90 if mk == "*" else 36,
+                color=col[s],
+                facecolors=col[s] if mk not in ("o", "s", "^", "D") else "none",
+                linewidths=1.3,
+                zorder=3,
+            )
             if len(fr) > 1:
                 order = np.argsort([r.get("segments", 0) for r in fr])
-                ax.plot(np.array(x)[order], np.array(y)[order], color=col[s], lw=0.6,
-                        alpha=0.5, zorder=2)
+                ax.plot(
+                    np.array(x)[order],
+                    np.array(y)[order],
+                    color=col[s],
+                    lw=0.6,
+                    alpha=0.5,
+                    zorder=2,
+                )
             for r in fr:
                 if "segments" in r and fam == "raycast tessellated":
-                    ax.annotate(str(r["segments"]), (r["time_per_ray"], max(r["p99"], FLOOR)),
-                                fontsize=6, color=col[s], xytext=(3, 3),
-                                textcoords="offset points")
+                    ax.annotate(
+                        str(r["segments"]),
+                        (r["time_per_ray"], max(r["p99"], FLOOR)),
+                        fontsize=6,
+                        color=col[s],
+                        xytext=(3, 3),
+                        textcoords="offset points",
+                    )
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("run time per ray [s] (single thread; raycast: sidecar trace time)")
     ax.set_ylabel("p99 relative depth error on hits (vs float64 object space / mpmath)")
     ax.axhline(FLOOR, color="grey", lw=0.5, ls=":")
-    ax.text(min(r["time_per_ray"] for r in rows) * 1.05,
-            FLOOR * 1.5, "exact agreement plotted at 1e-17", fontsize=7, color="grey")
+    ax.text(
+        min(r["time_per_ray"] for r in rows) * 1.05,
+        FLOOR * 1.5,
+        "exact agreement plotted at 1e-17",
+        fontsize=7,
+        color="grey",
+    )
     ax.grid(True, which="major", alpha=0.3)
     h1 = [Line2D([], [], color=col[s], marker="o", ls="", label=s) for s in scenes]
-    fams = ["raycast analytic", "raycast tessellated", "trimesh+embree tessellated",
-            "trimesh ray_triangle tessellated", "numpy world form", "numpy object space"]
-    names = ["raycast (analytic / mesh)", "raycast on tessellation (label = segments)",
-             "trimesh + embree", "trimesh ray_triangle (f64)", "numpy world form",
-             "numpy object space (f64 reference; error vs mpmath)"]
-    h2 = [Line2D([], [], color="k", marker=FAMILY_MARKER[f], ls="", label=nm,
-                 markerfacecolor="k" if FAMILY_MARKER[f] in ("*", "x") else "none")
-          for f, nm in zip(fams, names)]
-    l1 = ax.legend(handles=h1, title="scene (colour)", loc="upper left",
-                   bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    fams = [
+        "raycast analytic",
+        "raycast tessellated",
+        "trimesh+embree tessellated",
+        "trimesh ray_triangle tessellated",
+        "numpy world form",
+        "numpy object space",
+    ]
+    names = [
+        "raycast (analytic / mesh)",
+        "raycast on tessellation (label = segments)",
+        "trimesh + embree",
+        "trimesh ray_triangle (f64)",
+        "numpy world form",
+        "numpy object space (f64 reference; error vs mpmath)",
+    ]
+    h2 = [
+        Line2D(
+            [],
+            [],
+            color="k",
+            marker=FAMILY_MARKER[f],
+            ls="",
+            label=nm,
+            markerfacecolor="k" if FAMILY_MARKER[f] in ("*", "x") else "none",
+        )
+        for f, nm in zip(fams, names)
+    ]
+    l1 = ax.legend(
+        handles=h1, title="scene (colour)", loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8
+    )
     ax.add_artist(l1)
-    ax.legend(handles=h2, title="method (marker)", loc="upper left", bbox_to_anchor=(1.01, 0.55),
-              fontsize=8)
+    ax.legend(
+        handles=h2,
+        title="method (marker)",
+        loc="upper left",
+        bbox_to_anchor=(1.01, 0.55),
+        fontsize=8,
+    )
     ax.set_title("Depth error vs run time per ray")
     fig.tight_layout()
     fig.savefig(png, dpi=130)
@@ -474,10 +627,14 @@ def plot(rows, infos, png):
 
 def binary_id(path: Path):
     import hashlib
+
     st = path.stat()
     h = hashlib.sha256(path.read_bytes()).hexdigest()[:12]
-    return {"path": str(path), "sha256_12": h,
-            "mtime": time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(st.st_mtime)) + " UTC"}
+    return {
+        "path": str(path),
+        "sha256_12": h,
+        "mtime": time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(st.st_mtime)) + " UTC",
+    }
 
 
 def fmt(x, spec=".1e"):
@@ -497,21 +654,27 @@ def summary_text(rows, infos):
     for r in rows:
         by.setdefault(r["scene"], []).append(r)
     # Pareto fronts
-    out.append("**Pareto front per scene** (no other method both faster and more accurate, "
-               "fastest first):")
+    out.append(
+        "**Pareto front per scene** (no other method both faster and more accurate, fastest first):"
+    )
     out.append("")
     for s, rs in by.items():
         front = pareto(rs)
-        out.append(f"- {s}: " + " → ".join(
-            f"{r['method']} ({ns(r['time_per_ray'])} ns, {fmt(r['p99'])})" for r in front))
+        out.append(
+            f"- {s}: "
+            + " → ".join(
+                f"{r['method']} ({ns(r['time_per_ray'])} ns, {fmt(r['p99'])})" for r in front
+            )
+        )
     out.append("")
     # tessellation pay-off
     out.append("**Where tessellation stops paying off.**")
     out.append("")
     for s, rs in by.items():
         an = [r for r in rs if r["family"] == "raycast analytic"]
-        tr = sorted([r for r in rs if r["family"] == "raycast tessellated"],
-                    key=lambda r: r["segments"])
+        tr = sorted(
+            [r for r in rs if r["family"] == "raycast tessellated"], key=lambda r: r["segments"]
+        )
         if not an or not tr:
             continue
         a = an[0]
@@ -522,44 +685,57 @@ def summary_text(rows, infos):
         # e² law: p99 ∝ n⁻², triangles ∝ n²
         nneed = last["segments"] * math.sqrt(max(last["p99"], FLOOR) / ea)
         tri_need = last["triangles"] * (nneed / last["segments"]) ** 2
-        emb = sorted([r for r in rs if r["family"] == "trimesh+embree tessellated"],
-                     key=lambda r: r["segments"])
+        emb = sorted(
+            [r for r in rs if r["family"] == "trimesh+embree tessellated"],
+            key=lambda r: r["segments"],
+        )
         emb_fast = [r for r in emb if r["time_per_ray"] < a["time_per_ray"]]
-        txt = (f"- {s}: raycast analytic p99 {fmt(a['p99'])} at {ns(a['time_per_ray'])} ns/ray "
-               f"(whole process {ns(a.get('whole_process_per_ray'))} ns/ray). ")
+        txt = (
+            f"- {s}: raycast analytic p99 {fmt(a['p99'])} at {ns(a['time_per_ray'])} ns/ray "
+            f"(whole process {ns(a.get('whole_process_per_ray'))} ns/ray). "
+        )
         if match:
             m = match[0]
-            txt += (f"The tessellation matches it from {m['segments']} segments "
-                    f"({m['triangles']:,} triangles, {ns(m['time_per_ray'])} ns/ray). ")
+            txt += (
+                f"The tessellation matches it from {m['segments']} segments "
+                f"({m['triangles']:,} triangles, {ns(m['time_per_ray'])} ns/ray). "
+            )
         else:
-            txt += (f"No tessellation matches it: the finest, {last['segments']} segments "
-                    f"({last['triangles']:,} triangles), has p99 {fmt(last['p99'])} at "
-                    f"{ns(last['time_per_ray'])} ns/ray trace "
-                    f"(+{fmt(last.get('build_s'), '.1f')} s build); by the e² law matching would need ≈{nneed:.0e} segments "
-                    f"(≈{tri_need:.0e} triangles). ")
+            txt += (
+                f"No tessellation matches it: the finest, {last['segments']} segments "
+                f"({last['triangles']:,} triangles), has p99 {fmt(last['p99'])} at "
+                f"{ns(last['time_per_ray'])} ns/ray trace "
+                f"(+{fmt(last.get('build_s'), '.1f')} s build); by the e² law matching would need ≈{nneed:.0e} segments "
+                f"(≈{tri_need:.0e} triangles). "
+            )
         if slower:
-            txt += (f"raycast on its tessellation is slower per ray than on the analytic "
-                    f"quadrics from {slower[0]['segments']} segments on")
+            txt += (
+                f"raycast on its tessellation is slower per ray than on the analytic "
+                f"quadrics from {slower[0]['segments']} segments on"
+            )
             if len(slower) == len(tr):
                 txt += " (every resolution tried)"
-            txt += (f", {last['time_per_ray'] / a['time_per_ray']:.0f}× at "
-                    f"{last['segments']}. ")
+            txt += f", {last['time_per_ray'] / a['time_per_ray']:.0f}× at {last['segments']}. "
         else:
             txt += "raycast on its tessellation stays at or below the analytic trace time here. "
         if emb_fast:
             e = emb_fast[-1]
-            txt += (f"Only trimesh + embree on the tessellation is faster per ray than raycast "
-                    f"analytic, up to {e['segments']} segments ({ns(e['time_per_ray'])} ns/ray), "
-                    f"at p99 {fmt(e['p99'])}: {math.log10(max(e['p99'], FLOOR) / ea):.0f} digits "
-                    f"worse.")
+            txt += (
+                f"Only trimesh + embree on the tessellation is faster per ray than raycast "
+                f"analytic, up to {e['segments']} segments ({ns(e['time_per_ray'])} ns/ray), "
+                f"at p99 {fmt(e['p99'])}: {math.log10(max(e['p99'], FLOOR) / ea):.0f} digits "
+                f"worse."
+            )
         else:
             txt += "No tessellated method is faster per ray than raycast analytic here."
         out.append(txt)
     out.append("")
     # world form
-    out.append("**World form (Q, P, R baked about the world origin) versus object space**, "
-               "near and far from the origin (p99 relative depth error; digits lost = "
-               "log10(world / object space), object space error vs mpmath, floored at 1e-16):")
+    out.append(
+        "**World form (Q, P, R baked about the world origin) versus object space**, "
+        "near and far from the origin (p99 relative depth error; digits lost = "
+        "log10(world / object space), object space error vs mpmath, floored at 1e-16):"
+    )
     out.append("")
     for s, rs in by.items():
         w = [r for r in rs if r["family"] == "numpy world form"]
@@ -569,10 +745,12 @@ def summary_text(rows, infos):
             continue
         eo = ob[0].get("mp_p99", ob[0]["p99"]) if ob else float("nan")
         lost = math.log10(max(w[0]["p99"], 1e-16) / max(eo, 1e-16))
-        out.append(f"- {s}: world form p99 {fmt(w[0]['p99'])} (max {fmt(w[0]['max'])}, "
-                   f"hit/miss disagreements {w[0]['hitmiss']}), object space vs mpmath "
-                   f"{fmt(eo)}, raycast {fmt(an[0]['p99']) if an else '—'}: "
-                   f"{lost:.1f} digits lost.")
+        out.append(
+            f"- {s}: world form p99 {fmt(w[0]['p99'])} (max {fmt(w[0]['max'])}, "
+            f"hit/miss disagreements {w[0]['hitmiss']}), object space vs mpmath "
+            f"{fmt(eo)}, raycast {fmt(an[0]['p99']) if an else '—'}: "
+            f"{lost:.1f} digits lost."
+        )
     return "\n".join(out)
 
 
@@ -582,11 +760,18 @@ def stiff_table() -> str:
     with tempfile.TemporaryDirectory(prefix="stiff") as td:
         table = Path(td) / "stiff.md"
         env = dict(os.environ, RAYCAST_STIFF_REPORT=str(table))
-        run = subprocess.run(["cargo", "test", "--release", "--quiet", "--test", "stiff"],
-                             cwd=ROOT, env=env, capture_output=True, text=True)
+        run = subprocess.run(
+            ["cargo", "test", "--release", "--quiet", "--test", "stiff"],
+            cwd=ROOT,
+            env=env,
+            capture_output=True,
+            text=True,
+        )
         if run.returncode != 0 or not table.exists():
-            return ("**The stiff-case test failed** (`cargo test --release --test stiff`):\n\n"
-                    "```\n" + (run.stdout + run.stderr)[-3000:] + "\n```")
+            return (
+                "**The stiff-case test failed** (`cargo test --release --test stiff`):\n\n"
+                "```\n" + (run.stdout + run.stderr)[-3000:] + "\n```"
+            )
         return table.read_text()
 
 
@@ -594,99 +779,125 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
     L = []
     L.append("# Depth error versus run time per ray")
     L.append("")
-    L.append("Regenerate: `.venv/bin/python -m raycast_tools error-vs-time` (writes this file, "
-             f"`{png_path.name}` and `error_vs_time.json`; took {elapsed:.0f} s).")
+    L.append(
+        "Regenerate: `.venv/bin/python -m raycast_tools error-vs-time` (writes this file, "
+        f"`{png_path.name}` and `error_vs_time.json`; took {elapsed:.0f} s)."
+    )
     L.append("")
     la = mach["loadavg"]
-    L.append(f"Machine: {mach['nproc']} CPUs (`nproc`), {mach['cpu']}"
-             f"{f' at {mach[chr(109)+chr(104)+chr(122)]:.0f} MHz' if mach['mhz'] else ''}, "
-             f"load average at start {la[0]:.2f}/{la[1]:.2f}/{la[2]:.2f} (a shared machine: two "
-             f"earlier full runs of this script differed by up to 4× on single raycast points, "
-             f"so read time differences below that factor with care). Python {mach['python']}, numpy {mach['numpy']}. "
-             "Everything single-threaded (raycast `--threads 1`).")
+    L.append(
+        f"Machine: {mach['nproc']} CPUs (`nproc`), {mach['cpu']}"
+        f"{f' at {mach[chr(109) + chr(104) + chr(122)]:.0f} MHz' if mach['mhz'] else ''}, "
+        f"load average at start {la[0]:.2f}/{la[1]:.2f}/{la[2]:.2f} (a shared machine: two "
+        f"earlier full runs of this script differed by up to 4× on single raycast points, "
+        f"so read time differences below that factor with care). Python {mach['python']}, numpy {mach['numpy']}. "
+        "Everything single-threaded (raycast `--threads 1`)."
+    )
     L.append("")
     b0 = mach.get("binary_start", {})
     accel = sorted({str(r.get("accel")) for r in rows if r.get("accel")})
-    L.append(f"raycast binary: `{b0.get('path')}` (copied at the start and run from the copy), "
-             f"sha256 {b0.get('sha256_12')}…, built {b0.get('mtime')}; acceleration structure "
-             f"reported in the sidecar: {', '.join(accel) or '—'}.")
+    L.append(
+        f"raycast binary: `{b0.get('path')}` (copied at the start and run from the copy), "
+        f"sha256 {b0.get('sha256_12')}…, built {b0.get('mtime')}; acceleration structure "
+        f"reported in the sidecar: {', '.join(accel) or '—'}."
+    )
     L.append("")
     L.append(f"![error vs time]({png_path.name})")
     L.append("")
-    L.append("Each marker is one method (or one tessellation resolution) on one scene: x = run "
-             "time per ray, y = p99 relative depth error on rays both the method and the "
-             "reference hit (exact agreement is drawn at 1e-17). Lower left is better.")
+    L.append(
+        "Each marker is one method (or one tessellation resolution) on one scene: x = run "
+        "time per ray, y = p99 relative depth error on rays both the method and the "
+        "reference hit (exact agreement is drawn at 1e-17). Lower left is better."
+    )
     L.append("")
     L.append(summary_text(rows, infos))
     L.append("")
-    L.append("**Notes.** raycast has no float32 quadric path (its quadrics are always float64 "
-             "about a local anchor, docs/RAYCAST_quadric.md), so the float precision question "
-             "for quadrics is shown with the numpy world form instead. The tessellation error "
-             "is the chordal (sagitta) error, ≈ e²/(8r) for edge length e on curvature radius "
-             "r, divided by the incidence cosine; it falls as e² (see "
-             "`python -m raycast_tools tessellation-check` for the fitted slopes), so each halving of the "
-             "error costs about 1.4× the segments and 2× the triangles. p99 includes the "
-             "silhouette and open-rim rays where a chord sends the ray to another facet; hit/"
-             "miss disagreements are counted separately (column h/m) and not in the error. "
-             "ray_triangle's p99 on the tessellations comes from its small ray subset (about "
-             "half of them hit, so it is nearly the max of those and misses most silhouette "
-             "rays): compare it with the others' median rather than their p99. trimesh + "
-             "embree traverses in float32 but trimesh recomputes each hit point in float64 on "
-             "the plane of the triangle Embree found, so its depth error is the float64 one "
-             "whenever the triangle is right (bunny: the same p99 as ray_triangle; far "
-             "spheres: the same as raycast's tessellation, the sagitta dominating). raycast "
-             "stores triangle vertices in float32 about an anchor, which is the ~1e-7 error on "
-             "the bunny (`python -m raycast_tools validate` allows a p99 of 1e-6).")
+    L.append(
+        "**Notes.** raycast has no float32 quadric path (its quadrics are always float64 "
+        "about a local anchor, docs/RAYCAST_quadric.md), so the float precision question "
+        "for quadrics is shown with the numpy world form instead. The tessellation error "
+        "is the chordal (sagitta) error, ≈ e²/(8r) for edge length e on curvature radius "
+        "r, divided by the incidence cosine; it falls as e² (see "
+        "`python -m raycast_tools tessellation-check` for the fitted slopes), so each halving of the "
+        "error costs about 1.4× the segments and 2× the triangles. p99 includes the "
+        "silhouette and open-rim rays where a chord sends the ray to another facet; hit/"
+        "miss disagreements are counted separately (column h/m) and not in the error. "
+        "ray_triangle's p99 on the tessellations comes from its small ray subset (about "
+        "half of them hit, so it is nearly the max of those and misses most silhouette "
+        "rays): compare it with the others' median rather than their p99. trimesh + "
+        "embree traverses in float32 but trimesh recomputes each hit point in float64 on "
+        "the plane of the triangle Embree found, so its depth error is the float64 one "
+        "whenever the triangle is right (bunny: the same p99 as ray_triangle; far "
+        "spheres: the same as raycast's tessellation, the sagitta dominating). raycast "
+        "stores triangle vertices in float32 about an anchor, which is the ~1e-7 error on "
+        "the bunny (`python -m raycast_tools validate` allows a p99 of 1e-6)."
+    )
     L.append("")
     L.append("## Scenes and references")
     L.append("")
-    L.append("| scene | file | rays (timed) | rays with reference | reference hits | ambiguous "
-             "| quadrics | mesh triangles | mpmath subset | f64 ref vs mpmath, max rel |")
+    L.append(
+        "| scene | file | rays (timed) | rays with reference | reference hits | ambiguous "
+        "| quadrics | mesh triangles | mpmath subset | f64 ref vs mpmath, max rel |"
+    )
     L.append("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for i in infos:
-        L.append(f"| {i['scene']} | `{i['path']}` | {i['rays']} | {i['eval_rays']} | "
-                 f"{i['ref_hits']} | {i['ambiguous']} | {i['quadrics']} | {i['mesh_triangles']:,} "
-                 f"| {i['mp_rays']} | {fmt(i['mp_vs_f64_max'])} |")
+        L.append(
+            f"| {i['scene']} | `{i['path']}` | {i['rays']} | {i['eval_rays']} | "
+            f"{i['ref_hits']} | {i['ambiguous']} | {i['quadrics']} | {i['mesh_triangles']:,} "
+            f"| {i['mp_rays']} | {fmt(i['mp_vs_f64_max'])} |"
+        )
     L.append("")
-    L.append("The float64 object-space reference agrees with mpmath (120 bits) to the value in "
-             "the last column on the subset; the bunny's (and the mixed scene's mesh) "
-             "reference depths are mpmath plane intersections on the triangle ray_triangle "
-             "found, so ray_triangle's own float64 error is measurable. The sphere@1e5 and "
-             "sphere@1e7 scenes are far_sphere.gltf's unit sphere moved to (1e5,0,0) and "
-             "(1e7,0,0), written to a temporary folder.")
+    L.append(
+        "The float64 object-space reference agrees with mpmath (120 bits) to the value in "
+        "the last column on the subset; the bunny's (and the mixed scene's mesh) "
+        "reference depths are mpmath plane intersections on the triangle ray_triangle "
+        "found, so ray_triangle's own float64 error is measurable. The sphere@1e5 and "
+        "sphere@1e7 scenes are far_sphere.gltf's unit sphere moved to (1e5,0,0) and "
+        "(1e7,0,0), written to a temporary folder."
+    )
     L.append("")
     L.append("## All measurements")
     L.append("")
-    L.append("Time columns in ns per ray. *trace*: raycast sidecar `trace` (the plotted value "
-             "for raycast); *process*: raycast whole-process wall time / rays; for other "
-             "methods the query call (after building the acceleration structure, *build*). "
-             "ray_triangle is timed on the first rays only (column *rays timed*).")
+    L.append(
+        "Time columns in ns per ray. *trace*: raycast sidecar `trace` (the plotted value "
+        "for raycast); *process*: raycast whole-process wall time / rays; for other "
+        "methods the query call (after building the acceleration structure, *build*). "
+        "ray_triangle is timed on the first rays only (column *rays timed*)."
+    )
     L.append("")
-    L.append("| scene | method | triangles | time/ray (plotted) | raycast process/ray | build s "
-             "| rays timed | hits | h/m | median | p99 | max | vs mpmath p99 | vs mpmath max |")
+    L.append(
+        "| scene | method | triangles | time/ray (plotted) | raycast process/ray | build s "
+        "| rays timed | hits | h/m | median | p99 | max | vs mpmath p99 | vs mpmath max |"
+    )
     L.append("|" + " --- |" * 14)
     for r in rows:
-        L.append(f"| {r['scene']} | {r['method']} | {r.get('triangles') or '—'} | "
-                 f"{ns(r['time_per_ray'])} | {ns(r.get('whole_process_per_ray'))} | "
-                 f"{fmt(r.get('build_s'), '.3f')} | {r.get('rays_timed', '—')} | {r['hits']} | "
-                 f"{r['hitmiss']} | {fmt(r['median'])} | {fmt(r['p99'])} | {fmt(r['max'])} | "
-                 f"{fmt(r.get('mp_p99'))} | {fmt(r.get('mp_max'))} |")
+        L.append(
+            f"| {r['scene']} | {r['method']} | {r.get('triangles') or '—'} | "
+            f"{ns(r['time_per_ray'])} | {ns(r.get('whole_process_per_ray'))} | "
+            f"{fmt(r.get('build_s'), '.3f')} | {r.get('rays_timed', '—')} | {r['hits']} | "
+            f"{r['hitmiss']} | {fmt(r['median'])} | {fmt(r['p99'])} | {fmt(r['max'])} | "
+            f"{fmt(r.get('mp_p99'))} | {fmt(r.get('mp_max'))} |"
+        )
     L.append("")
-    L.append(f"Settings: {args.rays} rays per scene (raycast_tools.rays `make_rays`, seed 0), "
-             f"tessellations {args.segments} segments around (ellipsoids: half as many rings), "
-             f"ray_triangle on {args.f64_rays} rays up to {args.f64_max_segments} segments, "
-             f"bunny reference on {args.mesh_ref_rays} rays, mpmath on {args.mp_rays} quadric "
-             f"hits per scene, best of {args.repeat} runs.")
+    L.append(
+        f"Settings: {args.rays} rays per scene (raycast_tools.rays `make_rays`, seed 0), "
+        f"tessellations {args.segments} segments around (ellipsoids: half as many rings), "
+        f"ray_triangle on {args.f64_rays} rays up to {args.f64_max_segments} segments, "
+        f"bunny reference on {args.mesh_ref_rays} rays, mpmath on {args.mp_rays} quadric "
+        f"hits per scene, best of {args.repeat} runs."
+    )
     L.append("")
     L.append("## Stiff and extreme cases")
     L.append("")
-    L.append("From `cargo test --release --test stiff` (tests/stiff.rs), which checks each case of "
-             "`fixtures/stiff/cases.json` against its expected value, computed offline in mpmath "
-             "at 200 bits by `python -m raycast_tools stiff-cases`, and against the case's own bound (derivations "
-             "in `fixtures/stiff/README.md`; near tangency the bound scales with the root's "
-             "condition, and ambiguous cases accept either a hit or a miss). *result* is the "
-             "depth raycast computed, or what happened; the test fails if any case leaves its "
-             "bound.")
+    L.append(
+        "From `cargo test --release --test stiff` (tests/stiff.rs), which checks each case of "
+        "`fixtures/stiff/cases.json` against its expected value, computed offline in mpmath "
+        "at 200 bits by `python -m raycast_tools stiff-cases`, and against the case's own bound (derivations "
+        "in `fixtures/stiff/README.md`; near tangency the bound scales with the root's "
+        "condition, and ambiguous cases accept either a hit or a miss). *result* is the "
+        "depth raycast computed, or what happened; the test fails if any case leaves its "
+        "bound."
+    )
     L.append("")
     L.append(stiff)
     md_path.write_text("\n".join(L) + "\n")
@@ -707,8 +918,14 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="few rays and resolutions (smoke test)")
     a = ap.parse_args(argv)
     if a.quick:
-        a.rays, a.segments, a.f64_rays, a.mesh_ref_rays, a.mp_rays, a.repeat = \
-            2000, [16, 64], 30, 60, 20, 1
+        a.rays, a.segments, a.f64_rays, a.mesh_ref_rays, a.mp_rays, a.repeat = (
+            2000,
+            [16, 64],
+            30,
+            60,
+            20,
+            1,
+        )
     raycast = raycast_or_exit(a.raycast, "error-vs-time")
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -738,9 +955,12 @@ def main(argv=None):
     png = out / "error_vs_time.png"
     plot(rows, infos, png)
     write_report(rows, infos, mach, a, elapsed, out / "error_vs_time.md", png, stiff_table())
-    (out / "error_vs_time.json").write_text(json.dumps(
-        {"machine": mach, "scenes": infos, "rows": rows, "seconds": elapsed}, indent=1,
-        default=lambda x: x.item() if hasattr(x, "item") else str(x)))
+    (out / "error_vs_time.json").write_text(
+        json.dumps(
+            {"machine": mach, "scenes": infos, "rows": rows, "seconds": elapsed},
+            indent=1,
+            default=lambda x: x.item() if hasattr(x, "item") else str(x),
+        )
+    )
     print(f"wrote {out / 'error_vs_time.md'}, {png} ({elapsed:.0f} s)")
     return 0
-

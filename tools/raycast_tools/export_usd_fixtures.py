@@ -138,7 +138,8 @@ def convert_gltf(source: Path, stem: str) -> dict:
         else:
             if "translation" in node:
                 xformable.AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(
-                    Gf.Vec3d(*node["translation"]))
+                    Gf.Vec3d(*node["translation"])
+                )
             if "rotation" in node:
                 x, y, z, w = node["rotation"]
                 xformable.AddOrientOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Quatd(w, x, y, z))
@@ -163,7 +164,11 @@ def write_quadric(prim, extension: dict):
         prim.CreateAttribute(f"raycast:quadric:{name}", type_name, custom=True).Set(value)
 
     if "coefficients" in extension:
-        attr("coefficients", Sdf.ValueTypeNames.DoubleArray, Vt.DoubleArray(extension["coefficients"]))
+        attr(
+            "coefficients",
+            Sdf.ValueTypeNames.DoubleArray,
+            Vt.DoubleArray(extension["coefficients"]),
+        )
     else:
         q = extension["Q"]
         attr("Q", Sdf.ValueTypeNames.Matrix3d, Gf.Matrix3d(*q))
@@ -210,11 +215,19 @@ def export_gltf_scenes():
         names = convert_gltf(ROOT / "fixtures" / relative, stem)
         rays = quadric_rays.get(Path(relative).name, {}).get("rays", [])
         EXPECTED[stem] = [
-            {"label": r["label"], "origin": r["origin"], "direction": r["direction"],
-             "hit": names.get(r["hit"]) if r["hit"] else None,
-             "depth": r.get("depth"), "normal": r.get("normal", [0.0, 0.0, 0.0]),
-             **({"prim": r["prim"] if isinstance(r["prim"], list) else [r["prim"]]}
-                if "prim" in r else {})}
+            {
+                "label": r["label"],
+                "origin": r["origin"],
+                "direction": r["direction"],
+                "hit": names.get(r["hit"]) if r["hit"] else None,
+                "depth": r.get("depth"),
+                "normal": r.get("normal", [0.0, 0.0, 0.0]),
+                **(
+                    {"prim": r["prim"] if isinstance(r["prim"], list) else [r["prim"]]}
+                    if "prim" in r
+                    else {}
+                ),
+            }
             for r in rays
         ]
 
@@ -247,7 +260,9 @@ def export_gprims():
     rays = []
 
     def place(prim, centre):
-        UsdGeom.Xformable(prim).AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(*centre))
+        UsdGeom.Xformable(prim).AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(
+            Gf.Vec3d(*centre)
+        )
 
     def centre_of(row, col):
         return np.array([col * SPACING, row * SPACING, 0.0])
@@ -274,10 +289,28 @@ def export_gprims():
         name = f"/World/Cube{col}"
         c = define(UsdGeom.Cube, 1, col, name, "CreateSizeAttr", size)
         h = (size or 2.0) / 2
-        rays.append(ray(f"{name} +Z face", c + [0.5 * h, -0.25 * h, 10], [0, 0, -1], name, 10 - h,
-                        [0, 0, 1], prim=[0]))
-        rays.append(ray(f"{name} -Y face", c + [0.25 * h, -10, 0.5 * h], [0, 1, 0], name, 10 - h,
-                        [0, -1, 0], prim=[11]))
+        rays.append(
+            ray(
+                f"{name} +Z face",
+                c + [0.5 * h, -0.25 * h, 10],
+                [0, 0, -1],
+                name,
+                10 - h,
+                [0, 0, 1],
+                prim=[0],
+            )
+        )
+        rays.append(
+            ray(
+                f"{name} -Y face",
+                c + [0.25 * h, -10, 0.5 * h],
+                [0, 1, 0],
+                name,
+                10 - h,
+                [0, -1, 0],
+                prim=[11],
+            )
+        )
     # Shapes with an axis: rows 2.. by type, columns by axis (+ one with fallbacks).
     row = 2
     for type_name in ("Cylinder", "Cone", "Capsule", "Plane", "Cylinder_1"):
@@ -298,19 +331,52 @@ def export_gprims():
                     prim.CreateHeightAttr(h)
                 if type_name == "Cylinder":
                     rays.append(ray(f"{name} side", c + 10 * u, -u, name, 10 - r, u))
-                    rays.append(ray(f"{name} top cap", c + 10 * a + 0.3 * r * u, -a, name + ":caps",
-                                    10 - h / 2, a))
-                    rays.append(ray(f"{name} bottom cap", c - 10 * a - 0.3 * r * u, a,
-                                    name + ":caps", 10 - h / 2, -a))
+                    rays.append(
+                        ray(
+                            f"{name} top cap",
+                            c + 10 * a + 0.3 * r * u,
+                            -a,
+                            name + ":caps",
+                            10 - h / 2,
+                            a,
+                        )
+                    )
+                    rays.append(
+                        ray(
+                            f"{name} bottom cap",
+                            c - 10 * a - 0.3 * r * u,
+                            a,
+                            name + ":caps",
+                            10 - h / 2,
+                            -a,
+                        )
+                    )
                 else:
                     rho = r / 2  # the cone has radius r/2 at w = 0
                     grad = r * u + (r * r / h) * a
-                    rays.append(ray(f"{name} side at half radius", c + rho * u + 10 * a, -a, name,
-                                    10.0, grad))
-                    rays.append(ray(f"{name} base cap", c - 10 * a + 0.3 * r * u, a,
-                                    name + ":caps", 10 - h / 2, -a))
-                    rays.append(ray(f"{name} side from the side", c + 10 * u, -u, name,
-                                    10 - rho, grad))
+                    rays.append(
+                        ray(
+                            f"{name} side at half radius",
+                            c + rho * u + 10 * a,
+                            -a,
+                            name,
+                            10.0,
+                            grad,
+                        )
+                    )
+                    rays.append(
+                        ray(
+                            f"{name} base cap",
+                            c - 10 * a + 0.3 * r * u,
+                            a,
+                            name + ":caps",
+                            10 - h / 2,
+                            -a,
+                        )
+                    )
+                    rays.append(
+                        ray(f"{name} side from the side", c + 10 * u, -u, name, 10 - rho, grad)
+                    )
             elif type_name == "Cylinder_1":
                 top, bottom, h = (0.5, 1.0, 2.0) if axis else (1.0, 1.0, 2.0)
                 if axis:
@@ -320,7 +386,9 @@ def export_gprims():
                 radius_mid = (top + bottom) / 2
                 b = (top - bottom) / h  # f = u² + v² − (radius_mid + b w)²
                 grad = 2 * radius_mid * u - 2 * b * radius_mid * a
-                rays.append(ray(f"{name} side at w = 0", c + 10 * u, -u, name, 10 - radius_mid, grad))
+                rays.append(
+                    ray(f"{name} side at w = 0", c + 10 * u, -u, name, 10 - radius_mid, grad)
+                )
                 rays.append(ray(f"{name} top cap", c + 10 * a, -a, name + ":caps", 10 - h / 2, a))
             elif type_name == "Capsule":
                 r, h = (0.5, 2.0) if axis else (0.5, 1.0)
@@ -329,11 +397,21 @@ def export_gprims():
                     prim.CreateHeightAttr(h)
                 rays.append(ray(f"{name} side", c + 10 * u, -u, name, 10 - r, u))
                 rays.append(ray(f"{name} top", c + 10 * a, -a, name + ":top", 10 - h / 2 - r, a))
-                rays.append(ray(f"{name} bottom", c - 10 * a, a, name + ":bottom", 10 - h / 2 - r, -a))
+                rays.append(
+                    ray(f"{name} bottom", c - 10 * a, a, name + ":bottom", 10 - h / 2 - r, -a)
+                )
                 # on the seam-free part of the top hemisphere, 45 degrees up
                 p = c + (h / 2) * a + r * (u + a) / math.sqrt(2)
-                rays.append(ray(f"{name} top hemisphere at 45 degrees", p + 10 * u, -u,
-                                name + ":top", 10.0, u + a))
+                rays.append(
+                    ray(
+                        f"{name} top hemisphere at 45 degrees",
+                        p + 10 * u,
+                        -u,
+                        name + ":top",
+                        10.0,
+                        u + a,
+                    )
+                )
             else:  # Plane
                 width, length = (4.0, 6.0) if axis else (2.0, 2.0)
                 if axis:
@@ -346,12 +424,29 @@ def export_gprims():
                 width_dir, length_dir = np.array(width_dir), np.array(length_dir)
                 inside = 0.45 * width * width_dir + 0.45 * length * length_dir
                 rays.append(ray(f"{name} front", c + inside + 10 * a, -a, name, 10.0, a))
-                rays.append(ray(f"{name} back (normal not flipped)", c + inside - 10 * a, a, name,
-                                10.0, a))
-                rays.append(ray(f"{name} just outside the width", c + 0.55 * width * width_dir + 10 * a,
-                                -a, None, None, None))
-                rays.append(ray(f"{name} inside the length only", c + 0.55 * length * length_dir
-                                + 0.1 * width * width_dir + 10 * a, -a, None, None, None))
+                rays.append(
+                    ray(f"{name} back (normal not flipped)", c + inside - 10 * a, a, name, 10.0, a)
+                )
+                rays.append(
+                    ray(
+                        f"{name} just outside the width",
+                        c + 0.55 * width * width_dir + 10 * a,
+                        -a,
+                        None,
+                        None,
+                        None,
+                    )
+                )
+                rays.append(
+                    ray(
+                        f"{name} inside the length only",
+                        c + 0.55 * length * length_dir + 0.1 * width * width_dir + 10 * a,
+                        -a,
+                        None,
+                        None,
+                        None,
+                    )
+                )
         row += 1
     save(stage, "gprims")
     EXPECTED["gprims"] = rays
@@ -362,8 +457,9 @@ def export_gprims():
 
 
 def tetra_points(scale=1.0):
-    return [Gf.Vec3f(*(scale * np.array(p))) for p in
-            [(1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)]]
+    return [
+        Gf.Vec3f(*(scale * np.array(p))) for p in [(1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)]
+    ]
 
 
 TETRA_FACES = [0, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2]
@@ -388,8 +484,9 @@ def define_quad_cube(stage, path, half=0.5):
     h = half
     mesh.CreatePointsAttr([Gf.Vec3f(x, y, z) for z in (-h, h) for y in (-h, h) for x in (-h, h)])
     mesh.CreateFaceVertexCountsAttr([4] * 6)
-    mesh.CreateFaceVertexIndicesAttr([4, 5, 7, 6, 0, 2, 3, 1, 1, 3, 7, 5, 0, 4, 6, 2, 2, 6, 7, 3,
-                                      0, 1, 5, 4])
+    mesh.CreateFaceVertexIndicesAttr(
+        [4, 5, 7, 6, 0, 2, 3, 1, 1, 3, 7, 5, 0, 4, 6, 2, 2, 6, 7, 3, 0, 1, 5, 4]
+    )
     return mesh
 
 
@@ -402,36 +499,88 @@ def export_xforms():
     root.AddScaleOp().Set(Gf.Vec3f(2, 2, 2))
     # one leaf per op kind, each under its own child of Root
     ops = [
-        ("translate", lambda x: x.AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(4, 0, 0))),
-        ("translateXYZ", lambda x: (x.AddTranslateXOp().Set(6.0), x.AddTranslateYOp().Set(1.0),
-                                    x.AddTranslateZOp().Set(-1.0))),
-        ("scale", lambda x: (x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 4, 0)),
-                             x.AddScaleOp().Set(Gf.Vec3f(0.5, 1.5, 1.0)))),
-        ("scaleXYZ", lambda x: (x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 8, 0)),
-                                x.AddScaleXOp().Set(0.75), x.AddScaleYOp().Set(1.25),
-                                x.AddScaleZOp().Set(0.5))),
-        ("rotateXYZ_single", lambda x: (x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 0, 4)),
-                                        x.AddRotateXOp().Set(30.0), x.AddRotateYOp().Set(45.0),
-                                        x.AddRotateZOp().Set(60.0))),
+        (
+            "translate",
+            lambda x: x.AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(4, 0, 0)),
+        ),
+        (
+            "translateXYZ",
+            lambda x: (
+                x.AddTranslateXOp().Set(6.0),
+                x.AddTranslateYOp().Set(1.0),
+                x.AddTranslateZOp().Set(-1.0),
+            ),
+        ),
+        (
+            "scale",
+            lambda x: (
+                x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 4, 0)),
+                x.AddScaleOp().Set(Gf.Vec3f(0.5, 1.5, 1.0)),
+            ),
+        ),
+        (
+            "scaleXYZ",
+            lambda x: (
+                x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 8, 0)),
+                x.AddScaleXOp().Set(0.75),
+                x.AddScaleYOp().Set(1.25),
+                x.AddScaleZOp().Set(0.5),
+            ),
+        ),
+        (
+            "rotateXYZ_single",
+            lambda x: (
+                x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 0, 4)),
+                x.AddRotateXOp().Set(30.0),
+                x.AddRotateYOp().Set(45.0),
+                x.AddRotateZOp().Set(60.0),
+            ),
+        ),
     ]
     for k, order in enumerate(("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")):
-        ops.append((f"rotate{order}", lambda x, order=order, k=k: (
-            x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(-4, 0, 4 * k + 4)),
-            getattr(x, f"AddRotate{order}Op")().Set(Gf.Vec3f(25, 50, 75)))))
+        ops.append(
+            (
+                f"rotate{order}",
+                lambda x, order=order, k=k: (
+                    x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(-4, 0, 4 * k + 4)),
+                    getattr(x, f"AddRotate{order}Op")().Set(Gf.Vec3f(25, 50, 75)),
+                ),
+            )
+        )
     ops += [
-        ("orient", lambda x: (x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(4, 4, 0)),
-                              x.AddOrientOp().Set(Gf.Quatf(0.8, 0.2, 0.4, 0.4)))),
-        ("transform", lambda x: x.AddTransformOp().Set(Gf.Matrix4d(
-            1, 0.25, 0, 0, 0.5, 1, 0, 0, 0, 0.3, 1.5, 0, -4, -4, 2, 1))),
-        ("pivot_invert", lambda x: (
-            x.AddTranslateOp(opSuffix="place").Set(Gf.Vec3d(4, -4, 0)),
-            x.AddTranslateOp(opSuffix="pivot").Set(Gf.Vec3d(0.5, 0.5, 0)),
-            x.AddRotateZOp().Set(90.0),
-            x.AddTranslateOp(opSuffix="pivot", isInverseOp=True))),
-        ("reset", lambda x: (x.SetResetXformStack(True),
-                             x.AddTranslateOp().Set(Gf.Vec3d(20, 0, 0)))),
-        ("mirror", lambda x: (x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(8, -4, 0)),
-                              x.AddScaleOp().Set(Gf.Vec3f(-1, 1, 1)))),
+        (
+            "orient",
+            lambda x: (
+                x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(4, 4, 0)),
+                x.AddOrientOp().Set(Gf.Quatf(0.8, 0.2, 0.4, 0.4)),
+            ),
+        ),
+        (
+            "transform",
+            lambda x: x.AddTransformOp().Set(
+                Gf.Matrix4d(1, 0.25, 0, 0, 0.5, 1, 0, 0, 0, 0.3, 1.5, 0, -4, -4, 2, 1)
+            ),
+        ),
+        (
+            "pivot_invert",
+            lambda x: (
+                x.AddTranslateOp(opSuffix="place").Set(Gf.Vec3d(4, -4, 0)),
+                x.AddTranslateOp(opSuffix="pivot").Set(Gf.Vec3d(0.5, 0.5, 0)),
+                x.AddRotateZOp().Set(90.0),
+                x.AddTranslateOp(opSuffix="pivot", isInverseOp=True),
+            ),
+        ),
+        (
+            "reset",
+            lambda x: (x.SetResetXformStack(True), x.AddTranslateOp().Set(Gf.Vec3d(20, 0, 0))),
+        ),
+        (
+            "mirror",
+            lambda x: (
+                x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(8, -4, 0)),
+                x.AddScaleOp().Set(Gf.Vec3f(-1, 1, 1)),
+            ),
+        ),
     ]
     for name, author in ops:
         group = UsdGeom.Xform.Define(stage, f"/World/Root/{name}")
@@ -439,8 +588,12 @@ def export_xforms():
         define_tetra(stage, f"/World/Root/{name}/tet", 0.5, left_handed=(name == "orient"))
     # a scope's and an untyped prim's xformOps are ignored (not Xformable)
     scope = UsdGeom.Scope.Define(stage, "/World/Scope")
-    scope.GetPrim().CreateAttribute("xformOp:translate", Sdf.ValueTypeNames.Double3).Set(Gf.Vec3d(100, 0, 0))
-    scope.GetPrim().CreateAttribute("xformOpOrder", Sdf.ValueTypeNames.TokenArray).Set(["xformOp:translate"])
+    scope.GetPrim().CreateAttribute("xformOp:translate", Sdf.ValueTypeNames.Double3).Set(
+        Gf.Vec3d(100, 0, 0)
+    )
+    scope.GetPrim().CreateAttribute("xformOpOrder", Sdf.ValueTypeNames.TokenArray).Set(
+        ["xformOp:translate"]
+    )
     leaf = UsdGeom.Xform.Define(stage, "/World/Scope/Leaf")
     leaf.AddTranslateOp().Set(Gf.Vec3d(0, -20, 0))
     define_quad_cube(stage, "/World/Scope/Leaf/cube")
@@ -489,15 +642,36 @@ def export_composition():
     cube = define_quad_cube(stage, "/World/Instancer/Prototypes/Box", 0.6)
     cube.AddRotateZOp().Set(15.0)  # the prototype's own transform applies to each instance
     instancer.CreatePrototypesRel().SetTargets(
-        ["/World/Instancer/Prototypes/Tet", "/World/Instancer/Prototypes/Box"])
+        ["/World/Instancer/Prototypes/Tet", "/World/Instancer/Prototypes/Box"]
+    )
     instancer.CreateProtoIndicesAttr([0, 1, 0, 1, 1])
-    instancer.CreatePositionsAttr([Gf.Vec3f(-8, 0, 0), Gf.Vec3f(-4, 0, 0), Gf.Vec3f(0, 0, 0),
-                                   Gf.Vec3f(4, 0, 0), Gf.Vec3f(8, 0, 0)])
-    instancer.CreateOrientationsAttr([Gf.Quath(1, 0, 0, 0), Gf.Quath(0.5, 0.5, 0.5, 0.5),
-                                      Gf.Quath(0, 0, 0, 1), Gf.Quath(1, 0, 0, 0),
-                                      Gf.Quath(1, 0, 0, 0)])
-    instancer.CreateScalesAttr([Gf.Vec3f(1, 1, 1), Gf.Vec3f(1, 2, 1), Gf.Vec3f(1.5, 1.5, 1.5),
-                                Gf.Vec3f(1, 1, 1), Gf.Vec3f(1, 1, 1)])
+    instancer.CreatePositionsAttr(
+        [
+            Gf.Vec3f(-8, 0, 0),
+            Gf.Vec3f(-4, 0, 0),
+            Gf.Vec3f(0, 0, 0),
+            Gf.Vec3f(4, 0, 0),
+            Gf.Vec3f(8, 0, 0),
+        ]
+    )
+    instancer.CreateOrientationsAttr(
+        [
+            Gf.Quath(1, 0, 0, 0),
+            Gf.Quath(0.5, 0.5, 0.5, 0.5),
+            Gf.Quath(0, 0, 0, 1),
+            Gf.Quath(1, 0, 0, 0),
+            Gf.Quath(1, 0, 0, 0),
+        ]
+    )
+    instancer.CreateScalesAttr(
+        [
+            Gf.Vec3f(1, 1, 1),
+            Gf.Vec3f(1, 2, 1),
+            Gf.Vec3f(1.5, 1.5, 1.5),
+            Gf.Vec3f(1, 1, 1),
+            Gf.Vec3f(1, 1, 1),
+        ]
+    )
     instancer.CreateInvisibleIdsAttr([3])
     # a general quadric prim (matrix form): an ellipsoid, and hidden things
     quadric = UsdGeom.Xform.Define(stage, "/World/Quadric")
@@ -516,8 +690,9 @@ def export_composition():
         UsdGeom.Xformable(p).AddTranslateOp().Set(Gf.Vec3d(0, 0, 5))
     save(stage, "composition")
     # copy the referenced layer next to the binary too (same folder, so nothing to do)
-    EXPECTED["composition"] = mesh_rays(Usd.Stage.Open(str(OUT / "composition.usda")),
-                                        quadric_at=("/World/Quadric", [0, 14, 0]))
+    EXPECTED["composition"] = mesh_rays(
+        Usd.Stage.Open(str(OUT / "composition.usda")), quadric_at=("/World/Quadric", [0, 14, 0])
+    )
 
 
 def intersect(origin, direction, objects):
@@ -546,8 +721,17 @@ def mesh_rays(stage, quadric_at=None):
             hit = intersect(origin, direction, objects)
             if hit is None or hit[4] < 1e-3:
                 continue  # missing or too close to an edge to be unambiguous
-            rays.append(ray(f"{name} triangle {index}", origin, direction, hit[0],
-                            hit[1] * np.linalg.norm(direction), hit[3], prim=[hit[2]]))
+            rays.append(
+                ray(
+                    f"{name} triangle {index}",
+                    origin,
+                    direction,
+                    hit[0],
+                    hit[1] * np.linalg.norm(direction),
+                    hit[3],
+                    prim=[hit[2]],
+                )
+            )
     if quadric_at:
         name, centre = quadric_at
         c = np.array(centre, dtype=float)
@@ -558,8 +742,16 @@ def mesh_rays(stage, quadric_at=None):
     if stage.GetPrimAtPath("/World/Hidden"):
         origin, direction = np.array([0, 0.01, 9.0]), np.array([0, 0, -1.0])
         assert intersect(origin, direction, objects) is None
-        rays.append(ray("hidden, guide and inactive prims are not drawn", origin, direction,
-                        None, None, None))
+        rays.append(
+            ray(
+                "hidden, guide and inactive prims are not drawn",
+                origin,
+                direction,
+                None,
+                None,
+                None,
+            )
+        )
     return rays
 
 
@@ -567,16 +759,28 @@ def mesh_rays(stage, quadric_at=None):
 # invalid quadric prims
 
 BAD = {
-    "quadric_both_forms": ({"coefficients": [1, 1, 1, 0, 0, 0, 0, 0, 0, -1], "R": -1.0},
-                           "not both"),
-    "quadric_missing_r": ({"Q": [1, 0, 0, 0, 1, 0, 0, 0, 1], "P": [0, 0, 0]}, "missing raycast:quadric:R"),
+    "quadric_both_forms": (
+        {"coefficients": [1, 1, 1, 0, 0, 0, 0, 0, 0, -1], "R": -1.0},
+        "not both",
+    ),
+    "quadric_missing_r": (
+        {"Q": [1, 0, 0, 0, 1, 0, 0, 0, 1], "P": [0, 0, 0]},
+        "missing raycast:quadric:R",
+    ),
     "quadric_coefficient_count": ({"coefficients": [1, 1, 1, 0, 0, 0, 0, 0, -1]}, "9 numbers"),
     "quadric_unbounded": ({"coefficients": [1, 1, 0, 0, 0, 0, 0, 0, 0, -1]}, "needs `bounds`"),
-    "quadric_not_symmetric": ({"Q": [1, 0.5, 0, 0, 1, 0, 0, 0, 1], "P": [0, 0, 0], "R": -1},
-                              "not symmetric"),
+    "quadric_not_symmetric": (
+        {"Q": [1, 0.5, 0, 0, 1, 0, 0, 0, 1], "P": [0, 0, 0], "R": -1},
+        "not symmetric",
+    ),
     "quadric_zero_q_p": ({"coefficients": [0, 0, 0, 0, 0, 0, 0, 0, 0, 1]}, "not a surface"),
-    "quadric_bounds_inverted": ({"coefficients": [1, 1, 1, 0, 0, 0, 0, 0, 0, -1],
-                                 "bounds": {"min": [1, 0, 0], "max": [0, 1, 1]}}, "exceeds"),
+    "quadric_bounds_inverted": (
+        {
+            "coefficients": [1, 1, 1, 0, 0, 0, 0, 0, 0, -1],
+            "bounds": {"min": [1, 0, 0], "max": [0, 1, 1]},
+        },
+        "exceeds",
+    ),
 }
 
 
@@ -587,24 +791,31 @@ def export_bad():
         prim = UsdGeom.Xform.Define(stage, "/Q").GetPrim()
         if "R" in extension and "coefficients" in extension:
             write_quadric(prim, {"coefficients": extension["coefficients"]})
-            prim.CreateAttribute("raycast:quadric:R", Sdf.ValueTypeNames.Double, custom=True).Set(-1.0)
+            prim.CreateAttribute("raycast:quadric:R", Sdf.ValueTypeNames.Double, custom=True).Set(
+                -1.0
+            )
         elif "Q" in extension and "R" not in extension:
             prim.CreateAttribute("raycast:quadric:Q", Sdf.ValueTypeNames.Matrix3d, custom=True).Set(
-                Gf.Matrix3d(*extension["Q"]))
+                Gf.Matrix3d(*extension["Q"])
+            )
             prim.CreateAttribute("raycast:quadric:P", Sdf.ValueTypeNames.Double3, custom=True).Set(
-                Gf.Vec3d(*extension["P"]))
+                Gf.Vec3d(*extension["P"])
+            )
         else:
             write_quadric(prim, extension)
         (OUT / "bad").mkdir(parents=True, exist_ok=True)
         stage.GetRootLayer().Export(str(OUT / "bad" / f"{stem}.usda"))
         bad[stem] = message
-    (OUT / "bad" / "expected_errors.json").write_text(json.dumps(bad, indent=1, sort_keys=True) + "\n")
+    (OUT / "bad" / "expected_errors.json").write_text(
+        json.dumps(bad, indent=1, sort_keys=True) + "\n"
+    )
     print(f"wrote {len(bad)} files in fixtures/usd/bad/")
 
 
 def main(argv=None):
-    argparse.ArgumentParser(prog=prog("usd-fixtures"),
-                            description=__doc__.split("\n\n")[0]).parse_args(argv)
+    argparse.ArgumentParser(
+        prog=prog("usd-fixtures"), description=__doc__.split("\n\n")[0]
+    ).parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)
     export_gltf_scenes()
     export_gprims()

@@ -38,15 +38,12 @@ def json_text(value, indent: int = 0) -> str:
     return json.dumps(value, allow_nan=False)
 
 
-
 def pad4(data: bytes, fill: bytes = b"\0") -> bytes:
     return data + fill * ((-len(data)) % 4)
 
 
-
 def data_uri(data: bytes) -> str:
     return "data:application/octet-stream;base64," + base64.b64encode(data).decode("ascii")
-
 
 
 class Gltf:
@@ -117,8 +114,14 @@ class Gltf:
         self.doc["scenes"].append(s)
         return len(self.doc["scenes"]) - 1
 
-    def perspective(self, name: str, yfov: float, aspect: float | None = None, znear: float = 0.1,
-                    zfar: float | None = None) -> int:
+    def perspective(
+        self,
+        name: str,
+        yfov: float,
+        aspect: float | None = None,
+        znear: float = 0.1,
+        zfar: float | None = None,
+    ) -> int:
         p = {}
         if aspect is not None:
             p["aspectRatio"] = aspect

@@ -22,8 +22,13 @@ def machine() -> dict:
         mem_kib = int(Path("/proc/meminfo").read_text().splitlines()[0].split()[1])
     except (OSError, ValueError, IndexError):
         pass
-    return {"nproc": os.cpu_count(), "cpu": model, "mhz": mhz,
-            "memory_gib": round(mem_kib / 2**20, 1) if mem_kib else None,
-            "loadavg": os.getloadavg() if hasattr(os, "getloadavg") else None,
-            "kernel": platform.release(), "python": platform.python_version(),
-            "numpy": np.__version__}
+    return {
+        "nproc": os.cpu_count(),
+        "cpu": model,
+        "mhz": mhz,
+        "memory_gib": round(mem_kib / 2**20, 1) if mem_kib else None,
+        "loadavg": os.getloadavg() if hasattr(os, "getloadavg") else None,
+        "kernel": platform.release(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+    }

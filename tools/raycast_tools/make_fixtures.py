@@ -74,18 +74,37 @@ def cube(h: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     Vertex i: x = +h if i in {1,2,5,6}, y = +h if i in {2,3,6,7}, z = +h if i >= 4.
     Triangle order (prim index): 0,1 +Z; 2,3 -Z; 4,5 +X; 6,7 -X; 8,9 +Y; 10,11 -Y.
     """
-    v = np.array(
-        [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
-         [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]],
-        dtype=np.float64,
-    ) * h
+    v = (
+        np.array(
+            [
+                [-1, -1, -1],
+                [1, -1, -1],
+                [1, 1, -1],
+                [-1, 1, -1],
+                [-1, -1, 1],
+                [1, -1, 1],
+                [1, 1, 1],
+                [-1, 1, 1],
+            ],
+            dtype=np.float64,
+        )
+        * h
+    )
     f = np.array(
-        [[4, 5, 6], [4, 6, 7],  # +Z
-         [0, 2, 1], [0, 3, 2],  # -Z
-         [1, 2, 6], [1, 6, 5],  # +X
-         [0, 4, 7], [0, 7, 3],  # -X
-         [3, 7, 6], [3, 6, 2],  # +Y
-         [0, 1, 5], [0, 5, 4]],  # -Y
+        [
+            [4, 5, 6],
+            [4, 6, 7],  # +Z
+            [0, 2, 1],
+            [0, 3, 2],  # -Z
+            [1, 2, 6],
+            [1, 6, 5],  # +X
+            [0, 4, 7],
+            [0, 7, 3],  # -X
+            [3, 7, 6],
+            [3, 6, 2],  # +Y
+            [0, 1, 5],
+            [0, 5, 4],
+        ],  # -Y
         dtype=np.int64,
     )
     check_outward(v, f)
@@ -148,15 +167,26 @@ def make_plane() -> None:
 def make_modes() -> None:
     g = Gltf(GENERATOR)
     # TRIANGLES, non-indexed: the quad's two triangles as 6 vertices.
-    tris = g.mesh("tris", [{"attributes": {"POSITION": g.positions(QUAD_V[QUAD_F.reshape(-1)])},
-                            "mode": TRIANGLES}])
+    tris = g.mesh(
+        "tris",
+        [{"attributes": {"POSITION": g.positions(QUAD_V[QUAD_F.reshape(-1)])}, "mode": TRIANGLES}],
+    )
     # TRIANGLE_STRIP, indexed: strip order (-1,-1) (1,-1) (-1,1) (1,1) through the quad's vertices.
-    strip = g.mesh("strip", [{"attributes": {"POSITION": g.positions(QUAD_V)},
-                              "indices": g.indices([0, 1, 3, 2], UNSIGNED_SHORT),
-                              "mode": TRIANGLE_STRIP}])
+    strip = g.mesh(
+        "strip",
+        [
+            {
+                "attributes": {"POSITION": g.positions(QUAD_V)},
+                "indices": g.indices([0, 1, 3, 2], UNSIGNED_SHORT),
+                "mode": TRIANGLE_STRIP,
+            }
+        ],
+    )
     # TRIANGLE_FAN, non-indexed: centre (0,0) then the 4 corners, closing on the first corner:
     # 4 triangles (bottom, right, top, left).
-    fan_v = np.array([[0, 0, 0], [-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0], [-1, -1, 0]], float)
+    fan_v = np.array(
+        [[0, 0, 0], [-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0], [-1, -1, 0]], float
+    )
     fan = g.mesh("fan", [{"attributes": {"POSITION": g.positions(fan_v)}, "mode": TRIANGLE_FAN}])
     # POINTS / LINES: must be skipped. If either were wrongly read as TRIANGLES its first
     # three vertices would make a real triangle (lower-right half of the quad).
@@ -183,8 +213,12 @@ def make_sparse() -> None:
     sp_idx = g.view(np.array([1, 2], np.uint16).tobytes())
     sp_val = g.view(final[[1, 2]].tobytes())
     pos = g.accessor(
-        base_view, FLOAT, 4, "VEC3",
-        min=fminmax(final, 0), max=fminmax(final, 1),
+        base_view,
+        FLOAT,
+        4,
+        "VEC3",
+        min=fminmax(final, 0),
+        max=fminmax(final, 1),
         sparse={
             "count": 2,
             "indices": {"bufferView": sp_idx, "componentType": UNSIGNED_SHORT},
@@ -217,7 +251,9 @@ def make_quantized() -> None:
     ]:
         raw = unit * full
         v = g.view(strided(raw, dtype, stride), ARRAY_BUFFER, stride=stride)
-        pos = g.accessor(v, ctype, 4, "VEC3", normalized=True, min=iminmax(raw, 0), max=iminmax(raw, 1))
+        pos = g.accessor(
+            v, ctype, 4, "VEC3", normalized=True, min=iminmax(raw, 0), max=iminmax(raw, 1)
+        )
         idx = g.indices(QUAD_F, UNSIGNED_BYTE)
         meshes.append(g.mesh(name, [{"attributes": {"POSITION": pos}, "indices": idx}]))
     n0 = g.node("short", mesh=meshes[0], translation=[-1.0, -1.0, 0.0], scale=[2.0, 2.0, 1.0])
@@ -232,8 +268,11 @@ def make_instances() -> None:
     a = g.node("a", mesh=m, translation=[3.0, 0.0, 0.0])
     b = g.node("b", mesh=m, rotation=ROT_Y90, translation=[-3.0, 0.0, 0.0])
     # column-major: scale (1,2,1), translation (0,3,0)
-    c = g.node("c", mesh=m, matrix=[1.0, 0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0,
-                                    0.0, 0.0, 1.0, 0.0, 0.0, 3.0, 0.0, 1.0])
+    c = g.node(
+        "c",
+        mesh=m,
+        matrix=[1.0, 0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 3.0, 0.0, 1.0],
+    )
     d = g.node("d", mesh=m, translation=[0.0, 0.0, 2.0])
     g.doc["nodes"][c]["children"] = [d]
     mirror = g.node("mirror", mesh=m, translation=[0.0, -3.0, 0.0], scale=[-1.0, 1.0, 1.0])
@@ -310,16 +349,27 @@ def corner_filler() -> tuple[np.ndarray, np.ndarray]:
 
 def make_trap() -> None:
     g = Gltf(GENERATOR)
-    big_v = np.array([[-9.5, -0.5, trap_z(-9.5)], [9.5, 0.25, trap_z(9.5)], [-9.5, 1.0, trap_z(-9.5)]])
+    big_v = np.array(
+        [[-9.5, -0.5, trap_z(-9.5)], [9.5, 0.25, trap_z(9.5)], [-9.5, 1.0, trap_z(-9.5)]]
+    )
     # counter-clockwise seen from +Z: normal points up (+Z side, tilted slightly toward -X)
     big = g.mesh("big", [{"attributes": {"POSITION": g.positions(big_v)}}])
     near_v = np.array([[2, 0.2, 0.2], [2, 0.2, 0.3], [2, 0.4, 0.3], [2, 0.4, 0.2]], float)
     # normal -X (faces a ray travelling +X)
-    near = g.mesh("near", [{"attributes": {"POSITION": g.positions(near_v)},
-                            "indices": g.indices([[0, 1, 2], [0, 2, 3]], UNSIGNED_SHORT)}])
+    near = g.mesh(
+        "near",
+        [
+            {
+                "attributes": {"POSITION": g.positions(near_v)},
+                "indices": g.indices([[0, 1, 2], [0, 2, 3]], UNSIGNED_SHORT),
+            }
+        ],
+    )
     fv, ff = corner_filler()
-    filler = g.mesh("corners", [{"attributes": {"POSITION": g.positions(fv)},
-                                 "indices": g.indices(ff, UNSIGNED_SHORT)}])
+    filler = g.mesh(
+        "corners",
+        [{"attributes": {"POSITION": g.positions(fv)}, "indices": g.indices(ff, UNSIGNED_SHORT)}],
+    )
     nodes = [g.node("big", mesh=big), g.node("near", mesh=near), g.node("corners", mesh=filler)]
     g.scene(nodes)
     FILES.write_json(GLTF_DIR / "trap.gltf", g.embedded())
@@ -416,8 +466,10 @@ def make_bad() -> None:
     FILES.write_json(BAD_DIR / "missing_buffer.gltf", doc)
 
     # not_json.gltf
-    FILES.write_bytes(BAD_DIR / "not_json.gltf",
-                b"this is not a glTF file {\n  \"asset\": oops\n}}}\n\x01\x02\x03 garbage\n")
+    FILES.write_bytes(
+        BAD_DIR / "not_json.gltf",
+        b'this is not a glTF file {\n  "asset": oops\n}}}\n\x01\x02\x03 garbage\n',
+    )
 
     # draco_required.gltf: Draco-compressed primitive (payload is not real Draco data)
     g = Gltf(GENERATOR)
@@ -425,9 +477,21 @@ def make_bad() -> None:
     payload = g.view(b"DRACO\x02\x02\x01\x01\x00\x00\x00" + bytes(20))
     pos = g.accessor(None, FLOAT, 4, "VEC3", min=[-1.0, -1.0, 0.0], max=[1.0, 1.0, 0.0])
     idx = g.accessor(None, UNSIGNED_SHORT, 6, "SCALAR")
-    m = g.mesh("draco", [{"attributes": {"POSITION": pos}, "indices": idx,
-                          "extensions": {"KHR_draco_mesh_compression": {
-                              "bufferView": payload, "attributes": {"POSITION": 0}}}}])
+    m = g.mesh(
+        "draco",
+        [
+            {
+                "attributes": {"POSITION": pos},
+                "indices": idx,
+                "extensions": {
+                    "KHR_draco_mesh_compression": {
+                        "bufferView": payload,
+                        "attributes": {"POSITION": 0},
+                    }
+                },
+            }
+        ],
+    )
     g.scene([g.node("draco", mesh=m)])
     FILES.write_json(BAD_DIR / "draco_required.gltf", g.embedded())
 
@@ -435,12 +499,25 @@ def make_bad() -> None:
     g = Gltf(GENERATOR)
     g.require("EXT_meshopt_compression")
     g.bin += b"\xa0" + bytes(47)  # 48 bytes of "compressed" data
-    g.doc["bufferViews"].append({
-        "buffer": 0, "byteOffset": 0, "byteLength": 48, "byteStride": 12, "target": ARRAY_BUFFER,
-        "extensions": {"EXT_meshopt_compression": {
-            "buffer": 0, "byteOffset": 0, "byteLength": 48, "byteStride": 12,
-            "count": 4, "mode": "ATTRIBUTES"}},
-    })
+    g.doc["bufferViews"].append(
+        {
+            "buffer": 0,
+            "byteOffset": 0,
+            "byteLength": 48,
+            "byteStride": 12,
+            "target": ARRAY_BUFFER,
+            "extensions": {
+                "EXT_meshopt_compression": {
+                    "buffer": 0,
+                    "byteOffset": 0,
+                    "byteLength": 48,
+                    "byteStride": 12,
+                    "count": 4,
+                    "mode": "ATTRIBUTES",
+                }
+            },
+        }
+    )
     pos = g.accessor(0, FLOAT, 4, "VEC3", min=[-1.0, -1.0, 0.0], max=[1.0, 1.0, 0.0])
     m = g.mesh("meshopt", [{"attributes": {"POSITION": pos}, "mode": TRIANGLE_FAN}])
     g.scene([g.node("meshopt", mesh=m)])
@@ -463,16 +540,22 @@ def make_bad() -> None:
     FILES.write_json(BAD_DIR / "node_cycle.gltf", g.embedded())
 
     # empty.gltf: valid, one scene with one node that has no mesh (no meshes at all)
-    FILES.write_json(BAD_DIR / "empty.gltf", {
-        "asset": {"version": "2.0", "generator": GENERATOR},
-        "scene": 0,
-        "scenes": [{"name": "empty", "nodes": [0]}],
-        "nodes": [{"name": "nothing", "translation": [0.0, 0.0, 1.0]}],
-    })
+    FILES.write_json(
+        BAD_DIR / "empty.gltf",
+        {
+            "asset": {"version": "2.0", "generator": GENERATOR},
+            "scene": 0,
+            "scenes": [{"name": "empty", "nodes": [0]}],
+            "nodes": [{"name": "nothing", "translation": [0.0, 0.0, 1.0]}],
+        },
+    )
 
     # rays with the wrong shape / a NaN
     FILES.write_npy(BAD_DIR / "bad_rays.npy", np.arange(15, dtype=np.float64).reshape(3, 5))
-    FILES.write_npy(BAD_DIR / "nan_rays.npy", np.array([[0, 0, 5, 0, 0, -1], [0, 0, 5, np.nan, 0, -1]], np.float64))
+    FILES.write_npy(
+        BAD_DIR / "nan_rays.npy",
+        np.array([[0, 0, 5, 0, 0, -1], [0, 0, 5, np.nan, 0, -1]], np.float64),
+    )
 
     # garbage.obj: three vertices, a face that references vertex 100
     FILES.write_bytes(BAD_DIR / "garbage.obj", b"o broken\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 100\n")
@@ -558,7 +641,9 @@ def copy_assets() -> None:
 
 
 def main(argv=None) -> int:
-    argparse.ArgumentParser(prog=prog("fixtures"), description=__doc__.split("\n\n")[0]).parse_args(argv)
+    argparse.ArgumentParser(prog=prog("fixtures"), description=__doc__.split("\n\n")[0]).parse_args(
+        argv
+    )
     print(f"fixtures: writing into {FIX.relative_to(ROOT)}/")
     make_cube()
     make_plane()

@@ -71,6 +71,7 @@ TANGENT_REL = 1e-6
 
 # ---------------------------------------------------------------- glTF JSON
 
+
 def load_gltf_json(path) -> dict:
     """The JSON header of a .gltf or .glb file (buffers are not needed here)."""
     data = Path(path).read_bytes()
@@ -79,7 +80,7 @@ def load_gltf_json(path) -> dict:
         length, ctype = struct.unpack_from("<II", data, 12)
         if ctype != 0x4E4F534A:
             raise ValueError(f"{path}: first GLB chunk is not JSON")
-        return json.loads(data[20:20 + length].decode("utf-8"))
+        return json.loads(data[20 : 20 + length].decode("utf-8"))
     return json.loads(data.decode("utf-8"))
 
 
@@ -95,11 +96,13 @@ def _quat_matrix(q):
     if n == 0.0:
         return np.eye(3)
     x, y, z, w = x / n, y / n, z / n, w / n
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def node_local_matrix(node: dict) -> np.ndarray:
@@ -148,6 +151,7 @@ def node_world_matrices(header: dict, scene=None) -> dict[int, np.ndarray]:
 
 # ---------------------------------------------------------------- quadrics
 
+
 def parse_quadric(ext: dict):
     """(Q 3x3, P 3, R, bmin or None, bmax or None) as float64 from the extension."""
     if "coefficients" in ext:
@@ -162,16 +166,21 @@ def parse_quadric(ext: dict):
     bounds = ext.get("bounds")
     if bounds is None:
         return Q, P, R, None, None
-    return (Q, P, R, np.array(bounds["min"], dtype=np.float64),
-            np.array(bounds["max"], dtype=np.float64))
+    return (
+        Q,
+        P,
+        R,
+        np.array(bounds["min"], dtype=np.float64),
+        np.array(bounds["max"], dtype=np.float64),
+    )
 
 
 @dataclass
 class Quadric:
     node: int
     name: str
-    ext: dict          # the raw extension JSON (for the mpmath path)
-    node_json: list    # local JSON nodes from root to this node (for the mpmath path)
+    ext: dict  # the raw extension JSON (for the mpmath path)
+    node_json: list  # local JSON nodes from root to this node (for the mpmath path)
     world: np.ndarray  # 4x4 float64
     Q: np.ndarray
     P: np.ndarray
@@ -189,8 +198,7 @@ class Quadric:
 
     def f(self, p):
         """f at local points (..., 3)."""
-        return (np.einsum("...i,ij,...j->...", p, self.Q, p)
-                + p @ self.P + self.R)
+        return np.einsum("...i,ij,...j->...", p, self.Q, p) + p @ self.P + self.R
 
     def grad(self, p):
         return 2.0 * p @ self.Q + self.P  # Q symmetric
@@ -218,8 +226,9 @@ class Quadric:
         if lb is None:
             return None
         lo, hi = lb
-        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                            for z in (lo[2], hi[2])])
+        corners = np.array(
+            [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+        )
         w = corners @ self.A.T + self.t
         return w.min(axis=0), w.max(axis=0)
 
@@ -240,9 +249,20 @@ def quadrics_from_header(header: dict, scene=None) -> list[Quadric]:
         while chain[-1] in parents:
             chain.append(parents[chain[-1]])
         Q, P, R, bmin, bmax = parse_quadric(ext)
-        out.append(Quadric(i, node_name(header, i), ext,
-                           [nodes[k] for k in reversed(chain)],
-                           worlds[i], Q, P, R, bmin, bmax))
+        out.append(
+            Quadric(
+                i,
+                node_name(header, i),
+                ext,
+                [nodes[k] for k in reversed(chain)],
+                worlds[i],
+                Q,
+                P,
+                R,
+                bmin,
+                bmax,
+            )
+        )
     return out
 
 
@@ -255,6 +275,7 @@ def has_quadrics(header: dict) -> bool:
 
 
 # ---------------------------------------------------------------- float64 path
+
 
 def _box_margin(q: Quadric, p):
     """Signed distance of local points to the clip-box boundary (>0 inside); +inf unclipped."""
@@ -349,8 +370,16 @@ def intersect_quadric(q: Quadric, origins, dirs, newton: bool = True):
         tau = np.where(bad, 0.0, tau)
     tangent = tau < TANGENT_REL
     depth = t * np.linalg.norm(d, axis=1)
-    return {"t": t, "depth": depth, "normal": normal, "p_local": plocal,
-            "tangent": tangent, "clip": clip, "tau": tau, "tangent_L2": tangent_L2}
+    return {
+        "t": t,
+        "depth": depth,
+        "normal": normal,
+        "p_local": plocal,
+        "tangent": tangent,
+        "clip": clip,
+        "tau": tau,
+        "tangent_L2": tangent_L2,
+    }
 
 
 def trace(quadrics: list[Quadric], origins, dirs, newton: bool = True):
@@ -409,12 +438,20 @@ def _nearest(quadrics, depth_all, normals, amb_tan, amb_clip):
             for i in np.flatnonzero(tie):
                 reasons[i].add("tie")
     amb = np.array([bool(r) for r in reasons], dtype=bool)
-    return {"depth": out_depth, "normal": out_normal, "node": out_node, "name": names,
-            "index": out_index, "ambiguous": amb, "reasons": reasons}
+    return {
+        "depth": out_depth,
+        "normal": out_normal,
+        "node": out_node,
+        "name": names,
+        "index": out_index,
+        "ambiguous": amb,
+        "reasons": reasons,
+    }
 
 
-def merge_hits(qres: dict, mesh_depth, mesh_normal, mesh_node, mesh_ambiguous=None,
-               mesh_names=None):
+def merge_hits(
+    qres: dict, mesh_depth, mesh_normal, mesh_node, mesh_ambiguous=None, mesh_names=None
+):
     """Nearest of the quadric result and mesh hits (depth inf = miss).
 
     Adds kind ('quadric'/'mesh'/''), and flags a tie between a quadric and a mesh
@@ -448,8 +485,10 @@ def merge_hits(qres: dict, mesh_depth, mesh_normal, mesh_node, mesh_ambiguous=No
 
 # ---------------------------------------------------------------- mpmath path
 
+
 def _mp():
     import mpmath
+
     return mpmath
 
 
@@ -465,9 +504,11 @@ def mp_local_matrix(mp, node):
         x, y, z, w = x / nrm, y / nrm, z / nrm, w / nrm
     else:
         x, y, z, w = mp.mpf(0), mp.mpf(0), mp.mpf(0), mp.mpf(1)
-    rot = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-           [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-           [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    rot = [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ]
     s = [mp.mpf(c) for c in node.get("scale", [1, 1, 1])]
     tr = [mp.mpf(c) for c in node.get("translation", [0, 0, 0])]
     m = mp.eye(4)
@@ -490,7 +531,7 @@ def intersect_quadric_mp(q: Quadric, origin, direction, prec: int = 100):
             world = world * mp_local_matrix(mp, nd)
         A = mp.matrix([[world[r, c] for c in range(3)] for r in range(3)])
         tt = mp.matrix([world[r, 3] for r in range(3)])
-        Ai = A ** -1
+        Ai = A**-1
         ext = q.ext
         if "coefficients" in ext:
             a, b, c, d, e, f, g, h, i, j = (mp.mpf(x) for x in ext["coefficients"])
@@ -529,8 +570,9 @@ def intersect_quadric_mp(q: Quadric, origin, direction, prec: int = 100):
                 continue
             p = ol + tk * v
             if q.bmin is not None:
-                inside = all(mp.mpf(float(q.bmin[k])) <= p[k] <= mp.mpf(float(q.bmax[k]))
-                             for k in range(3))
+                inside = all(
+                    mp.mpf(float(q.bmin[k])) <= p[k] <= mp.mpf(float(q.bmax[k])) for k in range(3)
+                )
                 if not inside:
                     continue
             g = 2 * (Q * p) + P
@@ -564,6 +606,7 @@ def trace_mp(quadrics: list[Quadric], origins, dirs, prec: int = 100):
 
 # ---------------------------------------------------------------- command line
 
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog=prog("quadric-reference"), description=__doc__.split("\n")[0])
     ap.add_argument("scene", help=".gltf/.glb with RAYCAST_quadric nodes")
@@ -580,8 +623,10 @@ def main(argv=None):
     else:
         r = trace(qs, rays[:, :3], rays[:, 3:])
     hit = np.isfinite(r["depth"])
-    print(f"{len(qs)} quadrics, {len(rays)} rays, {int(hit.sum())} hits, "
-          f"{int(r['ambiguous'].sum())} ambiguous")
+    print(
+        f"{len(qs)} quadrics, {len(rays)} rays, {int(hit.sum())} hits, "
+        f"{int(r['ambiguous'].sum())} ambiguous"
+    )
     if a.out:
         out = Path(a.out)
         out.mkdir(parents=True, exist_ok=True)
@@ -590,4 +635,3 @@ def main(argv=None):
         np.save(out / "node.npy", r["node"])
         np.save(out / "ambiguous.npy", r["ambiguous"])
     return 0
-

@@ -75,11 +75,13 @@ def scene(rng) -> dict:
     nodes = []
     for i, kind in enumerate(CANONICAL):
         offset = np.array([(i % 3) * 7.0, (i // 3) * 7.0, 0.0]) - 7.0
-        nodes.append({
-            "name": f"{kind}",
-            "matrix": random_matrix(rng, offset),
-            "extensions": {"RAYCAST_quadric": random_quadric(kind, rng)},
-        })
+        nodes.append(
+            {
+                "name": f"{kind}",
+                "matrix": random_matrix(rng, offset),
+                "extensions": {"RAYCAST_quadric": random_quadric(kind, rng)},
+            }
+        )
     return {
         "asset": {"version": "2.0", "generator": "raycast_tools random-quadrics"},
         "extensionsUsed": ["RAYCAST_quadric"],
@@ -110,4 +112,3 @@ def main(argv=None) -> int:
     for path in write_scenes(args.out, args.scenes, args.seed):
         print(path)
     return 0
-

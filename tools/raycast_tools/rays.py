@@ -27,8 +27,9 @@ def make_rays(ref, n: int, seed: int):
     if ntri:
         # 35%: uniform triangle index (small triangles, edges); 35%: area-weighted
         aim = kind < 0.7
-        area = 0.5 * np.linalg.norm(np.cross(ref.tris[:, 1] - ref.tris[:, 0],
-                                             ref.tris[:, 2] - ref.tris[:, 0]), axis=1)
+        area = 0.5 * np.linalg.norm(
+            np.cross(ref.tris[:, 1] - ref.tris[:, 0], ref.tris[:, 2] - ref.tris[:, 0]), axis=1
+        )
         by_index = rng.integers(0, ntri, n)
         p = area / area.sum() if area.sum() > 0 else None
         by_area = rng.choice(ntri, n, p=p)

@@ -33,8 +33,9 @@ def run_raycast(raycast, scene, args, out) -> dict:
     return res
 
 
-def run_rays(raycast, scene, origins, dirs, workdir, threads=None,
-             aov="depth,normal,id,prim", out_name="out") -> dict:
+def run_rays(
+    raycast, scene, origins, dirs, workdir, threads=None, aov="depth,normal,id,prim", out_name="out"
+) -> dict:
     """raycast in rays mode: writes WORKDIR/rays.npy (float64 origin|direction rows), runs
     raycast into WORKDIR/OUT_NAME and returns run_raycast's dict."""
     workdir = Path(workdir)
@@ -49,6 +50,7 @@ def run_rays(raycast, scene, origins, dirs, workdir, threads=None,
 
 def raycast_info(raycast, scene) -> dict:
     """`raycast info SCENE --json`, parsed."""
-    res = subprocess.run([str(raycast), "info", str(scene), "--json"], capture_output=True,
-                         text=True, check=True)
+    res = subprocess.run(
+        [str(raycast), "info", str(scene), "--json"], capture_output=True, text=True, check=True
+    )
     return json.loads(res.stdout)

@@ -61,20 +61,21 @@ from . import quadric_reference as qref
 from .cli import prog
 from .gltf_writer import data_uri
 
-EIG_REL = 1e-10     # eigenvalues below this fraction of the largest count as zero
-TERM_REL = 1e-9     # linear/constant terms below this of the function scale count as zero
-BOX_WIDEN = 1e-9    # clip box widening, relative to its largest side (as raycast)
+EIG_REL = 1e-10  # eigenvalues below this fraction of the largest count as zero
+TERM_REL = 1e-9  # linear/constant terms below this of the function scale count as zero
+BOX_WIDEN = 1e-9  # clip box widening, relative to its largest side (as raycast)
 
 
 @dataclass
 class Tessellation:
     """World-space triangles of one quadric node."""
+
     name: str
     kind: str
-    vertices: np.ndarray          # (V, 3) float64 world
-    faces: np.ndarray             # (F, 3) int64
-    local: np.ndarray             # (V, 3) float64 local (node) coordinates
-    anchor: np.ndarray            # (3,) world anchor (clip-box or ellipsoid centre)
+    vertices: np.ndarray  # (V, 3) float64 world
+    faces: np.ndarray  # (F, 3) int64
+    local: np.ndarray  # (V, 3) float64 local (node) coordinates
+    anchor: np.ndarray  # (3,) world anchor (clip-box or ellipsoid centre)
     segments: int
     rows: int
     info: dict = field(default_factory=dict)
@@ -91,10 +92,11 @@ class Tessellation:
 
 # ------------------------------------------------------------------ canonical form
 
+
 @dataclass
 class _Patch:
-    func: callable        # (U, V) arrays -> (..., 3) y-coordinates (principal frame)
-    u: np.ndarray         # parameter values (periodic ones without the repeat)
+    func: callable  # (U, V) arrays -> (..., 3) y-coordinates (principal frame)
+    u: np.ndarray  # parameter values (periodic ones without the repeat)
     v: np.ndarray
     u_periodic: bool = False
 
@@ -108,8 +110,14 @@ def _scale_of(q: qref.Quadric, lo, hi):
 
 def _box_in_frame(bmin, bmax, c, U):
     """AABB, in y = Uᵀ(p - c) coordinates, of the local clip box."""
-    corners = np.array([[x, y, z] for x in (bmin[0], bmax[0]) for y in (bmin[1], bmax[1])
-                        for z in (bmin[2], bmax[2])])
+    corners = np.array(
+        [
+            [x, y, z]
+            for x in (bmin[0], bmax[0])
+            for y in (bmin[1], bmax[1])
+            for z in (bmin[2], bmax[2])
+        ]
+    )
     yc = (corners - c) @ U
     return yc.min(axis=0), yc.max(axis=0)
 
@@ -165,9 +173,12 @@ def _canonical(q: qref.Quadric):
             perm = [i, j, kk]
             patches = []
             for sgn in (1.0, -1.0):
+
                 def f(PH, RH, sgn=sgn):
-                    return np.stack([RH * si * np.cos(PH), RH * si * np.sin(PH),
-                                     sgn * RH * sk], axis=-1)
+                    return np.stack(
+                        [RH * si * np.cos(PH), RH * si * np.sin(PH), sgn * RH * sk], axis=-1
+                    )
+
                 patches.append(_Patch(f, _angles_placeholder(), np.array([0.0, rho_max]), True))
             return "cone", c, U[:, perm], patches, True
         alpha = w / -k
@@ -175,13 +186,21 @@ def _canonical(q: qref.Quadric):
         neg = np.flatnonzero(alpha < 0)
         a = 1.0 / np.sqrt(np.abs(alpha))
         if len(pos) == 3:
+
             def f(PH, TH):
                 st = np.where((TH == 0.0) | (TH == math.pi), 0.0, np.sin(TH))
                 ct = np.where(TH == 0.0, 1.0, np.where(TH == math.pi, -1.0, np.cos(TH)))
-                return np.stack([a[0] * st * np.cos(PH), a[1] * st * np.sin(PH),
-                                 a[2] * ct], axis=-1)
-            return "ellipsoid", c, U, [_Patch(f, _angles_placeholder(),
-                                               np.array([0.0, math.pi]), True)], False
+                return np.stack(
+                    [a[0] * st * np.cos(PH), a[1] * st * np.sin(PH), a[2] * ct], axis=-1
+                )
+
+            return (
+                "ellipsoid",
+                c,
+                U,
+                [_Patch(f, _angles_placeholder(), np.array([0.0, math.pi]), True)],
+                False,
+            )
         if len(pos) == 2:
             i, j = pos
             kk = neg[0]
@@ -191,9 +210,14 @@ def _canonical(q: qref.Quadric):
             def f(PH, H):
                 r = np.sqrt(1.0 + (H / ak) ** 2)
                 return np.stack([ai * r * np.cos(PH), aj * r * np.sin(PH), H], axis=-1)
-            return ("hyperboloid_one_sheet", c, U[:, perm],
-                    [_Patch(f, _angles_placeholder(), np.array([ylo[kk], yhi[kk]]), True)],
-                    False)
+
+            return (
+                "hyperboloid_one_sheet",
+                c,
+                U[:, perm],
+                [_Patch(f, _angles_placeholder(), np.array([ylo[kk], yhi[kk]]), True)],
+                False,
+            )
         if len(pos) == 1:
             kk = pos[0]
             i, j = neg
@@ -203,14 +227,23 @@ def _canonical(q: qref.Quadric):
             if ymk < ak:
                 return "hyperboloid_two_sheets", c, U[:, perm], [], False
             rho1 = math.sqrt((ymk / ak) ** 2 - 1.0)
-            rho2 = math.hypot(max(abs(ylo[i]), abs(yhi[i])) / ai,
-                              max(abs(ylo[j]), abs(yhi[j])) / aj)
+            rho2 = math.hypot(
+                max(abs(ylo[i]), abs(yhi[i])) / ai, max(abs(ylo[j]), abs(yhi[j])) / aj
+            )
             rho_max = min(rho1, rho2)
             patches = []
             for sgn in (1.0, -1.0):
+
                 def f(PH, RH, sgn=sgn):
-                    return np.stack([ai * RH * np.cos(PH), aj * RH * np.sin(PH),
-                                     sgn * ak * np.sqrt(1.0 + RH * RH)], axis=-1)
+                    return np.stack(
+                        [
+                            ai * RH * np.cos(PH),
+                            aj * RH * np.sin(PH),
+                            sgn * ak * np.sqrt(1.0 + RH * RH),
+                        ],
+                        axis=-1,
+                    )
+
                 patches.append(_Patch(f, _angles_placeholder(), np.array([0.0, rho_max]), True))
             return "hyperboloid_two_sheets", c, U[:, perm], patches, False
         return "empty", c, U, [], True
@@ -228,16 +261,24 @@ def _canonical(q: qref.Quadric):
 
             def f(YI, YJ):
                 return np.stack([YI, YJ, -(wi * YI * YI + wj * YJ * YJ + k) / p], axis=-1)
-            return kind, c, Up, [_Patch(f, np.array([ylo[i], yhi[i]]),
-                                        np.array([ylo[j], yhi[j]]))], False
+
+            return (
+                kind,
+                c,
+                Up,
+                [_Patch(f, np.array([ylo[i], yhi[i]]), np.array([ylo[j], yhi[j]]))],
+                False,
+            )
         if k == 0.0:
             if w[i] * w[j] > 0:
                 return "line", c, Up, [], True
             r = math.sqrt(abs(w[j] / w[i]))
             patches = []
             for sgn in (1.0, -1.0):
+
                 def f(YJ, H, sgn=sgn):
                     return np.stack([sgn * r * YJ, YJ, H], axis=-1)
+
                 patches.append(_Patch(f, np.array([ylo[j], yhi[j]]), np.array([ylo[kk], yhi[kk]])))
             return "intersecting_planes", c, Up, patches, True
         alpha = np.array([w[i], w[j]]) / -k
@@ -245,10 +286,15 @@ def _canonical(q: qref.Quadric):
             ai, aj = 1.0 / np.sqrt(alpha)
 
             def f(PH, H):
-                return np.stack([ai * np.cos(PH) + 0.0 * H, aj * np.sin(PH) + 0.0 * H, H],
-                                axis=-1)
-            return "elliptic_cylinder", c, Up, [_Patch(f, _angles_placeholder(),
-                                                       np.array([ylo[kk], yhi[kk]]), True)], True
+                return np.stack([ai * np.cos(PH) + 0.0 * H, aj * np.sin(PH) + 0.0 * H, H], axis=-1)
+
+            return (
+                "elliptic_cylinder",
+                c,
+                Up,
+                [_Patch(f, _angles_placeholder(), np.array([ylo[kk], yhi[kk]]), True)],
+                True,
+            )
         if np.all(alpha < 0):
             return "empty", c, Up, [], True
         # hyperbolic cylinder: α_a > 0 (the axis crossing the curve), α_b < 0
@@ -259,15 +305,17 @@ def _canonical(q: qref.Quadric):
         sb = max(abs(ylo[axes[1]]), abs(yhi[axes[1]])) / ab
         patches = []
         for sgn in (1.0, -1.0):
+
             def f(S, H, sgn=sgn):
                 return np.stack([sgn * aa * np.sqrt(1.0 + S * S), ab * S, H], axis=-1)
+
             patches.append(_Patch(f, np.array([-sb, sb]), np.array([ylo[kk], yhi[kk]])))
         return "hyperbolic_cylinder", c, Up, patches, True
 
     if rank == 1:
         i = int(np.flatnonzero(nz)[0])
         others = [t for t in range(3) if t != i]
-        g = U[:, others] @ lin_null[others]       # linear term direction (local)
+        g = U[:, others] @ lin_null[others]  # linear term direction (local)
         gn = float(np.linalg.norm(g))
         if gn == 0.0:
             if k == 0.0:
@@ -283,10 +331,13 @@ def _canonical(q: qref.Quadric):
             Up = U[:, [i, o1, o2]]
             patches = []
             for r0 in roots:
+
                 def f(Y1, Y2, r0=r0):
                     return np.stack([r0 + 0.0 * Y1, Y1, Y2], axis=-1)
-                patches.append(_Patch(f, np.array([ylo[o1], yhi[o1]]),
-                                      np.array([ylo[o2], yhi[o2]])))
+
+                patches.append(
+                    _Patch(f, np.array([ylo[o1], yhi[o1]]), np.array([ylo[o2], yhi[o2]]))
+                )
             return kind, c, Up, patches, True
         up = g / gn
         uq = np.cross(U[:, i], up)
@@ -297,8 +348,14 @@ def _canonical(q: qref.Quadric):
 
         def f(YI, YQ):
             return np.stack([YI, -(wi * YI * YI + k) / gn + 0.0 * YQ, YQ], axis=-1)
-        return "parabolic_cylinder", cl, Up, [_Patch(f, np.array([ylo2[0], yhi2[0]]),
-                                                     np.array([ylo2[2], yhi2[2]]))], True
+
+        return (
+            "parabolic_cylinder",
+            cl,
+            Up,
+            [_Patch(f, np.array([ylo2[0], yhi2[0]]), np.array([ylo2[2], yhi2[2]]))],
+            True,
+        )
 
     # rank 0: plane P·p + R = 0
     pn = float(np.linalg.norm(P))
@@ -312,8 +369,14 @@ def _canonical(q: qref.Quadric):
 
     def f(Y1, Y2):
         return np.stack([0.0 * Y1, Y1, Y2], axis=-1)
-    return "plane", c0, Up, [_Patch(f, np.array([ylo2[1], yhi2[1]]),
-                                    np.array([ylo2[2], yhi2[2]]))], True
+
+    return (
+        "plane",
+        c0,
+        Up,
+        [_Patch(f, np.array([ylo2[1], yhi2[1]]), np.array([ylo2[2], yhi2[2]]))],
+        True,
+    )
 
 
 def _angles_placeholder():
@@ -323,6 +386,7 @@ def _angles_placeholder():
 
 
 # ------------------------------------------------------------------ grids
+
 
 def _arc_lengths(patch: _Patch, c, U, A):
     """World arc length of the middle u-line and v-line, and whether v-lines are straight."""
@@ -359,7 +423,7 @@ def _grid(patch: _Patch, n, m):
         uu[-1] = patch.u[-1]
     vv = patch.v[0] + (patch.v[-1] - patch.v[0]) * np.arange(m + 1) / m
     vv[-1] = patch.v[-1]
-    UU, VV = np.meshgrid(uu, vv, indexing="ij")        # (n+1, m+1)
+    UU, VV = np.meshgrid(uu, vv, indexing="ij")  # (n+1, m+1)
     Y = patch.func(UU, VV).reshape(-1, 3)
     idx = np.arange((n + 1) * (m + 1)).reshape(n + 1, m + 1)
     a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
@@ -378,6 +442,7 @@ def _merge(V, F):
 
 
 # ------------------------------------------------------------------ clipping
+
 
 def _clip_to_box(V, F, lo, hi):
     """Sutherland–Hodgman clip of triangles (local coords) to the box [lo, hi].
@@ -443,6 +508,7 @@ def _clip_to_box(V, F, lo, hi):
 
 # ------------------------------------------------------------------ public API
 
+
 def resolution_for_edge(q: qref.Quadric, edge: float):
     """(segments, rows) giving world edge lengths of about `edge` on quadric q."""
     kind, c, U, patches, straight = _canonical(q)
@@ -454,8 +520,13 @@ def resolution_for_edge(q: qref.Quadric, edge: float):
     return max(n, 3), m
 
 
-def tessellate_quadric(q: qref.Quadric, segments: int | None = None, rows: int | None = None,
-                       edge: float | None = None, clip: bool = True) -> Tessellation:
+def tessellate_quadric(
+    q: qref.Quadric,
+    segments: int | None = None,
+    rows: int | None = None,
+    edge: float | None = None,
+    clip: bool = True,
+) -> Tessellation:
     """World-space triangles of quadric node q (a quadric_reference.Quadric).
 
     Give either `segments` (n, around or along the first parameter; `rows` m defaults
@@ -483,8 +554,11 @@ def tessellate_quadric(q: qref.Quadric, segments: int | None = None, rows: int |
             for p in patches:
                 lu, lv, st = _arc_lengths(p, c, U, q.A)
                 m = max(m, 1 if st else int(math.ceil(lv / (lu / n))))
-    if kind in ("plane", "parallel_planes", "coincident_planes", "intersecting_planes") \
-            and segments is None and edge is None:
+    if (
+        kind in ("plane", "parallel_planes", "coincident_planes", "intersecting_planes")
+        and segments is None
+        and edge is None
+    ):
         n = m = 1
     Vs, Fs, off = [], [], 0
     for p in patches:
@@ -495,11 +569,12 @@ def tessellate_quadric(q: qref.Quadric, segments: int | None = None, rows: int |
     lb = q.local_bounds()
     if not Vs or lb is None:
         z = np.zeros((0, 3))
-        return Tessellation(q.name, kind, z, np.zeros((0, 3), np.int64), z,
-                            q.t.copy(), n, m, {"residual": 0.0})
+        return Tessellation(
+            q.name, kind, z, np.zeros((0, 3), np.int64), z, q.t.copy(), n, m, {"residual": 0.0}
+        )
     Y = np.concatenate(Vs)
     F = np.concatenate(Fs)
-    L = c + Y @ U.T                               # local points, on the surface
+    L = c + Y @ U.T  # local points, on the surface
     L, F = _merge(L, F)
     created = np.zeros(len(L), bool)
     if clip and q.bmin is not None:
@@ -517,7 +592,7 @@ def tessellate_quadric(q: qref.Quadric, segments: int | None = None, rows: int |
         residual = float(res.max())
     else:
         residual = 0.0
-    W = L @ q.A.T + q.t                           # float64 world
+    W = L @ q.A.T + q.t  # float64 world
     # winding: geometric normal toward f > 0 (world gradient A⁻ᵀ ∇f at the centroid)
     if len(F):
         T = W[F]
@@ -529,8 +604,17 @@ def tessellate_quadric(q: qref.Quadric, segments: int | None = None, rows: int |
         F[flip] = F[flip][:, [0, 2, 1]]
     lo, hi = lb
     anchor = q.A @ (0.5 * (lo + hi)) + q.t
-    return Tessellation(q.name, kind, W, F.astype(np.int64), L, anchor, n, m,
-                        {"residual": residual, "clipped_vertices": int(created.sum())})
+    return Tessellation(
+        q.name,
+        kind,
+        W,
+        F.astype(np.int64),
+        L,
+        anchor,
+        n,
+        m,
+        {"residual": residual, "clipped_vertices": int(created.sum())},
+    )
 
 
 def tessellate_gltf(path, segments=None, edge=None, rows=None, only=None, scene=None):
@@ -556,8 +640,17 @@ def _embed_buffers(header: dict, src_dir: Path):
         b["uri"] = data_uri(data)
 
 
-def write_tessellated_gltf(src, out, segments=None, edge=None, rows=None, only=None,
-                           drop_other_quadrics=False, scene=None, tessellations=None):
+def write_tessellated_gltf(
+    src,
+    out,
+    segments=None,
+    edge=None,
+    rows=None,
+    only=None,
+    drop_other_quadrics=False,
+    scene=None,
+    tessellations=None,
+):
     """Write `out` (.gltf + .bin beside it): `src` with its quadric nodes tessellated.
 
     `only`: names of the quadric nodes to tessellate (default all).  The others keep
@@ -573,8 +666,9 @@ def write_tessellated_gltf(src, out, segments=None, edge=None, rows=None, only=N
     qs = qref.quadrics_from_header(header, scene)
     sel = [q for q in qs if only is None or q.name in set(only)]
     if tessellations is None:
-        tessellations = [tessellate_quadric(q, segments=segments, rows=rows, edge=edge)
-                         for q in sel]
+        tessellations = [
+            tessellate_quadric(q, segments=segments, rows=rows, edge=edge) for q in sel
+        ]
     nodes = header["nodes"]
     for q in qs:
         if q in sel or drop_other_quadrics:
@@ -600,24 +694,57 @@ def write_tessellated_gltf(src, out, segments=None, edge=None, rows=None, only=N
             while len(blob) % 4:
                 blob.append(0)
             views.append(len(header["bufferViews"]))
-            header["bufferViews"].append({"buffer": bidx, "byteOffset": len(blob),
-                                          "byteLength": arr.nbytes, "target": target})
+            header["bufferViews"].append(
+                {
+                    "buffer": bidx,
+                    "byteOffset": len(blob),
+                    "byteLength": arr.nbytes,
+                    "target": target,
+                }
+            )
             blob.extend(arr.tobytes())
         a_pos = len(header["accessors"])
-        header["accessors"].append({"bufferView": views[0], "componentType": 5126,
-                                    "count": len(pos), "type": "VEC3",
-                                    "min": [float(x) for x in pos.min(axis=0)],
-                                    "max": [float(x) for x in pos.max(axis=0)]})
-        header["accessors"].append({"bufferView": views[1], "componentType": 5125,
-                                    "count": int(idx.size), "type": "SCALAR"})
-        header["meshes"].append({"name": f"{t.name}_tess",
-                                 "primitives": [{"attributes": {"POSITION": a_pos},
-                                                 "indices": a_pos + 1, "mode": 4}]})
-        nodes.append({"name": t.name, "mesh": len(header["meshes"]) - 1,
-                      "translation": [float(x) for x in t.anchor],
-                      "extras": {"tessellation": {"kind": t.kind, "segments": t.segments,
-                                                  "rows": t.rows,
-                                                  "triangles": int(len(t.faces))}}})
+        header["accessors"].append(
+            {
+                "bufferView": views[0],
+                "componentType": 5126,
+                "count": len(pos),
+                "type": "VEC3",
+                "min": [float(x) for x in pos.min(axis=0)],
+                "max": [float(x) for x in pos.max(axis=0)],
+            }
+        )
+        header["accessors"].append(
+            {
+                "bufferView": views[1],
+                "componentType": 5125,
+                "count": int(idx.size),
+                "type": "SCALAR",
+            }
+        )
+        header["meshes"].append(
+            {
+                "name": f"{t.name}_tess",
+                "primitives": [
+                    {"attributes": {"POSITION": a_pos}, "indices": a_pos + 1, "mode": 4}
+                ],
+            }
+        )
+        nodes.append(
+            {
+                "name": t.name,
+                "mesh": len(header["meshes"]) - 1,
+                "translation": [float(x) for x in t.anchor],
+                "extras": {
+                    "tessellation": {
+                        "kind": t.kind,
+                        "segments": t.segments,
+                        "rows": t.rows,
+                        "triangles": int(len(t.faces)),
+                    }
+                },
+            }
+        )
         roots.append(len(nodes) - 1)
     bin_path = out.with_suffix(".bin")
     header["buffers"].append({"uri": bin_path.name, "byteLength": len(blob)})
@@ -634,7 +761,9 @@ def write_tessellated_gltf(src, out, segments=None, edge=None, rows=None, only=N
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog=prog("tessellate"), description="Tessellate RAYCAST_quadric nodes into a glTF mesh")
+    ap = argparse.ArgumentParser(
+        prog=prog("tessellate"), description="Tessellate RAYCAST_quadric nodes into a glTF mesh"
+    )
     ap.add_argument("scene")
     ap.add_argument("out")
     g = ap.add_mutually_exclusive_group(required=True)
@@ -644,10 +773,18 @@ def main(argv=None):
     ap.add_argument("--only", nargs="*")
     ap.add_argument("--drop-other-quadrics", action="store_true")
     a = ap.parse_args(argv)
-    ts = write_tessellated_gltf(a.scene, a.out, segments=a.segments, edge=a.edge, rows=a.rows,
-                                only=a.only, drop_other_quadrics=a.drop_other_quadrics)
+    ts = write_tessellated_gltf(
+        a.scene,
+        a.out,
+        segments=a.segments,
+        edge=a.edge,
+        rows=a.rows,
+        only=a.only,
+        drop_other_quadrics=a.drop_other_quadrics,
+    )
     for t in ts:
-        print(f"{t.name}: {t.kind}, {t.segments}x{t.rows}, {len(t.faces)} triangles, "
-              f"max vertex residual {t.info['residual']:.1e}")
+        print(
+            f"{t.name}: {t.kind}, {t.segments}x{t.rows}, {len(t.faces)} triangles, "
+            f"max vertex residual {t.info['residual']:.1e}"
+        )
     return 0
-

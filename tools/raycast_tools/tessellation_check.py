@@ -58,12 +58,13 @@ from .runner import run_rays
 
 QFIX = ROOT / "fixtures" / "quadrics"
 SLOPE_RANGE = (1.6, 2.4)
-NORMAL_SLOPE_RANGE = (0.7, 1.3)   # reported, not enforced
+NORMAL_SLOPE_RANGE = (0.7, 1.3)  # reported, not enforced
 DEFAULT_FIXTURES = ["sphere_coefficients.gltf", "cylinder.gltf:canonical", "ellipsoid.gltf"]
 DEFAULT_SEGMENTS = [8, 16, 32, 64, 128, 256]
 
 
 # ------------------------------------------------------------------ shared helpers
+
 
 def parse_fixture(spec: str):
     """'file.gltf' or 'file.gltf:node1,node2' -> (path, names or None)."""
@@ -107,17 +108,37 @@ def compare(ref, depth, normal, unit, min_cos, subset=None, jump=np.inf):
 
     def q(x, p):
         return float(np.percentile(x, p)) if len(x) else float("nan")
-    return {"rays": int(sel.sum()), "both_hit": int(both.sum()), "fit_rays": int(good.sum()),
-            "hitmiss_disagree": disagree, "jumps": int(jumped.sum()),
-            "depth_rel_median": q(rel[good], 50), "depth_rel_p99": q(rel[good], 99),
-            "depth_rel_max": q(rel[good], 100), "depth_rel_max_all": q(rel, 100),
-            "normal_median": q(ang[good], 50), "normal_p99": q(ang[good], 99)}
+
+    return {
+        "rays": int(sel.sum()),
+        "both_hit": int(both.sum()),
+        "fit_rays": int(good.sum()),
+        "hitmiss_disagree": disagree,
+        "jumps": int(jumped.sum()),
+        "depth_rel_median": q(rel[good], 50),
+        "depth_rel_p99": q(rel[good], 99),
+        "depth_rel_max": q(rel[good], 100),
+        "depth_rel_max_all": q(rel, 100),
+        "normal_median": q(ang[good], 50),
+        "normal_p99": q(ang[good], 99),
+    }
 
 
 # ------------------------------------------------------------------ the check
 
-def check_fixture(spec, segments, nrays, nrays_f64, seed, raycast, min_cos, workdir,
-                  methods=("ray_triangle", "embree", "raycast"), f64_max_segments=128):
+
+def check_fixture(
+    spec,
+    segments,
+    nrays,
+    nrays_f64,
+    seed,
+    raycast,
+    min_cos,
+    workdir,
+    methods=("ray_triangle", "embree", "raycast"),
+    f64_max_segments=128,
+):
     path, only = parse_fixture(spec)
     qs = load_quadrics(path, only)
     o, d = quadric_rays(qs, nrays, seed)
@@ -144,13 +165,23 @@ def check_fixture(spec, segments, nrays, nrays_f64, seed, raycast, min_cos, work
                 st = compare(ref, dep, nor, d, min_cos, jump=e)
             else:
                 g = Path(workdir) / f"{path.stem}_{n}.gltf"
-                tess.write_tessellated_gltf(path, g, only=[q.name for q in qs],
-                                            drop_other_quadrics=True, tessellations=ts)
-                r = run_rays(raycast, g, o, d, Path(workdir) / f"rc_{path.stem}_{n}",
-                                aov="depth,normal")
+                tess.write_tessellated_gltf(
+                    path, g, only=[q.name for q in qs], drop_other_quadrics=True, tessellations=ts
+                )
+                r = run_rays(
+                    raycast, g, o, d, Path(workdir) / f"rc_{path.stem}_{n}", aov="depth,normal"
+                )
                 st = compare(ref, r["depth"], r["normal"], d, min_cos, jump=e)
-            st.update({"fixture": spec, "segments": n, "edge": e, "triangles": len(tris),
-                       "method": m, "seconds": time.perf_counter() - t0})
+            st.update(
+                {
+                    "fixture": spec,
+                    "segments": n,
+                    "edge": e,
+                    "triangles": len(tris),
+                    "method": m,
+                    "seconds": time.perf_counter() - t0,
+                }
+            )
             rows.append(st)
     return rows
 
@@ -161,42 +192,61 @@ def slopes(rows):
     for k in keys:
         rr = [r for r in rows if (r["fixture"], r["method"]) == k]
         e = [r["edge"] for r in rr]
-        out[k] = {"depth_median": fit_slope(e, [r["depth_rel_median"] for r in rr]),
-                  "depth_p99": fit_slope(e, [r["depth_rel_p99"] for r in rr]),
-                  "normal_median": fit_slope(e, [r["normal_median"] for r in rr])}
+        out[k] = {
+            "depth_median": fit_slope(e, [r["depth_rel_median"] for r in rr]),
+            "depth_p99": fit_slope(e, [r["depth_rel_p99"] for r in rr]),
+            "normal_median": fit_slope(e, [r["normal_median"] for r in rr]),
+        }
     return out
 
 
 def format_table(rows, sl):
     lines = []
-    hdr = (f"{'fixture':26} {'method':12} {'seg':>4} {'tris':>7} {'edge':>8} {'hits':>5} "
-           f"{'fit':>5} {'h/m':>4} {'jmp':>4} {'depth med':>9} {'depth p99':>9} {'max':>8} "
-           f"{'max all':>8} {'nrm med':>8} {'nrm p99':>8} {'sec':>6}")
+    hdr = (
+        f"{'fixture':26} {'method':12} {'seg':>4} {'tris':>7} {'edge':>8} {'hits':>5} "
+        f"{'fit':>5} {'h/m':>4} {'jmp':>4} {'depth med':>9} {'depth p99':>9} {'max':>8} "
+        f"{'max all':>8} {'nrm med':>8} {'nrm p99':>8} {'sec':>6}"
+    )
     lines.append(hdr)
     lines.append("-" * len(hdr))
     for r in rows:
-        lines.append(f"{r['fixture'][:26]:26} {r['method']:12} {r['segments']:4d} "
-                     f"{r['triangles']:7d} {r['edge']:8.2e} {r['both_hit']:5d} "
-                     f"{r['fit_rays']:5d} {r['hitmiss_disagree']:4d} {r['jumps']:4d} "
-                     f"{r['depth_rel_median']:9.2e} {r['depth_rel_p99']:9.2e} "
-                     f"{r['depth_rel_max']:8.1e} {r['depth_rel_max_all']:8.1e} "
-                     f"{r['normal_median']:8.1e} {r['normal_p99']:8.1e} {r['seconds']:6.2f}")
+        lines.append(
+            f"{r['fixture'][:26]:26} {r['method']:12} {r['segments']:4d} "
+            f"{r['triangles']:7d} {r['edge']:8.2e} {r['both_hit']:5d} "
+            f"{r['fit_rays']:5d} {r['hitmiss_disagree']:4d} {r['jumps']:4d} "
+            f"{r['depth_rel_median']:9.2e} {r['depth_rel_p99']:9.2e} "
+            f"{r['depth_rel_max']:8.1e} {r['depth_rel_max_all']:8.1e} "
+            f"{r['normal_median']:8.1e} {r['normal_p99']:8.1e} {r['seconds']:6.2f}"
+        )
     lines.append("")
     lines.append("log-log slopes vs edge length (depth: expect ~2, normal: ~1)")
-    lines.append(f"{'fixture':26} {'method':12} {'depth med':>9} {'depth p99':>9} "
-                 f"{'normal med':>10}  verdict")
+    lines.append(
+        f"{'fixture':26} {'method':12} {'depth med':>9} {'depth p99':>9} "
+        f"{'normal med':>10}  verdict"
+    )
     for (fx, m), s in sl.items():
         ok = all(SLOPE_RANGE[0] <= s[k] <= SLOPE_RANGE[1] for k in ("depth_median", "depth_p99"))
         nok = NORMAL_SLOPE_RANGE[0] <= s["normal_median"] <= NORMAL_SLOPE_RANGE[1]
-        lines.append(f"{fx[:26]:26} {m:12} {s['depth_median']:9.2f} {s['depth_p99']:9.2f} "
-                     f"{s['normal_median']:10.2f}  {'ok' if ok else 'FAIL'}"
-                     f"{'' if nok else ' (normal slope off)'}")
+        lines.append(
+            f"{fx[:26]:26} {m:12} {s['depth_median']:9.2f} {s['depth_p99']:9.2f} "
+            f"{s['normal_median']:10.2f}  {'ok' if ok else 'FAIL'}"
+            f"{'' if nok else ' (normal slope off)'}"
+        )
     return "\n".join(lines)
 
 
-def run_check(fixtures=DEFAULT_FIXTURES, segments=DEFAULT_SEGMENTS, nrays=2000, nrays_f64=200,
-              seed=0, raycast=None, min_cos=0.5, use_raycast=True, workdir=None,
-              f64_max_segments=128):
+def run_check(
+    fixtures=DEFAULT_FIXTURES,
+    segments=DEFAULT_SEGMENTS,
+    nrays=2000,
+    nrays_f64=200,
+    seed=0,
+    raycast=None,
+    min_cos=0.5,
+    use_raycast=True,
+    workdir=None,
+    f64_max_segments=128,
+):
     """Returns (rows, slopes, ok)."""
     methods = ["ray_triangle", "embree"]
     rc = Path(raycast) if raycast else find_raycast()
@@ -208,26 +258,43 @@ def run_check(fixtures=DEFAULT_FIXTURES, segments=DEFAULT_SEGMENTS, nrays=2000, 
     with tempfile.TemporaryDirectory(prefix="tesscheck") as tmp:
         wd = Path(workdir) if workdir else Path(tmp)
         for fx in fixtures:
-            rows += check_fixture(fx, segments, nrays, nrays_f64, seed, rc, min_cos, wd, methods,
-                                  f64_max_segments)
+            rows += check_fixture(
+                fx, segments, nrays, nrays_f64, seed, rc, min_cos, wd, methods, f64_max_segments
+            )
     sl = slopes(rows)
-    ok = all(SLOPE_RANGE[0] <= s[k] <= SLOPE_RANGE[1]
-             for s in sl.values() for k in ("depth_median", "depth_p99"))
+    ok = all(
+        SLOPE_RANGE[0] <= s[k] <= SLOPE_RANGE[1]
+        for s in sl.values()
+        for k in ("depth_median", "depth_p99")
+    )
     return rows, sl, ok
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog=prog("tessellation-check"), description=__doc__.split("\n")[0])
-    ap.add_argument("--fixtures", nargs="+", default=DEFAULT_FIXTURES,
-                    help="fixture files (in fixtures/quadrics unless a path), "
-                         "optionally FILE:node,node")
+    ap = argparse.ArgumentParser(
+        prog=prog("tessellation-check"), description=__doc__.split("\n")[0]
+    )
+    ap.add_argument(
+        "--fixtures",
+        nargs="+",
+        default=DEFAULT_FIXTURES,
+        help="fixture files (in fixtures/quadrics unless a path), optionally FILE:node,node",
+    )
     ap.add_argument("--segments", nargs="+", type=int, default=DEFAULT_SEGMENTS)
     ap.add_argument("--rays", type=int, default=2000)
-    ap.add_argument("--rays-f64", type=int, default=200,
-                    help="rays for trimesh ray_triangle (slow), the first of --rays")
-    ap.add_argument("--f64-max-segments", type=int, default=128,
-                    help="skip ray_triangle above this resolution (~0.5 s/ray at 325k "
-                         "triangles; embree and raycast cover every resolution)")
+    ap.add_argument(
+        "--rays-f64",
+        type=int,
+        default=200,
+        help="rays for trimesh ray_triangle (slow), the first of --rays",
+    )
+    ap.add_argument(
+        "--f64-max-segments",
+        type=int,
+        default=128,
+        help="skip ray_triangle above this resolution (~0.5 s/ray at 325k "
+        "triangles; embree and raycast cover every resolution)",
+    )
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--min-cos", type=float, default=0.5)
     ap.add_argument("--no-raycast", action="store_true", help="skip method (c)")
@@ -235,14 +302,31 @@ def main(argv=None):
     ap.add_argument("--json", default=None, help="write rows and slopes here")
     a = ap.parse_args(argv)
     t0 = time.perf_counter()
-    rows, sl, ok = run_check(a.fixtures, a.segments, a.rays, a.rays_f64, a.seed, a.raycast,
-                             a.min_cos, not a.no_raycast, f64_max_segments=a.f64_max_segments)
+    rows, sl, ok = run_check(
+        a.fixtures,
+        a.segments,
+        a.rays,
+        a.rays_f64,
+        a.seed,
+        a.raycast,
+        a.min_cos,
+        not a.no_raycast,
+        f64_max_segments=a.f64_max_segments,
+    )
     print(format_table(rows, sl))
-    print(f"\n{'OK' if ok else 'FAIL'}: depth slopes {'all' if ok else 'not all'} within "
-          f"{list(SLOPE_RANGE)} ({time.perf_counter() - t0:.1f} s)")
+    print(
+        f"\n{'OK' if ok else 'FAIL'}: depth slopes {'all' if ok else 'not all'} within "
+        f"{list(SLOPE_RANGE)} ({time.perf_counter() - t0:.1f} s)"
+    )
     if a.json:
-        Path(a.json).write_text(json.dumps(
-            {"rows": rows, "slopes": [{"fixture": k[0], "method": k[1], **v}
-                                      for k, v in sl.items()], "ok": ok}, indent=1))
+        Path(a.json).write_text(
+            json.dumps(
+                {
+                    "rows": rows,
+                    "slopes": [{"fixture": k[0], "method": k[1], **v} for k, v in sl.items()],
+                    "ok": ok,
+                },
+                indent=1,
+            )
+        )
     return 0 if ok else 1
-

@@ -35,9 +35,25 @@ CPU = Path("/sys/devices/system/cpu")
 
 def timings(raycast, scene, accel, threads, work: Path, cpus: str | None = None) -> dict:
     """One 2048x2048 depth render; the sidecar's timings (seconds)."""
-    cmd = [str(raycast), str(scene), "--width", "2048", "--height", "2048", "--aov", "depth",
-           "--format", "npy", "--threads", str(threads), "--accel", accel, "--out", str(work),
-           "--quiet"]
+    cmd = [
+        str(raycast),
+        str(scene),
+        "--width",
+        "2048",
+        "--height",
+        "2048",
+        "--aov",
+        "depth",
+        "--format",
+        "npy",
+        "--threads",
+        str(threads),
+        "--accel",
+        accel,
+        "--out",
+        str(work),
+        "--quiet",
+    ]
     if cpus is not None:
         cmd = ["taskset", "-c", cpus, *cmd]
     subprocess.run(cmd, check=True)
@@ -63,8 +79,10 @@ def model_name() -> str:
 def write_topology(path: Path) -> None:
     """lscpu, then each CPU's core id and hyperthread siblings."""
     lscpu = subprocess.run(["lscpu"], capture_output=True, text=True)
-    lines = [f"{c.name} core {topology(c, 'core_id')} siblings {topology(c, 'thread_siblings_list')}"
-             for c in cpu_dirs()]
+    lines = [
+        f"{c.name} core {topology(c, 'core_id')} siblings {topology(c, 'thread_siblings_list')}"
+        for c in cpu_dirs()
+    ]
     path.write_text(lscpu.stdout + lscpu.stderr + "".join(line + "\n" for line in lines))
 
 
@@ -86,8 +104,16 @@ def scaling(raycast, scenes, out: Path, work: Path) -> None:
                 for threads in THREADS:
                     for run in RUNS:
                         t = timings(raycast, scene, accel, threads, work)
-                        print(Path(scene).name, accel, threads, run, t["build"], t["trace"],
-                              file=f, flush=True)
+                        print(
+                            Path(scene).name,
+                            accel,
+                            threads,
+                            run,
+                            t["build"],
+                            t["trace"],
+                            file=f,
+                            flush=True,
+                        )
 
 
 def pinning(raycast, out: Path, work: Path) -> None:
@@ -100,20 +126,41 @@ def pinning(raycast, out: Path, work: Path) -> None:
                 for accel in ACCELS:
                     for run in RUNS:
                         t = timings(raycast, scene, accel, threads, work, cpus)
-                        print(scene.name, f"cpus={cpus}", accel, threads, run, t["trace"],
-                              file=f, flush=True)
+                        print(
+                            scene.name,
+                            f"cpus={cpus}",
+                            accel,
+                            threads,
+                            run,
+                            t["trace"],
+                            file=f,
+                            flush=True,
+                        )
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog=prog("thread-scaling"), description=__doc__.split("\n\n")[0])
-    ap.add_argument("--raycast", default=os.environ.get("RAYCAST", str(RELEASE)),
-                    help="raycast binary (default: $RAYCAST, else target/release/raycast)")
-    ap.add_argument("--out", default=os.environ.get("OUT", str(ROOT / "reports/device")),
-                    help="output folder (default: $OUT, else reports/device)")
-    ap.add_argument("--big-scene", default=os.environ.get("BIG_SCENE") or None,
-                    help="a further scene (default: $BIG_SCENE)")
-    ap.add_argument("--pinning", action="store_true", default=os.environ.get("PINNING") == "1",
-                    help="add the pinning experiment (default: on when $PINNING is 1)")
+    ap.add_argument(
+        "--raycast",
+        default=os.environ.get("RAYCAST", str(RELEASE)),
+        help="raycast binary (default: $RAYCAST, else target/release/raycast)",
+    )
+    ap.add_argument(
+        "--out",
+        default=os.environ.get("OUT", str(ROOT / "reports/device")),
+        help="output folder (default: $OUT, else reports/device)",
+    )
+    ap.add_argument(
+        "--big-scene",
+        default=os.environ.get("BIG_SCENE") or None,
+        help="a further scene (default: $BIG_SCENE)",
+    )
+    ap.add_argument(
+        "--pinning",
+        action="store_true",
+        default=os.environ.get("PINNING") == "1",
+        help="add the pinning experiment (default: on when $PINNING is 1)",
+    )
     a = ap.parse_args(argv)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

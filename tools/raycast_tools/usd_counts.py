@@ -70,8 +70,10 @@ def world_bounds(prim):
     used = sorted(set(mesh.GetFaceVertexIndicesAttr().Get()))
     matrix = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
     world = [matrix.Transform(Gf.Vec3d(points[i])) for i in used]
-    return [[min(p[k] for p in world) for k in range(3)],
-            [max(p[k] for p in world) for k in range(3)]]
+    return [
+        [min(p[k] for p in world) for k in range(3)],
+        [max(p[k] for p in world) for k in range(3)],
+    ]
 
 
 class Counter:
@@ -170,7 +172,8 @@ def main(argv=None):
             if "error" in r:
                 print(f"{r['file']}: error: {r['error']}")
             else:
-                print(f"{r['file']}: {r['triangles']} triangles, {r['meshes']} meshes, "
-                      f"{r['gprims']} gprims")
+                print(
+                    f"{r['file']}: {r['triangles']} triangles, {r['meshes']} meshes, "
+                    f"{r['gprims']} gprims"
+                )
     return 0
-

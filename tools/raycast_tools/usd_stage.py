@@ -113,7 +113,7 @@ def flatten(stage, gprim=None):
         world = [np.array(matrix.Transform(Gf.Vec3d(p))) for p in points]
         tris, start = [], 0
         for c in counts:
-            face = indices[start:start + c]
+            face = indices[start : start + c]
             start += c
             for k in range(1, c - 1):
                 t = [world[face[0]], world[face[k]], world[face[k + 1]]]
@@ -137,8 +137,11 @@ def flatten(stage, gprim=None):
             targets = instancer.GetPrototypesRel().GetTargets()
             excluded.update(t for t in targets if t.HasPrefix(prim.GetPath()))
             transforms = instancer.ComputeInstanceTransformsAtTime(
-                Usd.TimeCode.Default(), Usd.TimeCode.Default(),
-                UsdGeom.PointInstancer.IncludeProtoXform, UsdGeom.PointInstancer.IgnoreMask)
+                Usd.TimeCode.Default(),
+                Usd.TimeCode.Default(),
+                UsdGeom.PointInstancer.IncludeProtoXform,
+                UsdGeom.PointInstancer.IgnoreMask,
+            )
             mask = instancer.ComputeMaskAtTime(Usd.TimeCode.Default())
             indices = instancer.GetProtoIndicesAttr().Get()
             parent = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
@@ -159,7 +162,7 @@ def flatten(stage, gprim=None):
                             p = p.GetParent()
                         world = below * m * parent if sub != proto else m * parent
                         if is_gprim:
-                            relative = str(sub.GetPath())[len(str(proto.GetPath())):]
+                            relative = str(sub.GetPath())[len(str(proto.GetPath())) :]
                             extra += gprim(sub, world, f"{prim.GetPath()}[{i}]{relative}")
                         else:
                             tris += mesh_tris(sub, world)

@@ -54,7 +54,7 @@ from .runner import run_raycast, run_rays
 
 warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"trimesh\.visual.*")
 
-U32 = 2.0 ** -24  # unit roundoff of float32
+U32 = 2.0**-24  # unit roundoff of float32
 
 # ---------------------------------------------------------------------------------
 # Tolerances: the only place they are set.
@@ -108,9 +108,9 @@ TOL = {
 # Ambiguity thresholds (what the reference cannot decide), not tolerances.
 AMBIG = {
     "backend_depth_rel": 1e-4,  # ray_triangle vs embree depth disagreement
-    "graze_cos": 1e-5,          # ray_triangle drops |d.n| <= 1e-5 (unit d, n)
-    "edge_rel": 1e-6,           # hit point to triangle edge, times scene size
-    "tie_rel": 1e-6,            # two hits on different objects, relative depth
+    "graze_cos": 1e-5,  # ray_triangle drops |d.n| <= 1e-5 (unit d, n)
+    "edge_rel": 1e-6,  # hit point to triangle edge, times scene size
+    "tie_rel": 1e-6,  # two hits on different objects, relative depth
 }
 
 # glTF features trimesh 5.2.0 ignores or cannot decode (would give a wrong reference)
@@ -125,6 +125,7 @@ SCENE_EXTS = {".gltf", ".glb", ".obj"}
 
 
 # ------------------------------------------------------------------ scene discovery
+
 
 def find_scenes(paths):
     """[(path, skip_reason or None)] in a stable order."""
@@ -170,24 +171,25 @@ def gltf_precheck(header: dict) -> str | None:
 
 # ------------------------------------------------------------------ reference scene
 
+
 @dataclass
 class RefObject:
-    key: str          # "/nodes/3" or "obj:name"
+    key: str  # "/nodes/3" or "obj:name"
     name: str
-    node: int         # glTF node index, -1 for OBJ
+    node: int  # glTF node index, -1 for OBJ
     tris: np.ndarray  # (n, 3, 3) float64 world
-    flip: bool        # transform with negative determinant: front face is clockwise
+    flip: bool  # transform with negative determinant: front face is clockwise
 
 
 @dataclass
 class RefScene:
     path: Path
     objects: list
-    tris: np.ndarray = field(init=False)       # (T,3,3) all world triangles
-    tri_obj: np.ndarray = field(init=False)    # (T,) object index
+    tris: np.ndarray = field(init=False)  # (T,3,3) all world triangles
+    tri_obj: np.ndarray = field(init=False)  # (T,) object index
     tri_local: np.ndarray = field(init=False)  # (T,) index inside object
     offsets: np.ndarray = field(init=False)
-    normals: np.ndarray = field(init=False)    # (T,3) front-face unit normal (0 if degenerate)
+    normals: np.ndarray = field(init=False)  # (T,3) front-face unit normal (0 if degenerate)
     quadrics: list = field(default_factory=list)
     header: dict | None = None
     notes: list = field(default_factory=list)
@@ -195,11 +197,15 @@ class RefScene:
     def finish(self):
         counts = [len(o.tris) for o in self.objects]
         self.offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        self.tris = (np.concatenate([o.tris for o in self.objects])
-                     if self.objects else np.zeros((0, 3, 3)))
+        self.tris = (
+            np.concatenate([o.tris for o in self.objects]) if self.objects else np.zeros((0, 3, 3))
+        )
         self.tri_obj = np.repeat(np.arange(len(self.objects)), counts).astype(np.int64)
-        self.tri_local = (np.concatenate([np.arange(c) for c in counts]).astype(np.int64)
-                          if counts else np.zeros(0, np.int64))
+        self.tri_local = (
+            np.concatenate([np.arange(c) for c in counts]).astype(np.int64)
+            if counts
+            else np.zeros(0, np.int64)
+        )
         t = self.tris
         n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
         ln = np.linalg.norm(n, axis=1)
@@ -234,6 +240,7 @@ def _trimesh_node_names(header):
     """
     import trimesh
     from trimesh.util import unique_name
+
     base = getattr(trimesh.constants, "DEFAULT_BASE_FRAME", None) or "world"
     name_index, counts = {}, {}
     for i, n in enumerate(header.get("nodes", [])):
@@ -247,6 +254,7 @@ def _trimesh_node_names(header):
 
 def load_reference(path: Path) -> RefScene:
     import trimesh
+
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".obj":
@@ -310,8 +318,16 @@ def _load_obj(path: Path) -> RefScene:
     unique).  Object matching to raycast falls back to order and triangle counts.
     """
     import trimesh
-    scene = trimesh.load(str(path), force="scene", split_objects=True, split_groups=True,
-                         group_material=False, maintain_order=True, process=False)
+
+    scene = trimesh.load(
+        str(path),
+        force="scene",
+        split_objects=True,
+        split_groups=True,
+        group_material=False,
+        maintain_order=True,
+        process=False,
+    )
     objects = []
     for frame in scene.graph.nodes_geometry:
         T, gname = scene.graph[frame]
@@ -333,6 +349,7 @@ class SkipScene(Exception):
 # ------------------------------------------------------------------ rays
 
 # ------------------------------------------------------------------ references
+
 
 def trace_f64(ref: RefScene, origins, unit, chunk=32):
     """ray_triangle (float64) with all hits kept, so ties can be found.
@@ -364,6 +381,7 @@ def trace_f64(ref: RefScene, origins, unit, chunk=32):
 
 
 # ------------------------------------------------------------------ raycast
+
 
 def map_objects(ref: RefScene, sidecar_objects):
     """raycast object id (1-based) -> reference object index (-1 unknown).
@@ -411,21 +429,33 @@ def map_objects(ref: RefScene, sidecar_objects):
     mism = []
     for so in sidecar_objects:
         k = m[int(so["id"])]
-        if k >= 0 and so.get("triangles") is not None and so["triangles"] != len(ref.objects[k].tris):
-            mism.append(f"{so.get('name')}: raycast {so['triangles']} triangles, "
-                        f"trimesh {len(ref.objects[k].tris)}")
+        if (
+            k >= 0
+            and so.get("triangles") is not None
+            and so["triangles"] != len(ref.objects[k].tris)
+        ):
+            mism.append(
+                f"{so.get('name')}: raycast {so['triangles']} triangles, "
+                f"trimesh {len(ref.objects[k].tris)}"
+            )
     return m, how, mism
 
 
 # ------------------------------------------------------------------ comparison
+
 
 def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
     """Compare raycast results `rc` (flattened) with the references; a report dict."""
     n = len(origins)
     lo, hi = ref.bounds()
     size = float(np.linalg.norm(hi - lo)) or 1.0
-    rep = {"mode": label, "rays": n, "triangles": int(len(ref.tris)),
-           "quadrics": len(ref.quadrics), "notes": list(ref.notes)}
+    rep = {
+        "mode": label,
+        "rays": n,
+        "triangles": int(len(ref.tris)),
+        "quadrics": len(ref.quadrics),
+        "notes": list(ref.notes),
+    }
 
     # ---- trimesh
     nf = min(n, max_f64)
@@ -447,13 +477,16 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
     mdepth = dem.copy()
     mtri = triem.copy()
     mdepth[:nf], mtri[:nf] = d64, tri64
-    reasons = {k: np.zeros(n, dtype=bool) for k in
-               ("backends", "graze", "edge", "tie", "quadric_tangent", "quadric_clip")}
+    reasons = {
+        k: np.zeros(n, dtype=bool)
+        for k in ("backends", "graze", "edge", "tie", "quadric_tangent", "quadric_clip")
+    }
     if have_embree:
         h64, hem = np.isfinite(d64), np.isfinite(dem[:nf])
         with np.errstate(invalid="ignore"):
-            bad = (h64 != hem) | (h64 & hem & (np.abs(d64 - dem[:nf]) >
-                                              AMBIG["backend_depth_rel"] * d64))
+            bad = (h64 != hem) | (
+                h64 & hem & (np.abs(d64 - dem[:nf]) > AMBIG["backend_depth_rel"] * d64)
+            )
         reasons["backends"][:nf] = bad
     reasons["tie"][:nf] = tie
 
@@ -485,8 +518,9 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
                 reasons["tie"][i] = True
         both = np.isfinite(qr["depth"]) & np.isfinite(mdepth)
         with np.errstate(invalid="ignore"):
-            reasons["tie"] |= both & (np.abs(qr["depth"] - mdepth) <=
-                                      AMBIG["tie_rel"] * np.minimum(qr["depth"], mdepth))
+            reasons["tie"] |= both & (
+                np.abs(qr["depth"] - mdepth) <= AMBIG["tie_rel"] * np.minimum(qr["depth"], mdepth)
+            )
 
     # ---- raycast outputs
     rdepth = np.asarray(rc["depth"], dtype=np.float64).reshape(-1)
@@ -530,7 +564,9 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
         ok = (trisel >= 0) & np.isfinite(dep)
         if ok.any():
             p = origins[ok] + dep[ok, None] * unit[ok]
-            reasons["edge"][np.flatnonzero(ok)[edge_distance(ref.tris[trisel[ok]], p) < band]] = True
+            reasons["edge"][np.flatnonzero(ok)[edge_distance(ref.tris[trisel[ok]], p) < band]] = (
+                True
+            )
 
     amb = np.zeros(n, dtype=bool)
     for v in reasons.values():
@@ -551,8 +587,9 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
 
     isq = kind == "quadric"
     for label_, sel, tol_hm, tol_id in (
-            ("mesh", na & ~isq, TOL["hitmiss_agreement"], TOL["id_agreement"]),
-            ("quadric", na & isq, TOL["quadric_hitmiss_agreement"], TOL["quadric_id_agreement"])):
+        ("mesh", na & ~isq, TOL["hitmiss_agreement"], TOL["id_agreement"]),
+        ("quadric", na & isq, TOL["quadric_hitmiss_agreement"], TOL["quadric_id_agreement"]),
+    ):
         # rays whose reference result is a mesh hit or a miss count as "mesh"; a
         # raycast quadric hit where the reference misses is a quadric disagreement
         if label_ == "mesh":
@@ -566,14 +603,18 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
         rep[f"{label_}_hitmiss_disagree"] = int(dis.sum())
         rep[f"{label_}_hitmiss_examples"] = [int(i) for i in np.flatnonzero(dis)[:5]]
         agree = 1.0 - dis.sum() / nsel
-        check("hitmiss_agreement" if label_ == "mesh" else "quadric_hitmiss_agreement",
-              agree, agree >= tol_hm)
+        check(
+            "hitmiss_agreement" if label_ == "mesh" else "quadric_hitmiss_agreement",
+            agree,
+            agree >= tol_hm,
+        )
         bh = sel & ref_hit & rc_hit
         if bh.any():
             idok = rc_obj[bh] == ref_obj[bh]
             rate = float(idok.mean())
-            check("id_agreement" if label_ == "mesh" else "quadric_id_agreement", rate,
-                  rate >= tol_id)
+            check(
+                "id_agreement" if label_ == "mesh" else "quadric_id_agreement", rate, rate >= tol_id
+            )
             if label_ == "mesh":
                 bi = bh & (rc_obj == ref_obj)
                 if bi.any():
@@ -591,8 +632,10 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
                 p99 = float(np.percentile(rel, 99))
                 check("depth_rel_p99", p99, p99 <= TOL["depth_rel_p99"])
                 cosv = np.abs(np.einsum("ij,ij->i", unit[bh], ref_normal[bh]))
-                bound = (TOL["depth_bound_k"] * U32 * size / np.maximum(cosv, AMBIG["graze_cos"])
-                         + 1e-12 * ref_depth[bh])
+                bound = (
+                    TOL["depth_bound_k"] * U32 * size / np.maximum(cosv, AMBIG["graze_cos"])
+                    + 1e-12 * ref_depth[bh]
+                )
                 ratio = float((err / bound).max())
                 check("depth_bound_ratio_max", ratio, ratio <= TOL["depth_bound_ratio_max"])
                 ap99 = float(np.percentile(ang, 99))
@@ -615,8 +658,8 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
 
 # ------------------------------------------------------------------ per scene
 
-def validate_scene(path, raycast, nrays=2000, seed=0, max_f64=2000, camera=False,
-                   keep=None):
+
+def validate_scene(path, raycast, nrays=2000, seed=0, max_f64=2000, camera=False, keep=None):
     """Validate one scene; returns a list of report dicts (rays mode, camera mode)."""
     path = Path(path)
     base = {"scene": str(path)}
@@ -644,9 +687,21 @@ def validate_scene(path, raycast, nrays=2000, seed=0, max_f64=2000, camera=False
         if camera:
             w = h = 64
             try:
-                rc = run_raycast(raycast, path, ["--aov", "depth,normal,id,prim",
-                                                 "--format", "npy", "--width", str(w),
-                                                 "--height", str(h)], tmp / "camera")
+                rc = run_raycast(
+                    raycast,
+                    path,
+                    [
+                        "--aov",
+                        "depth,normal,id,prim",
+                        "--format",
+                        "npy",
+                        "--width",
+                        str(w),
+                        "--height",
+                        str(h),
+                    ],
+                    tmp / "camera",
+                )
                 cam = rc["sidecar"]["camera"]
                 o, u, _ = camera_rays(cam, w, h)
             except Exception as e:
@@ -666,6 +721,7 @@ def validate_scene(path, raycast, nrays=2000, seed=0, max_f64=2000, camera=False
 
 # ------------------------------------------------------------------ output
 
+
 def _fmt(x, spec=".1e"):
     if x is None:
         return "-"
@@ -675,8 +731,26 @@ def _fmt(x, spec=".1e"):
 
 
 def table(reports):
-    cols = ["scene", "mode", "status", "rays", "hits", "amb", "hm-dis", "rel p99", "rel max",
-            "bound", "ang p99", "id", "prim", "q-rel max", "q-ang", "t rc", "t f64", "t emb"]
+    cols = [
+        "scene",
+        "mode",
+        "status",
+        "rays",
+        "hits",
+        "amb",
+        "hm-dis",
+        "rel p99",
+        "rel max",
+        "bound",
+        "ang p99",
+        "id",
+        "prim",
+        "q-rel max",
+        "q-ang",
+        "t rc",
+        "t f64",
+        "t emb",
+    ]
     rows = []
     for r in reports:
         name = Path(r["scene"]).name
@@ -687,55 +761,90 @@ def table(reports):
 
         def cv(k, spec=".1e"):
             return _fmt(c[k]["value"], spec) + ("" if c[k]["ok"] else "!") if k in c else "-"
-        rows.append([
-            name, r["mode"], r["status"], str(r["rays"]),
-            f"{r['hits_raycast']}/{r['hits_ref']}", str(r["ambiguous"]),
-            str(r.get("mesh_hitmiss_disagree", 0) + r.get("quadric_hitmiss_disagree", 0)),
-            cv("depth_rel_p99"), _fmt((r.get("mesh_depth_rel") or {}).get("max")),
-            cv("depth_bound_ratio_max", ".2f"), cv("normal_angle_p99"),
-            cv("id_agreement", ".4f"), cv("prim_agreement", ".4f"),
-            cv("quadric_depth_rel_max"), cv("quadric_normal_angle_max"),
-            _fmt(r.get("time_raycast"), ".2f"), _fmt(r.get("time_f64"), ".2f"),
-            _fmt(r.get("time_embree"), ".2f"),
-        ])
-    widths = [max(len(cols[i]), *(len(row[i]) for row in rows if len(row) > i and len(row) == len(cols)))
-              if rows else len(cols[i]) for i in range(len(cols))]
+
+        rows.append(
+            [
+                name,
+                r["mode"],
+                r["status"],
+                str(r["rays"]),
+                f"{r['hits_raycast']}/{r['hits_ref']}",
+                str(r["ambiguous"]),
+                str(r.get("mesh_hitmiss_disagree", 0) + r.get("quadric_hitmiss_disagree", 0)),
+                cv("depth_rel_p99"),
+                _fmt((r.get("mesh_depth_rel") or {}).get("max")),
+                cv("depth_bound_ratio_max", ".2f"),
+                cv("normal_angle_p99"),
+                cv("id_agreement", ".4f"),
+                cv("prim_agreement", ".4f"),
+                cv("quadric_depth_rel_max"),
+                cv("quadric_normal_angle_max"),
+                _fmt(r.get("time_raycast"), ".2f"),
+                _fmt(r.get("time_f64"), ".2f"),
+                _fmt(r.get("time_embree"), ".2f"),
+            ]
+        )
+    widths = [
+        max(len(cols[i]), *(len(row[i]) for row in rows if len(row) > i and len(row) == len(cols)))
+        if rows
+        else len(cols[i])
+        for i in range(len(cols))
+    ]
     lines = ["  ".join(c.ljust(w) for c, w in zip(cols, widths))]
     for row in rows:
         if len(row) == len(cols):
             lines.append("  ".join(v.ljust(w) for v, w in zip(row, widths)))
         else:
-            lines.append("  ".join([row[0].ljust(widths[0]), row[1].ljust(widths[1]),
-                                    row[2].ljust(widths[2]), row[3]]))
+            lines.append(
+                "  ".join(
+                    [
+                        row[0].ljust(widths[0]),
+                        row[1].ljust(widths[1]),
+                        row[2].ljust(widths[2]),
+                        row[3],
+                    ]
+                )
+            )
     for r in reports:
         extra = []
         if r.get("ambiguous_by_reason"):
-            extra.append("ambiguous: " + ", ".join(f"{k} {v}" for k, v in
-                                                   r["ambiguous_by_reason"].items()))
+            extra.append(
+                "ambiguous: " + ", ".join(f"{k} {v}" for k, v in r["ambiguous_by_reason"].items())
+            )
         extra += r.get("notes", [])
         bad = [k for k, v in r.get("checks", {}).items() if not v["ok"]]
         if bad:
             extra.append("out of tolerance: " + ", ".join(bad))
         if extra:
             lines.append(f"  {Path(r['scene']).name} [{r.get('mode', '')}]: " + "; ".join(extra))
-    lines.append("('!' = out of tolerance; hits = raycast/reference; bound = max depth error "
-                 "/ per-ray bound; times in s)")
+    lines.append(
+        "('!' = out of tolerance; hits = raycast/reference; bound = max depth error "
+        "/ per-ray bound; times in s)"
+    )
     return "\n".join(lines)
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(prog=prog("validate"),
-                                 description="Validate raycast against trimesh and the "
-                                             "quadric reference.")
+    ap = argparse.ArgumentParser(
+        prog=prog("validate"),
+        description="Validate raycast against trimesh and the quadric reference.",
+    )
     ap.add_argument("scenes", nargs="+", help="scene files or directories")
     ap.add_argument("--rays", type=int, default=2000, help="rays per scene (default 2000)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json", action="store_true", help="machine-readable output")
-    ap.add_argument("--raycast", default=None, help="raycast binary (default: $RAYCAST, target/release, "
-                                                    "target/debug, PATH)")
-    ap.add_argument("--max-rays-f64", type=int, default=2000,
-                    help="rays given to trimesh's slow float64 ray_triangle (the rest use "
-                         "embree's triangle choice with a float64 plane hit; default 2000)")
+    ap.add_argument(
+        "--raycast",
+        default=None,
+        help="raycast binary (default: $RAYCAST, target/release, target/debug, PATH)",
+    )
+    ap.add_argument(
+        "--max-rays-f64",
+        type=int,
+        default=2000,
+        help="rays given to trimesh's slow float64 ray_triangle (the rest use "
+        "embree's triangle choice with a float64 plane hit; default 2000)",
+    )
     ap.add_argument("--camera", action="store_true", help="also check camera mode (64x64)")
     ap.add_argument("--keep", default=None, help="keep rays and raycast outputs in this folder")
     a = ap.parse_args(argv)
@@ -745,12 +854,18 @@ def main(argv=None):
         if skip:
             reports.append({"scene": str(path), "status": "skip", "reason": skip})
             continue
-        reports.extend(validate_scene(path, raycast, a.rays, a.seed, a.max_rays_f64,
-                                      a.camera, a.keep))
+        reports.extend(
+            validate_scene(path, raycast, a.rays, a.seed, a.max_rays_f64, a.camera, a.keep)
+        )
     failed = any(r.get("status") in ("FAIL", "error") for r in reports)
     if a.json:
-        print(json.dumps({"tolerances": TOL, "ambiguity": AMBIG, "reports": reports,
-                          "ok": not failed}, indent=1, default=_json_default))
+        print(
+            json.dumps(
+                {"tolerances": TOL, "ambiguity": AMBIG, "reports": reports, "ok": not failed},
+                indent=1,
+                default=_json_default,
+            )
+        )
     else:
         print(table(reports))
     return 1 if failed else 0
@@ -766,4 +881,3 @@ def _json_default(o):
     if isinstance(o, set):
         return sorted(o)
     return str(o)
-

@@ -150,18 +150,25 @@ def gprim_local(prim, n):
         if h <= 0:
             return None
         corners = np.array([[x, y, z] for x in (-h, h) for y in (-h, h) for z in (-h, h)])
-        quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4),
-                 (1, 5, 7, 3)]
-        t = np.array([[corners[a], corners[b], corners[c]] for a, b, c, d in quads
-                      for a, b, c in ((a, b, c), (a, c, d))])
+        quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+        t = np.array(
+            [
+                [corners[a], corners[b], corners[c]]
+                for a, b, c, d in quads
+                for a, b, c in ((a, b, c), (a, c, d))
+            ]
+        )
         return [("", t, t)], 0.0, "Z"
     if kind == "Plane":
         width = float(_value(prim, "width", 2.0))
         length = float(_value(prim, "length", 2.0))
         # usd-core's extents: X spans (y: length, z: width), Y (x: width, z: length),
         # Z (x: width, y: length); built directly in xyz, normal +axis
-        half = {"X": (0.0, length / 2, width / 2), "Y": (width / 2, 0.0, length / 2),
-                "Z": (width / 2, length / 2, 0.0)}[axis]
+        half = {
+            "X": (0.0, length / 2, width / 2),
+            "Y": (width / 2, 0.0, length / 2),
+            "Z": (width / 2, length / 2, 0.0),
+        }[axis]
         a = {"X": 0, "Y": 1, "Z": 2}[axis]
         i, j = [x for x in range(3) if x != a]
         if a == 1:
@@ -185,9 +192,14 @@ def gprim_local(prim, n):
         if h == 0 or (bottom == 0 and top == 0):
             return None
         side = _revolution([(bottom, -h / 2), (top, h / 2)], n)
-        caps = [c for c in (_disc(top, h / 2, n, True) if top > 0 else None,
-                            _disc(bottom, -h / 2, n, False) if bottom > 0 else None)
-                if c is not None]
+        caps = [
+            c
+            for c in (
+                _disc(top, h / 2, n, True) if top > 0 else None,
+                _disc(bottom, -h / 2, n, False) if bottom > 0 else None,
+            )
+            if c is not None
+        ]
         caps = np.concatenate(caps)
         radial = np.array([k, k, 1.0])
         out = [("", side, side * radial), (":caps", caps, caps * radial)]
@@ -230,7 +242,7 @@ class Tessellator:
 
     def __init__(self, segments):
         self.segments = segments
-        self.outer = {}     # object name -> outer world triangles
+        self.outer = {}  # object name -> outer world triangles
         self.sagitta = 0.0  # largest world sagitta (SAG)
         self.count = 0
 
@@ -267,6 +279,7 @@ class Tessellator:
 
 # ------------------------------------------------------------------ quadric prims
 
+
 def quadric_prims(stage):
     """qref.Quadric for each drawn prim carrying raycast:quadric:* (outside instancers)."""
     out = []
@@ -274,11 +287,13 @@ def quadric_prims(stage):
     for prim in drawn_prims(stage.GetPseudoRoot(), excluded):
         if prim.IsA(UsdGeom.PointInstancer):
             inst = UsdGeom.PointInstancer(prim)
-            excluded.update(t for t in inst.GetPrototypesRel().GetTargets()
-                            if t.HasPrefix(prim.GetPath()))
+            excluded.update(
+                t for t in inst.GetPrototypesRel().GetTargets() if t.HasPrefix(prim.GetPath())
+            )
             continue
-        names = [a.GetName() for a in prim.GetAttributes()
-                 if a.GetName().startswith("raycast:quadric:")]
+        names = [
+            a.GetName() for a in prim.GetAttributes() if a.GetName().startswith("raycast:quadric:")
+        ]
         if not names or hidden_purpose(prim):
             continue
         get = lambda n: prim.GetAttribute(f"raycast:quadric:{n}").Get()  # noqa: E731
@@ -290,11 +305,16 @@ def quadric_prims(stage):
             ext["P"] = [float(x) for x in get("P")]
             ext["R"] = float(get("R"))
         if "raycast:quadric:boundsMin" in names:
-            ext["bounds"] = {"min": [float(x) for x in get("boundsMin")],
-                             "max": [float(x) for x in get("boundsMax")]}
+            ext["bounds"] = {
+                "min": [float(x) for x in get("boundsMin")],
+                "max": [float(x) for x in get("boundsMax")],
+            }
         Q, P, R, bmin, bmax = qref.parse_quadric(ext)
-        matrix = UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default()) \
-            if prim.IsA(UsdGeom.Xformable) else None
+        matrix = (
+            UsdGeom.Xformable(prim).ComputeLocalToWorldTransform(Usd.TimeCode.Default())
+            if prim.IsA(UsdGeom.Xformable)
+            else None
+        )
         world = np.eye(4) if matrix is None else np.array(matrix, dtype=np.float64).T
         out.append(qref.Quadric(-1, str(prim.GetPath()), ext, [], world, Q, P, R, bmin, bmax))
     return out
@@ -302,10 +322,14 @@ def quadric_prims(stage):
 
 # ------------------------------------------------------------------ one scene
 
+
 def ref_scene(path, objects):
-    objs = [validate.RefObject(f"usd:{name}", name, -1,
-                               np.asarray(tris, dtype=np.float64).reshape(-1, 3, 3), False)
-            for name, tris in objects]
+    objs = [
+        validate.RefObject(
+            f"usd:{name}", name, -1, np.asarray(tris, dtype=np.float64).reshape(-1, 3, 3), False
+        )
+        for name, tris in objects
+    ]
     ref = validate.RefScene(Path(path), objs)
     ref.finish()
     return ref
@@ -328,9 +352,14 @@ def validate_scene(path, raycast, nrays=500, seed=0, segments=SEGMENTS):
     inner = ref_scene(path, inner_objects)
     outer = ref_scene(path, outer_objects)
     inner.quadrics = quadrics
-    report = {"scene": str(path), "segments": segments, "gprims": tess.count,
-              "quadric_prims": len(quadrics), "objects": len(inner_objects),
-              "triangles": int(len(inner.tris))}
+    report = {
+        "scene": str(path),
+        "segments": segments,
+        "gprims": tess.count,
+        "quadric_prims": len(quadrics),
+        "objects": len(inner_objects),
+        "triangles": int(len(inner.tris)),
+    }
     if inner.bounds() is None:
         report["skipped"] = "nothing drawn"
         return report
@@ -355,7 +384,8 @@ def validate_scene(path, raycast, nrays=500, seed=0, segments=SEGMENTS):
             tri_[use] = -2
         qn = qres["normal"]
         qcos = np.abs(np.einsum("ij,ij->i", qn, unit)) / np.maximum(
-            np.linalg.norm(qn, axis=1), 1e-300)
+            np.linalg.norm(qn, axis=1), 1e-300
+        )
         cos = np.where(ti == -2, qcos, cos)
         for i in np.flatnonzero(qres["ambiguous"]):
             reasons[i].update(qres["reasons"][i])
@@ -407,8 +437,11 @@ def validate_scene(path, raycast, nrays=500, seed=0, segments=SEGMENTS):
     with np.errstate(divide="ignore", invalid="ignore"):
         c = np.maximum(cos, AMBIG["graze_cos"])
         bracket = np.where(np.isfinite(do), di - do, 0.0)
-        bound = (np.maximum(sag / c, bracket)
-                 + TOL_USD["depth_bound_k"] * validate.U32 * size / c + 1e-12 * di)
+        bound = (
+            np.maximum(sag / c, bracket)
+            + TOL_USD["depth_bound_k"] * validate.U32 * size / c
+            + 1e-12 * di
+        )
         err = np.abs(rdepth - di)
     ratio = np.where(cmp_, err / bound, 0.0)
     reason_counts = {}
@@ -417,23 +450,41 @@ def validate_scene(path, raycast, nrays=500, seed=0, segments=SEGMENTS):
             reason_counts[x] = reason_counts.get(x, 0) + 1
     worst = int(np.argmax(ratio)) if n_cmp else None
     report.update(
-        hits_reference=int(ref_hit.sum()), hits_raycast=int(rhit.sum()),
-        ambiguous=int(amb.sum()), ambiguous_reasons=reason_counts,
-        hitmiss_disagreements=int(disagree.sum()), hitmiss_agreement=float(hitmiss),
-        compared=n_cmp, object_agreement=obj_agree,
+        hits_reference=int(ref_hit.sum()),
+        hits_raycast=int(rhit.sum()),
+        ambiguous=int(amb.sum()),
+        ambiguous_reasons=reason_counts,
+        hitmiss_disagreements=int(disagree.sum()),
+        hitmiss_agreement=float(hitmiss),
+        compared=n_cmp,
+        object_agreement=obj_agree,
         object_mismatches=[(ni[i], rnames[i]) for i in np.flatnonzero(cmp_ & ~obj_same)][:5],
         depth_err_max=float(err[cmp_].max()) if n_cmp else None,
         depth_err_rel_p99=float(np.percentile(err[cmp_] / di[cmp_], 99)) if n_cmp else None,
         depth_bound_ratio_max=float(ratio.max()) if n_cmp else None,
-        depth_sag_ratio_max=(float((err[cmp_] / (sag / c[cmp_])).max())
-                             if n_cmp and sag > 0 else None),
-        worst_ray=(None if worst is None else
-                   {"origin": origins[worst].tolist(), "direction": unit[worst].tolist(),
-                    "reference": float(di[worst]), "raycast": float(rdepth[worst]),
-                    "object": ni[worst]}),
-        disagreeing_rays=[{"origin": origins[i].tolist(), "direction": unit[i].tolist(),
-                           "reference": ni[i] or None, "raycast": rnames[i] or None}
-                          for i in np.flatnonzero(disagree)[:5]],
+        depth_sag_ratio_max=(
+            float((err[cmp_] / (sag / c[cmp_])).max()) if n_cmp and sag > 0 else None
+        ),
+        worst_ray=(
+            None
+            if worst is None
+            else {
+                "origin": origins[worst].tolist(),
+                "direction": unit[worst].tolist(),
+                "reference": float(di[worst]),
+                "raycast": float(rdepth[worst]),
+                "object": ni[worst],
+            }
+        ),
+        disagreeing_rays=[
+            {
+                "origin": origins[i].tolist(),
+                "direction": unit[i].tolist(),
+                "reference": ni[i] or None,
+                "raycast": rnames[i] or None,
+            }
+            for i in np.flatnonzero(disagree)[:5]
+        ],
     )
     failures = []
     if hitmiss < TOL_USD["hitmiss_agreement"]:
@@ -449,6 +500,7 @@ def validate_scene(path, raycast, nrays=500, seed=0, segments=SEGMENTS):
 
 # ------------------------------------------------------------------ command line
 
+
 def find_usd(arguments):
     for path, name in usd_files(arguments):
         if "bad" in Path(path).parts:
@@ -463,14 +515,16 @@ def line(r):
     if "skipped" in r:
         return f"{r['scene']}: skipped ({r['skipped']})"
     fmt = lambda x: "-" if x is None else f"{x:.2e}"  # noqa: E731
-    return (f"{r['scene']}: {'ok  ' if r['pass'] else 'FAIL'} rays {r['rays']} "
-            f"hits {r['hits_raycast']}/{r['hits_reference']} (raycast/ref) "
-            f"ambiguous {r['ambiguous']} {r['ambiguous_reasons'] or ''} "
-            f"hit/miss disagree {r['hitmiss_disagreements']} "
-            f"object agree {r['object_agreement']:.4f} of {r['compared']} "
-            f"depth err max {fmt(r['depth_err_max'])} (SAG {fmt(r['sagitta'])}, "
-            f"err/bound {fmt(r['depth_bound_ratio_max'])})"
-            + (f" -- {'; '.join(r['failures'])}" if r["failures"] else ""))
+    return (
+        f"{r['scene']}: {'ok  ' if r['pass'] else 'FAIL'} rays {r['rays']} "
+        f"hits {r['hits_raycast']}/{r['hits_reference']} (raycast/ref) "
+        f"ambiguous {r['ambiguous']} {r['ambiguous_reasons'] or ''} "
+        f"hit/miss disagree {r['hitmiss_disagreements']} "
+        f"object agree {r['object_agreement']:.4f} of {r['compared']} "
+        f"depth err max {fmt(r['depth_err_max'])} (SAG {fmt(r['sagitta'])}, "
+        f"err/bound {fmt(r['depth_bound_ratio_max'])})"
+        + (f" -- {'; '.join(r['failures'])}" if r["failures"] else "")
+    )
 
 
 def main(argv=None):
@@ -489,8 +543,13 @@ def main(argv=None):
         try:
             r = validate_scene(path, raycast, args.rays, args.seed, args.segments)
         except Exception as error:  # noqa: BLE001 - report and go on
-            r = {"scene": path, "error": str(error).strip().splitlines()[-1] if str(error)
-                 else type(error).__name__, "pass": False}
+            r = {
+                "scene": path,
+                "error": str(error).strip().splitlines()[-1]
+                if str(error)
+                else type(error).__name__,
+                "pass": False,
+            }
         r["scene"] = name
         if not r.get("pass", True):
             status = 1
@@ -503,4 +562,3 @@ def main(argv=None):
         print("no USD scenes found", file=sys.stderr)
         return 2
     return status
-
