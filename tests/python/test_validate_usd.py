@@ -1,4 +1,5 @@
-"""`python -m raycast_tools validate-usd` on USD fixtures: usd-core flattening + tessellated gprims vs raycast.
+"""`python -m raycast_tools validate-usd` on USD fixtures: usd-core flattening + tessellated
+gprims vs raycast.
 
 Run: .venv/bin/python -m pytest tests/python/test_validate_usd.py
 Skips when target/release/raycast (or $RAYCAST) does not exist, or without usd-core.

@@ -526,8 +526,8 @@ def report(r):
     lines = [
         "# Benchmark: octree vs obvhs vs Embree",
         "",
-        "Regenerate with `.venv/bin/python -m raycast_tools bench` (`--quick` for a short run, `--big` "
-        "adds the 20M-triangle scene); raw figures in `reports/bench.json`.",
+        "Regenerate with `.venv/bin/python -m raycast_tools bench` (`--quick` for a short run, "
+        "`--big` adds the 20M-triangle scene); raw figures in `reports/bench.json`.",
         "",
         f"Machine: {m['nproc']} cores, {m['cpu']} ({m['mhz'] or '?'} MHz), {m['memory_gib']} GiB, "
         f"{m['rustc']}, Python {m['python']}, kernel {m['kernel']}. "
@@ -578,8 +578,10 @@ def report(r):
                 sub = " (subset)" if t.get("subset") else ""
                 lines.append(
                     f"| {NAMES.get(x['name'], x['name'])} | {t['rays']}{sub} ({t['count']}) | "
-                    f"{t['threads']} | {fmt(x['build_s'], '.3f')} | {fmt(t['mrays_per_s'], '.3g')} | "
-                    f"{t['hit_ratio'] * 100:.0f}% | {fmt(x['bpp'], '.1f')} | {fmt(x['peak'], '.0f')} | "
+                    f"{t['threads']} | {fmt(x['build_s'], '.3f')} | "
+                    f"{fmt(t['mrays_per_s'], '.3g')} | "
+                    f"{t['hit_ratio'] * 100:.0f}% | {fmt(x['bpp'], '.1f')} | "
+                    f"{fmt(x['peak'], '.0f')} | "
                     f"{fmt(t['mrays_per_s'] / ref_e['mrays_per_s'] if ref_e else None)} | "
                     f"{fmt(t['mrays_per_s'] / ref_b['mrays_per_s'] if ref_b else None)} |"
                 )
@@ -602,7 +604,8 @@ def report(r):
                     "",
                     f"Depth only vs all AOVs (octree, {aov['rays']} rays, "
                     f"{aov['threads']} threads): {d['median_s'] * 1e3:.0f} ms vs "
-                    f"{a['median_s'] * 1e3:.0f} ms; extra peak memory {fmt(d['peak_extra_mib'], '.0f')} "
+                    f"{a['median_s'] * 1e3:.0f} ms; extra peak memory "
+                    f"{fmt(d['peak_extra_mib'], '.0f')} "
                     f"MiB vs {fmt(a['peak_extra_mib'], '.0f')} MiB ({', '.join(a['aovs'])}).",
                 ]
         lines.append("")

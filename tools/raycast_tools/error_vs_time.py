@@ -1,7 +1,7 @@
 """Depth error versus run time per ray: analytic quadrics, tessellations, world form, trimesh.
 
-    .venv/bin/python -m raycast_tools error-vs-time [--rays N] [--segments 16 32 ...] [--out reports]
-                                                [--raycast PATH] [--quick]
+    .venv/bin/python -m raycast_tools error-vs-time [--rays N] [--segments 16 32 ...]
+                                    [--out reports] [--raycast PATH] [--quick]
 
 Writes reports/error_vs_time.md, reports/error_vs_time.png and reports/error_vs_time.json.
 
@@ -705,7 +705,8 @@ def summary_text(rows, infos):
                 f"No tessellation matches it: the finest, {last['segments']} segments "
                 f"({last['triangles']:,} triangles), has p99 {fmt(last['p99'])} at "
                 f"{ns(last['time_per_ray'])} ns/ray trace "
-                f"(+{fmt(last.get('build_s'), '.1f')} s build); by the e² law matching would need ≈{nneed:.0e} segments "
+                f"(+{fmt(last.get('build_s'), '.1f')} s build); by the e² law matching would need "
+                f"≈{nneed:.0e} segments "
                 f"(≈{tri_need:.0e} triangles). "
             )
         if slower:
@@ -790,7 +791,8 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
         f"{f' at {mach[chr(109) + chr(104) + chr(122)]:.0f} MHz' if mach['mhz'] else ''}, "
         f"load average at start {la[0]:.2f}/{la[1]:.2f}/{la[2]:.2f} (a shared machine: two "
         f"earlier full runs of this script differed by up to 4× on single raycast points, "
-        f"so read time differences below that factor with care). Python {mach['python']}, numpy {mach['numpy']}. "
+        f"so read time differences below that factor with care). Python {mach['python']}, numpy "
+        f"{mach['numpy']}. "
         "Everything single-threaded (raycast `--threads 1`)."
     )
     L.append("")
@@ -818,7 +820,8 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
         "for quadrics is shown with the numpy world form instead. The tessellation error "
         "is the chordal (sagitta) error, ≈ e²/(8r) for edge length e on curvature radius "
         "r, divided by the incidence cosine; it falls as e² (see "
-        "`python -m raycast_tools tessellation-check` for the fitted slopes), so each halving of the "
+        "`python -m raycast_tools tessellation-check` for the fitted slopes), so each halving of "
+        "the "
         "error costs about 1.4× the segments and 2× the triangles. p99 includes the "
         "silhouette and open-rim rays where a chord sends the ray to another facet; hit/"
         "miss disagreements are counted separately (column h/m) and not in the error. "
@@ -892,7 +895,8 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
     L.append(
         "From `cargo test --release --test stiff` (tests/stiff.rs), which checks each case of "
         "`fixtures/stiff/cases.json` against its expected value, computed offline in mpmath "
-        "at 200 bits by `python -m raycast_tools stiff-cases`, and against the case's own bound (derivations "
+        "at 200 bits by `python -m raycast_tools stiff-cases`, and against the case's own bound "
+        "(derivations "
         "in `fixtures/stiff/README.md`; near tangency the bound scales with the root's "
         "condition, and ambiguous cases accept either a hit or a miss). *result* is the "
         "depth raycast computed, or what happened; the test fails if any case leaves its "

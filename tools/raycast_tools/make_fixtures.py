@@ -118,7 +118,8 @@ def check_outward(v: np.ndarray, f: np.ndarray) -> None:
     assert (np.einsum("ij,ij->i", n, tri.mean(axis=1) - centre) > 0).all(), "winding not outward"
 
 
-# 2x2 quad in z = 0, normal +Z. Triangle 0 = (0,1,2) covers y < x, triangle 1 = (0,2,3) covers y > x.
+# 2x2 quad in z = 0, normal +Z. Triangle 0 = (0,1,2) covers y < x, triangle 1 = (0,2,3)
+# covers y > x.
 QUAD_V = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], dtype=np.float64)
 QUAD_F = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int64)
 
@@ -612,7 +613,7 @@ are Khronos sample models, the bunny is from the Stanford 3D Scanning
 Repository, Suzanne is Blender's test monkey); check the upstream pages before
 redistributing any of these outside this repository. `BoxDraco.gltf` refers to
 an external `0.bin` that the shared folder does not have either.
-"""
+"""  # noqa: E501 (fixture text, kept byte-identical)
 
 
 def copy_assets() -> None:

@@ -568,7 +568,8 @@ def make_families() -> None:
                         got = trace(r.g, doc, o, d)
                         if got is not None:
                             print(
-                                f"  note: {fname} {name} '{label}' blocked by {got[0]}; not documented"
+                                f"  note: {fname} {name} '{label}' blocked by {got[0]}; not "
+                                "documented"
                             )
                             continue
                         r.add(f"{name}: {label}", o, d, None)
@@ -578,7 +579,8 @@ def make_families() -> None:
                     got = trace(r.g, doc, o, d)
                     if got is None or got[0] != name:
                         print(
-                            f"  note: {fname} {name} '{label}' blocked by {got and got[0]}; not documented"
+                            f"  note: {fname} {name} '{label}' blocked by {got and got[0]}; not "
+                            "documented"
                         )
                         continue
                     r.add(f"{name}: {label}", o, d, name, t * float(np.linalg.norm(d)), n, pos)
@@ -1028,7 +1030,8 @@ def trap_cells(zs: float) -> list[str]:
         assert q[0] < TRAP_QUAD_Z < q[1], depth
         assert q[1] <= first_surf[0] and q[1] <= first_box[0], depth
         out.append(
-            f"| {depth} | {size[0]:g} | x [{lo[0] + size[0] * ix:g}, {lo[0] + size[0] * (ix + 1):g}], "
+            f"| {depth} | {size[0]:g} | x [{lo[0] + size[0] * ix:g}, "
+            f"{lo[0] + size[0] * (ix + 1):g}], "
             f"y [{lo[1] + size[1] * iy:g}, {lo[1] + size[1] * (iy + 1):g}] | "
             f"z [{first_box[0]:g}, {first_box[1]:g}] | z [{first_surf[0]:g}, {first_surf[1]:g}] | "
             f"z [{q[0]:g}, {q[1]:g}] |"

@@ -40,8 +40,8 @@ Ambiguity flags (the reference does not pretend to know the answer there):
   g'(t) = ±√Δ there, taking the larger gradient of the two roots); for Δ < 0,
   |Δ| / (|∇f(m)|² |v|²) at the closest-approach point m = o_l + t_c v.  For a
   sphere this is (r² - b²)/r² or (b² - r²)/b² with b the impact parameter: it
-  does not depend on how far the origin is.  (The plain |Δ| < 1e-6·L² test with L taken at the ray origin
-  scales with the squared distance to the surface and flags every ray that
+  does not depend on how far the origin is.  (The plain |Δ| < 1e-6·L² test with L
+  taken at the ray origin scales with the squared distance to the surface and flags every ray that
   reaches a small quadric from far away; ``tangent_L2`` keeps that measure as
   information only.)  Flagged when τ < TANGENT_REL.
 

@@ -4,7 +4,8 @@ Writes ``fixtures/stiff/cases.json`` (see ``fixtures/stiff/README.md``), read by
 suite so that ``cargo test`` needs no Python.  Run from the repository root:
 
     .venv/bin/python -m raycast_tools stiff-cases           # rebuild, check, write
-    .venv/bin/python -m raycast_tools stiff-cases --check   # rebuild and check only; fail if the file differs
+    .venv/bin/python -m raycast_tools stiff-cases --check   # rebuild and check only; fail if
+                                                            # the file differs
 
 Method (per case), all in mpmath at 200 bits on the EXACT binary values of the float64 inputs
 (``mpf(float)`` is exact):
@@ -692,7 +693,8 @@ def build_cases():
         add(
             f"translated_cylinder_1e{e}",
             "translated",
-            f"cylinder x^2+y^2=0.25 (radius 0.5), box [-0.6,-0.5,-1.2]..[0.8,0.5,0.8] (centre (0.1,0,-0.2), off the origin), "
+            "cylinder x^2+y^2=0.25 (radius 0.5), box [-0.6,-0.5,-1.2]..[0.8,0.5,0.8] (centre "
+            "(0.1,0,-0.2), off the origin), "
             f"node at ({big:g}+0.1, -{big:g}+0.1, {big / 4:g}+0.1), side view from 5 units",
             coeffs(4, 4, 0, j=-1),
             box([-0.6, -0.5, -1.2], [0.8, 0.5, 0.8]),

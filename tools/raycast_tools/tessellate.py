@@ -45,7 +45,7 @@ carrying the mesh.  Its POSITION data are float32 offsets from an anchor (the wo
 image of the clip-box centre, or of the ellipsoid centre) and the node's translation is
 that anchor as an exact float64 JSON number, so a surface far from the origin keeps its
 precision (float32 spacing is 1.0 at 1e7).
-"""
+"""  # noqa: E501 (the table)
 
 from __future__ import annotations
 

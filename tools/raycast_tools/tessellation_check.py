@@ -20,10 +20,11 @@ Errors are measured on rays that the reference hits without an ambiguity flag
 crosses the silhouette, column h/m) and "jumps" (both hit, but more than one edge
 length apart in depth: the ray passed between chord and arc and met another facet, the
 other sheet or the far wall through an open rim; column jmp) are counted separately:
-chordal error is at most about e²/(8r |cos|), far below an edge length e.  The log-log slope of error versus
-edge length (∝ 1/segments) is fitted over the resolutions for the median and the p99
-of the relative depth error and the median normal angle, on the rays whose incidence
-|cos| against the reference normal is >= --min-cos (default 0.5).  Why: a chord's
+chordal error is at most about e²/(8r |cos|), far below an edge length e.  The log-log
+slope of error versus edge length (∝ 1/segments) is fitted over the resolutions for the
+median and the p99 of the relative depth error and the median normal angle, on the rays
+whose incidence |cos| against the reference normal is >= --min-cos (default 0.5).  Why:
+a chord's
 depth error is sagitta/|cos| for a ray that meets the facet lying under the true hit;
 in a band along the silhouette (and along an open rim) a ray can instead pass
 between chord and arc and meet another facet or the far wall, an O(1) error on a set

@@ -3,8 +3,8 @@
 For each file: the number of mesh triangles (polygons fan-triangulated, every instance
 counted: scene-graph instances through their instance proxies, point instances once per
 visible instance), the number of drawn meshes and of intrinsic gprims, and the point
-instancers' visible instance counts, and the world-space bounds of up to 200 meshes drawn once (by prim
-path). The rules are raycast's (docs/usd.md): defined,
+instancers' visible instance counts, and the world-space bounds of up to 200 meshes drawn once
+(by prim path). The rules are raycast's (docs/usd.md): defined,
 active, loaded prims; not invisible; purpose neither guide nor proxy; values at the default
 time code; meshes with malformed topology are not drawn; point-instancer prototypes that
 live under their instancer are drawn only through it.

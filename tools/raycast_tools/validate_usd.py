@@ -1,7 +1,7 @@
 """Validate raycast's USD import against usd-core + trimesh.
 
-    python -m raycast_tools validate-usd SCENE_OR_DIR... [--rays N] [--seed S] [--segments N] [--json]
-                                       [--raycast PATH]
+    python -m raycast_tools validate-usd SCENE_OR_DIR... [--rays N] [--seed S] [--segments N]
+                                         [--json] [--raycast PATH]
 
 For each USD scene (.usd/.usda/.usdc/.usdz; folders are searched recursively, files in a
 `bad/` folder are skipped) the stage is opened with usd-core and flattened into world-space
