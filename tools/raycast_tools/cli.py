@@ -48,9 +48,12 @@ def usage() -> str:
 def main(argv: list[str] | None = None) -> int:
     """Run the command named by argv[0] with the remaining arguments; its exit status."""
     argv = sys.argv[1:] if argv is None else argv
-    if not argv or argv[0] in ("-h", "--help"):
+    if not argv:
+        print(usage(), file=sys.stderr)
+        return 2
+    if argv[0] in ("-h", "--help"):
         print(usage())
-        return 0 if argv else 2
+        return 0
     name, rest = argv[0], argv[1:]
     if name not in COMMANDS:
         print(f"{PROG}: unknown command {name!r}\n\n{usage()}", file=sys.stderr)
