@@ -47,6 +47,7 @@ def ray_triangle_hits(tris, origins, unit, chunk):
 
 
 def _with_normals(tris, depth, tri):
+    """(depth, unit normal of each hit triangle, zero on a miss, tri)."""
     normal = np.zeros((len(depth), 3))
     h = tri >= 0
     normal[h] = tri_normals(tris[tri[h]])

@@ -39,10 +39,12 @@ def json_text(value, indent: int = 0) -> str:
 
 
 def pad4(data: bytes, fill: bytes = b"\0") -> bytes:
+    """`data` padded with `fill` to a multiple of 4 bytes (glTF's alignment)."""
     return data + fill * ((-len(data)) % 4)
 
 
 def data_uri(data: bytes) -> str:
+    """`data` as a base64 `data:` URI, the form of an embedded glTF buffer."""
     return "data:application/octet-stream;base64," + base64.b64encode(data).decode("ascii")
 
 
@@ -171,6 +173,7 @@ class Gltf:
 
 
 def glb(doc: dict, data: bytes) -> bytes:
+    """A GLB file: the header, the JSON chunk (space-padded) and the BIN chunk when `data`."""
     js = pad4(json.dumps(doc, separators=(",", ":"), allow_nan=False).encode("utf-8"), b" ")
     out = struct.pack("<II", len(js), 0x4E4F534A) + js  # "JSON"
     if data:
@@ -180,6 +183,7 @@ def glb(doc: dict, data: bytes) -> bytes:
 
 
 def fminmax(a: np.ndarray, which: int) -> list[float]:
+    """Per-component min (`which` 0) or max (1) of the rows without NaN, as floats."""
     a = np.asarray(a, dtype=np.float64)
     a = a[~np.isnan(a).any(axis=1)]
     v = a.min(axis=0) if which == 0 else a.max(axis=0)
@@ -187,5 +191,6 @@ def fminmax(a: np.ndarray, which: int) -> list[float]:
 
 
 def iminmax(a: np.ndarray, which: int) -> list[int]:
+    """Per-component min (`which` 0) or max (1) of integer rows, as ints."""
     v = a.min(axis=0) if which == 0 else a.max(axis=0)
     return [int(x) for x in v]

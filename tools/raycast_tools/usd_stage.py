@@ -38,7 +38,7 @@ def usd_files(arguments):
 
 
 def mesh_triangles(prim):
-    """Fan triangles of a mesh at the default time, None when it is not drawn."""
+    """How many fan triangles a mesh draws at the default time; None when it is not drawn."""
     try:
         return checked_mesh_triangles(prim)
     except TypeError:
@@ -47,6 +47,7 @@ def mesh_triangles(prim):
 
 
 def checked_mesh_triangles(prim):
+    """mesh_triangles, raising TypeError on a value of the wrong type."""
     mesh = UsdGeom.Mesh(prim)
     points = mesh.GetPointsAttr().Get()
     counts = mesh.GetFaceVertexCountsAttr().Get()
@@ -66,6 +67,7 @@ def checked_mesh_triangles(prim):
 
 
 def hidden_purpose(prim):
+    """Whether the prim's computed purpose is guide or proxy (raycast does not draw those)."""
     imageable = UsdGeom.Imageable(prim)
     if not imageable:
         return False
