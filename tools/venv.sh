@@ -35,7 +35,7 @@ installed_here() {
 }
 
 if [[ -f "$stamp" && -x "$venv/bin/python" && "$(cat "$stamp")" == "$want" ]] && installed_here; then
-    echo "venv.sh: $venv is up to date (requirements $(cut -c1-12 <<<"$want"), python $pyver)"
+    echo "venv.sh: $venv is up to date (requirements + pyproject $(cut -c1-12 <<<"$want"), python $pyver)"
     exit 0
 fi
 
