@@ -685,20 +685,14 @@ def targets_section(entries):
         tri = e["rust"]["quadrics"] == 0
         for th in (1, 2):
             t = rate(oc, "coherent", th)
-            if tri and "embreex" in by and t:
-                add(
-                    f"coherent ≥ 1.0× embreex ({th}t)",
-                    e["key"],
-                    t["mrays_per_s"] / rate(by["embreex"], "coherent", th)["mrays_per_s"],
-                    1.0,
-                )
-            if tri and "bvh" in by and t:
-                add(
-                    f"coherent ≥ 1.5× obvhs BVH2 ({th}t)",
-                    e["key"],
-                    t["mrays_per_s"] / rate(by["bvh"], "coherent", th)["mrays_per_s"],
-                    1.5,
-                )
+            for peer, label, goal in (("embreex", "embreex", 1.0), ("bvh", "obvhs BVH2", 1.5)):
+                if tri and peer in by and t:
+                    add(
+                        f"coherent ≥ {goal:.1f}× {label} ({th}t)",
+                        e["key"],
+                        t["mrays_per_s"] / rate(by[peer], "coherent", th)["mrays_per_s"],
+                        goal,
+                    )
         t = rate(oc, "incoherent", 1)
         if tri and "embreex" in by and t:
             add(

@@ -490,6 +490,8 @@ def define_quad_cube(stage, path, half=0.5):
     return mesh
 
 
+# fmt: off
+# (the op table keeps its hand layout, one entry per few lines)
 def export_xforms():
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.Xform.Define(stage, "/World")
@@ -499,88 +501,37 @@ def export_xforms():
     root.AddScaleOp().Set(Gf.Vec3f(2, 2, 2))
     # one leaf per op kind, each under its own child of Root
     ops = [
-        (
-            "translate",
-            lambda x: x.AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(4, 0, 0)),
-        ),
-        (
-            "translateXYZ",
-            lambda x: (
-                x.AddTranslateXOp().Set(6.0),
-                x.AddTranslateYOp().Set(1.0),
-                x.AddTranslateZOp().Set(-1.0),
-            ),
-        ),
-        (
-            "scale",
-            lambda x: (
-                x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 4, 0)),
-                x.AddScaleOp().Set(Gf.Vec3f(0.5, 1.5, 1.0)),
-            ),
-        ),
-        (
-            "scaleXYZ",
-            lambda x: (
-                x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 8, 0)),
-                x.AddScaleXOp().Set(0.75),
-                x.AddScaleYOp().Set(1.25),
-                x.AddScaleZOp().Set(0.5),
-            ),
-        ),
-        (
-            "rotateXYZ_single",
-            lambda x: (
-                x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 0, 4)),
-                x.AddRotateXOp().Set(30.0),
-                x.AddRotateYOp().Set(45.0),
-                x.AddRotateZOp().Set(60.0),
-            ),
-        ),
+        ("translate", lambda x: x.AddTranslateOp(UsdGeom.XformOp.PrecisionDouble)
+                                 .Set(Gf.Vec3d(4, 0, 0))),
+        ("translateXYZ", lambda x: (x.AddTranslateXOp().Set(6.0), x.AddTranslateYOp().Set(1.0),
+                                    x.AddTranslateZOp().Set(-1.0))),
+        ("scale", lambda x: (x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 4, 0)),
+                             x.AddScaleOp().Set(Gf.Vec3f(0.5, 1.5, 1.0)))),
+        ("scaleXYZ", lambda x: (x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 8, 0)),
+                                x.AddScaleXOp().Set(0.75), x.AddScaleYOp().Set(1.25),
+                                x.AddScaleZOp().Set(0.5))),
+        ("rotateXYZ_single", lambda x: (x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(0, 0, 4)),
+                                        x.AddRotateXOp().Set(30.0), x.AddRotateYOp().Set(45.0),
+                                        x.AddRotateZOp().Set(60.0))),
     ]
     for k, order in enumerate(("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX")):
-        ops.append(
-            (
-                f"rotate{order}",
-                lambda x, order=order, k=k: (
-                    x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(-4, 0, 4 * k + 4)),
-                    getattr(x, f"AddRotate{order}Op")().Set(Gf.Vec3f(25, 50, 75)),
-                ),
-            )
-        )
+        ops.append((f"rotate{order}", lambda x, order=order, k=k: (
+            x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(-4, 0, 4 * k + 4)),
+            getattr(x, f"AddRotate{order}Op")().Set(Gf.Vec3f(25, 50, 75)))))
     ops += [
-        (
-            "orient",
-            lambda x: (
-                x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(4, 4, 0)),
-                x.AddOrientOp().Set(Gf.Quatf(0.8, 0.2, 0.4, 0.4)),
-            ),
-        ),
-        (
-            "transform",
-            lambda x: x.AddTransformOp().Set(
-                Gf.Matrix4d(1, 0.25, 0, 0, 0.5, 1, 0, 0, 0, 0.3, 1.5, 0, -4, -4, 2, 1)
-            ),
-        ),
-        (
-            "pivot_invert",
-            lambda x: (
-                x.AddTranslateOp(opSuffix="place").Set(Gf.Vec3d(4, -4, 0)),
-                x.AddTranslateOp(opSuffix="pivot").Set(Gf.Vec3d(0.5, 0.5, 0)),
-                x.AddRotateZOp().Set(90.0),
-                x.AddTranslateOp(opSuffix="pivot", isInverseOp=True),
-            ),
-        ),
-        (
-            "reset",
-            lambda x: (x.SetResetXformStack(True), x.AddTranslateOp().Set(Gf.Vec3d(20, 0, 0))),
-        ),
-        (
-            "mirror",
-            lambda x: (
-                x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(8, -4, 0)),
-                x.AddScaleOp().Set(Gf.Vec3f(-1, 1, 1)),
-            ),
-        ),
+        ("orient", lambda x: (x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(4, 4, 0)),
+                              x.AddOrientOp().Set(Gf.Quatf(0.8, 0.2, 0.4, 0.4)))),
+        ("transform", lambda x: x.AddTransformOp().Set(Gf.Matrix4d(
+            1, 0.25, 0, 0, 0.5, 1, 0, 0, 0, 0.3, 1.5, 0, -4, -4, 2, 1))),
+        ("pivot_invert", lambda x: (
+            x.AddTranslateOp(opSuffix="place").Set(Gf.Vec3d(4, -4, 0)),
+            x.AddTranslateOp(opSuffix="pivot").Set(Gf.Vec3d(0.5, 0.5, 0)),
+            x.AddRotateZOp().Set(90.0),
+            x.AddTranslateOp(opSuffix="pivot", isInverseOp=True))),
+        ("reset", lambda x: (x.SetResetXformStack(True),
+                             x.AddTranslateOp().Set(Gf.Vec3d(20, 0, 0)))),
+        ("mirror", lambda x: (x.AddTranslateOp(opSuffix="t").Set(Gf.Vec3d(8, -4, 0)),
+                              x.AddScaleOp().Set(Gf.Vec3f(-1, 1, 1)))),
     ]
     for name, author in ops:
         group = UsdGeom.Xform.Define(stage, f"/World/Root/{name}")
@@ -588,17 +539,15 @@ def export_xforms():
         define_tetra(stage, f"/World/Root/{name}/tet", 0.5, left_handed=(name == "orient"))
     # a scope's and an untyped prim's xformOps are ignored (not Xformable)
     scope = UsdGeom.Scope.Define(stage, "/World/Scope")
-    scope.GetPrim().CreateAttribute("xformOp:translate", Sdf.ValueTypeNames.Double3).Set(
-        Gf.Vec3d(100, 0, 0)
-    )
-    scope.GetPrim().CreateAttribute("xformOpOrder", Sdf.ValueTypeNames.TokenArray).Set(
-        ["xformOp:translate"]
-    )
+    prim = scope.GetPrim()
+    prim.CreateAttribute("xformOp:translate", Sdf.ValueTypeNames.Double3).Set(Gf.Vec3d(100, 0, 0))
+    prim.CreateAttribute("xformOpOrder", Sdf.ValueTypeNames.TokenArray).Set(["xformOp:translate"])
     leaf = UsdGeom.Xform.Define(stage, "/World/Scope/Leaf")
     leaf.AddTranslateOp().Set(Gf.Vec3d(0, -20, 0))
     define_quad_cube(stage, "/World/Scope/Leaf/cube")
     save(stage, "xforms")
     EXPECTED["xforms"] = mesh_rays(stage)
+# fmt: on
 
 
 def export_composition():

@@ -579,6 +579,8 @@ def add(
     CASES.append(case)
 
 
+# fmt: off
+# (the case table keeps its hand layout, one entry per few lines)
 def build_cases():
     identity = world_cols(IDENTITY)
 
@@ -590,133 +592,81 @@ def build_cases():
     base_cyl_o = (-2.125, -80.0, 0.75)
     base_cyl_d = (0.0078125, 1.0, 0.00390625)
     for k in (0, -20, -7, 3, 30):
-        s = 2.0**k
+        s = 2.0 ** k
         tag = f"2^{k}"
-        why = (
-            "the scene (world matrix and ray origin) is multiplied by an exact power of two, so "
-            "the exact depth scales exactly (the float inputs are exact multiples); 1e-15 "
-            "(4.5 ulp) is twice the first-order error estimate of this near-head-on hit "
-            "63-80 units away (error_estimate, about 4.5e-16)."
-        )
-        add(
-            f"scale2k_sphere_k{k}",
-            "scale_pow2",
+        why = ("the scene (world matrix and ray origin) is multiplied by an exact power of two, so "
+               "the exact depth scales exactly (the float inputs are exact multiples); 1e-15 "
+               "(4.5 ulp) is twice the first-order error estimate of this near-head-on hit "
+               "63-80 units away (error_estimate, about 4.5e-16).")
+        add(f"scale2k_sphere_k{k}", "scale_pow2",
             f"unit sphere at {base_sphere_c}, camera 63 units away, whole scene scaled by {tag}",
-            SPHERE,
-            None,
-            world_cols(diag(s, s, s), [s * c for c in base_sphere_c]),
-            [s * c for c in base_sphere_o],
-            base_sphere_d,
-            bound=1e-15,
-            reason=why,
-            extra={
-                "same_depth_as": None if k == 0 else "scale2k_sphere_k0",
-                "depth_ratio": None if k == 0 else s,
-            },
-        )
-        add(
-            f"scale2k_cylinder_k{k}",
-            "scale_pow2",
+            SPHERE, None, world_cols(diag(s, s, s), [s * c for c in base_sphere_c]),
+            [s * c for c in base_sphere_o], base_sphere_d, bound=1e-15, reason=why,
+            extra={"same_depth_as": None if k == 0 else "scale2k_sphere_k0",
+                   "depth_ratio": None if k == 0 else s})
+        add(f"scale2k_cylinder_k{k}", "scale_pow2",
             f"clipped cylinder x^2+y^2=1, |z|<=2, at {base_cyl_t}, camera 80 units away, "
             f"whole scene scaled by {tag}",
-            CYL_Z,
-            box([-1, -1, -2], [1, 1, 2]),
+            CYL_Z, box([-1, -1, -2], [1, 1, 2]),
             world_cols(diag(s, s, s), [s * c for c in base_cyl_t]),
-            [s * c for c in base_cyl_o],
-            base_cyl_d,
-            bound=1e-15,
-            reason=why,
-            extra={
-                "same_depth_as": None if k == 0 else "scale2k_cylinder_k0",
-                "depth_ratio": None if k == 0 else s,
-            },
-        )
+            [s * c for c in base_cyl_o], base_cyl_d, bound=1e-15, reason=why,
+            extra={"same_depth_as": None if k == 0 else "scale2k_cylinder_k0",
+                   "depth_ratio": None if k == 0 else s})
 
     # ---- 2. decade scaling 1e-6 .. 1e6 ----------------------------------------------------
     for e in range(-6, 7):
         s = float(f"1e{e}")
-        why = (
-            "uniform scale by a decade (inexact in binary) of a well-conditioned hit; the "
-            "first-order error is a few ulp, 1e-12 leaves a wide margin for rounding of the "
-            "scaled matrix and its inverse."
-        )
-        add(
-            f"decade_sphere_1e{e}",
-            "scale_decade",
+        why = ("uniform scale by a decade (inexact in binary) of a well-conditioned hit; the "
+               "first-order error is a few ulp, 1e-12 leaves a wide margin for rounding of the "
+               "scaled matrix and its inverse.")
+        add(f"decade_sphere_1e{e}", "scale_decade",
             f"unit sphere at (0.3,-0.2,0.1)*s, camera at (0.5,0.4,8)*s looking along -z, s=1e{e}",
-            SPHERE,
-            None,
-            world_cols(diag(s, s, s), [0.3 * s, -0.2 * s, 0.1 * s]),
-            [0.5 * s, 0.4 * s, 8.0 * s],
-            [-0.01, 0.02, -1.0],
-            bound=1e-12,
-            reason=why,
-        )
+            SPHERE, None, world_cols(diag(s, s, s), [0.3 * s, -0.2 * s, 0.1 * s]),
+            [0.5 * s, 0.4 * s, 8.0 * s], [-0.01, 0.02, -1.0], bound=1e-12, reason=why,
+            )
     for e in (-6, -3, 3, 6):
         s = float(f"1e{e}")
-        add(
-            f"decade_cylinder_1e{e}",
-            "scale_decade",
+        add(f"decade_cylinder_1e{e}", "scale_decade",
             f"cylinder x^2+y^2=1, |z|<=1.5 rotated about x by 0.4 rad, scaled by 1e{e}, side view",
-            CYL_Z,
-            box([-1, -1, -1.5], [1, 1, 1.5]),
-            world_cols(
-                [[s * x for x in row] for row in rot_axis_angle((1, 0, 0), 0.4)],
-                [0.1 * s, 0.2 * s, 0.3 * s],
-            ),
-            [6.0 * s, 0.45 * s, 0.5 * s],
-            [-1.0, 0.03, -0.02],
-            bound=1e-12,
+            CYL_Z, box([-1, -1, -1.5], [1, 1, 1.5]),
+            world_cols([[s * x for x in row] for row in rot_axis_angle((1, 0, 0), 0.4)],
+                       [0.1 * s, 0.2 * s, 0.3 * s]),
+            [6.0 * s, 0.45 * s, 0.5 * s], [-1.0, 0.03, -0.02], bound=1e-12,
             reason="uniform decade scale of a rotated, well-conditioned cylinder hit; 1e-12 is far "
-            "above the few-ulp first-order error.",
-        )
+                   "above the few-ulp first-order error.")
 
     # ---- 3. far translations with non-integer offsets ---------------------------------------
     for e in (3, 5, 7):
         big = float(f"1e{e}")
         c = (big + 0.1, 0.5 * big - 0.3, -big + 0.7)
-        add(
-            f"translated_sphere_1e{e}",
-            "translated",
+        add(f"translated_sphere_1e{e}", "translated",
             f"unit sphere centred at ({big:g}+0.1, {big / 2:g}-0.3, -{big:g}+0.7), camera 5 units "
             "away, oblique ray",
-            SPHERE,
-            None,
-            world_cols(IDENTITY, c),
-            (c[0] + 0.3, c[1] - 0.2, c[2] + 5.0),
-            (-0.05, 0.03, -1.0),
-            bound=1e-9,
+            SPHERE, None, world_cols(IDENTITY, c),
+            (c[0] + 0.3, c[1] - 0.2, c[2] + 5.0), (-0.05, 0.03, -1.0), bound=1e-9,
             reason="world coordinates of size 1e{0} carry an absolute rounding of about "
-            "1e{0}*1.1e-16 in any anchor difference; over a 4-unit depth that is at most "
-            "about 2e-10 relative at 1e7, below 1e-9.".format(e),
-        )
-        add(
-            f"translated_cylinder_1e{e}",
-            "translated",
+                   "1e{0}*1.1e-16 in any anchor difference; over a 4-unit depth that is at most "
+                   "about 2e-10 relative at 1e7, below 1e-9.".format(e))
+        add(f"translated_cylinder_1e{e}", "translated",
             "cylinder x^2+y^2=0.25 (radius 0.5), box [-0.6,-0.5,-1.2]..[0.8,0.5,0.8] (centre "
             "(0.1,0,-0.2), off the origin), "
             f"node at ({big:g}+0.1, -{big:g}+0.1, {big / 4:g}+0.1), side view from 5 units",
-            coeffs(4, 4, 0, j=-1),
-            box([-0.6, -0.5, -1.2], [0.8, 0.5, 0.8]),
+            coeffs(4, 4, 0, j=-1), box([-0.6, -0.5, -1.2], [0.8, 0.5, 0.8]),
             world_cols(IDENTITY, (big + 0.1, -big + 0.1, big / 4 + 0.1)),
-            (big + 0.1 - 5.0, -big + 0.1 + 0.1, big / 4 + 0.1 - 0.3),
-            (1.0, 0.01, 0.02),
+            (big + 0.1 - 5.0, -big + 0.1 + 0.1, big / 4 + 0.1 - 0.3), (1.0, 0.01, 0.02),
             bound=1e-9,
             reason="the clip-box centre's world image is rounded at 1e{0} (half an ulp, "
-            "about 1e{0}*1.1e-16) and every local coordinate inherits it; over a 4.5-unit "
-            "depth this stays below 1e-9 relative.".format(e),
-        )
+                   "about 1e{0}*1.1e-16) and every local coordinate inherits it; over a 4.5-unit "
+                   "depth this stays below 1e-9 relative.".format(e))
 
     # ---- 4. small spheres far away, near the silhouette -------------------------------------
     r = 1e-3
-    for idx, (cen, o_off, dvec) in enumerate(
-        [
-            ((0.0, 0.0, 0.0), (-1e4, 0.999e-3, 0.0), (1.0, 0.0, 0.0)),
-            ((1e4, 2e4, -3e4), (0.0, 0.0, 1e4), None),
-            ((0.5, -0.25, 0.125), (7e3, -7e3, 2e3), None),
-            ((-3.0, 2.0, 1e4), (0.0, 1e4, 0.0), None),
-        ]
-    ):
+    for idx, (cen, o_off, dvec) in enumerate([
+        ((0.0, 0.0, 0.0), (-1e4, 0.999e-3, 0.0), (1.0, 0.0, 0.0)),
+        ((1e4, 2e4, -3e4), (0.0, 0.0, 1e4), None),
+        ((0.5, -0.25, 0.125), (7e3, -7e3, 2e3), None),
+        ((-3.0, 2.0, 1e4), (0.0, 1e4, 0.0), None),
+    ]):
         centre = np.array(cen)
         origin = centre + np.array(o_off)
         if dvec is None:
@@ -728,812 +678,290 @@ def build_cases():
             aim_point = centre + 0.999 * r * perp
             dvec = aim_point - origin
             dvec = dvec / np.linalg.norm(dvec)
-        add(
-            f"small_far_sphere_{idx}",
-            "small_far",
+        add(f"small_far_sphere_{idx}", "small_far",
             f"sphere r=1e-3 at {cen} seen from about 1e4 away, impact parameter about 0.999 r "
             "(grazing: cos of incidence about 0.045)",
-            coeffs(1, 1, 1, j=-1e-6),
-            None,
-            world_cols(IDENTITY, cen),
-            origin.tolist(),
+            coeffs(1, 1, 1, j=-1e-6), None, world_cols(IDENTITY, cen), origin.tolist(),
             dvec.tolist() if isinstance(dvec, np.ndarray) else dvec,
-            reason=None,
-        )
+            reason=None)
 
     # ---- 5. exactly tangent rays (ambiguous) ------------------------------------------------
     tangents = [
-        (
-            "tangent_sphere_y1",
-            "unit sphere, ray along +x at y = 1 exactly",
-            SPHERE,
-            None,
-            identity,
-            (-5.0, 1.0, 0.0),
-            (1.0, 0.0, 0.0),
-        ),
-        (
-            "tangent_sphere_z1_far",
-            "unit sphere at (100.5,0,0), ray along -y at z = 1 from 1e3",
-            SPHERE,
-            None,
-            world_cols(IDENTITY, (100.5, 0.0, 0.0)),
-            (100.5, 1e3, 1.0),
-            (0.0, -1.0, 0.0),
-        ),
-        (
-            "tangent_ellipsoid",
-            "ellipsoid x^2/4+y^2+z^2/16=1, ray along +z at x = 2 exactly",
-            coeffs(0.25, 1, 0.0625, j=-1),
-            None,
-            identity,
-            (2.0, 0.0, -10.0),
-            (0.0, 0.0, 1.0),
-        ),
-        (
-            "tangent_cylinder",
-            "cylinder x^2+y^2=1 |z|<=2, ray along -y at x = 1 exactly",
-            CYL_Z,
-            box([-1, -1, -2], [1, 1, 2]),
-            identity,
-            (1.0, 5.0, 0.5),
-            (0.0, -1.0, 0.0),
-        ),
+        ("tangent_sphere_y1", "unit sphere, ray along +x at y = 1 exactly", SPHERE, None, identity,
+         (-5.0, 1.0, 0.0), (1.0, 0.0, 0.0)),
+        ("tangent_sphere_z1_far", "unit sphere at (100.5,0,0), ray along -y at z = 1 from 1e3",
+         SPHERE, None, world_cols(IDENTITY, (100.5, 0.0, 0.0)), (100.5, 1e3, 1.0),
+         (0.0, -1.0, 0.0)),
+        ("tangent_ellipsoid", "ellipsoid x^2/4+y^2+z^2/16=1, ray along +z at x = 2 exactly",
+         coeffs(0.25, 1, 0.0625, j=-1), None, identity, (2.0, 0.0, -10.0), (0.0, 0.0, 1.0)),
+        ("tangent_cylinder", "cylinder x^2+y^2=1 |z|<=2, ray along -y at x = 1 exactly",
+         CYL_Z, box([-1, -1, -2], [1, 1, 2]), identity, (1.0, 5.0, 0.5), (0.0, -1.0, 0.0)),
     ]
     for name, desc, qd, bd, wd, o, d in tangents:
-        add(
-            name,
-            "tangent_exact",
-            desc,
-            qd,
-            bd,
-            wd,
-            o,
-            d,
-            ambiguous=True,
-            ambiguous_kind="tangent",
-            reason=None,
-        )
+        add(name, "tangent_exact", desc, qd, bd, wd, o, d, ambiguous=True,
+            ambiguous_kind="tangent", reason=None)
 
     # ---- 6. near tangency, inside (hit) and outside (miss) ----------------------------------
     for delta, tag in ((1e-3, "1e-3"), (1e-5, "1e-5"), (1e-7, "1e-7")):
-        add(
-            f"near_tangent_in_{tag}",
-            "near_tangent",
+        add(f"near_tangent_in_{tag}", "near_tangent",
             f"unit sphere, ray along +x from x=-5 at y = 1 - {tag} (hits, chord half-length "
-            f"sqrt(2*{tag}))",
-            SPHERE,
-            None,
-            identity,
-            (-5.0, 1.0 - delta, 0.0),
-            (1.0, 0.0, 0.0),
-        )
-        add(
-            f"near_tangent_out_{tag}",
-            "near_tangent",
+            f"sqrt(2*{tag}))", SPHERE, None, identity, (-5.0, 1.0 - delta, 0.0), (1.0, 0.0, 0.0))
+        add(f"near_tangent_out_{tag}", "near_tangent",
             f"unit sphere, ray along +x from x=-5 at y = 1 + {tag}: misses by {tag}",
-            SPHERE,
-            None,
-            identity,
-            (-5.0, 1.0 + delta, 0.0),
-            (1.0, 0.0, 0.0),
-        )
+            SPHERE, None, identity, (-5.0, 1.0 + delta, 0.0), (1.0, 0.0, 0.0))
     rot = rot_axis_angle((0.2, 0.3, 0.9), 0.7)
     for sign, tag in ((-1, "in"), (1, "out")):
         # cylinder rotated: world ray built in local space then mapped with the float matrix
         lo = np.array([1.0 + sign * 1e-7, -4.0, 0.3])
         ld = np.array([0.0, 1.0, 0.0])
         Rm = np.array(rot)
-        add(
-            f"near_tangent_cylinder_{tag}_1e-7",
-            "near_tangent",
+        add(f"near_tangent_cylinder_{tag}_1e-7", "near_tangent",
             f"cylinder x^2+y^2=1 |z|<=2, rotated 0.7 rad about (0.2,0.3,0.9), translated; ray "
             f"parallel to local y at local x = 1 {'-' if sign < 0 else '+'} 1e-7",
-            CYL_Z,
-            box([-1, -1, -2], [1, 1, 2]),
-            world_cols(rot, (3.0, -2.0, 1.0)),
-            (Rm @ lo + np.array([3.0, -2.0, 1.0])).tolist(),
-            (Rm @ ld).tolist(),
-        )
+            CYL_Z, box([-1, -1, -2], [1, 1, 2]), world_cols(rot, (3.0, -2.0, 1.0)),
+            (Rm @ lo + np.array([3.0, -2.0, 1.0])).tolist(), (Rm @ ld).tolist())
 
     # ---- 7. camera inside ---------------------------------------------------------------------
     ell = coeffs(1 / 9, 0.25, 1, j=-1)  # semi-axes 3, 2, 1
-    add(
-        "inside_ellipsoid_a",
-        "inside",
-        "camera at the centre of ellipsoid (3,2,1), oblique ray: "
+    add("inside_ellipsoid_a", "inside", "camera at the centre of ellipsoid (3,2,1), oblique ray: "
         "exits through the far wall; normal points outward (f > 0), i.e. along the ray",
-        ell,
-        None,
-        identity,
-        (0.0, 0.0, 0.0),
-        (0.6, -0.3, 0.2),
-        bound=1e-9,
+        ell, None, identity, (0.0, 0.0, 0.0), (0.6, -0.3, 0.2), bound=1e-9,
         reason="well-conditioned exit root (only one positive root, steep incidence); 1e-9 is the "
-        "default bound for well-conditioned cases.",
-    )
-    add(
-        "inside_ellipsoid_b",
-        "inside",
-        "camera inside a rotated, translated ellipsoid (3,2,1), off-centre",
-        ell,
-        None,
-        world_cols(rot_axis_angle((1, 1, 0), 1.1), (10.0, -20.0, 5.0)),
-        (10.5, -19.7, 5.2),
-        (-0.2, 0.9, -0.1),
-        bound=1e-9,
-        reason="well-conditioned exit root; default 1e-9.",
-    )
-    add(
-        "inside_cylinder_wall",
-        "inside",
-        "camera inside cylinder x^2+y^2=1 |z|<=2, ray hits the "
+               "default bound for well-conditioned cases.")
+    add("inside_ellipsoid_b", "inside", "camera inside a rotated, translated ellipsoid (3,2,1), "
+        "off-centre", ell, None, world_cols(rot_axis_angle((1, 1, 0), 1.1), (10.0, -20.0, 5.0)),
+        (10.5, -19.7, 5.2), (-0.2, 0.9, -0.1), bound=1e-9,
+        reason="well-conditioned exit root; default 1e-9.")
+    add("inside_cylinder_wall", "inside", "camera inside cylinder x^2+y^2=1 |z|<=2, ray hits the "
         "inside wall at |z| < 2; normal points outward (away from the axis)",
-        CYL_Z,
-        box([-1, -1, -2], [1, 1, 2]),
-        identity,
-        (0.2, 0.1, 0.5),
-        (1.0, 0.3, 0.2),
-        bound=1e-9,
-        reason="well-conditioned exit root; default 1e-9.",
-    )
-    add(
-        "inside_cylinder_open_end",
-        "inside",
-        "camera inside cylinder x^2+y^2=1 |z|<=2, ray "
+        CYL_Z, box([-1, -1, -2], [1, 1, 2]), identity, (0.2, 0.1, 0.5), (1.0, 0.3, 0.2), bound=1e-9,
+        reason="well-conditioned exit root; default 1e-9.")
+    add("inside_cylinder_open_end", "inside", "camera inside cylinder x^2+y^2=1 |z|<=2, ray "
         "leaves through the open top (wall crossing at z > 2 is clipped): miss",
-        CYL_Z,
-        box([-1, -1, -2], [1, 1, 2]),
-        identity,
-        (0.2, 0.1, 0.5),
-        (0.3, 0.1, 1.0),
-        bound=1e-9,
-        reason="the only positive root lies well outside the clip box (z about 3.3): robust miss.",
-    )
-    add(
-        "outside_through_open_end",
-        "inside",
-        "camera above and beside an open cylinder "
+        CYL_Z, box([-1, -1, -2], [1, 1, 2]), identity, (0.2, 0.1, 0.5), (0.3, 0.1, 1.0), bound=1e-9,
+        reason="the only positive root lies well outside the clip box (z about 3.3): robust miss.")
+    add("outside_through_open_end", "inside", "camera above and beside an open cylinder "
         "x^2+y^2=1 |z|<=1: the near wall crossing (z=2) is clipped, the far root (inside wall, "
-        "z=0) is the hit",
-        CYL_Z,
-        box([-1, -1, -1], [1, 1, 1]),
-        identity,
-        (-3.0, 0.0, 4.0),
-        (1.0, 0.0, -1.0),
-        bound=1e-9,
-        reason="near root clipped by a wide margin, far root well-conditioned; default 1e-9.",
-    )
+        "z=0) is the hit", CYL_Z, box([-1, -1, -1], [1, 1, 1]), identity, (-3.0, 0.0, 4.0),
+        (1.0, 0.0, -1.0), bound=1e-9,
+        reason="near root clipped by a wide margin, far root well-conditioned; default 1e-9.")
 
     # ---- 8. rays along / nearly along a cylinder axis ----------------------------------------
     tall = box([-1, -1, -1e9], [1, 1, 1e9])
-    add(
-        "axis_on_axis",
-        "cylinder_axis",
-        "ray along the axis of x^2+y^2=1 (K = L = 0, M = -1): never meets the surface",
-        CYL_Z,
-        tall,
-        identity,
-        (0.0, 0.0, -5.0),
-        (0.0, 0.0, 1.0),
-        bound=1e-9,
-        reason="K = L = 0 exactly and M = -1: no root at all; robust miss.",
-    )
-    add(
-        "axis_parallel_inside",
-        "cylinder_axis",
-        "ray parallel to the axis at radius 0.5: miss",
-        CYL_Z,
-        tall,
-        identity,
-        (0.5, 0.0, -5.0),
-        (0.0, 0.0, 1.0),
-        bound=1e-9,
-        reason="K = L = 0 exactly, M = -0.75: robust miss.",
-    )
-    add(
-        "axis_parallel_outside",
-        "cylinder_axis",
-        "ray parallel to the axis at radius 2: miss",
-        CYL_Z,
-        tall,
-        identity,
-        (2.0, 0.0, -5.0),
-        (0.0, 0.0, 1.0),
-        bound=1e-9,
-        reason="K = L = 0 exactly, M = 3: robust miss.",
-    )
-    add(
-        "axis_parallel_on_surface",
-        "cylinder_axis",
-        "ray parallel to the axis at radius 1: the "
+    add("axis_on_axis", "cylinder_axis", "ray along the axis of x^2+y^2=1 (K = L = 0, M = -1): "
+        "never meets the surface", CYL_Z, tall, identity, (0.0, 0.0, -5.0), (0.0, 0.0, 1.0),
+        bound=1e-9, reason="K = L = 0 exactly and M = -1: no root at all; robust miss.")
+    add("axis_parallel_inside", "cylinder_axis", "ray parallel to the axis at radius 0.5: miss",
+        CYL_Z, tall, identity, (0.5, 0.0, -5.0), (0.0, 0.0, 1.0), bound=1e-9,
+        reason="K = L = 0 exactly, M = -0.75: robust miss.")
+    add("axis_parallel_outside", "cylinder_axis", "ray parallel to the axis at radius 2: miss",
+        CYL_Z, tall, identity, (2.0, 0.0, -5.0), (0.0, 0.0, 1.0), bound=1e-9,
+        reason="K = L = 0 exactly, M = 3: robust miss.")
+    add("axis_parallel_on_surface", "cylinder_axis", "ray parallel to the axis at radius 1: the "
         "whole ray lies on the surface (K = L = M = 0); any answer accepted",
-        CYL_Z,
-        tall,
-        identity,
-        (1.0, 0.0, -5.0),
-        (0.0, 0.0, 1.0),
-        ambiguous=True,
+        CYL_Z, tall, identity, (1.0, 0.0, -5.0), (0.0, 0.0, 1.0), ambiguous=True,
         ambiguous_kind="on_surface",
-        reason="the ray lies in the surface: every t > 0 is a root, hit or miss both acceptable.",
-    )
-    add(
-        "axis_tilt_1e-8",
-        "cylinder_axis",
-        "ray from the axis tilted by 1e-8 (dir (1e-8,0,1)): "
+        reason="the ray lies in the surface: every t > 0 is a root, hit or miss both acceptable.")
+    add("axis_tilt_1e-8", "cylinder_axis", "ray from the axis tilted by 1e-8 (dir (1e-8,0,1)): "
         "meets x = 1 at t = 1e8, z about 1e8 inside |z| <= 1e9",
-        CYL_Z,
-        tall,
-        identity,
-        (0.0, 0.0, -5.0),
-        (1e-8, 0.0, 1.0),
-        bound=1e-9,
+        CYL_Z, tall, identity, (0.0, 0.0, -5.0), (1e-8, 0.0, 1.0), bound=1e-9,
         reason="t = 1/1e-8 depends only on the transverse component, known to relative 1e-16 "
-        "under an identity transform; default 1e-9.",
-    )
-    add(
-        "axis_tilt_1e-8_offaxis",
-        "cylinder_axis",
-        "ray from (0.5,0.25,-5) with dir (1e-8,2e-8,1): hits far up the tube (t about 3.9e7)",
-        CYL_Z,
-        tall,
-        identity,
-        (0.5, 0.25, -5.0),
-        (1e-8, 2e-8, 1.0),
-        bound=1e-9,
-        reason="K = 5e-16 exactly scaled, root relative condition about 1; default 1e-9.",
-    )
+               "under an identity transform; default 1e-9.")
+    add("axis_tilt_1e-8_offaxis", "cylinder_axis", "ray from (0.5,0.25,-5) with dir "
+        "(1e-8,2e-8,1): hits far up the tube (t about 3.9e7)",
+        CYL_Z, tall, identity, (0.5, 0.25, -5.0), (1e-8, 2e-8, 1.0), bound=1e-9,
+        reason="K = 5e-16 exactly scaled, root relative condition about 1; default 1e-9.")
     Rt = rot_axis_angle((0.3, -0.5, 0.2), 0.9)
     Rn = np.array(Rt)
-    add(
-        "axis_tilt_1e-8_rotated",
-        "cylinder_axis",
-        "as axis_tilt_1e-8 but the tube is rotated: "
+    add("axis_tilt_1e-8_rotated", "cylinder_axis", "as axis_tilt_1e-8 but the tube is rotated: "
         "the 1e-8 transverse direction now comes out of a rounded inverse",
-        CYL_Z,
-        tall,
-        world_cols(Rt),
-        (Rn @ [0.0, 0.0, -5.0]).tolist(),
+        CYL_Z, tall, world_cols(Rt), (Rn @ [0.0, 0.0, -5.0]).tolist(),
         (Rn @ [1e-8, 0.0, 1.0]).tolist(),
-        reason=None,
-    )
+        reason=None)
 
     # ---- 9. paraboloid along its axis (K = 0) -----------------------------------------------
     parab = coeffs(1, 1, 0, i=-1)  # x^2 + y^2 - z
     pb = box([-3, -3, -1], [3, 3, 9])
-    add(
-        "paraboloid_vertex",
-        "paraboloid_axis",
-        "z = x^2+y^2 (f = x^2+y^2-z), from (0,0,5) along "
-        "-z: linear case K = 0, hits the vertex at t = 5, normal (0,0,-1)",
-        parab,
-        pb,
-        identity,
-        (0.0, 0.0, 5.0),
-        (0.0, 0.0, -1.0),
-        bound=1e-9,
-        reason="linear root -M/L with L = 1: exact; default 1e-9.",
-    )
-    add(
-        "paraboloid_offaxis",
-        "paraboloid_axis",
-        "z = x^2+y^2 from (0.5,0,5) along -z: hits z = 0.25 at t = 4.75, normal (1,0,-1)/sqrt2",
-        parab,
-        pb,
-        identity,
-        (0.5, 0.0, 5.0),
-        (0.0, 0.0, -1.0),
-        bound=1e-9,
-        reason="linear root, exact in binary; default 1e-9.",
-    )
-    add(
-        "paraboloid_axis_scaled_dir",
-        "paraboloid_axis",
-        "as paraboloid_offaxis with dir (0,0,-1e3) and a rotated, translated node",
-        parab,
-        pb,
+    add("paraboloid_vertex", "paraboloid_axis", "z = x^2+y^2 (f = x^2+y^2-z), from (0,0,5) along "
+        "-z: linear case K = 0, hits the vertex at t = 5, normal (0,0,-1)", parab, pb, identity,
+        (0.0, 0.0, 5.0), (0.0, 0.0, -1.0), bound=1e-9,
+        reason="linear root -M/L with L = 1: exact; default 1e-9.")
+    add("paraboloid_offaxis", "paraboloid_axis", "z = x^2+y^2 from (0.5,0,5) along -z: hits z = "
+        "0.25 at t = 4.75, normal (1,0,-1)/sqrt2", parab, pb, identity, (0.5, 0.0, 5.0),
+        (0.0, 0.0, -1.0), bound=1e-9,
+        reason="linear root, exact in binary; default 1e-9.")
+    add("paraboloid_axis_scaled_dir", "paraboloid_axis",
+        "as paraboloid_offaxis with dir (0,0,-1e3) "
+        "and a rotated, translated node", parab, pb,
         world_cols(rot_axis_angle((1, 2, 3), 0.5), (1.0, 2.0, 3.0)),
         (np.array(rot_axis_angle((1, 2, 3), 0.5)) @ [0.5, 0.0, 5.0] + [1.0, 2.0, 3.0]).tolist(),
-        (np.array(rot_axis_angle((1, 2, 3), 0.5)) @ [0.0, 0.0, -1e3]).tolist(),
-        bound=1e-9,
+        (np.array(rot_axis_angle((1, 2, 3), 0.5)) @ [0.0, 0.0, -1e3]).tolist(), bound=1e-9,
         reason="K is zero only to rounding of the rotated direction (|K| ~ 1e-16 K-scale, far "
-        "below 1e-13) and the root is well-conditioned; default 1e-9.",
-    )
+               "below 1e-13) and the root is well-conditioned; default 1e-9.")
 
     # ---- 10. cone apex ------------------------------------------------------------------------
     cone = coeffs(1, 1, -1)
     cb = cube(1.0)
-    add(
-        "cone_apex_axis",
-        "cone_apex",
-        "cone x^2+y^2-z^2=0 |z|<=1, ray along -z through the apex "
-        "(double root t = 5, zero gradient: any unit normal)",
-        cone,
-        cb,
-        identity,
-        (0.0, 0.0, 5.0),
-        (0.0, 0.0, -1.0),
-        robust_double=True,
-        reason=None,
-    )
-    add(
-        "cone_apex_oblique",
-        "cone_apex",
-        "cone, ray through the apex from (0.3,0.2,2) inside the "
-        "nappe (|v_xy| < |v_z|): double root at the apex",
-        cone,
-        cb,
-        identity,
-        (0.3, 0.2, 2.0),
-        (-0.3, -0.2, -2.0),
-        robust_double=True,
-        reason=None,
-    )
-    add(
-        "cone_apex_grazing",
-        "cone_apex",
-        "cone, ray through the apex from outside the nappes "
+    add("cone_apex_axis", "cone_apex", "cone x^2+y^2-z^2=0 |z|<=1, ray along -z through the apex "
+        "(double root t = 5, zero gradient: any unit normal)", cone, cb, identity, (0.0, 0.0, 5.0),
+        (0.0, 0.0, -1.0), robust_double=True, reason=None)
+    add("cone_apex_oblique", "cone_apex", "cone, ray through the apex from (0.3,0.2,2) inside the "
+        "nappe (|v_xy| < |v_z|): double root at the apex", cone, cb, identity, (0.3, 0.2, 2.0),
+        (-0.3, -0.2, -2.0), robust_double=True, reason=None)
+    add("cone_apex_grazing", "cone_apex", "cone, ray through the apex from outside the nappes "
         "(direction (1,0,0.5)): touches only at the apex, a perturbed ray misses or hits twice",
-        cone,
-        cb,
-        identity,
-        (-2.0, 0.0, -1.0),
-        (1.0, 0.0, 0.5),
-        ambiguous=True,
-        ambiguous_kind="tangent",
-        reason=None,
-    )
-    add(
-        "cone_generator_parallel",
-        "cone_apex",
-        "cone, ray parallel to the generator (1,0,1) from (0,0.5,-1.5): K = 0, linear root",
-        cone,
-        box([-2, -2, -2], [2, 2, 2]),
-        identity,
-        (0.0, 0.5, -1.5),
-        (1.0, 0.0, 1.0),
-        bound=1e-9,
-        reason="K = 0 exactly, linear root with |L| = 3; default 1e-9.",
-    )
+        cone, cb, identity, (-2.0, 0.0, -1.0), (1.0, 0.0, 0.5), ambiguous=True,
+        ambiguous_kind="tangent", reason=None)
+    add("cone_generator_parallel", "cone_apex", "cone, ray parallel to the generator (1,0,1) from "
+        "(0,0.5,-1.5): K = 0, linear root", cone, box([-2, -2, -2], [2, 2, 2]), identity,
+        (0.0, 0.5, -1.5), (1.0, 0.0, 1.0), bound=1e-9,
+        reason="K = 0 exactly, linear root with |L| = 3; default 1e-9.")
 
     # ---- 11. hyperboloid of one sheet ---------------------------------------------------------
     hyp = coeffs(1, 1, -1, j=-1)
     hb = cube(2.0)
-    add(
-        "hyperboloid_waist_out",
-        "hyperboloid",
-        "x^2+y^2-z^2=1, ray along +y in z = 0 at x = 1+1e-9: misses the waist circle by 1e-9",
-        hyp,
-        hb,
-        identity,
-        (1.0 + 1e-9, -5.0, 0.0),
-        (0.0, 1.0, 0.0),
-        bound=1e-9,
-        reason="the minimum of f along the ray is 2e-9, about 1e5 times its rounding: robust miss.",
-    )
-    add(
-        "hyperboloid_waist_in",
-        "hyperboloid",
-        "x^2+y^2-z^2=1, ray along +y in z = 0 at x = "
-        "1-1e-9: grazing hit, chord half-length about 4.5e-5",
-        hyp,
-        hb,
-        identity,
-        (1.0 - 1e-9, -5.0, 0.0),
-        (0.0, 1.0, 0.0),
-    )
+    add("hyperboloid_waist_out", "hyperboloid", "x^2+y^2-z^2=1, ray along +y in z = 0 at x = "
+        "1+1e-9: misses the waist circle by 1e-9", hyp, hb, identity, (1.0 + 1e-9, -5.0, 0.0),
+        (0.0, 1.0, 0.0), bound=1e-9,
+        reason="the minimum of f along the ray is 2e-9, about 1e5 times its rounding: robust miss.")
+    add("hyperboloid_waist_in", "hyperboloid", "x^2+y^2-z^2=1, ray along +y in z = 0 at x = "
+        "1-1e-9: grazing hit, chord half-length about 4.5e-5", hyp, hb, identity,
+        (1.0 - 1e-9, -5.0, 0.0), (0.0, 1.0, 0.0))
     s2 = 1 / math.sqrt(2)
-    add(
-        "hyperboloid_asymptote_a",
-        "hyperboloid",
-        "x^2+y^2-z^2=1 with dir (1,0,1)/sqrt2 (K = 0 exactly) from (0,0.5,-3)",
-        hyp,
-        hb,
-        identity,
-        (0.0, 0.5, -3.0),
-        (s2, 0.0, s2),
-        bound=1e-9,
-        reason="K = 0 exactly (equal components), linear root with |L| about 4.2; default 1e-9.",
-    )
-    add(
-        "hyperboloid_asymptote_b",
-        "hyperboloid",
-        "x^2+y^2-z^2=1 with dir (1,0,1)/sqrt2 from (0.5,0,0): hits at (1.25,0,0.75)",
-        hyp,
-        hb,
-        identity,
-        (0.5, 0.0, 0.0),
-        (s2, 0.0, s2),
-        bound=1e-9,
-        reason="K = 0 exactly, linear root; default 1e-9.",
-    )
-    add(
-        "hyperboloid_asymptote_line",
-        "hyperboloid",
-        "x^2+y^2-z^2=1, ray along the asymptote "
-        "line x = z through the centre: f = -1 all along (K = L = 0): miss",
-        hyp,
-        hb,
-        identity,
-        (-1.5, 0.0, -1.5),
-        (1.0, 0.0, 1.0),
-        bound=1e-9,
-        reason="K = L = 0 exactly with M = -1: no root, robust miss.",
-    )
-    add(
-        "hyperboloid_ruling",
-        "hyperboloid",
-        "x^2+y^2-z^2=1, ray along the ruling x = 1, y = z: "
-        "lies on the surface (K = L = M = 0); any answer accepted",
-        hyp,
-        hb,
-        identity,
-        (1.0, -1.5, -1.5),
-        (0.0, 1.0, 1.0),
-        ambiguous=True,
-        ambiguous_kind="on_surface",
-        reason="the ray lies in the surface: hit or miss both acceptable.",
-    )
+    add("hyperboloid_asymptote_a", "hyperboloid", "x^2+y^2-z^2=1 with dir (1,0,1)/sqrt2 (K = 0 "
+        "exactly) from (0,0.5,-3)", hyp, hb, identity, (0.0, 0.5, -3.0), (s2, 0.0, s2), bound=1e-9,
+        reason="K = 0 exactly (equal components), linear root with |L| about 4.2; default 1e-9.")
+    add("hyperboloid_asymptote_b", "hyperboloid", "x^2+y^2-z^2=1 with dir (1,0,1)/sqrt2 from "
+        "(0.5,0,0): hits at (1.25,0,0.75)", hyp, hb, identity, (0.5, 0.0, 0.0), (s2, 0.0, s2),
+        bound=1e-9, reason="K = 0 exactly, linear root; default 1e-9.")
+    add("hyperboloid_asymptote_line", "hyperboloid", "x^2+y^2-z^2=1, ray along the asymptote "
+        "line x = z through the centre: f = -1 all along (K = L = 0): miss", hyp, hb, identity,
+        (-1.5, 0.0, -1.5), (1.0, 0.0, 1.0), bound=1e-9,
+        reason="K = L = 0 exactly with M = -1: no root, robust miss.")
+    add("hyperboloid_ruling", "hyperboloid", "x^2+y^2-z^2=1, ray along the ruling x = 1, y = z: "
+        "lies on the surface (K = L = M = 0); any answer accepted", hyp, hb, identity,
+        (1.0, -1.5, -1.5), (0.0, 1.0, 1.0), ambiguous=True, ambiguous_kind="on_surface",
+        reason="the ray lies in the surface: hit or miss both acceptable.")
 
     # ---- 12. coefficients spanning 1e-6 .. 1e6 -----------------------------------------------
     span = coeffs(1e6, 1, 1e-6, j=-1)  # semi-axes 1e-3, 1, 1e3
     for name, o, d, desc in [
         ("span_long_axis", (0.0, 0.0, -5e3), (0.0, 0.0, 1.0), "along the 1e3 axis from z=-5e3"),
         ("span_short_axis", (-1.0, 0.5, 0.0), (1.0, 0.0, 0.0), "along the 1e-3 axis at y=0.5"),
-        (
-            "span_oblique",
-            (-0.0003, -3.0, -200.0),
-            (0.0001, 1.0, 0.05),
-            "oblique, grazing the thin axis",
-        ),
+        ("span_oblique", (-0.0003, -3.0, -200.0), (0.0001, 1.0, 0.05), "oblique, grazing the thin "
+         "axis"),
         ("span_middle", (0.0002, -4.0, 300.0), (0.0, 1.0, 0.0), "along y at x=2e-4, z=300"),
     ]:
-        add(
-            name,
-            "coefficient_span",
-            f"ellipsoid 1e6 x^2 + y^2 + 1e-6 z^2 = 1 (semi-axes 1e-3, 1, 1e3), ray {desc}",
-            span,
-            None,
-            identity,
-            o,
-            d,
-        )
+        add(name, "coefficient_span", "ellipsoid 1e6 x^2 + y^2 + 1e-6 z^2 = 1 (semi-axes 1e-3, "
+            f"1, 1e3), ray {desc}", span, None, identity, o, d)
 
     # ---- 13. ill-conditioned transforms -------------------------------------------------------
     flat_lin, flat_t = diag(1.0, 1.0, 1e-4), (0.1, 0.2, 0.3)
     flat = world_cols(flat_lin, flat_t)
     o, d = aim(flat_lin, flat_t, (0.2, -0.1, math.sqrt(0.95)), (0.01, 0.0, 1.0))
-    add(
-        "flat_sphere_top",
-        "ill_conditioned_transform",
-        "unit sphere scaled by 1e-4 along z (a disc 2e-4 thick), ray from above",
-        SPHERE,
-        None,
-        flat,
-        o,
-        d,
-    )
-    add(
-        "flat_sphere_edge",
-        "ill_conditioned_transform",
-        "the 1e-4-flattened sphere hit near its rim from the side",
-        SPHERE,
-        None,
-        flat,
-        (-5.0, 0.25, 0.30002),
-        (1.0, 0.01, 0.0),
-    )
+    add("flat_sphere_top", "ill_conditioned_transform", "unit sphere scaled by 1e-4 along z (a "
+        "disc 2e-4 thick), ray from above", SPHERE, None, flat, o, d)
+    add("flat_sphere_edge", "ill_conditioned_transform", "the 1e-4-flattened sphere hit near its "
+        "rim from the side", SPHERE, None, flat, (-5.0, 0.25, 0.30002), (1.0, 0.01, 0.0))
     shear = [[1.0, 0.3, 0.0], [0.0, 1.0, 0.3], [0.0, 0.0, 1.0]]
     o, d = aim(shear, (1.0, -1.0, 2.0), (0.36, 0.48, 0.8), (0.2, 0.5, 6.0))
-    add(
-        "shear_sphere",
-        "ill_conditioned_transform",
-        "unit sphere under shear 0.3 (xy, yz)",
-        SPHERE,
-        None,
-        world_cols(shear, (1.0, -1.0, 2.0)),
-        o,
-        d,
-    )
+    add("shear_sphere", "ill_conditioned_transform", "unit sphere under shear 0.3 (xy, yz)",
+        SPHERE, None, world_cols(shear, (1.0, -1.0, 2.0)), o, d)
     mixed = matmul_f(rot_axis_angle((1, -1, 2), 0.8), matmul_f(shear, diag(1.0, 1e-4, 1.0)))
     o, d = aim(mixed, (5.0, 6.0, 7.0), (0.6, -0.8, 0.3), (4.0, 0.5, -0.25))
-    add(
-        "shear_flat_cylinder",
-        "ill_conditioned_transform",
-        "cylinder x^2+y^2=1 |z|<=1 under "
+    add("shear_flat_cylinder", "ill_conditioned_transform", "cylinder x^2+y^2=1 |z|<=1 under "
         "rotation * shear 0.3 * scale(1,1e-4,1) (a thin ribbon), oblique ray",
-        CYL_Z,
-        cube(1.0),
-        world_cols(mixed, (5.0, 6.0, 7.0)),
-        o,
-        d,
-    )
+        CYL_Z, cube(1.0), world_cols(mixed, (5.0, 6.0, 7.0)), o, d)
     sp_lin = matmul_f(shear, diag(1e-4, 1.0, 1.0))
     o, d = aim(sp_lin, (0.0, 0.0, 0.0), (0.5, 1.0, 1.25), (0.0, 0.3, 6.0))
-    add(
-        "shear_paraboloid",
-        "ill_conditioned_transform",
-        "paraboloid z = x^2+y^2 under shear 0.3 and a 1e-4 scale on x, ray from above",
-        parab,
-        pb,
-        world_cols(sp_lin),
-        o,
-        d,
-    )
+    add("shear_paraboloid", "ill_conditioned_transform", "paraboloid z = x^2+y^2 under shear 0.3 "
+        "and a 1e-4 scale on x, ray from above", parab, pb, world_cols(sp_lin), o, d)
 
     # ---- 14. degenerate quadrics ------------------------------------------------------------
     plane = matrices([0] * 9, [0, 0, 1], 0)
-    add(
-        "plane_hit",
-        "degenerate",
-        "plane z = 0 (Q = 0, P = (0,0,1)) clipped to [-1,1]^3, ray from above",
-        plane,
-        cube(1.0),
-        identity,
-        (0.25, 0.125, 3.0),
-        (0.1, 0.2, -1.0),
-        bound=1e-9,
-        reason="linear root, |L| = 1; default 1e-9.",
-    )
-    add(
-        "plane_hit_from_below",
-        "degenerate",
-        "plane z = 0 seen from below: normal still +z",
-        plane,
-        cube(1.0),
-        identity,
-        (-0.5, 0.3, -2.0),
-        (0.05, -0.1, 1.0),
-        bound=1e-9,
-        reason="linear root; default 1e-9.",
-    )
-    add(
-        "plane_parallel",
-        "degenerate",
-        "ray parallel to the plane z = 0 at z = 0.5: miss",
-        plane,
-        cube(1.0),
-        identity,
-        (-3.0, 0.0, 0.5),
-        (1.0, 0.2, 0.0),
-        bound=1e-9,
-        reason="K = L = 0 exactly with M = 0.5: robust miss.",
-    )
-    add(
-        "plane_in_plane",
-        "degenerate",
-        "ray inside the plane z = 0: on the surface; any answer accepted",
-        plane,
-        cube(1.0),
-        identity,
-        (-3.0, 0.0, 0.0),
-        (1.0, 0.2, 0.0),
-        ambiguous=True,
-        ambiguous_kind="on_surface",
-        reason="the ray lies in the surface: hit or miss accepted.",
-    )
-    add(
-        "plane_outside_bounds",
-        "degenerate",
-        "plane z = 0 crossed at (2.5, 0, 0), outside the clip box [-1,1]^3: miss",
-        plane,
-        cube(1.0),
-        identity,
-        (2.5, 0.0, 4.0),
-        (0.0, 0.0, -1.0),
-        bound=1e-9,
-        reason="the only root lies 1.5 outside the clip box: robust miss.",
-    )
+    add("plane_hit", "degenerate", "plane z = 0 (Q = 0, P = (0,0,1)) clipped to [-1,1]^3, ray "
+        "from above", plane, cube(1.0), identity, (0.25, 0.125, 3.0), (0.1, 0.2, -1.0), bound=1e-9,
+        reason="linear root, |L| = 1; default 1e-9.")
+    add("plane_hit_from_below", "degenerate", "plane z = 0 seen from below: normal still +z",
+        plane, cube(1.0), identity, (-0.5, 0.3, -2.0), (0.05, -0.1, 1.0), bound=1e-9,
+        reason="linear root; default 1e-9.")
+    add("plane_parallel", "degenerate", "ray parallel to the plane z = 0 at z = 0.5: miss",
+        plane, cube(1.0), identity, (-3.0, 0.0, 0.5), (1.0, 0.2, 0.0), bound=1e-9,
+        reason="K = L = 0 exactly with M = 0.5: robust miss.")
+    add("plane_in_plane", "degenerate", "ray inside the plane z = 0: on the surface; any answer "
+        "accepted", plane, cube(1.0), identity, (-3.0, 0.0, 0.0), (1.0, 0.2, 0.0), ambiguous=True,
+        ambiguous_kind="on_surface", reason="the ray lies in the surface: hit or miss accepted.")
+    add("plane_outside_bounds", "degenerate", "plane z = 0 crossed at (2.5, 0, 0), outside the "
+        "clip box [-1,1]^3: miss", plane, cube(1.0), identity, (2.5, 0.0, 4.0), (0.0, 0.0, -1.0),
+        bound=1e-9, reason="the only root lies 1.5 outside the clip box: robust miss.")
     pair = coeffs(1, -1, 0)
-    add(
-        "plane_pair_hit",
-        "degenerate",
-        "plane pair x^2-y^2=0, [-2,2]^3, ray crosses the plane x = y away from the crossing line",
-        pair,
-        cube(2.0),
-        identity,
-        (1.0, -0.5, 0.0),
-        (0.0, 1.0, 0.1),
-        bound=1e-9,
-        reason="simple root, |g'| = 2 at x = 1; default 1e-9.",
-    )
-    add(
-        "plane_pair_crossing_line",
-        "degenerate",
-        "plane pair x^2-y^2=0, ray along +x in y = 0 "
-        "through the crossing line x = y = 0 (double root, zero gradient)",
-        pair,
-        cube(2.0),
-        identity,
-        (-1.5, 0.0, 0.5),
-        (1.0, 0.0, 0.0),
-        ambiguous=True,
-        ambiguous_kind="tangent",
-        reason=None,
-    )
-    add(
-        "double_plane",
-        "degenerate",
-        "coincident planes z^2 = 0: every crossing is a double "
-        "root (tangent everywhere, zero gradient)",
-        coeffs(0, 0, 1),
-        cube(1.0),
-        identity,
-        (0.2, 0.3, 2.0),
-        (0.1, -0.1, -1.0),
-        ambiguous=True,
-        ambiguous_kind="tangent",
-        reason=None,
-    )
+    add("plane_pair_hit", "degenerate", "plane pair x^2-y^2=0, [-2,2]^3, ray crosses the plane "
+        "x = y away from the crossing line", pair, cube(2.0), identity, (1.0, -0.5, 0.0),
+        (0.0, 1.0, 0.1), bound=1e-9, reason="simple root, |g'| = 2 at x = 1; default 1e-9.")
+    add("plane_pair_crossing_line", "degenerate", "plane pair x^2-y^2=0, ray along +x in y = 0 "
+        "through the crossing line x = y = 0 (double root, zero gradient)", pair, cube(2.0),
+        identity, (-1.5, 0.0, 0.5), (1.0, 0.0, 0.0), ambiguous=True, ambiguous_kind="tangent",
+        reason=None)
+    add("double_plane", "degenerate", "coincident planes z^2 = 0: every crossing is a double "
+        "root (tangent everywhere, zero gradient)", coeffs(0, 0, 1), cube(1.0), identity,
+        (0.2, 0.3, 2.0), (0.1, -0.1, -1.0), ambiguous=True, ambiguous_kind="tangent",
+        reason=None)
     empty = coeffs(1, 1, 1, j=1)
-    add(
-        "empty_sphere",
-        "degenerate",
-        "empty quadric x^2+y^2+z^2+1=0: miss",
-        empty,
-        None,
-        identity,
-        (0.0, 0.0, 5.0),
-        (0.0, 0.0, -1.0),
-        bound=1e-9,
-        reason="f >= 1 everywhere: robust miss.",
-    )
-    add(
-        "empty_cylinder",
-        "degenerate",
-        "empty x^2+y^2+1=0 with bounds: miss",
-        coeffs(1, 1, 0, j=1),
-        cube(1.0),
-        identity,
-        (3.0, 0.2, 0.1),
-        (-1.0, 0.0, 0.0),
-        bound=1e-9,
-        reason="f >= 1 everywhere: robust miss.",
-    )
+    add("empty_sphere", "degenerate", "empty quadric x^2+y^2+z^2+1=0: miss", empty, None, identity,
+        (0.0, 0.0, 5.0), (0.0, 0.0, -1.0), bound=1e-9, reason="f >= 1 everywhere: robust miss.")
+    add("empty_cylinder", "degenerate", "empty x^2+y^2+1=0 with bounds: miss", coeffs(1, 1, 0, j=1),
+        cube(1.0), identity, (3.0, 0.2, 0.1), (-1.0, 0.0, 0.0), bound=1e-9,
+        reason="f >= 1 everywhere: robust miss.")
     point = coeffs(1, 1, 1)
-    add(
-        "point_through",
-        "degenerate",
-        "point quadric x^2+y^2+z^2=0, ray through the point (double root, zero gradient)",
-        point,
-        None,
-        identity,
-        (0.0, 0.0, 5.0),
-        (0.0, 0.0, -1.0),
-        ambiguous=True,
-        ambiguous_kind="tangent",
-        reason=None,
-    )
-    add(
-        "point_miss",
-        "degenerate",
-        "point quadric, ray passing 0.5 from the point: miss",
-        point,
-        None,
-        identity,
-        (0.5, 0.0, 5.0),
-        (0.0, 0.0, -1.0),
-        bound=1e-9,
-        reason="f >= 0.25 along the ray: robust miss.",
-    )
+    add("point_through", "degenerate", "point quadric x^2+y^2+z^2=0, ray through the point "
+        "(double root, zero gradient)", point, None, identity, (0.0, 0.0, 5.0), (0.0, 0.0, -1.0),
+        ambiguous=True, ambiguous_kind="tangent", reason=None)
+    add("point_miss", "degenerate", "point quadric, ray passing 0.5 from the point: miss", point,
+        None, identity, (0.5, 0.0, 5.0), (0.0, 0.0, -1.0), bound=1e-9,
+        reason="f >= 0.25 along the ray: robust miss.")
 
     # ---- 15. errors ---------------------------------------------------------------------------
-    add(
-        "singular_scale_zero",
-        "error",
-        "unit sphere with world scale 0 on z: Quadric::new must fail (singular world matrix)",
-        SPHERE,
-        None,
-        world_cols(diag(1, 1, 0)),
-        (0, 0, 5),
-        (0, 0, -1),
-        reason="error case: no bound.",
-    )
-    add(
-        "singular_rank2",
-        "error",
-        "cylinder with a rank-2 world matrix (two equal columns): Quadric::new must fail",
-        CYL_Z,
-        cube(1.0),
-        world_cols([[1, 1, 0], [0, 0, 1], [2, 2, 0]], (1, 2, 3)),
-        (0, 0, 5),
-        (0, 0, -1),
-        reason="error case: no bound.",
-    )
-    add(
-        "spec_unbounded",
-        "error",
-        "cylinder without bounds: QuadricSpec construction (or Quadric::new) must fail",
-        CYL_Z,
-        None,
-        identity,
-        (3, 0, 0),
-        (-1, 0, 0),
-        reason="error case: no bound.",
-    )
-    add(
-        "spec_zero",
-        "error",
-        "Q and P all zero (R = 1): QuadricSpec construction must fail",
-        coeffs(j=1),
-        cube(1.0),
-        identity,
-        (3, 0, 0),
-        (-1, 0, 0),
-        reason="error case: no bound.",
-    )
+    add("singular_scale_zero", "error", "unit sphere with world scale 0 on z: Quadric::new must "
+        "fail (singular world matrix)", SPHERE, None, world_cols(diag(1, 1, 0)), (0, 0, 5),
+        (0, 0, -1), reason="error case: no bound.")
+    add("singular_rank2", "error", "cylinder with a rank-2 world matrix (two equal columns): "
+        "Quadric::new must fail", CYL_Z, cube(1.0),
+        world_cols([[1, 1, 0], [0, 0, 1], [2, 2, 0]], (1, 2, 3)), (0, 0, 5), (0, 0, -1),
+        reason="error case: no bound.")
+    add("spec_unbounded", "error", "cylinder without bounds: QuadricSpec construction (or "
+        "Quadric::new) must fail", CYL_Z, None, identity, (3, 0, 0), (-1, 0, 0),
+        reason="error case: no bound.")
+    add("spec_zero", "error", "Q and P all zero (R = 1): QuadricSpec construction must fail",
+        coeffs(j=1), cube(1.0), identity, (3, 0, 0), (-1, 0, 0), reason="error case: no bound.")
 
     # ---- 16. non-unit directions --------------------------------------------------------------
     ud = (-0.0078125, 0.001953125, -1.0)
     for mag, tag in ((1e-3, "1e-3"), (1e3, "1e3")):
-        add(
-            f"dir_length_{tag}",
-            "dir_length",
-            f"scale2k_sphere_k0 with the direction multiplied "
+        add(f"dir_length_{tag}", "dir_length", f"scale2k_sphere_k0 with the direction multiplied "
             f"by {tag} (components rounded): depth equals that case's to a few ulp",
-            SPHERE,
-            None,
-            world_cols(IDENTITY, base_sphere_c),
-            base_sphere_o,
-            [mag * x for x in ud],
-            bound=1e-15,
+            SPHERE, None, world_cols(IDENTITY, base_sphere_c), base_sphere_o,
+            [mag * x for x in ud], bound=1e-15,
             reason="depth = t |d| does not depend on |d|; only the rounding of the scaled "
-            "direction components (relative 1.1e-16) is added to the few-ulp error.",
-            extra={"same_depth_as": "scale2k_sphere_k0", "depth_ratio": 1.0},
-        )
-    add(
-        "dir_length_2^-40",
-        "dir_length",
-        "scale2k_sphere_k0 with the direction multiplied by "
-        "2^-40 (exact): same depth, t = 2^40 times larger",
-        SPHERE,
-        None,
-        world_cols(IDENTITY, base_sphere_c),
-        base_sphere_o,
-        [2.0**-40 * x for x in ud],
-        bound=1e-15,
-        reason="exact rescaling of the direction leaves the depth unchanged; 1e-15 "
+                   "direction components (relative 1.1e-16) is added to the few-ulp error.",
+            extra={"same_depth_as": "scale2k_sphere_k0", "depth_ratio": 1.0})
+    add("dir_length_2^-40", "dir_length", "scale2k_sphere_k0 with the direction multiplied by "
+        "2^-40 (exact): same depth, t = 2^40 times larger", SPHERE, None,
+        world_cols(IDENTITY, base_sphere_c), base_sphere_o, [2.0 ** -40 * x for x in ud],
+        bound=1e-15, reason="exact rescaling of the direction leaves the depth unchanged; 1e-15 "
         "allows the few-ulp error of the base case.",
-        extra={"same_depth_as": "scale2k_sphere_k0", "depth_ratio": 1.0},
-    )
+        extra={"same_depth_as": "scale2k_sphere_k0", "depth_ratio": 1.0})
 
     # ---- 17. negative zeros -------------------------------------------------------------------
-    add(
-        "negzero_sphere",
-        "negative_zero",
-        "unit sphere, origin (-0,-0,5), dir (-0,-0,-1): t = 4, normal (0,0,1)",
-        SPHERE,
-        None,
-        identity,
-        (-0.0, -0.0, 5.0),
-        (-0.0, -0.0, -1.0),
-        bound=1e-9,
-        reason="head-on hit, exact in binary; default 1e-9.",
-    )
-    add(
-        "negzero_cylinder",
-        "negative_zero",
-        "cylinder x^2+y^2=1 |z|<=1, dir (-1,-0,-0) from (3,0.5,-0): hits x = sqrt(0.75)",
-        CYL_Z,
-        cube(1.0),
-        identity,
-        (3.0, 0.5, -0.0),
-        (-1.0, -0.0, -0.0),
-        bound=1e-9,
-        reason="well-conditioned hit; default 1e-9.",
-    )
-    add(
-        "negzero_plane",
-        "negative_zero",
-        "plane z = 0, dir (0.5,-0,-1) from (0,-0,2)",
-        plane,
-        cube(1.0),
-        identity,
-        (0.0, -0.0, 2.0),
-        (0.5, -0.0, -1.0),
-        bound=1e-9,
-        reason="linear root, exact; default 1e-9.",
-    )
+    add("negzero_sphere", "negative_zero", "unit sphere, origin (-0,-0,5), dir (-0,-0,-1): t = 4, "
+        "normal (0,0,1)", SPHERE, None, identity, (-0.0, -0.0, 5.0), (-0.0, -0.0, -1.0), bound=1e-9,
+        reason="head-on hit, exact in binary; default 1e-9.")
+    add("negzero_cylinder", "negative_zero", "cylinder x^2+y^2=1 |z|<=1, dir (-1,-0,-0) from "
+        "(3,0.5,-0): hits x = sqrt(0.75)", CYL_Z, cube(1.0), identity, (3.0, 0.5, -0.0),
+        (-1.0, -0.0, -0.0), bound=1e-9, reason="well-conditioned hit; default 1e-9.")
+    add("negzero_plane", "negative_zero", "plane z = 0, dir (0.5,-0,-1) from (0,-0,2)", plane,
+        cube(1.0), identity, (0.0, -0.0, 2.0), (0.5, -0.0, -1.0), bound=1e-9,
+        reason="linear root, exact; default 1e-9.")
+# fmt: on
 
 
 # --------------------------------------------------------------------------------------------
