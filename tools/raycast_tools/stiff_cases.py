@@ -44,7 +44,7 @@ from .metrics import angle
 from .paths import ROOT
 from .quadric_reference import parse_quadric
 
-mp.prec = 200
+PREC = 200  # mpmath bits for every reference answer (set by main)
 
 EPS = 2.0**-53  # unit roundoff of float64
 SAFETY = 16.0  # derived bound = nice_up(SAFETY * first-order estimate)
@@ -1139,6 +1139,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog=prog("stiff-cases"), description=__doc__.splitlines()[0])
     ap.add_argument("--check", action="store_true", help="do not write; fail if the file differs")
     args = ap.parse_args(argv)
+    mp.prec = PREC
     build_cases()
     names = [c["name"] for c in CASES]
     assert len(names) == len(set(names)), "duplicate case names"
