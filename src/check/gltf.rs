@@ -10,7 +10,8 @@
 //! Codes are the Khronos glTF-Validator's where the meaning is the same.
 
 use super::{resolve_inside, CheckOptions, Findings};
-use crate::import::gltf::{can_honour_required, dangling_positions, span_fits, QUADRIC_EXTENSION};
+use crate::import::gltf::accessor::span_fits;
+use crate::import::gltf::{can_honour_required, QUADRIC_EXTENSION};
 use crate::quadric::QuadricSpec;
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::{Map, Value};
@@ -347,6 +348,23 @@ fn crate_validation(json: &[u8], f: &mut Findings) -> Option<String> {
         }
     }
     None
+}
+
+/// JSON pointers of POSITION attributes that name an accessor the file does not have. The
+/// `gltf` crate's validation panics on them, so they are checked before it runs.
+fn dangling_positions(root: &gltf::json::Root) -> Vec<String> {
+    let mut found = Vec::new();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(index) = primitive.attributes.get(&position) {
+                if index.value() >= root.accessors.len() {
+                    found.push(format!("/meshes/{m}/primitives/{p}/attributes/POSITION"));
+                }
+            }
+        }
+    }
+    found
 }
 
 /// `meshes[0].primitives[1].indices` -> `/meshes/0/primitives/1/indices`.
