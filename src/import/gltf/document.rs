@@ -29,6 +29,8 @@ pub(super) enum BufferData {
 pub struct Document {
     /// The whole file (a GLB's BIN chunk is read from here, not copied).
     pub(super) file: Vec<u8>,
+    /// The JSON text's place in `file`.
+    json_text: Range<usize>,
     /// The JSON root object.
     pub(super) json: Map<String, Value>,
     /// True for a GLB container.
@@ -47,13 +49,12 @@ impl Document {
     /// no JSON object to read.
     pub fn parse(file: Vec<u8>, is_glb: bool, sink: &mut dyn Sink) -> Option<Document> {
         let is_glb = is_glb || file.starts_with(b"glTF");
-        let (json, bin) = if is_glb {
-            let (json, bin) = glb_chunks(&file, sink)?;
-            (json, bin)
+        let (json_text, bin) = if is_glb {
+            glb_chunks(&file, sink)?
         } else {
             (0..file.len(), None)
         };
-        let value: Value = match serde_json::from_slice(&file[json]) {
+        let value: Value = match serde_json::from_slice(&file[json_text.clone()]) {
             Ok(value) => value,
             Err(e) => {
                 let code = if e.to_string().contains("number out of range") {
@@ -71,6 +72,7 @@ impl Document {
         };
         Some(Document {
             file,
+            json_text,
             json,
             is_glb,
             bin,
@@ -82,6 +84,11 @@ impl Document {
     /// The JSON root object.
     pub fn root(&self) -> &Map<String, Value> {
         &self.json
+    }
+
+    /// The JSON text, as in the file.
+    pub fn json_text(&self) -> &[u8] {
+        &self.file[self.json_text.clone()]
     }
 
     /// A top-level array (`"meshes"`, `"nodes"`, ...), empty when absent or not an array.
