@@ -263,7 +263,7 @@ impl Document {
                     "ACCESSOR_TOO_LONG",
                     at,
                     format!(
-                        "{} elements from offset {offset} do not fit buffer view {view} ({} bytes)",
+                        "{} elements from offset {offset} run past the end of buffer view {view} ({} bytes)",
                         layout.count,
                         bytes.len()
                     ),

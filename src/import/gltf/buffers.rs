@@ -318,7 +318,7 @@ fn read_file(
             sink.error(
                 "IO_ERROR",
                 at,
-                format!("buffer file '{decoded}' cannot be found"),
+                format!("the buffer refers to '{decoded}', which does not exist"),
             );
             return None;
         }

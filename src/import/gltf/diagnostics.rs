@@ -52,7 +52,7 @@ impl Diagnostic {
     /// The same diagnostic, its message prefixed with where it was reached from (a
     /// primitive, a node), so that a fail-fast error names both.
     pub fn within(mut self, at: &str) -> Diagnostic {
-        if !self.pointer.starts_with(at) {
+        if !self.pointer.starts_with(at) && !self.message.contains("(read for ") {
             self.message = format!("{} (read for {at})", self.message);
         }
         self

@@ -62,7 +62,7 @@ impl Document {
                 } else {
                     "INVALID_JSON"
                 };
-                sink.error(code, "", format!("not valid JSON: {e}"));
+                sink.error(code, "", format!("not valid glTF JSON: {e}"));
                 return None;
             }
         };
@@ -190,7 +190,7 @@ fn glb_chunks(bytes: &[u8], sink: &mut dyn Sink) -> Option<(Range<usize>, Option
         sink.error(
             "GLB_LENGTH_TOO_SMALL",
             "",
-            format!("declared length {declared} leaves no room for a chunk"),
+            format!("the GLB header declares {declared} bytes: no room for a chunk"),
         );
     }
     if declared > bytes.len() || declared < 20 && declared != bytes.len() {
@@ -198,7 +198,7 @@ fn glb_chunks(bytes: &[u8], sink: &mut dyn Sink) -> Option<(Range<usize>, Option
             "GLB_LENGTH_MISMATCH",
             "",
             format!(
-                "declared length {declared} differs from the file's {} bytes",
+                "the GLB header declares {declared} bytes but the file has {}",
                 bytes.len()
             ),
         );
