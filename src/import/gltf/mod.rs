@@ -107,5 +107,14 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     if let Some(error) = sink.error {
         return Err(fail(error));
     }
-    scene::build(&doc, options.scene.as_deref(), path).map_err(fail)
+    let mut scene = scene::build(&doc, options.scene.as_deref(), path).map_err(fail)?;
+    // What the layer noticed while reading (a network URI, extra bytes after a GLB) comes
+    // before what the scene walk noticed.
+    let notes = sink
+        .notes
+        .iter()
+        .filter(|d| d.severity == Severity::Warning);
+    let notes: Vec<String> = notes.map(Diagnostic::to_string).collect();
+    scene.warnings.splice(0..0, notes);
+    Ok(scene)
 }
