@@ -47,6 +47,29 @@ struct InfoArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    paths: PathArgs,
+}
+
+/// Where a scene's external files may come from (the same rule as `raycast check`).
+#[derive(Args)]
+struct PathArgs {
+    /// Folder tree external files (glTF buffers) must stay in (default: the scene's folder).
+    #[arg(long, value_name = "DIR")]
+    root: Option<PathBuf>,
+    /// Read external files wherever they are.
+    #[arg(long)]
+    allow_outside: bool,
+}
+
+impl PathArgs {
+    fn load_options(self, scene: Option<String>) -> LoadOptions {
+        LoadOptions {
+            scene,
+            root: self.root,
+            allow_outside: self.allow_outside,
+        }
+    }
 }
 
 #[derive(Args)]
@@ -103,6 +126,8 @@ struct RenderArgs {
     /// Print nothing but errors.
     #[arg(long, short)]
     quiet: bool,
+    #[command(flatten)]
+    paths: PathArgs,
 }
 
 fn parse_vec3(text: &str) -> Result<DVec3, String> {
@@ -137,9 +162,7 @@ fn main() -> ExitCode {
 }
 
 fn info(args: InfoArgs) -> raycast::Result<()> {
-    let options = LoadOptions {
-        scene: args.scene_choice,
-    };
+    let options = args.paths.load_options(args.scene_choice);
     let scene = import::load(&args.scene, &options)?;
     let info = SceneInfo::new(&scene);
     let text = if args.json {
@@ -176,9 +199,7 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         .map(|(eye, target)| (eye, target, args.up.unwrap_or(DVec3::Y)));
     let job = RenderJob {
         scene: args.scene.unwrap_or_default(),
-        load: LoadOptions {
-            scene: args.scene_choice,
-        },
+        load: args.paths.load_options(args.scene_choice),
         aovs: dedup(args.aov),
         camera: CameraChoice {
             name: args.camera,

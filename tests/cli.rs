@@ -344,3 +344,85 @@ fn info_reports_objects_cameras_and_extensions() {
         "{text}"
     );
 }
+
+/// One path rule for render, `info` and `check`: a buffer outside the scene's folder is
+/// refused by all three, naming the URI; `--root` widens the folder and `--allow-outside`
+/// lifts the rule, for all three alike.
+#[test]
+fn a_buffer_outside_the_root_is_refused_by_render_info_and_check() {
+    let dir = temp_dir("confine");
+    std::fs::create_dir_all(dir.join("scene")).unwrap();
+    let cube = std::fs::read(fixture("gltf/cube.gltf")).unwrap();
+    let text = String::from_utf8(cube).unwrap();
+    assert!(
+        text.contains("\"cube.bin\""),
+        "the fixture names its buffer cube.bin"
+    );
+    let scene = dir.join("scene/cube.gltf");
+    std::fs::write(
+        &scene,
+        text.replace("\"cube.bin\"", "\"../elsewhere/cube.bin\""),
+    )
+    .unwrap();
+    std::fs::create_dir_all(dir.join("elsewhere")).unwrap();
+    std::fs::copy(fixture("gltf/cube.bin"), dir.join("elsewhere/cube.bin")).unwrap();
+    let out = dir.join("out");
+    let runs = |extra: &[&str]| -> Vec<Output> {
+        let scene = arg(&scene);
+        let render = [&[scene, "--out", arg(&out), "--quiet"][..], extra].concat();
+        let info = [&["info", scene][..], extra].concat();
+        let check = [&["check", scene, "--json"][..], extra].concat();
+        vec![raycast(&render), raycast(&info), raycast(&check)]
+    };
+    for (run, what) in runs(&[]).iter().zip(["render", "info", "check"]) {
+        assert!(!run.status.success(), "{what} reads outside the folder");
+        let said = String::from_utf8_lossy(if what == "check" {
+            &run.stdout
+        } else {
+            &run.stderr
+        });
+        assert!(
+            said.contains("../elsewhere/cube.bin") && said.contains("leads out of the folder"),
+            "{what}: {said}"
+        );
+    }
+    for extra in [&["--root", arg(&dir)][..], &["--allow-outside"]] {
+        for (run, what) in runs(extra).iter().zip(["render", "info", "check"]) {
+            assert!(
+                run.status.success(),
+                "{what} {extra:?}: {}{}",
+                String::from_utf8_lossy(&run.stdout),
+                String::from_utf8_lossy(&run.stderr)
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Parts a ray caster does not read cannot stop a render: a texture without `source` (as
+/// with KHR_texture_basisu or EXT_texture_webp), an animation channel without a node
+/// (KHR_animation_pointer), integers written as `1.0`, and a missing image file.
+#[test]
+fn parts_a_ray_caster_does_not_read_cannot_stop_a_render() {
+    let dir = temp_dir("unread-parts");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(fixture("gltf/cube.bin"), dir.join("cube.bin")).unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(fixture("gltf/cube.gltf")).unwrap()).unwrap();
+    json["textures"] = serde_json::json!([{"sampler": 0.0}]);
+    json["samplers"] = serde_json::json!([{}]);
+    json["images"] = serde_json::json!([{"uri": "missing.png"}]);
+    json["animations"] = serde_json::json!([{
+        "channels": [{"sampler": 0, "target": {"path": "pointer"}}],
+        "samplers": [{"input": 0, "output": 0}]
+    }]);
+    json["nodes"][0]["mesh"] = serde_json::json!(0.0);
+    let scene = dir.join("cube.gltf");
+    std::fs::write(&scene, json.to_string()).unwrap();
+    let out = dir.join("out");
+    raycast_ok(&[arg(&scene), "--out", arg(&out), "--quiet"]);
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    assert_eq!(sidecar["stats"]["triangles"], 12);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -243,6 +243,7 @@ fn scene_choice_by_default_index_and_name() {
     for choice in ["first", "0"] {
         let options = LoadOptions {
             scene: Some(choice.into()),
+            ..Default::default()
         };
         let scene = import::load(&fixture("gltf/scenes.gltf"), &options).unwrap();
         assert_hit(
@@ -255,6 +256,7 @@ fn scene_choice_by_default_index_and_name() {
     }
     let options = LoadOptions {
         scene: Some("third".into()),
+        ..Default::default()
     };
     let err = import::load(&fixture("gltf/scenes.gltf"), &options).unwrap_err();
     assert!(err.to_string().contains("no scene 'third'"), "{err}");

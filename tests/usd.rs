@@ -427,6 +427,7 @@ fn unreadable_files_are_errors() {
 fn scene_option_selects_a_prim() {
     let options = LoadOptions {
         scene: Some("/World/Root/translate".into()),
+        ..Default::default()
     };
     let scene = import::load(&fixture("usd/xforms.usda"), &options).unwrap();
     let names: Vec<&str> = scene.objects.iter().map(|o| o.name.as_str()).collect();
@@ -439,6 +440,7 @@ fn scene_option_selects_a_prim() {
     );
     let bad = LoadOptions {
         scene: Some("/World/Nothing".into()),
+        ..Default::default()
     };
     let error = import::load(&fixture("usd/xforms.usda"), &bad).unwrap_err();
     assert!(

@@ -34,6 +34,10 @@ pub struct CheckArgs {
     /// (bytes; K, M, G suffixes).
     #[arg(long, value_name = "SIZE", default_value = "2G", value_parser = parse_size)]
     pub max_memory: u64,
+    /// Folder tree external files must stay in (default: the folder named on the command
+    /// line, or the file's own folder).
+    #[arg(long, value_name = "DIR")]
+    pub root: Option<PathBuf>,
     /// Let external buffers, images and USD references resolve outside the asset's folder.
     #[arg(long)]
     pub allow_outside: bool,
@@ -78,7 +82,7 @@ pub fn run(args: &CheckArgs) -> ExitCode {
 fn run_inner(args: &CheckArgs) -> Result<bool, String> {
     let started = Instant::now();
     let mut assets = discover(&args.paths)?;
-    if let Some(root) = &args.isolated_root {
+    if let Some(root) = args.isolated_root.as_ref().or(args.root.as_ref()) {
         for asset in &mut assets {
             asset.root = root.clone();
         }

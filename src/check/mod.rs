@@ -20,11 +20,12 @@ pub mod obj;
 pub mod report;
 pub mod usd;
 
-use crate::import::{self, LoadOptions};
+use crate::import;
+pub use crate::import::paths::resolve_inside;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// How bad a finding is.
@@ -420,7 +421,6 @@ fn check_into(
         );
         return None;
     };
-    let load = LoadOptions::default();
     let scene = match format {
         "gltf" | "glb" => {
             let bytes = match std::fs::read(path) {
@@ -430,10 +430,7 @@ fn check_into(
                     return None;
                 }
             };
-            if !gltf::check(path, root, &bytes, options, findings) {
-                return None;
-            }
-            import::gltf::load(path, &load)
+            gltf::check(path, root, bytes, options, findings)?
         }
         "obj" => {
             let bytes = match std::fs::read(path) {
@@ -507,63 +504,6 @@ fn importer_warning(format: &str, warning: &str, findings: &mut Findings) {
     findings.info("IMPORTER_NOTE", location, warning.to_string());
 }
 
-/// Where an external file named by an asset resolves, or why it is refused: `uri` is a
-/// relative path (already percent-decoded) from the asset's folder `base`, and must stay
-/// inside the folder tree `root`. Absolute paths, `..` escapes and symbolic links leading out
-/// of the tree are refused unless `allow_outside`; nothing is read here.
-pub fn resolve_inside(
-    base: &Path,
-    root: &Path,
-    uri: &str,
-    allow_outside: bool,
-) -> Result<PathBuf, String> {
-    let relative = Path::new(uri);
-    let windows_drive = uri.len() >= 2 && uri.as_bytes()[1] == b':';
-    if relative.is_absolute() || uri.starts_with('\\') || windows_drive {
-        if allow_outside {
-            return Ok(relative.to_path_buf());
-        }
-        return Err(format!("'{uri}' is an absolute path: not read"));
-    }
-    let full = base.join(relative);
-    if allow_outside {
-        return Ok(full);
-    }
-    let lexical = |p: &Path| -> Option<PathBuf> {
-        let absolute = std::path::absolute(p).ok()?;
-        let mut out = PathBuf::new();
-        for component in absolute.components() {
-            match component {
-                Component::ParentDir => {
-                    if !out.pop() {
-                        return None;
-                    }
-                }
-                Component::CurDir => {}
-                other => out.push(other),
-            }
-        }
-        Some(out)
-    };
-    match (lexical(&full), lexical(root)) {
-        (Some(f), Some(r)) if f.starts_with(&r) => {}
-        _ => {
-            return Err(format!(
-                "'{uri}' leads out of the asset's folder {}: not read (--allow-outside reads it)",
-                root.display()
-            ))
-        }
-    }
-    if let (Ok(real), Ok(root_real)) = (full.canonicalize(), root.canonicalize()) {
-        if !real.starts_with(&root_real) {
-            return Err(format!(
-                "'{uri}' leads out of the asset's folder through a symbolic link: not read"
-            ));
-        }
-    }
-    Ok(full)
-}
-
 /// Parses a size such as `512M`, `2G`, `100000` (bytes; K, M, G, T are powers of 1024).
 pub fn parse_size(text: &str) -> Result<u64, String> {
     let t = text.trim();
@@ -626,21 +566,6 @@ mod tests {
         assert_eq!(parse_range("0.5..2"), Ok((0.5, 2.0)));
         assert_eq!(parse_range("1..").map(|r| r.0), Ok(1.0));
         assert!(parse_range("2..1").is_err());
-    }
-
-    #[test]
-    fn paths_stay_inside() {
-        let base = Path::new("fixtures/gltf");
-        assert!(resolve_inside(base, base, "cube.bin", false).is_ok());
-        assert!(resolve_inside(base, base, "../gltf/cube.bin", false).is_ok());
-        assert!(resolve_inside(base, base, "../../Cargo.toml", false).is_err());
-        assert!(resolve_inside(base, base, "/etc/passwd", false).is_err());
-        assert!(resolve_inside(base, base, "a/../../x", false).is_err());
-        assert!(resolve_inside(base, base, "/etc/passwd", true).is_ok());
-        // A wider tree lets a file reach its siblings.
-        let root = Path::new("fixtures");
-        assert!(resolve_inside(base, root, "../obj/x.obj", false).is_ok());
-        assert!(resolve_inside(base, root, "../../Cargo.toml", false).is_err());
     }
 
     #[test]

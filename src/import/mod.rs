@@ -2,6 +2,7 @@
 
 pub mod gltf;
 pub mod obj;
+pub mod paths;
 pub mod usd;
 
 use crate::error::{Error, Result};
@@ -14,6 +15,10 @@ use std::path::Path;
 pub struct LoadOptions {
     /// glTF scene to load, by index or name; `None` for the file's default scene.
     pub scene: Option<String>,
+    /// The folder tree external files must stay in (`--root`); `None`: the asset's folder.
+    pub root: Option<std::path::PathBuf>,
+    /// Read external files wherever they are (`--allow-outside`).
+    pub allow_outside: bool,
 }
 
 /// Loads a `.gltf`, `.glb` or `.obj` file, choosing the importer by extension.

@@ -1,0 +1,219 @@
+//! Buffers, buffer views and images: the rules beyond what the document layer reports while
+//! reading them (it reports URIs, data: URIs, missing files and byte lengths shorter than
+//! declared). Images are never decoded; their first bytes are sniffed.
+
+use super::Walker;
+use crate::import::gltf::buffers::{resolve, Resource};
+use crate::import::gltf::document::index_of;
+use serde_json::Value;
+use std::io::Read;
+
+impl Walker<'_, '_> {
+    /// Rules on buffers that the layer does not need: a zero byteLength, a BIN chunk much
+    /// longer than its buffer.
+    pub(super) fn buffers(&mut self) {
+        for (i, buffer) in self.list("buffers").iter().enumerate() {
+            let at = format!("/buffers/{i}");
+            let declared = buffer.get("byteLength").and_then(Value::as_u64);
+            if declared == Some(0) {
+                self.f.error(
+                    "VALUE_NOT_IN_RANGE",
+                    format!("{at}/byteLength"),
+                    "must be at least 1",
+                );
+            }
+            let uses_bin = self.doc.is_glb && i == 0 && buffer.get("uri").is_none();
+            if let (true, Some(bin), Some(declared)) = (uses_bin, self.doc.bin_chunk(), declared) {
+                if bin.len() as u64 > declared + 3 {
+                    self.f.warn(
+                        "BUFFER_GLB_CHUNK_TOO_BIG",
+                        at,
+                        format!(
+                            "the BIN chunk has {} bytes for a {declared}-byte buffer",
+                            bin.len()
+                        ),
+                    );
+                }
+            }
+        }
+    }
+
+    /// Lengths, offsets and strides of buffer views against their buffers.
+    pub(super) fn buffer_views(&mut self) {
+        let views = self.list("bufferViews");
+        for (i, view) in views.iter().enumerate() {
+            let at = format!("/bufferViews/{i}");
+            let length = view.get("byteLength").and_then(Value::as_u64);
+            if length == Some(0) {
+                self.f.error(
+                    "VALUE_NOT_IN_RANGE",
+                    format!("{at}/byteLength"),
+                    "must be at least 1",
+                );
+            }
+            let offset = view.get("byteOffset").and_then(Value::as_u64).unwrap_or(0);
+            if let (Some(length), Some(buffer)) = (length, index_of(view, "buffer")) {
+                if let Some(declared) = self
+                    .list("buffers")
+                    .get(buffer)
+                    .and_then(|b| b.get("byteLength"))
+                    .and_then(Value::as_u64)
+                {
+                    if offset.checked_add(length).is_none_or(|end| end > declared) {
+                        self.f.error(
+                            "BUFFER_VIEW_TOO_LONG",
+                            format!("{at}/byteLength"),
+                            format!(
+                                "bytes {offset}..{} do not fit buffer {buffer} of {declared} bytes",
+                                offset.saturating_add(length)
+                            ),
+                        );
+                    }
+                }
+            }
+            if let Some(stride) = view.get("byteStride").and_then(Value::as_u64) {
+                let sat = format!("{at}/byteStride");
+                if !(4..=252).contains(&stride) {
+                    self.f.error(
+                        "VALUE_NOT_IN_RANGE",
+                        sat.clone(),
+                        format!("byteStride {stride} is not in 4..252"),
+                    );
+                } else if stride % 4 != 0 {
+                    self.f.error(
+                        "VALUE_MULTIPLE_OF",
+                        sat.clone(),
+                        format!("byteStride {stride} is not a multiple of 4"),
+                    );
+                }
+                if length.is_some_and(|l| stride > l) {
+                    self.f.error(
+                        "BUFFER_VIEW_TOO_BIG_BYTE_STRIDE",
+                        sat.clone(),
+                        "byteStride is larger than the view",
+                    );
+                }
+                if view.get("target").and_then(Value::as_u64) == Some(34963) {
+                    self.f.error(
+                        "BUFFER_VIEW_INVALID_BYTE_STRIDE",
+                        sat,
+                        "an index buffer view cannot have a byteStride",
+                    );
+                }
+            }
+        }
+    }
+
+    /// Images: where their URIs lead (the layer's path rule) and what their bytes look like.
+    pub(super) fn images(&mut self) {
+        for (i, image) in self.list("images").iter().enumerate() {
+            let at = format!("/images/{i}");
+            if let Some(uri) = image.get("uri").and_then(Value::as_str) {
+                if let Some(head) = self.image_head(uri, &format!("{at}/uri")) {
+                    self.image_bytes(&head, &at);
+                }
+            }
+            let Some(view) = index_of(image, "bufferView") else {
+                continue;
+            };
+            if image.get("mimeType").is_none() {
+                self.f.error(
+                    "UNSATISFIED_DEPENDENCY",
+                    format!("{at}/mimeType"),
+                    "an image in a buffer view needs a mimeType",
+                );
+            }
+            if self
+                .list("bufferViews")
+                .get(view)
+                .is_some_and(|v| v.get("byteStride").is_some())
+            {
+                self.f.error(
+                    "IMAGE_BUFFER_VIEW_WITH_BYTESTRIDE",
+                    format!("{at}/bufferView"),
+                    "an image's buffer view has a byteStride",
+                );
+            }
+            if let Ok(data) = self.doc.view_bytes(view) {
+                self.image_bytes(data, &at);
+            }
+        }
+    }
+
+    /// The first bytes of an image named by `uri` (embedded or a file under the path rule).
+    fn image_head(&mut self, uri: &str, at: &str) -> Option<Vec<u8>> {
+        let resources = self.resources.clone();
+        let mut sink = super::Collect {
+            f: self.f,
+            too_large: false,
+        };
+        match resolve(uri, at, &resources, &mut sink)? {
+            Resource::Data { mime, bytes } => {
+                if !matches!(
+                    mime.as_str(),
+                    "image/png" | "image/jpeg" | "image/webp" | "image/ktx2"
+                ) {
+                    self.f.error(
+                        "IMAGE_MIME_TYPE_INVALID",
+                        at,
+                        format!("image data: URI has media type '{mime}'"),
+                    );
+                }
+                Some(bytes)
+            }
+            Resource::File(path, decoded) => {
+                let mut head = Vec::new();
+                let read = std::fs::File::open(&path)
+                    .and_then(|file| file.take(64).read_to_end(&mut head));
+                if read.is_err() || !path.is_file() {
+                    // Images are never read by raycast: a missing one is a warning.
+                    self.f.warn(
+                        "IO_ERROR",
+                        at,
+                        format!("image file '{decoded}' cannot be found"),
+                    );
+                    return None;
+                }
+                Some(head)
+            }
+        }
+    }
+
+    /// Sniffs embedded image data (it is never decoded).
+    fn image_bytes(&mut self, data: &[u8], at: &str) {
+        const PNG: &[u8] = b"\x89PNG\r\n\x1a\n";
+        if data.starts_with(PNG) {
+            if data.len() < 33 && data.len() < 64 {
+                self.f.error(
+                    "IMAGE_UNEXPECTED_EOS",
+                    at.to_string(),
+                    "the PNG data ends early",
+                );
+            } else if &data[12..16] != b"IHDR" {
+                self.f.error(
+                    "IMAGE_DATA_INVALID",
+                    at.to_string(),
+                    "the PNG data has no IHDR chunk",
+                );
+            }
+        } else if data.starts_with(&[0xFF, 0xD8]) {
+            if data.len() < 4 {
+                self.f.error(
+                    "IMAGE_UNEXPECTED_EOS",
+                    at.to_string(),
+                    "the JPEG data ends early",
+                );
+            }
+        } else if data.len() >= 4 && &data[..4] == b"RIFF" || data.starts_with(b"\xABKTX") {
+        } else if data.len() >= 8 && data[..8].starts_with(&PNG[..4]) {
+            self.f
+                .error("IMAGE_DATA_INVALID", at.to_string(), "broken PNG signature");
+        } else {
+            self.f.warn(
+                "IMAGE_UNRECOGNIZED_FORMAT",
+                at.to_string(),
+                "not PNG, JPEG, WebP or KTX2 data",
+            );
+        }
+    }
+}

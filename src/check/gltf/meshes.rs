@@ -1,0 +1,452 @@
+//! Meshes and primitives: attribute semantics and formats, morph targets, indices, modes,
+//! and how buffer views are shared between vertices and indices.
+
+use super::Walker;
+use crate::import::gltf::accessor::Layout;
+use crate::import::gltf::document::{array, escape, index_of};
+use serde_json::Value;
+use std::collections::{HashMap, HashSet};
+
+impl Walker<'_, '_> {
+    pub(super) fn meshes(&mut self) {
+        let meshes = self.list("meshes");
+        let quantized = self
+            .list("extensionsUsed")
+            .iter()
+            .any(|e| e.as_str() == Some("KHR_mesh_quantization"));
+        let mut vertex_views: HashMap<usize, usize> = HashMap::new();
+        let mut index_views: HashSet<usize> = HashSet::new();
+        for (m, mesh) in meshes.iter().enumerate() {
+            let prims = array(mesh, "primitives");
+            let mut targets_count = None;
+            for (p, prim) in prims.iter().enumerate() {
+                let at = format!("/meshes/{m}/primitives/{p}");
+                let empty = serde_json::Map::new();
+                let attributes = prim
+                    .get("attributes")
+                    .and_then(Value::as_object)
+                    .unwrap_or(&empty);
+                let mut count = None;
+                let mut sets: HashMap<&str, Vec<usize>> = HashMap::new();
+                for (name, acc) in attributes {
+                    let aat = format!("{at}/attributes/{}", escape(name));
+                    let semantic = name.split_once('_').filter(|(base, n)| {
+                        matches!(*base, "TEXCOORD" | "COLOR" | "JOINTS" | "WEIGHTS")
+                            && !n.is_empty()
+                            && n.bytes().all(|c| c.is_ascii_digit())
+                            && (n.len() == 1 || !n.starts_with('0'))
+                    });
+                    if let Some((base, n)) = semantic {
+                        if let Ok(n) = n.parse::<usize>() {
+                            let base = match base {
+                                "TEXCOORD" => "TEXCOORD",
+                                "COLOR" => "COLOR",
+                                "JOINTS" => "JOINTS",
+                                _ => "WEIGHTS",
+                            };
+                            sets.entry(base).or_default().push(n);
+                        }
+                    } else if !matches!(name.as_str(), "POSITION" | "NORMAL" | "TANGENT")
+                        && !name.starts_with('_')
+                    {
+                        self.f.error(
+                            "MESH_PRIMITIVE_INVALID_ATTRIBUTE",
+                            aat.clone(),
+                            format!("'{name}' is not a valid attribute semantic"),
+                        );
+                    }
+                    let Some(acc) = acc.as_u64().and_then(|a| usize::try_from(a).ok()) else {
+                        continue;
+                    };
+                    let Some(layout) = self.layout(acc) else {
+                        continue;
+                    };
+                    if count.is_some_and(|c| c != layout.count) {
+                        self.f.error(
+                            "MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT",
+                            aat.clone(),
+                            "attribute accessors have different counts",
+                        );
+                    }
+                    count.get_or_insert(layout.count);
+                    if layout.component == 5125 {
+                        self.f.error(
+                            "MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_UNSIGNED_INT",
+                            aat.clone(),
+                            "vertex attributes cannot be UNSIGNED_INT",
+                        );
+                    }
+                    let float_vec = |n: usize| layout.comps == n && layout.rows.is_none();
+                    let format_ok = match name.as_str() {
+                        "POSITION" => float_vec(3) && (layout.component == 5126 || quantized),
+                        "NORMAL" => float_vec(3) && (layout.component == 5126 || quantized),
+                        "TANGENT" => float_vec(4) && (layout.component == 5126 || quantized),
+                        _ => true,
+                    };
+                    if !format_ok {
+                        self.f.error(
+                            "MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT",
+                            aat.clone(),
+                            format!("invalid accessor format for {name}"),
+                        );
+                    }
+                    let acc_json = &self.list("accessors")[acc];
+                    if name == "POSITION"
+                        && (acc_json.get("min").is_none() || acc_json.get("max").is_none())
+                    {
+                        self.f.error(
+                            "MESH_PRIMITIVE_POSITION_ACCESSOR_WITHOUT_BOUNDS",
+                            aat.clone(),
+                            "POSITION accessors must have min and max",
+                        );
+                    }
+                    if let Some(view_index) = index_of(acc_json, "bufferView") {
+                        *vertex_views.entry(view_index).or_insert(0) += 1;
+                        if let Some(view) = self.view_of(acc) {
+                            let total = index_of(view, "byteOffset").unwrap_or(0)
+                                + index_of(acc_json, "byteOffset").unwrap_or(0);
+                            if !total.is_multiple_of(4) {
+                                self.f.error(
+                                    "MESH_PRIMITIVE_ACCESSOR_UNALIGNED",
+                                    aat.clone(),
+                                    "vertex attribute data must start on a 4-byte boundary",
+                                );
+                            }
+                            if view.get("target").and_then(Value::as_u64) == Some(34963) {
+                                self.f.error(
+                                    "BUFFER_VIEW_TARGET_OVERRIDE",
+                                    aat.clone(),
+                                    "an index buffer view is used for vertex data",
+                                );
+                            }
+                        }
+                    }
+                    self.attribute_data(name, acc, &layout, &aat);
+                }
+                for (base, mut ns) in sets {
+                    ns.sort_unstable();
+                    if ns.iter().enumerate().any(|(i, &n)| i != n) {
+                        self.f.error(
+                            "MESH_PRIMITIVE_INDEXED_SEMANTIC_CONTINUITY",
+                            format!("{at}/attributes"),
+                            format!("{base}_n sets are not numbered 0, 1, 2, ..."),
+                        );
+                    }
+                }
+                let has = |k: &str| attributes.contains_key(k);
+                let joints = attributes
+                    .keys()
+                    .filter(|k| k.starts_with("JOINTS_"))
+                    .count();
+                let weights = attributes
+                    .keys()
+                    .filter(|k| k.starts_with("WEIGHTS_"))
+                    .count();
+                if joints != weights {
+                    self.f.error(
+                        "MESH_PRIMITIVE_JOINTS_WEIGHTS_MISMATCH",
+                        format!("{at}/attributes"),
+                        "JOINTS_n and WEIGHTS_n come in pairs",
+                    );
+                }
+                if !has("POSITION") {
+                    self.f.warn(
+                        "MESH_PRIMITIVE_NO_POSITION",
+                        format!("{at}/attributes"),
+                        "no POSITION: nothing is drawn",
+                    );
+                }
+                if has("TANGENT") && !has("NORMAL") {
+                    self.f.warn(
+                        "MESH_PRIMITIVE_TANGENT_WITHOUT_NORMAL",
+                        format!("{at}/attributes"),
+                        "TANGENT without NORMAL",
+                    );
+                }
+                let texcoords = attributes
+                    .keys()
+                    .filter(|k| k.starts_with("TEXCOORD_"))
+                    .count();
+                if let Some(material) =
+                    index_of(prim, "material").and_then(|i| self.list("materials").get(i))
+                {
+                    let needed = max_tex_coord(material);
+                    if needed.is_some_and(|n| n >= texcoords) {
+                        self.f.error(
+                            "MESH_PRIMITIVE_TOO_FEW_TEXCOORDS",
+                            at.clone(),
+                            "the material reads a TEXCOORD set the primitive does not have",
+                        );
+                    }
+                }
+                let mode = index_of(prim, "mode").unwrap_or(4) as u64;
+                if let Some(indices) = index_of(prim, "indices") {
+                    if let Some(view) = self
+                        .list("accessors")
+                        .get(indices)
+                        .and_then(|a| index_of(a, "bufferView"))
+                    {
+                        index_views.insert(view);
+                    }
+                    self.indices(indices, count, mode, &format!("{at}/indices"));
+                } else if let Some(count) = count {
+                    self.mode_count(mode, count, &at);
+                }
+                let targets = array(prim, "targets");
+                if targets_count.is_some_and(|t| t != targets.len()) {
+                    self.f.error(
+                        "MESH_PRIMITIVES_UNEQUAL_TARGETS_COUNT",
+                        format!("{at}/targets"),
+                        "primitives of a mesh have different numbers of morph targets",
+                    );
+                }
+                targets_count.get_or_insert(targets.len());
+                for (t, target) in targets.iter().enumerate() {
+                    let Some(target) = target.as_object() else {
+                        continue;
+                    };
+                    for (name, acc) in target {
+                        let tat = format!("{at}/targets/{t}/{}", escape(name));
+                        if !attributes.contains_key(name) {
+                            self.f.error(
+                                "MESH_PRIMITIVE_MORPH_TARGET_NO_BASE_ACCESSOR",
+                                tat.clone(),
+                                format!("morph target {name} has no base attribute"),
+                            );
+                        }
+                        let Some(acc) = acc.as_u64().and_then(|a| usize::try_from(a).ok()) else {
+                            continue;
+                        };
+                        if let Some(layout) = self.layout(acc) {
+                            if count.is_some_and(|c| c != layout.count) {
+                                self.f.error(
+                                    "MESH_PRIMITIVE_MORPH_TARGET_INVALID_ATTRIBUTE_COUNT",
+                                    tat.clone(),
+                                    "morph target accessor count differs from the base",
+                                );
+                            }
+                        }
+                        let acc_json = self.list("accessors").get(acc).unwrap_or(&Value::Null);
+                        if name == "POSITION"
+                            && (acc_json.get("min").is_none() || acc_json.get("max").is_none())
+                        {
+                            self.f.error(
+                                "MESH_PRIMITIVE_POSITION_ACCESSOR_WITHOUT_BOUNDS",
+                                tat.clone(),
+                                "morph POSITION accessors must have min and max",
+                            );
+                        }
+                        if let Some(view) = self.view_of(acc) {
+                            if view.get("target").and_then(Value::as_u64) == Some(34963) {
+                                self.f.error(
+                                    "BUFFER_VIEW_TARGET_OVERRIDE",
+                                    tat.clone(),
+                                    "an index buffer view is used for vertex data",
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+            if let (Some(weights), Some(targets)) =
+                (mesh.get("weights").and_then(Value::as_array), targets_count)
+            {
+                if weights.len() != targets {
+                    self.f.error(
+                        "MESH_INVALID_WEIGHTS_COUNT",
+                        format!("/meshes/{m}/weights"),
+                        format!("{} weights for {targets} morph targets", weights.len()),
+                    );
+                }
+            }
+        }
+        for (view, users) in vertex_views {
+            let Some(v) = self.list("bufferViews").get(view) else {
+                continue;
+            };
+            if users > 1 && v.get("byteStride").is_none() {
+                self.f.error(
+                    "MESH_PRIMITIVE_ACCESSOR_WITHOUT_BYTESTRIDE",
+                    format!("/bufferViews/{view}"),
+                    "a buffer view shared by vertex attributes needs a byteStride",
+                );
+            }
+            if index_views.contains(&view)
+                || v.get("target").and_then(Value::as_u64) == Some(34963) && users > 0
+            {
+                self.f.error(
+                    "BUFFER_VIEW_TARGET_OVERRIDE",
+                    format!("/bufferViews/{view}"),
+                    "the view is used both for vertices and for indices",
+                );
+            }
+        }
+        for view in index_views {
+            if let Some(v) = self.list("bufferViews").get(view) {
+                if v.get("target").and_then(Value::as_u64) == Some(34962) {
+                    self.f.error(
+                        "BUFFER_VIEW_TARGET_OVERRIDE",
+                        format!("/bufferViews/{view}"),
+                        "a vertex buffer view is used for indices",
+                    );
+                }
+            }
+        }
+    }
+
+    /// Value checks on normals, tangents, colours and skin weights.
+    fn attribute_data(&mut self, name: &str, acc: usize, layout: &Layout, at: &str) {
+        if layout.component != 5126 {
+            return;
+        }
+        let check = |n: &str| name == n || name.starts_with(&format!("{n}_"));
+        if !(check("NORMAL") || check("TANGENT") || check("COLOR") || check("WEIGHTS")) {
+            return;
+        }
+        let Some(values) = self.values(acc) else {
+            return;
+        };
+        let comps = layout.comps;
+        for (e, v) in values.chunks_exact(comps).enumerate() {
+            let problem = if name == "NORMAL" || name == "TANGENT" {
+                let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                if (len - 1.0).abs() > 5e-4 {
+                    Some((
+                        "ACCESSOR_VECTOR3_NON_UNIT",
+                        format!("element {e} has length {len}"),
+                    ))
+                } else if name == "TANGENT" && comps == 4 && v[3] != 1.0 && v[3] != -1.0 {
+                    Some((
+                        "ACCESSOR_INVALID_SIGN",
+                        format!("element {e} has w = {}", v[3]),
+                    ))
+                } else {
+                    None
+                }
+            } else if check("COLOR") {
+                v.iter().any(|c| !(0.0..=1.0).contains(c)).then(|| {
+                    (
+                        "ACCESSOR_NON_CLAMPED",
+                        format!("element {e} is outside [0, 1]"),
+                    )
+                })
+            } else if v.iter().any(|w| *w < 0.0) {
+                Some((
+                    "ACCESSOR_WEIGHTS_NEGATIVE",
+                    format!("element {e} has a negative weight"),
+                ))
+            } else {
+                None
+            };
+            if let Some((code, message)) = problem {
+                self.f.error(code, at.to_string(), message);
+                return;
+            }
+        }
+        if check("WEIGHTS") && name == "WEIGHTS_0" {
+            let sum_ok = values
+                .chunks_exact(comps)
+                .all(|v| (v.iter().sum::<f64>() - 1.0).abs() <= 2e-3 || comps != 4);
+            if !sum_ok {
+                self.f.error(
+                    "ACCESSOR_WEIGHTS_NON_NORMALIZED",
+                    at.to_string(),
+                    "skin weights do not add up to 1",
+                );
+            }
+        }
+    }
+
+    fn mode_count(&mut self, mode: u64, count: usize, at: &str) {
+        let bad = match mode {
+            4 => !count.is_multiple_of(3),
+            5 | 6 => count < 3,
+            1 => !count.is_multiple_of(2),
+            3 => count < 2,
+            2 => count < 2,
+            _ => false,
+        };
+        if bad {
+            self.f.warn(
+                "MESH_PRIMITIVE_INCOMPATIBLE_MODE",
+                at.to_string(),
+                format!("{count} vertices do not make whole primitives of mode {mode}"),
+            );
+        }
+    }
+
+    fn indices(&mut self, indices: usize, vertices: Option<usize>, mode: u64, at: &str) {
+        let Some(layout) = self.layout(indices) else {
+            return;
+        };
+        if layout.comps != 1 || !matches!(layout.component, 5121 | 5123 | 5125) {
+            self.f.error(
+                "MESH_PRIMITIVE_INDICES_ACCESSOR_INVALID_FORMAT",
+                at.to_string(),
+                "indices must be SCALAR unsigned integers",
+            );
+            return;
+        }
+        if let Some(view) = self.view_of(indices) {
+            if view.get("byteStride").is_some() {
+                self.f.error(
+                    "MESH_PRIMITIVE_INDICES_ACCESSOR_WITH_BYTESTRIDE",
+                    at.to_string(),
+                    "the indices' buffer view has a byteStride",
+                );
+            }
+        }
+        self.mode_count(mode, layout.count, at);
+        let Some(values) = self.values(indices) else {
+            return;
+        };
+        let restart = match layout.component {
+            5121 => 255.0,
+            5123 => 65535.0,
+            _ => 4294967295.0,
+        };
+        let mut oob = 0usize;
+        let mut first_oob = None;
+        let mut restarts = 0usize;
+        for &v in values.iter() {
+            if v == restart {
+                restarts += 1;
+            } else if vertices.is_some_and(|n| v as usize >= n) {
+                oob += 1;
+                first_oob.get_or_insert(v);
+            }
+        }
+        if restarts > 0 {
+            self.f.error(
+                "ACCESSOR_INDEX_PRIMITIVE_RESTART",
+                format!("/accessors/{indices}"),
+                format!("{restarts} indices hold the primitive restart value {restart}"),
+            );
+        }
+        if let (Some(first), Some(n)) = (first_oob, vertices) {
+            self.f.error(
+                "ACCESSOR_INDEX_OOB",
+                format!("/accessors/{indices}"),
+                format!("{oob} indices out of range (first: {first}; {n} vertices)"),
+            );
+        }
+    }
+}
+
+/// The largest `texCoord` a material's textures read, if any.
+fn max_tex_coord(v: &Value) -> Option<usize> {
+    match v {
+        Value::Object(map) => {
+            let here = map
+                .get("index")
+                .filter(|_| map.len() <= 4)
+                .map(|_| index_of(v, "texCoord").unwrap_or(0));
+            map.iter()
+                .filter(|(k, _)| *k != "extras")
+                .filter_map(|(_, x)| max_tex_coord(x))
+                .chain(here)
+                .max()
+        }
+        _ => None,
+    }
+}

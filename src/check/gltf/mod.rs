@@ -1,0 +1,279 @@
+//! `raycast check` for glTF: the document layer ([`crate::import::gltf`]) read collect-all,
+//! then the rules only a validator needs, one file per part of the document.
+//!
+//! The file is parsed once: the layer's [`Document`] reports container, JSON, URI and
+//! buffer problems into the findings, the walker below adds the validator's rules working on
+//! the raw JSON (so one bad property does not hide the others), and the scene is built from
+//! the same document by the importer's own code ([`scene::build`]). So `check` and the
+//! renderer agree on what loads, by construction. The `gltf` crate's reference validation
+//! runs beside it where the crate can read the file.
+//!
+//! Codes are the Khronos glTF-Validator's where the meaning is the same.
+
+mod accessors;
+mod animations;
+mod buffers;
+mod meshes;
+mod nodes;
+mod schema;
+mod skins;
+
+use super::{CheckOptions, Findings, Severity};
+use crate::import::gltf::accessor::Layout;
+use crate::import::gltf::buffers::Resources;
+use crate::import::gltf::document::index_of;
+use crate::import::gltf::{self as layer, scene, Diagnostic, Document, Sink};
+use crate::scene::Scene;
+use serde_json::{Map, Value};
+use std::collections::HashMap;
+use std::path::Path;
+use std::rc::Rc;
+
+/// Deepest node hierarchy walked.
+pub const MAX_NODE_DEPTH: usize = 1024;
+
+/// Bytes of memory one triangle costs the importer and the scene (f64 while building, f32
+/// stored, object table), used to estimate what an asset will allocate.
+const BYTES_PER_TRIANGLE: u64 = 128;
+
+/// The findings as the document layer's sink. Remembers whether the layer refused to read
+/// something for its size, which stops the scene from being built.
+struct Collect<'f> {
+    f: &'f mut Findings,
+    too_large: bool,
+}
+
+impl Sink for Collect<'_> {
+    fn push(&mut self, d: Diagnostic) {
+        let severity = match d.severity {
+            layer::Severity::Error => Severity::Error,
+            layer::Severity::Warning => Severity::Warning,
+            layer::Severity::Info => Severity::Info,
+        };
+        self.too_large |= d.code == "ASSET_TOO_LARGE";
+        self.f.push(severity, d.code, d.pointer, d.message);
+    }
+}
+
+/// Checks a `.gltf` or `.glb` file held in `bytes`, external files confined to the folder
+/// tree `tree_root`. Returns the scene the importer builds from it, or `None` when it is not
+/// built (no JSON to read, or more than the memory limit).
+pub fn check(
+    path: &Path,
+    tree_root: &Path,
+    bytes: Vec<u8>,
+    options: &CheckOptions,
+    f: &mut Findings,
+) -> Option<crate::Result<Scene>> {
+    let mut sink = Collect {
+        f,
+        too_large: false,
+    };
+    let mut doc = Document::parse(bytes, layer::is_glb_path(path), &mut sink)?;
+    let base = crate::import::paths::folder_of(path);
+    let resources = Resources {
+        base: &base,
+        root: tree_root,
+        allow_outside: options.allow_outside,
+        max_bytes: options.max_bytes,
+    };
+    doc.load_buffers(&resources, None, &mut sink);
+    doc.decode_views(&mut sink);
+    let too_large = sink.too_large;
+    crate_validation(&doc, f);
+    let mut walker = Walker {
+        doc: &doc,
+        root: doc.root(),
+        f,
+        options,
+        resources,
+        values: HashMap::new(),
+        importable: !too_large,
+    };
+    walker.run();
+    if !walker.importable {
+        return None;
+    }
+    Some(scene::build(&doc, None, path).map_err(|e| crate::Error::in_file(path, e.to_string())))
+}
+
+/// Runs the `gltf` crate's reference validation where the crate can read the file (it
+/// refuses some valid files; the walker covers what it would have said about them).
+fn crate_validation(doc: &Document, f: &mut Findings) {
+    use gltf::json::validation::{Error as VError, Validate};
+    let Ok(root) = serde_json::from_slice::<gltf::json::Root>(doc.json_text()) else {
+        return;
+    };
+    let dangling = dangling_positions(&root);
+    if !dangling.is_empty() {
+        for pointer in dangling {
+            f.error(
+                "UNRESOLVED_REFERENCE",
+                pointer,
+                "refers to an accessor that does not exist",
+            );
+        }
+        return;
+    }
+    let mut found = Vec::new();
+    root.validate(&root, gltf::json::Path::new, &mut |path, error| {
+        found.push((path().to_string(), error));
+    });
+    for (path, error) in found {
+        let pointer = json_pointer(&path);
+        match error {
+            VError::IndexOutOfBounds => f.error(
+                "UNRESOLVED_REFERENCE",
+                pointer,
+                "refers to an object that does not exist",
+            ),
+            VError::Invalid => f.warn("VALUE_NOT_IN_LIST", pointer, "invalid value"),
+            VError::Oversize => f.error("VALUE_NOT_IN_RANGE", pointer, "value too large"),
+            // The crate asks for properties the specification leaves optional; the walker
+            // checks the required ones itself.
+            VError::Missing | VError::Unsupported => {}
+        }
+    }
+}
+
+/// JSON pointers of POSITION attributes that name an accessor the file does not have. The
+/// `gltf` crate's validation panics on them, so they are checked before it runs.
+fn dangling_positions(root: &gltf::json::Root) -> Vec<String> {
+    let mut found = Vec::new();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(index) = primitive.attributes.get(&position) {
+                if index.value() >= root.accessors.len() {
+                    found.push(format!("/meshes/{m}/primitives/{p}/attributes/POSITION"));
+                }
+            }
+        }
+    }
+    found
+}
+
+/// `meshes[0].primitives[1].indices` -> `/meshes/0/primitives/1/indices`.
+fn json_pointer(path: &str) -> String {
+    let mut out = String::new();
+    for part in path.split(['.', '[']) {
+        let part = part.trim_end_matches(']');
+        if part.is_empty() {
+            continue;
+        }
+        out.push('/');
+        out.push_str(&part.replace('~', "~0").replace('/', "~1"));
+    }
+    out
+}
+
+/// A number for a message: plain when short, in scientific notation when plain would be
+/// long (`1e300`, not three hundred digits).
+fn readable(x: f64) -> String {
+    let plain = x.to_string();
+    if plain.len() <= 24 {
+        plain
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// The validator's walk over one document.
+struct Walker<'a, 'f> {
+    doc: &'a Document,
+    root: &'a Map<String, Value>,
+    f: &'f mut Findings,
+    options: &'a CheckOptions,
+    /// Where external files (images) may come from.
+    resources: Resources<'a>,
+    /// Decoded accessor values (sparse applied), by accessor index.
+    values: HashMap<usize, Option<Rc<Vec<f64>>>>,
+    /// False once the scene must not be built (too large).
+    importable: bool,
+}
+
+impl<'a> Walker<'a, '_> {
+    /// A top-level array of the document.
+    fn list(&self, key: &str) -> &'a [Value] {
+        self.doc.list(key)
+    }
+
+    fn run(&mut self) {
+        self.schema();
+        self.asset();
+        self.extension_lists();
+        self.buffers();
+        self.buffer_views();
+        self.accessors();
+        self.meshes();
+        let triangles = self.nodes_and_scenes();
+        self.cameras();
+        self.images();
+        self.animations();
+        self.skins();
+        let estimate = triangles.saturating_mul(BYTES_PER_TRIANGLE);
+        if estimate > self.options.max_bytes {
+            self.f.error(
+                "ASSET_TOO_LARGE",
+                "",
+                format!(
+                    "the scene expands to about {triangles} triangles (~{} MiB), more than the limit of {} MiB (--max-memory): not loaded",
+                    estimate >> 20,
+                    self.options.max_bytes >> 20
+                ),
+            );
+            self.importable = false;
+        }
+    }
+
+    /// The layout of accessor `accessor`, when it exists and is well formed.
+    fn layout(&self, accessor: usize) -> Option<Layout> {
+        Layout::of(self.list("accessors").get(accessor)?)
+    }
+
+    /// The buffer view JSON of accessor `accessor`.
+    fn view_of(&self, accessor: usize) -> Option<&'a Value> {
+        let view = index_of(self.list("accessors").get(accessor)?, "bufferView")?;
+        self.list("bufferViews").get(view)
+    }
+
+    /// Decodes an accessor with a buffer view (sparse applied), once. `None` when its data
+    /// cannot be read (the layout rules say why) or it has no buffer view (zeros are not
+    /// checked: the validator leaves them alone too).
+    fn values(&mut self, index: usize) -> Option<Rc<Vec<f64>>> {
+        if let Some(v) = self.values.get(&index) {
+            return v.clone();
+        }
+        let backed = self
+            .list("accessors")
+            .get(index)
+            .is_some_and(|a| a.get("bufferView").is_some());
+        let decoded = backed
+            .then(|| self.doc.accessor_values(index).ok())
+            .flatten()
+            .map(|(_, values)| Rc::new(values));
+        self.values.insert(index, decoded.clone());
+        decoded
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pointers() {
+        assert_eq!(
+            json_pointer("meshes[0].primitives[1].indices"),
+            "/meshes/0/primitives/1/indices"
+        );
+        assert_eq!(json_pointer("scene"), "/scene");
+    }
+
+    #[test]
+    fn long_numbers_are_readable() {
+        assert_eq!(readable(1e300), "1e300");
+        assert_eq!(readable(-2.5), "-2.5");
+        assert_eq!(readable(4294967296.0), "4294967296");
+    }
+}

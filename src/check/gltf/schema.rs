@@ -1,0 +1,352 @@
+//! Shape rules that need no meaning: collection types, empty arrays, required properties,
+//! integer properties, extension objects and lists, and the asset version.
+
+use super::{readable, Walker};
+use crate::import::gltf::can_honour_required;
+use crate::import::gltf::document::{array, as_index, escape};
+use serde_json::{Map, Value};
+use std::collections::HashSet;
+
+/// Properties that hold non-negative integers wherever they appear.
+const INTEGER_KEYS: &[&str] = &[
+    "buffer",
+    "bufferView",
+    "byteLength",
+    "byteOffset",
+    "byteStride",
+    "count",
+    "componentType",
+    "mesh",
+    "skin",
+    "camera",
+    "node",
+    "input",
+    "output",
+    "source",
+    "texCoord",
+    "scene",
+    "material",
+    "indices",
+    "mode",
+    "inverseBindMatrices",
+    "skeleton",
+];
+
+impl Walker<'_, '_> {
+    /// Shape checks that need no meaning: collection types, empty arrays, required
+    /// properties, extension objects.
+    pub(super) fn schema(&mut self) {
+        const COLLECTIONS: &[&str] = &[
+            "accessors",
+            "animations",
+            "buffers",
+            "bufferViews",
+            "cameras",
+            "images",
+            "materials",
+            "meshes",
+            "nodes",
+            "samplers",
+            "scenes",
+            "skins",
+            "textures",
+        ];
+        for &key in COLLECTIONS {
+            match self.root.get(key) {
+                None => {}
+                Some(Value::Array(items)) => {
+                    for (i, item) in items.iter().enumerate() {
+                        if !item.is_object() {
+                            self.f.error(
+                                "TYPE_MISMATCH",
+                                format!("/{key}/{i}"),
+                                "expected an object",
+                            );
+                        }
+                    }
+                }
+                Some(_) => self
+                    .f
+                    .error("TYPE_MISMATCH", format!("/{key}"), "expected an array"),
+            }
+        }
+        let declared: HashSet<&str> = self.doc.extension_names("extensionsUsed").collect();
+        self.tree_object(self.root, "", &declared);
+        match self.root.get("asset") {
+            None => self.f.error(
+                "UNDEFINED_PROPERTY",
+                "/asset",
+                "the asset property is missing",
+            ),
+            Some(asset) if !asset.is_object() => {
+                self.f
+                    .error("TYPE_MISMATCH", "/asset", "expected an object")
+            }
+            Some(asset) => self.required(asset, "/asset", &["version"]),
+        }
+        let required: &[(&str, &[&str])] = &[
+            ("accessors", &["componentType", "count", "type"]),
+            ("animations", &["channels", "samplers"]),
+            ("buffers", &["byteLength"]),
+            ("bufferViews", &["buffer", "byteLength"]),
+            ("cameras", &["type"]),
+            ("meshes", &["primitives"]),
+            ("skins", &["joints"]),
+        ];
+        for &(key, props) in required {
+            for (i, item) in self.list(key).iter().enumerate() {
+                self.required(item, &format!("/{key}/{i}"), props);
+            }
+        }
+        for (i, mesh) in self.list("meshes").iter().enumerate() {
+            for (j, prim) in array(mesh, "primitives").iter().enumerate() {
+                let at = format!("/meshes/{i}/primitives/{j}");
+                self.required(prim, &at, &["attributes"]);
+                if prim
+                    .get("attributes")
+                    .and_then(Value::as_object)
+                    .is_some_and(Map::is_empty)
+                {
+                    self.f
+                        .error("EMPTY_ENTITY", format!("{at}/attributes"), "no attributes");
+                }
+            }
+        }
+        for (i, anim) in self.list("animations").iter().enumerate() {
+            for (j, channel) in array(anim, "channels").iter().enumerate() {
+                let at = format!("/animations/{i}/channels/{j}");
+                self.required(channel, &at, &["sampler", "target"]);
+                if let Some(target) = channel.get("target") {
+                    self.required(target, &format!("{at}/target"), &["path"]);
+                }
+            }
+            for (j, sampler) in array(anim, "samplers").iter().enumerate() {
+                let at = format!("/animations/{i}/samplers/{j}");
+                self.required(sampler, &at, &["input", "output"]);
+            }
+        }
+        for (i, acc) in self.list("accessors").iter().enumerate() {
+            if let Some(sparse) = acc.get("sparse") {
+                let at = format!("/accessors/{i}/sparse");
+                self.required(sparse, &at, &["count", "indices", "values"]);
+                if let Some(ind) = sparse.get("indices") {
+                    self.required(
+                        ind,
+                        &format!("{at}/indices"),
+                        &["bufferView", "componentType"],
+                    );
+                }
+                if let Some(val) = sparse.get("values") {
+                    self.required(val, &format!("{at}/values"), &["bufferView"]);
+                }
+            }
+        }
+        for (i, image) in self.list("images").iter().enumerate() {
+            let has_uri = image.get("uri").is_some();
+            let has_view = image.get("bufferView").is_some();
+            if has_uri == has_view {
+                self.f.error(
+                    "ONE_OF_MISMATCH",
+                    format!("/images/{i}"),
+                    "an image needs exactly one of uri and bufferView",
+                );
+            }
+        }
+    }
+
+    fn required(&mut self, item: &Value, at: &str, props: &[&str]) {
+        let Some(obj) = item.as_object() else {
+            return;
+        };
+        for prop in props {
+            if !obj.contains_key(*prop) {
+                self.f.error(
+                    "UNDEFINED_PROPERTY",
+                    format!("{at}/{prop}"),
+                    format!("property '{prop}' must be defined"),
+                );
+            }
+        }
+    }
+
+    /// Empty arrays, integers out of range, and `extensions` objects with undeclared names,
+    /// anywhere but in extras.
+    fn tree(&mut self, v: &Value, at: &str, declared: &HashSet<&str>) {
+        match v {
+            Value::Array(items) => {
+                if items.is_empty() {
+                    self.f.error("EMPTY_ENTITY", at, "an empty array");
+                }
+                for (i, item) in items.iter().enumerate() {
+                    self.tree(item, &format!("{at}/{i}"), declared);
+                }
+            }
+            Value::Object(map) => self.tree_object(map, at, declared),
+            _ => {}
+        }
+    }
+
+    /// [`Walker::tree`] for the members of one object.
+    fn tree_object(&mut self, map: &Map<String, Value>, at: &str, declared: &HashSet<&str>) {
+        for (key, item) in map {
+            let here = format!("{at}/{}", escape(key));
+            if key == "extras" {
+                continue;
+            }
+            if INTEGER_KEYS.contains(&key.as_str()) && as_index(item).is_none() {
+                if let Some(x) = item.as_f64() {
+                    self.f.error(
+                        "VALUE_NOT_IN_RANGE",
+                        here.clone(),
+                        format!("{} is not a valid non-negative integer", readable(x)),
+                    );
+                }
+            }
+            if key != "extensions" {
+                self.tree(item, &here, declared);
+                continue;
+            }
+            let Some(extensions) = item.as_object() else {
+                self.f.error("TYPE_MISMATCH", here, "expected an object");
+                continue;
+            };
+            for (name, ext) in extensions {
+                let ext_at = format!("{here}/{}", escape(name));
+                if !declared.contains(name.as_str()) {
+                    self.f.error(
+                        "UNDECLARED_EXTENSION",
+                        ext_at.clone(),
+                        format!("extension '{name}' is not in extensionsUsed"),
+                    );
+                }
+                if !ext.is_object() {
+                    self.f.error(
+                        "TYPE_MISMATCH",
+                        ext_at.clone(),
+                        "an extension must be an object",
+                    );
+                }
+                self.tree(ext, &ext_at, declared);
+            }
+        }
+    }
+
+    pub(super) fn asset(&mut self) {
+        let Some(asset) = self.root.get("asset") else {
+            return;
+        };
+        let parse = |v: Option<&Value>| -> Option<Option<(u64, u64)>> {
+            let v = v?;
+            Some(v.as_str().and_then(|t| {
+                let (a, b) = t.split_once('.')?;
+                let ok = |s: &str| !s.is_empty() && s.bytes().all(|c| c.is_ascii_digit());
+                if !(ok(a) && ok(b)) {
+                    return None;
+                }
+                Some((a.parse().ok()?, b.parse().ok()?))
+            }))
+        };
+        let version = match parse(asset.get("version")) {
+            None => None,
+            Some(None) => {
+                self.f.error(
+                    "PATTERN_MISMATCH",
+                    "/asset/version",
+                    "the version must look like MAJOR.MINOR",
+                );
+                None
+            }
+            Some(Some(v)) => Some(v),
+        };
+        if let Some((major, minor)) = version {
+            if major != 2 {
+                self.f.error(
+                    "UNKNOWN_ASSET_MAJOR_VERSION",
+                    "/asset/version",
+                    format!("glTF {major}.{minor} is not glTF 2"),
+                );
+            } else if minor > 0 {
+                self.f.warn(
+                    "UNKNOWN_ASSET_MINOR_VERSION",
+                    "/asset/version",
+                    format!("glTF 2.{minor} is newer than 2.0"),
+                );
+            }
+        }
+        match (parse(asset.get("minVersion")), version) {
+            (Some(None), _) => self.f.error(
+                "PATTERN_MISMATCH",
+                "/asset/minVersion",
+                "minVersion must look like MAJOR.MINOR",
+            ),
+            (Some(Some(min)), Some(version)) if min > version => self.f.error(
+                "ASSET_MIN_VERSION_GREATER_THAN_VERSION",
+                "/asset/minVersion",
+                "minVersion is greater than version",
+            ),
+            _ => {}
+        }
+    }
+
+    pub(super) fn extension_lists(&mut self) {
+        let names = |key: &str| -> Vec<String> {
+            self.list(key)
+                .iter()
+                .filter_map(Value::as_str)
+                .map(String::from)
+                .collect()
+        };
+        let used = names("extensionsUsed");
+        let required = names("extensionsRequired");
+        for (key, list) in [("extensionsUsed", &used), ("extensionsRequired", &required)] {
+            let mut seen = HashSet::new();
+            for (i, name) in list.iter().enumerate() {
+                if !seen.insert(name) {
+                    self.f.error(
+                        "DUPLICATE_ELEMENTS",
+                        format!("/{key}/{i}"),
+                        format!("'{name}' is listed twice"),
+                    );
+                }
+                let valid = name.split_once('_').is_some_and(|(prefix, rest)| {
+                    !prefix.is_empty()
+                        && prefix
+                            .bytes()
+                            .all(|c| c.is_ascii_uppercase() || c.is_ascii_digit())
+                        && !rest.is_empty()
+                });
+                if key == "extensionsUsed" && !valid {
+                    self.f.warn(
+                        "INVALID_EXTENSION_NAME_FORMAT",
+                        format!("/{key}/{i}"),
+                        format!("'{name}' is not PREFIX_name"),
+                    );
+                }
+            }
+        }
+        if !required.is_empty() && self.root.get("extensionsUsed").is_none() {
+            self.f.error(
+                "UNSATISFIED_DEPENDENCY",
+                "/extensionsRequired",
+                "extensionsRequired without extensionsUsed",
+            );
+        }
+        for (i, name) in required.iter().enumerate() {
+            let at = format!("/extensionsRequired/{i}");
+            if !used.contains(name) {
+                self.f.error(
+                    "UNUSED_EXTENSION_REQUIRED",
+                    at.clone(),
+                    format!("'{name}' is required but not in extensionsUsed"),
+                );
+            }
+            if !can_honour_required(name) {
+                self.f.error(
+                    "UNSUPPORTED_EXTENSION",
+                    at,
+                    format!("the file requires '{name}', which raycast cannot decode"),
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,120 @@
+//! glTF 2.0 (`.gltf` and `.glb`): one document layer, used twice.
+//!
+//! - The importer ([`load`]) reads it fail-fast: the first error ends the load.
+//! - `raycast check` reads the same [`Document`] collect-all, through a [`Sink`] that keeps
+//!   every [`Diagnostic`] (code, severity, JSON pointer, message), then builds the scene from
+//!   it with [`scene::build`]: the file is parsed once, and both agree on what loads.
+//!
+//! The JSON is kept as `serde_json::Value` and only the parts a ray caster uses are
+//! interpreted — buffers, buffer views, accessors, meshes, nodes, scenes, cameras and the
+//! `RAYCAST_quadric` extension — so textures, images, samplers, materials, animations, skins
+//! and extensions used but not required cannot stop a render. (The `gltf` crate's JSON model
+//! refuses valid files: integers written as `1.0`, textures without `source`, accessors
+//! without `bufferView`; `check` still runs its reference validation where it can.) Only the
+//! buffers the geometry reads are loaded, under the path rule of [`crate::import::paths`].
+//!
+//! Compressed data (Draco, meshopt) and GPU instancing enter through the seams of [`decode`].
+
+pub mod accessor;
+pub mod buffers;
+pub mod decode;
+pub mod diagnostics;
+pub mod document;
+pub mod mesh;
+pub mod node;
+pub mod scene;
+
+pub use diagnostics::{Diagnostic, FailFast, Severity, Sink};
+pub use document::Document;
+
+use super::paths::folder_of;
+use super::LoadOptions;
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+use std::path::Path;
+
+/// Our node extension carrying an analytic quadric (docs/RAYCAST_quadric.md).
+pub const QUADRIC_EXTENSION: &str = "RAYCAST_quadric";
+
+/// Extensions whose absence from our reader does not change the geometry we read.
+const HONOURED_REQUIRED: &[&str] = &["KHR_mesh_quantization", QUADRIC_EXTENSION];
+
+/// Prefixes of extensions that only concern appearance (materials, textures, lights).
+const APPEARANCE_PREFIXES: &[&str] = &[
+    "KHR_materials_",
+    "KHR_texture_",
+    "KHR_lights_",
+    "EXT_texture_",
+    "EXT_lights_",
+    "MSFT_texture_",
+];
+
+/// True when a file that requires extension `name` can still be drawn correctly (it does not
+/// change geometry, or we decode it). Shared with `raycast check`.
+pub fn can_honour_required(name: &str) -> bool {
+    HONOURED_REQUIRED.contains(&name) || APPEARANCE_PREFIXES.iter().any(|p| name.starts_with(p))
+}
+
+/// True when the path names a GLB by its extension.
+pub fn is_glb_path(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"))
+}
+
+/// Refuses a document that requires an extension that changes geometry and that we cannot
+/// decode (`UNSUPPORTED_EXTENSION`, at `/extensionsRequired/i`).
+pub fn check_required_extensions(doc: &Document, sink: &mut dyn Sink) {
+    for (i, name) in doc.extension_names("extensionsRequired").enumerate() {
+        if !can_honour_required(name) {
+            sink.error(
+                "UNSUPPORTED_EXTENSION",
+                format!("/extensionsRequired/{i}"),
+                format!("requires extension {name} which raycast cannot decode"),
+            );
+        }
+    }
+}
+
+/// Loads a glTF or GLB file, fail-fast. External files resolve under the path rule of
+/// `options` (the asset's folder unless widened or lifted).
+pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
+    let bytes =
+        std::fs::read(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
+    let fail = |d: Diagnostic| Error::in_file(path, d.to_string());
+    let mut sink = FailFast::default();
+    let parsed = Document::parse(bytes, is_glb_path(path), &mut sink);
+    let mut doc = match (parsed, sink.error.take()) {
+        (Some(doc), None) => doc,
+        (_, Some(error)) => return Err(fail(error)),
+        (None, None) => return Err(Error::in_file(path, "not a glTF file")),
+    };
+    check_required_extensions(&doc, &mut sink);
+    let base = folder_of(path);
+    let root = options.root.clone().unwrap_or_else(|| base.clone());
+    let resources = buffers::Resources {
+        base: &base,
+        root: &root,
+        allow_outside: options.allow_outside,
+        max_bytes: u64::MAX,
+    };
+    if sink.error.is_none() {
+        let needed = scene::needed_buffers(&doc);
+        doc.load_buffers(&resources, Some(&needed), &mut sink);
+    }
+    if sink.error.is_none() {
+        doc.decode_views(&mut sink);
+    }
+    if let Some(error) = sink.error {
+        return Err(fail(error));
+    }
+    let mut scene = scene::build(&doc, options.scene.as_deref(), path).map_err(fail)?;
+    // What the layer noticed while reading (a network URI, extra bytes after a GLB) comes
+    // before what the scene walk noticed.
+    let notes = sink
+        .notes
+        .iter()
+        .filter(|d| d.severity == Severity::Warning);
+    let notes: Vec<String> = notes.map(Diagnostic::to_string).collect();
+    scene.warnings.splice(0..0, notes);
+    Ok(scene)
+}

@@ -1,0 +1,298 @@
+//! Nodes → scene: walks the chosen scene's node tree in f64, places each mesh (read once,
+//! however many nodes use it) and quadric, and collects the cameras. The one place a node
+//! becomes scene objects is [`add_mesh_object`].
+
+use super::accessor::NO_DATA;
+use super::decode::{self, GPU_INSTANCING, MESHOPT};
+use super::diagnostics::{Diagnostic, FailFast};
+use super::document::{array, as_index, extension, index_of, Document};
+use super::mesh::DRACO;
+use super::node::{local_transform, Node};
+use super::QUADRIC_EXTENSION;
+use crate::camera::Camera;
+use crate::import::place;
+use crate::quadric::{Quadric, QuadricSpec};
+use crate::scene::{Scene, SceneBuilder};
+use glam::{DMat4, DVec3};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Most node instances one file may expand to (guards against exponential node sharing).
+pub const MAX_NODE_VISITS: usize = 10_000_000;
+
+/// Builds the scene `choice` (by index or name; `None`: the default) of a document whose
+/// buffers are loaded. Fails at the first problem in what the scene draws.
+pub fn build(doc: &Document, choice: Option<&str>, path: &Path) -> Result<Scene, Diagnostic> {
+    let mut walk = Walk {
+        doc,
+        builder: SceneBuilder::new(),
+        meshes: HashMap::new(),
+    };
+    walk.builder.set_extensions_used(
+        doc.extension_names("extensionsUsed")
+            .map(String::from)
+            .collect(),
+    );
+    let roots = match doc
+        .scene_roots(choice)
+        .map_err(|e| Diagnostic::error("UNRESOLVED_REFERENCE", "/scenes", e))?
+    {
+        Some(roots) => roots,
+        None => {
+            let roots = doc.parentless_nodes();
+            if !roots.is_empty() {
+                walk.builder
+                    .warn("the file defines no scene: drawing every root node");
+            }
+            roots
+        }
+    };
+    walk.walk(&roots)?;
+    if walk.builder.object_count() == 0 {
+        walk.builder
+            .warn("the scene holds no triangles or quadrics");
+    }
+    Ok(walk.builder.finish(path.to_path_buf()))
+}
+
+/// Adds one placed mesh to the scene: the mesh's triangles in its own frame, the f64 world
+/// matrix of the node (or instance), and the object's name and source pointer. Every mesh
+/// object of a glTF scene goes through here.
+fn add_mesh_object(
+    builder: &mut SceneBuilder,
+    name: String,
+    pointer: String,
+    local: &[[DVec3; 3]],
+    world: &DMat4,
+) {
+    if !local.is_empty() {
+        builder.add_mesh(name, pointer, place(local, world));
+    }
+}
+
+/// Which buffers the geometry reads: those behind the accessors of mesh primitives (POSITION,
+/// indices, sparse parts), Draco data and GPU instancing attributes, and the sources of
+/// meshopt-compressed views. Others (textures, animations) are never read for a render.
+pub fn needed_buffers(doc: &Document) -> Vec<bool> {
+    let mut needed = vec![false; doc.list("buffers").len()];
+    let mut mark_view = |view: Option<usize>| {
+        let Some(v) = view.and_then(|v| doc.item("bufferViews", v)) else {
+            return;
+        };
+        let buffers = std::iter::once(index_of(v, "buffer")).chain(
+            MESHOPT
+                .iter()
+                .map(|name| extension(v, name).and_then(|e| index_of(e, "buffer"))),
+        );
+        for b in buffers.flatten() {
+            if let Some(flag) = needed.get_mut(b) {
+                *flag = true;
+            }
+        }
+    };
+    let mut accessors = Vec::new();
+    for mesh in doc.list("meshes") {
+        for prim in array(mesh, "primitives") {
+            accessors.extend(prim.get("attributes").and_then(|a| index_of(a, "POSITION")));
+            accessors.extend(index_of(prim, "indices"));
+            mark_view(extension(prim, DRACO).and_then(|d| index_of(d, "bufferView")));
+        }
+    }
+    for node in doc.list("nodes") {
+        if let Some(attributes) = extension(node, GPU_INSTANCING).and_then(|e| e.get("attributes"))
+        {
+            accessors.extend(
+                attributes
+                    .as_object()
+                    .into_iter()
+                    .flat_map(|a| a.values())
+                    .filter_map(as_index),
+            );
+        }
+    }
+    for acc in accessors
+        .into_iter()
+        .filter_map(|a| doc.item("accessors", a))
+    {
+        mark_view(index_of(acc, "bufferView"));
+        if let Some(sparse) = acc.get("sparse") {
+            mark_view(
+                sparse
+                    .get("indices")
+                    .and_then(|i| index_of(i, "bufferView")),
+            );
+            mark_view(sparse.get("values").and_then(|v| index_of(v, "bufferView")));
+        }
+    }
+    needed
+}
+
+/// The node walk's state.
+struct Walk<'a> {
+    doc: &'a Document,
+    builder: SceneBuilder,
+    /// Triangles of each mesh read so far, in the mesh's frame.
+    meshes: HashMap<usize, Vec<[DVec3; 3]>>,
+}
+
+impl Walk<'_> {
+    fn walk(&mut self, roots: &[usize]) -> Result<(), Diagnostic> {
+        let node_count = self.doc.list("nodes").len();
+        let mut stack: Vec<(usize, DMat4, usize)> = roots
+            .iter()
+            .rev()
+            .map(|&n| (n, DMat4::IDENTITY, 0))
+            .collect();
+        let mut visits = 0usize;
+        let mut warned_skin = false;
+        while let Some((index, parent, depth)) = stack.pop() {
+            let at = format!("/nodes/{index}");
+            if depth > node_count {
+                return Err(Diagnostic::error("NODE_LOOP", at, "node cycle"));
+            }
+            visits += 1;
+            if visits > MAX_NODE_VISITS {
+                return Err(Diagnostic::error(
+                    "ASSET_TOO_LARGE",
+                    "/nodes",
+                    format!("the node hierarchy expands to more than {MAX_NODE_VISITS} instances"),
+                ));
+            }
+            let node = self.doc.node(index).ok_or_else(|| {
+                Diagnostic::error("UNRESOLVED_REFERENCE", &at, "node does not exist")
+            })?;
+            let mut sink = FailFast::default();
+            let world = parent * local_transform(node.json, &at, &mut sink);
+            if let Some(error) = sink.error {
+                return Err(error);
+            }
+            if !world.is_finite() {
+                return Err(Diagnostic::error(
+                    "NODE_TRANSFORM_NOT_FINITE",
+                    at,
+                    "world transform is not finite",
+                ));
+            }
+            if node.json.get("skin").is_some() && !warned_skin {
+                warned_skin = true;
+                self.builder
+                    .warn("skinned meshes are drawn in their bind pose");
+            }
+            self.add_node(&node, &world)?;
+            for child in node.children().rev() {
+                stack.push((child, world, depth + 1));
+            }
+        }
+        Ok(())
+    }
+
+    /// The node's mesh (once, or per GPU instance), quadric and camera.
+    fn add_node(&mut self, node: &Node, world: &DMat4) -> Result<(), Diagnostic> {
+        let at = node.pointer();
+        let name = node
+            .name
+            .map_or_else(|| format!("node{}", node.index), String::from);
+        if let Some(mesh) = node.mesh {
+            self.read_mesh(mesh).map_err(|e| e.within(&at))?;
+            let local = &self.meshes[&mesh];
+            let instances = match extension(node.json, GPU_INSTANCING) {
+                Some(ext) => decode::gpu_instances(self.doc, node.index, ext)?,
+                None => None,
+            };
+            match instances {
+                None => add_mesh_object(&mut self.builder, name.clone(), at.clone(), local, world),
+                Some(instances) => {
+                    for (k, instance) in instances.iter().enumerate() {
+                        let pointer = format!("{at}/extensions/{GPU_INSTANCING}/{k}");
+                        add_mesh_object(
+                            &mut self.builder,
+                            format!("{name}[{k}]"),
+                            pointer,
+                            local,
+                            &(*world * *instance),
+                        );
+                    }
+                }
+            }
+        }
+        if let Some(ext) = extension(node.json, QUADRIC_EXTENSION) {
+            let quadric = QuadricSpec::from_gltf_extension(ext)
+                .and_then(|spec| Quadric::new(&spec, *world))
+                .map_err(|e| {
+                    Diagnostic::error(
+                        "QUADRIC_INVALID",
+                        format!("{at}/extensions/{QUADRIC_EXTENSION}"),
+                        format!("('{name}'): {e}"),
+                    )
+                })?;
+            self.builder.add_quadric(
+                name.clone(),
+                format!("{at}/extensions/{QUADRIC_EXTENSION}"),
+                quadric,
+            );
+        }
+        if let Some(camera) = node.camera {
+            self.add_camera(camera, &name, world);
+        }
+        Ok(())
+    }
+
+    /// Reads the triangles of mesh `mesh` (all its triangle primitives, in order) into the
+    /// cache, once per mesh however many nodes use it.
+    fn read_mesh(&mut self, mesh: usize) -> Result<(), Diagnostic> {
+        if self.meshes.contains_key(&mesh) {
+            return Ok(());
+        }
+        if self.doc.item("meshes", mesh).is_none() {
+            return Err(Diagnostic::error(
+                "UNRESOLVED_REFERENCE",
+                format!("/meshes/{mesh}"),
+                "mesh does not exist",
+            ));
+        }
+        let mut triangles = Vec::new();
+        for prim in 0..self.doc.primitive_count(mesh) {
+            match self.doc.primitive_geometry(mesh, prim) {
+                Ok(Some(geometry)) => triangles.extend(geometry.triangles()),
+                Ok(None) => {
+                    let why = self.doc.primitive_skip_reason(mesh, prim);
+                    self.builder
+                        .warn(format!("/meshes/{mesh}/primitives/{prim}: {why}"));
+                }
+                // A buffer without a uri, or on the network, is valid: its data is simply
+                // not here. The primitive is left out rather than the file refused.
+                Err(e) if e.code == NO_DATA => self
+                    .builder
+                    .warn(format!("/meshes/{mesh}/primitives/{prim}: skipped: {e}")),
+                Err(e) => return Err(e),
+            }
+        }
+        self.meshes.insert(mesh, triangles);
+        Ok(())
+    }
+
+    fn add_camera(&mut self, camera: usize, node_name: &str, world: &DMat4) {
+        let spec = match self.doc.camera(camera) {
+            Ok(spec) => spec,
+            Err(e) => {
+                self.builder.warn(format!("{e}: camera skipped"));
+                return;
+            }
+        };
+        let Some(to_world) = Camera::orthonormalised(*world) else {
+            self.builder.warn(format!(
+                "camera on node '{node_name}' has a degenerate transform: skipped"
+            ));
+            return;
+        };
+        self.builder.add_camera(Camera {
+            name: spec.name.unwrap_or_else(|| node_name.to_string()),
+            source: format!("gltf camera {camera} on node '{node_name}'"),
+            projection: spec.projection,
+            aspect_ratio: spec.aspect_ratio,
+            znear: spec.znear,
+            zfar: spec.zfar,
+            to_world,
+        });
+    }
+}
