@@ -22,8 +22,8 @@ transform="$npm_dir/node_modules/.bin/gltf-transform"
 helper() { node "$npm_dir/gltf_helper.mjs" "$@"; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-rm -rf "$out"
 mkdir -p "$out"
+rm -f "$out"/*.glb "$out"/*.bin
 
 # Sources, small and without textures (a ray caster reads none): the helmet is simplified
 # to about 4.5k triangles with gltfpack's simplifier, the others keep all their triangles.
@@ -54,7 +54,8 @@ helper draco-optional "$out/knight.draco-seq.glb" "$out/knight.draco-optional.gl
 "$gltfpack" -i "$work/shapes.glb" -o "$out/shapes.quantized.glb" -kn
 
 # GPU instancing: many-cubes' 501 nodes sharing one mesh become one node with 501 instances.
-"$gltfpack" -i "$assets/many-cubes.gltf" -o "$out/cubes.instanced.glb" -mi
+# Unquantized (-noq), so that trimesh can be the reference for tools/validate.py.
+"$gltfpack" -i "$assets/many-cubes.gltf" -o "$out/cubes.instanced.glb" -mi -noq
 "$gltfpack" -i "$assets/many-cubes.gltf" -o "$out/cubes.instanced-meshopt.glb" -mi -cc
 
 # Reference decodes: the official decoders' output as plain accessors. The quantized files'
@@ -62,7 +63,8 @@ helper draco-optional "$out/knight.draco-seq.glb" "$out/knight.draco-optional.gl
 # of the node transforms).
 for file in "$out"/*.glb; do
   case "$file" in
-    *.plain.glb | *.nodes.glb | *.draco-optional.glb) ;; # the last is the draco-seq stream
+    *.plain.glb | *.nodes.glb | *.instanced.glb) ;; # nothing to decode
+    *.draco-optional.glb) ;; # the Draco stream of knight.draco-seq.glb
     *.quantized.glb) "$transform" dequantize "$file" "${file%.glb}.plain.glb" ;;
     *) helper plain "$file" "${file%.glb}.plain.glb" ;;
   esac
