@@ -147,10 +147,12 @@ fn gpu_instances_become_named_objects_placed_like_the_original_nodes() {
         assert_eq!(scene.objects.len(), 501, "{file}");
         assert_eq!(scene.objects[0].name, "node0[0]", "{file}");
         assert_eq!(scene.objects[500].name, "node0[500]", "{file}");
-        assert!(scene
-            .objects
-            .iter()
-            .all(|o| o.source == "/nodes/0/extensions/EXT_mesh_gpu_instancing"));
+        for (k, o) in scene.objects.iter().enumerate() {
+            assert_eq!(
+                o.source,
+                format!("/nodes/0/extensions/EXT_mesh_gpu_instancing/{k}")
+            );
+        }
         assert_eq!(
             scene.decoded.last().map(String::as_str),
             Some("EXT_mesh_gpu_instancing: 501 instances on 1 nodes"),

@@ -379,8 +379,7 @@ def _load_gltf(path: Path, header: dict) -> RefScene:
             key, name = f"trimesh:{parts[0][3]}", parts[0][3]
         objects.append(RefObject(key, name, node, tris, parts[0][2]))
     for (node, i), (name, tris, flip) in sorted(instanced.items()):
-        # Every instance shares the node's source pointer: matched by name instead.
-        key = f"/nodes/{node}/extensions/{INSTANCING}[{i}]"
+        key = f"/nodes/{node}/extensions/{INSTANCING}/{i}"  # raycast's source pointer
         objects.append(RefObject(key, name, node, tris, flip))
     ref = RefScene(path, objects, header=header, notes=notes)
     try:

@@ -95,7 +95,7 @@ pub fn decode(bytes: &[u8], extension: &Value) -> Result<DracoPrimitive, String>
 
 /// Reads the connectivity method from the stream header ("DRACO", major, minor, geometry
 /// type, method), refusing streams that are not triangle meshes.
-fn method(bytes: &[u8]) -> Result<Method, String> {
+pub fn method(bytes: &[u8]) -> Result<Method, String> {
     match bytes {
         [b'D', b'R', b'A', b'C', b'O', _, _, 1, method, ..] => match method {
             0 => Ok(Method::Sequential),

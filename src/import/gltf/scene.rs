@@ -48,6 +48,9 @@ pub fn build(doc: &Document, choice: Option<&str>, path: &Path) -> Result<Scene,
         }
     };
     walk.walk(&roots)?;
+    for line in decode::summary(doc) {
+        walk.builder.note_decoded(line);
+    }
     if walk.builder.object_count() == 0 {
         walk.builder
             .warn("the scene holds no triangles or quadrics");
@@ -79,12 +82,12 @@ pub fn needed_buffers(doc: &Document) -> Vec<bool> {
         let Some(v) = view.and_then(|v| doc.item("bufferViews", v)) else {
             return;
         };
-        let buffers = std::iter::once(index_of(v, "buffer")).chain(
-            MESHOPT
-                .iter()
-                .map(|name| extension(v, name).and_then(|e| index_of(e, "buffer"))),
-        );
-        for b in buffers.flatten() {
+        // A meshopt view is decoded from its extension's buffer: its own (fallback) buffer
+        // is never read.
+        let compressed = MESHOPT
+            .iter()
+            .find_map(|name| extension(v, name).map(|e| index_of(e, "buffer")));
+        if let Some(b) = compressed.unwrap_or_else(|| index_of(v, "buffer")) {
             if let Some(flag) = needed.get_mut(b) {
                 *flag = true;
             }
