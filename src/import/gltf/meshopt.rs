@@ -104,7 +104,7 @@ impl MeshoptView {
     fn check(&self) -> Result<(), String> {
         let stride = self.byte_stride;
         let stride_ok = match self.mode {
-            Mode::Attributes => stride % 4 == 0 && (4..=256).contains(&stride),
+            Mode::Attributes => stride.is_multiple_of(4) && (4..=256).contains(&stride),
             Mode::Triangles | Mode::Indices => stride == 2 || stride == 4,
         };
         if !stride_ok {
@@ -125,7 +125,7 @@ impl MeshoptView {
                 self.filter, self.mode
             ));
         }
-        if self.mode == Mode::Triangles && self.count % 3 != 0 {
+        if self.mode == Mode::Triangles && !self.count.is_multiple_of(3) {
             return Err(format!(
                 "TRIANGLES count {} is not a multiple of 3",
                 self.count
