@@ -21,6 +21,10 @@ use super::{draco, instancing, meshopt};
 use glam::{DMat4, DVec3};
 use serde_json::Value;
 
+/// The codes of the diagnostics the decoders give (Draco, meshopt, GPU instancing data that
+/// cannot be decoded).
+pub const DECODE_ERRORS: [&str; 3] = ["DRACO_INVALID", "MESHOPT_INVALID", "INSTANCING_INVALID"];
+
 /// Names of the meshopt buffer view extension.
 pub const MESHOPT: [&str; 2] = meshopt::EXTENSIONS;
 

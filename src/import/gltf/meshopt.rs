@@ -143,7 +143,12 @@ impl MeshoptView {
 
 /// Decodes the compressed bytes `encoded` of a view described by `view` into its plain bytes.
 pub fn decode(encoded: &[u8], view: &MeshoptView) -> Result<Vec<u8>, String> {
-    let fail = |e: meshopt::Error| format!("cannot decode {:?} data: {e}", view.mode);
+    let fail = |e: meshopt::Error| {
+        format!(
+            "cannot decode {:?} data: the compressed bytes are malformed ({e})",
+            view.mode
+        )
+    };
     let mut bytes = match (view.mode, view.byte_stride) {
         (Mode::Attributes, stride) => decode_attributes(encoded, view.count, stride)?,
         (Mode::Triangles, 2) => {
@@ -177,7 +182,9 @@ fn decode_attributes(encoded: &[u8], count: usize, stride: usize) -> Result<Vec<
     fn run<const S: usize>(encoded: &[u8], count: usize) -> Result<Vec<u8>, String> {
         meshopt::decode_vertex_buffer::<Element<S>>(encoded, count)
             .map(|v| v.iter().flat_map(|e| e.0).collect())
-            .map_err(|e| format!("cannot decode ATTRIBUTES data: {e}"))
+            .map_err(|e| {
+                format!("cannot decode Attributes data: the compressed bytes are malformed ({e})")
+            })
     }
     macro_rules! by_stride {
         ($($s:literal)*) => {
