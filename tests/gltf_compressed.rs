@@ -207,3 +207,44 @@ fn meshopt_fallback_file_is_never_read() {
     let reference = load("compressed/knight.meshopt-fallback.plain.glb");
     assert_eq!(largest_difference(&scene.unwrap(), &reference, true), 0.0);
 }
+
+#[test]
+fn corrupted_compressed_data_is_an_error_not_a_crash() {
+    // Random bytes of the BIN chunk (the Draco and meshopt streams, the instance data)
+    // overwritten, 150 variants per file: each load must end in a scene with finite bounds
+    // or an error, never a panic or an abort.
+    let dir = std::env::temp_dir().join(format!("raycast-corrupt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    for file in [
+        "helmet.draco-seq",
+        "knight.draco-eb",
+        "helmet.meshopt",
+        "helmet.meshopt-khr",
+        "knight.meshopt",
+        "cubes.instanced-meshopt",
+    ] {
+        let original = std::fs::read(fixture(&format!("compressed/{file}.glb"))).unwrap();
+        let json_len = u32::from_le_bytes(original[12..16].try_into().unwrap()) as usize;
+        let bin = 20 + json_len + 8;
+        for variant in 0..150 {
+            let mut bytes = original.clone();
+            let flips = 1 + (rng.next_u64() % 8) as usize;
+            for _ in 0..flips {
+                let at = bin + (rng.next_u64() as usize) % (bytes.len() - bin);
+                bytes[at] = rng.next_u64() as u8;
+            }
+            let path = dir.join(format!("{file}-{variant}.glb"));
+            std::fs::write(&path, &bytes).unwrap();
+            if let Ok(scene) = raycast::import::load(&path, &Default::default()) {
+                let b = scene.world_bounds();
+                assert!(
+                    b.is_empty() || (b.min.is_finite() && b.max.is_finite()),
+                    "{file} variant {variant}: non-finite bounds"
+                );
+            }
+            std::fs::remove_file(&path).unwrap();
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
