@@ -11,7 +11,7 @@ seed() {
         cp "$f" "fuzz/corpus/$target/$(echo "$f" | tr '/' '_')"
     done
 }
-seed gltf '\.(gltf|glb)$' fixtures/gltf fixtures/gltf-validator fixtures/malformed fixtures/bad
+seed gltf '\.(gltf|glb)$' fixtures/gltf fixtures/gltf-validator fixtures/malformed fixtures/bad fixtures/compressed
 seed obj '\.obj$' fixtures/obj fixtures/bad fixtures/assets fuzz/seeds/obj
 seed usd '\.(usda|usdc|usd)$' fixtures/usd
 for t in gltf obj usd; do

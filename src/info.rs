@@ -22,6 +22,8 @@ pub struct SceneInfo {
     pub cameras: Vec<CameraSummary>,
     /// Extensions the file declares.
     pub extensions_used: Vec<String>,
+    /// What the importer decoded (Draco, meshopt, GPU instancing), one line per extension.
+    pub decoded: Vec<String>,
     /// USD stage metadata.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stage: Option<StageInfo>,
@@ -101,6 +103,7 @@ impl SceneInfo {
                 })
                 .collect(),
             extensions_used: scene.extensions_used.clone(),
+            decoded: scene.decoded.clone(),
             stage: scene.stage.clone(),
             warnings: scene.warnings.clone(),
         }
@@ -151,6 +154,9 @@ impl fmt::Display for SceneInfo {
         }
         if !self.extensions_used.is_empty() {
             writeln!(f, "  extensions used: {}", self.extensions_used.join(", "))?;
+        }
+        for d in &self.decoded {
+            writeln!(f, "  decoded: {d}")?;
         }
         for w in &self.warnings {
             writeln!(f, "  warning: {w}")?;

@@ -166,6 +166,7 @@ pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Si
             write,
         },
         stage: scene.stage.clone(),
+        decoded: scene.decoded.clone(),
         warnings: scene.warnings.clone(),
     };
     let json = serde_json::to_string_pretty(&sidecar).map_err(|e| Error::msg(e.to_string()))?;

@@ -71,6 +71,8 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// Extensions the file declares (glTF `extensionsUsed`).
     pub extensions_used: Vec<String>,
+    /// What the importer decoded, one line per extension (Draco, meshopt, GPU instancing).
+    pub decoded: Vec<String>,
     /// USD stage metadata (USD files only).
     pub stage: Option<StageInfo>,
 }
@@ -234,6 +236,7 @@ pub struct SceneBuilder {
     cameras: Vec<Camera>,
     warnings: Vec<String>,
     extensions_used: Vec<String>,
+    decoded: Vec<String>,
     stage: Option<StageInfo>,
 }
 
@@ -298,6 +301,11 @@ impl SceneBuilder {
         self.extensions_used = extensions;
     }
 
+    /// Records what was decoded (one line, e.g. an extension and its counts).
+    pub fn note_decoded(&mut self, line: String) {
+        self.decoded.push(line);
+    }
+
     /// Records USD stage metadata.
     pub fn set_stage(&mut self, stage: StageInfo) {
         self.stage = Some(stage);
@@ -342,6 +350,7 @@ impl SceneBuilder {
             cameras: self.cameras,
             warnings: self.warnings,
             extensions_used: self.extensions_used,
+            decoded: self.decoded,
             stage: self.stage,
         }
     }

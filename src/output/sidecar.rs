@@ -45,6 +45,9 @@ pub struct Sidecar {
     /// USD stage metadata (`upAxis`, `metersPerUnit`), for USD scenes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stage: Option<StageInfo>,
+    /// What the importer decoded (Draco, meshopt, GPU instancing), one line per extension.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub decoded: Vec<String>,
     /// Importer and render warnings.
     pub warnings: Vec<String>,
 }

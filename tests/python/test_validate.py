@@ -439,3 +439,26 @@ def test_raycast_mixed_within_tolerance(tmp_path):
     p = mixed_scene(tmp_path)
     r = validate.validate_scene(p, RAYCAST, nrays=1000, seed=0)[0]
     assert r["status"] == "ok", json.dumps(r, default=str)[:2000]
+
+
+def test_reference_expands_gpu_instances_like_the_per_node_original():
+    # trimesh draws an EXT_mesh_gpu_instancing node once; the reference must expand it. The
+    # same 501 cubes as plain nodes (gltfpack without instancing) are the independent answer.
+    inst = validate.load_reference(FIXTURES / "compressed" / "cubes.instanced.glb")
+    nodes = validate.load_reference(FIXTURES / "compressed" / "cubes.nodes.glb")
+    assert len(inst.objects) == len(nodes.objects) == 501
+    assert [o.name for o in inst.objects[:2]] == ["node0[0]", "node0[1]"]
+    assert inst.objects[7].key == "/nodes/0/extensions/EXT_mesh_gpu_instancing/7"
+
+    def centroids(ref):
+        return np.array(sorted(tuple(o.tris.reshape(-1, 3).mean(axis=0)) for o in ref.objects))
+
+    size = np.linalg.norm(np.subtract(*nodes.bounds()))
+    assert np.abs(centroids(inst) - centroids(nodes)).max() < 1e-4 * size
+
+
+def test_compressed_files_use_the_reference_decode_next_to_them():
+    ref = validate.load_reference(FIXTURES / "compressed" / "helmet.draco-eb.glb")
+    assert any("helmet.draco-eb.plain.glb" in n for n in ref.notes)
+    with pytest.raises(validate.SkipScene):  # Draco without a reference decode
+        validate.load_reference(FIXTURES / "compressed" / "knight.draco-optional.glb")

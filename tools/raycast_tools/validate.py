@@ -36,6 +36,7 @@ import argparse
 import json
 import math
 import shutil
+import struct
 import tempfile
 import time
 import warnings
@@ -252,14 +253,99 @@ def _trimesh_node_names(header):
     return names
 
 
-def load_reference(path: Path) -> RefScene:
-    import trimesh
+# Compression trimesh cannot decode: a file using one is checked against the reference decode
+# next to it (`<stem>.plain.glb`, written by glTF-Transform with the official decoders; see
+# tools/make_compressed_fixtures.sh), when there is one.
+COMPRESSION = ("KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_meshopt_compression")
+INSTANCING = "EXT_mesh_gpu_instancing"
 
+
+def _accessor(path: Path, header: dict, index: int) -> np.ndarray:
+    """An uncompressed accessor as float64 rows, normalized integers divided out (glTF 2.0
+    3.11: max(c / (2^(b-1) - 1), -1) for signed, c / (2^b - 1) for unsigned types)."""
+    a = header["accessors"][index]
+    types = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
+    dtype = np.dtype(types[a["componentType"]])
+    comps = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}[a["type"]]
+    view = header["bufferViews"][a["bufferView"]]
+    buffer = header["buffers"][view["buffer"]]
+    data = path.read_bytes()
+    if "uri" in buffer:
+        blob = (path.parent / buffer["uri"]).read_bytes()
+    else:  # GLB: the BIN chunk after the JSON chunk
+        (json_len,) = struct.unpack_from("<I", data, 12)
+        (bin_len,) = struct.unpack_from("<I", data, 20 + json_len)
+        blob = data[28 + json_len : 28 + json_len + bin_len]
+    start = view.get("byteOffset", 0) + a.get("byteOffset", 0)
+    stride = view.get("byteStride", dtype.itemsize * comps)
+    rows = np.stack(
+        [np.frombuffer(blob, dtype, comps, start + i * stride) for i in range(a["count"])]
+    ).astype(np.float64)
+    if a.get("normalized"):
+        top = float(np.iinfo(dtype).max)
+        rows = np.maximum(rows / top, -1.0)
+    return rows
+
+
+def _instance_matrices(path: Path, header: dict, ext: dict) -> list:
+    """EXT_mesh_gpu_instancing: one T * R * S matrix per instance (node space)."""
+    attrs = ext["attributes"]
+    got = {k: _accessor(path, header, i) for k, i in attrs.items()}
+    count = len(next(iter(got.values())))
+    out = []
+    for i in range(count):
+        m = np.eye(4)
+        r = qref._quat_matrix(got["ROTATION"][i]) if "ROTATION" in got else np.eye(3)
+        s = got["SCALE"][i] if "SCALE" in got else np.ones(3)
+        m[:3, :3] = r * s[None, :]
+        if "TRANSLATION" in got:
+            m[:3, 3] = got["TRANSLATION"][i]
+        out.append(m)
+    return out
+
+
+def _expand_instances(path: Path, header: dict, per_node: dict):
+    """Replaces each instanced node's single trimesh placement (trimesh ignores the
+    extension) with one `<node name>[i]` part per instance: world = node world * instance."""
+    instanced = {}
+    for node, parts in list(per_node.items()):
+        if node < 0:
+            continue
+        ext = header["nodes"][node].get("extensions", {}).get(INSTANCING)
+        if ext is None:
+            continue
+        world = parts[0][4]
+        to_node = np.linalg.inv(world)
+        tris = np.concatenate([p[1] for p in sorted(parts, key=lambda x: x[0])])
+        local = tris @ to_node[:3, :3].T + to_node[:3, 3]
+        name = qref.node_name(header, node)
+        for i, m in enumerate(_instance_matrices(path, header, ext)):
+            w = world @ m
+            placed = local @ w[:3, :3].T + w[:3, 3]
+            flip = bool(np.linalg.det(w[:3, :3]) < 0)
+            instanced[(node, i)] = (f"{name}[{i}]", placed, flip)
+        del per_node[node]
+    return instanced
+
+
+def load_reference(path: Path) -> RefScene:
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".obj":
         return _load_obj(path)
     header = qref.load_gltf_json(path)
+    used = set(header.get("extensionsUsed", []))
+    plain = path.with_name(path.stem + ".plain.glb")
+    if used & set(COMPRESSION) and plain.is_file():
+        ref = load_reference(plain)
+        ref.notes.append(f"reference: {plain.name} (glTF-Transform with the official decoders)")
+        return ref
+    return _load_gltf(path, header)
+
+
+def _load_gltf(path: Path, header: dict) -> RefScene:
+    import trimesh
+
     reason = gltf_precheck(header)
     if reason:
         raise SkipScene(reason)
@@ -288,9 +374,10 @@ def load_reference(path: Path) -> RefScene:
         T = np.asarray(T, dtype=np.float64)
         tris = tris @ T[:3, :3].T + T[:3, 3]
         flip = bool(np.linalg.det(T[:3, :3]) < 0)
-        per_node.setdefault(node, []).append((order, tris, flip, frame))
+        per_node.setdefault(node, []).append((order, tris, flip, frame, T))
     if unmatched:
         notes.append(f"{unmatched} trimesh frames not matched to a glTF node")
+    instanced = _expand_instances(path, header, per_node)
     objects = []
     for node in sorted(per_node):
         parts = sorted(per_node[node], key=lambda x: x[0])
@@ -300,6 +387,9 @@ def load_reference(path: Path) -> RefScene:
         else:
             key, name = f"trimesh:{parts[0][3]}", parts[0][3]
         objects.append(RefObject(key, name, node, tris, parts[0][2]))
+    for (node, i), (name, tris, flip) in sorted(instanced.items()):
+        key = f"/nodes/{node}/extensions/{INSTANCING}/{i}"  # raycast's source pointer
+        objects.append(RefObject(key, name, node, tris, flip))
     ref = RefScene(path, objects, header=header, notes=notes)
     try:
         ref.quadrics = qref.quadrics_from_header(header)

@@ -21,6 +21,7 @@ mod skins;
 use super::{CheckOptions, Findings, Severity};
 use crate::import::gltf::accessor::Layout;
 use crate::import::gltf::buffers::Resources;
+use crate::import::gltf::decode::DECODE_ERRORS;
 use crate::import::gltf::document::index_of;
 use crate::import::gltf::{self as layer, scene, Diagnostic, Document, Sink};
 use crate::scene::Scene;
@@ -94,7 +95,19 @@ pub fn check(
     if !walker.importable {
         return None;
     }
-    Some(scene::build(&doc, None, path).map_err(|e| crate::Error::in_file(path, e.to_string())))
+    let built = scene::build(&doc, None, path);
+    // The walker does not decode: a decoder's error is reported with its own code.
+    if let Err(e) = &built {
+        if DECODE_ERRORS.contains(&e.code) {
+            f.push(
+                Severity::Error,
+                e.code,
+                e.pointer.clone(),
+                e.message.clone(),
+            );
+        }
+    }
+    Some(built.map_err(|e| crate::Error::in_file(path, e.to_string())))
 }
 
 /// Runs the `gltf` crate's reference validation where the crate can read the file (it

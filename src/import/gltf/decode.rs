@@ -9,51 +9,228 @@
 //! - [`gpu_instances`]: the scene walk asks for the instance matrices of every node with
 //!   EXT_mesh_gpu_instancing; each instance becomes an object `<node name>[i]`.
 //!
-//! No decoder is built in yet: a file that *requires* one of these extensions is refused by
-//! the extension policy ([`super::can_honour_required`]); one that only *uses* it is read
-//! through its fallback data.
+//! The decoders are self-contained modules with a narrow API (bytes and extension JSON in,
+//! decoded data out): [`super::draco`] (draco-core), [`super::meshopt`] (meshoptimizer) and
+//! [`super::instancing`]. [`summary`] tells `info` and the sidecar what was decoded.
 
+use super::accessor::NO_DATA;
 use super::diagnostics::{Diagnostic, Sink};
-use super::document::Document;
-use super::mesh::Geometry;
-use glam::DMat4;
+use super::document::{extension, index_of, Document};
+use super::mesh::{Geometry, TriangleMode, DRACO};
+use super::{draco, instancing, meshopt};
+use glam::{DMat4, DVec3};
 use serde_json::Value;
 
+/// The codes of the diagnostics the decoders give (Draco, meshopt, GPU instancing data that
+/// cannot be decoded).
+pub const DECODE_ERRORS: [&str; 3] = ["DRACO_INVALID", "MESHOPT_INVALID", "INSTANCING_INVALID"];
+
 /// Names of the meshopt buffer view extension.
-pub const MESHOPT: [&str; 2] = ["EXT_meshopt_compression", "KHR_meshopt_compression"];
+pub const MESHOPT: [&str; 2] = meshopt::EXTENSIONS;
 
 /// Name of the GPU instancing node extension.
-pub const GPU_INSTANCING: &str = "EXT_mesh_gpu_instancing";
+pub const GPU_INSTANCING: &str = instancing::EXTENSION;
 
-/// The decoded bytes of buffer view `view`, whose meshopt extension object is `ext`.
-/// `Ok(None)`: not decoded (the view's own, fallback bytes are read instead).
+/// The decoded bytes of buffer view `view`, whose meshopt extension object is `ext`. The
+/// view's own buffer (often a fallback buffer without data) is never read.
 pub fn meshopt_view(
-    _doc: &Document,
-    _view: usize,
-    _ext: &Value,
+    doc: &Document,
+    view: usize,
+    ext: &Value,
 ) -> Result<Option<Vec<u8>>, Diagnostic> {
-    Ok(None)
+    let name = meshopt_name(doc, view);
+    let at = format!("/bufferViews/{view}/extensions/{name}");
+    let invalid = |e: String| Diagnostic::error("MESHOPT_INVALID", &at, e);
+    let spec = meshopt::MeshoptView::parse(ext).map_err(invalid)?;
+    let buffer = doc.buffer(spec.buffer).ok_or_else(|| {
+        Diagnostic::error(
+            NO_DATA,
+            format!("{at}/buffer"),
+            format!("buffer {} has no data that raycast can read", spec.buffer),
+        )
+    })?;
+    let encoded = spec
+        .byte_offset
+        .checked_add(spec.byte_length)
+        .and_then(|end| buffer.get(spec.byte_offset..end))
+        .ok_or_else(|| {
+            invalid(format!(
+                "the compressed bytes lie outside buffer {}",
+                spec.buffer
+            ))
+        })?;
+    let bytes = meshopt::decode(encoded, &spec).map_err(invalid)?;
+    let length = doc
+        .item("bufferViews", view)
+        .and_then(|v| index_of(v, "byteLength"))
+        .unwrap_or(0);
+    if bytes.len() > length {
+        return Err(invalid(format!(
+            "decodes to {} bytes, more than the view's byteLength {length}",
+            bytes.len()
+        )));
+    }
+    Ok(Some(bytes))
+}
+
+/// Which meshopt extension name buffer view `view` carries.
+fn meshopt_name(doc: &Document, view: usize) -> &'static str {
+    let json = doc.item("bufferViews", view);
+    MESHOPT
+        .into_iter()
+        .find(|name| json.and_then(|v| extension(v, name)).is_some())
+        .unwrap_or(MESHOPT[0])
+}
+
+/// True when the Draco data of a primitive (`json`) is what we read: Draco is required, or
+/// the fallback POSITION accessor has no data. Otherwise the fallback accessors are read.
+fn reads_draco(doc: &Document, json: &Value) -> bool {
+    let required = doc
+        .extension_names("extensionsRequired")
+        .any(|e| e == DRACO);
+    let position = json.get("attributes").and_then(|a| index_of(a, "POSITION"));
+    let empty_fallback = position
+        .and_then(|p| doc.item("accessors", p))
+        .is_none_or(|a| a.get("bufferView").is_none());
+    required || empty_fallback
 }
 
 /// The geometry of a Draco-compressed primitive, whose extension object is `ext`. `None`:
-/// not decoded here; the primitive's fallback accessors are read instead.
+/// not decoded here; the primitive's fallback accessors are read instead. The POSITION
+/// accessor gives the decoded values' normalization and must agree with their count.
 pub fn draco_primitive(
-    _doc: &Document,
-    _mesh: usize,
-    _prim: usize,
-    _ext: &Value,
+    doc: &Document,
+    mesh: usize,
+    prim: usize,
+    ext: &Value,
 ) -> Option<Result<Geometry, Diagnostic>> {
-    None
+    let json = doc.item("meshes", mesh)?.get("primitives")?.get(prim)?;
+    reads_draco(doc, json)
+        .then(|| decode_draco(doc, json, ext, &format!("/meshes/{mesh}/primitives/{prim}")))
+}
+
+fn decode_draco(
+    doc: &Document,
+    json: &Value,
+    ext: &Value,
+    at: &str,
+) -> Result<Geometry, Diagnostic> {
+    let at_ext = format!("{at}/extensions/{DRACO}");
+    let invalid = |e: String| Diagnostic::error("DRACO_INVALID", &at_ext, e);
+    let view = draco::buffer_view(ext).map_err(invalid)?;
+    let bytes = doc.view_bytes(view)?;
+    let decoded = draco::decode(bytes, ext).map_err(invalid)?;
+    let position = json
+        .get("attributes")
+        .and_then(|a| index_of(a, "POSITION"))
+        .ok_or_else(|| Diagnostic::error("UNDEFINED_PROPERTY", at, "no POSITION attribute"))?;
+    let layout = doc.layout(position)?;
+    if layout.count != decoded.positions.len() {
+        return Err(invalid(format!(
+            "POSITION accessor count {} differs from the {} points Draco decoded",
+            layout.count,
+            decoded.positions.len()
+        )));
+    }
+    let positions = decoded
+        .positions
+        .iter()
+        .map(|p| DVec3::from_array(p.map(|c| layout.dequantize(c))))
+        .collect();
+    Geometry::new(positions, Some(decoded.indices), TriangleMode::List, at)
 }
 
 /// The local instance matrices (relative to the node) of a node with GPU instancing, whose
-/// extension object is `ext`. `Ok(None)`: instancing not applied (the node is drawn once).
+/// extension object is `ext`.
 pub fn gpu_instances(
-    _doc: &Document,
-    _node: usize,
-    _ext: &Value,
+    doc: &Document,
+    node: usize,
+    ext: &Value,
 ) -> Result<Option<Vec<DMat4>>, Diagnostic> {
-    Ok(None)
+    let at = format!("/nodes/{node}/extensions/{GPU_INSTANCING}");
+    let invalid = |e: String| Diagnostic::error("INSTANCING_INVALID", &at, e);
+    let accessors = instancing::accessors(ext).map_err(invalid)?;
+    let read = |accessor: Option<usize>,
+                comps: usize,
+                what: &str|
+     -> Result<Option<Vec<Vec<f64>>>, Diagnostic> {
+        let Some(accessor) = accessor else {
+            return Ok(None);
+        };
+        let (layout, values) = doc.accessor_values(accessor)?;
+        if layout.comps != comps || layout.rows.is_some() {
+            return Err(invalid(format!(
+                "{what} accessor {accessor} must have {comps} components"
+            )));
+        }
+        let rows = values
+            .chunks_exact(comps)
+            .map(|row| row.iter().map(|&c| layout.dequantize(c)).collect())
+            .collect();
+        Ok(Some(rows))
+    };
+    let vec3 = |rows: Vec<Vec<f64>>| rows.into_iter().map(|r| DVec3::from_slice(&r)).collect();
+    let values = instancing::InstanceValues {
+        translation: read(accessors.translation, 3, "TRANSLATION")?.map(vec3),
+        rotation: read(accessors.rotation, 4, "ROTATION")?
+            .map(|rows| rows.into_iter().map(|r| [r[0], r[1], r[2], r[3]]).collect()),
+        scale: read(accessors.scale, 3, "SCALE")?.map(vec3),
+    };
+    instancing::matrices(&values).map(Some).map_err(invalid)
+}
+
+/// One line per decoding extension the document uses, for `info` and the sidecar: meshopt
+/// buffer views decoded, Draco primitives read from Draco data (by connectivity method), and
+/// GPU-instanced nodes with their instance counts.
+pub fn summary(doc: &Document) -> Vec<String> {
+    let mut lines = Vec::new();
+    if !doc.decoded_views.is_empty() {
+        let name = (0..doc.list("bufferViews").len())
+            .find(|&v| doc.decoded_views.contains_key(&v))
+            .map_or(MESHOPT[0], |v| meshopt_name(doc, v));
+        lines.push(format!("{name}: {} buffer views", doc.decoded_views.len()));
+    }
+    let (mut sequential, mut edgebreaker) = (0, 0);
+    for mesh in doc.list("meshes") {
+        for json in super::document::array(mesh, "primitives") {
+            let Some(ext) = extension(json, DRACO).filter(|_| reads_draco(doc, json)) else {
+                continue;
+            };
+            let bytes = draco::buffer_view(ext)
+                .ok()
+                .and_then(|v| doc.view_bytes(v).ok());
+            match bytes.and_then(|b| draco::method(b).ok()) {
+                Some(draco::Method::Sequential) => sequential += 1,
+                Some(draco::Method::Edgebreaker) => edgebreaker += 1,
+                None => {}
+            }
+        }
+    }
+    if sequential + edgebreaker > 0 {
+        lines.push(format!(
+            "{DRACO}: {} primitives ({sequential} sequential, {edgebreaker} edgebreaker)",
+            sequential + edgebreaker
+        ));
+    }
+    let (mut nodes, mut instances) = (0, 0);
+    for node in doc.list("nodes") {
+        let Some(ext) = extension(node, GPU_INSTANCING) else {
+            continue;
+        };
+        let first = instancing::accessors(ext)
+            .ok()
+            .and_then(|a| a.translation.or(a.rotation).or(a.scale));
+        if let Some(layout) = first.and_then(|a| doc.layout(a).ok()) {
+            nodes += 1;
+            instances += layout.count;
+        }
+    }
+    if nodes > 0 {
+        lines.push(format!(
+            "{GPU_INSTANCING}: {instances} instances on {nodes} nodes"
+        ));
+    }
+    lines
 }
 
 impl Document {

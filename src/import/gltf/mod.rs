@@ -20,7 +20,10 @@ pub mod buffers;
 pub mod decode;
 pub mod diagnostics;
 pub mod document;
+pub mod draco;
+pub mod instancing;
 pub mod mesh;
+pub mod meshopt;
 pub mod node;
 pub mod scene;
 
@@ -37,7 +40,14 @@ use std::path::Path;
 pub const QUADRIC_EXTENSION: &str = "RAYCAST_quadric";
 
 /// Extensions whose absence from our reader does not change the geometry we read.
-const HONOURED_REQUIRED: &[&str] = &["KHR_mesh_quantization", QUADRIC_EXTENSION];
+const HONOURED_REQUIRED: &[&str] = &[
+    "KHR_mesh_quantization",
+    QUADRIC_EXTENSION,
+    mesh::DRACO,
+    decode::MESHOPT[0],
+    decode::MESHOPT[1],
+    decode::GPU_INSTANCING,
+];
 
 /// Prefixes of extensions that only concern appearance (materials, textures, lights).
 const APPEARANCE_PREFIXES: &[&str] = &[

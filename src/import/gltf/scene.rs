@@ -48,6 +48,9 @@ pub fn build(doc: &Document, choice: Option<&str>, path: &Path) -> Result<Scene,
         }
     };
     walk.walk(&roots)?;
+    for line in decode::summary(doc) {
+        walk.builder.note_decoded(line);
+    }
     if walk.builder.object_count() == 0 {
         walk.builder
             .warn("the scene holds no triangles or quadrics");
@@ -57,17 +60,36 @@ pub fn build(doc: &Document, choice: Option<&str>, path: &Path) -> Result<Scene,
 
 /// Adds one placed mesh to the scene: the mesh's triangles in its own frame, the f64 world
 /// matrix of the node (or instance), and the object's name and source pointer. Every mesh
-/// object of a glTF scene goes through here.
+/// object of a glTF scene goes through here. Refuses placed coordinates beyond the f32 range
+/// (the scene stores f32), which large but finite transforms, such as a corrupt GPU instance
+/// scale, can reach.
 fn add_mesh_object(
     builder: &mut SceneBuilder,
     name: String,
     pointer: String,
     local: &[[DVec3; 3]],
     world: &DMat4,
-) {
-    if !local.is_empty() {
-        builder.add_mesh(name, pointer, place(local, world));
+) -> Result<(), Diagnostic> {
+    if local.is_empty() {
+        return Ok(());
     }
+    let placed = place(local, world);
+    let limit = f32::MAX as f64 / 2.0;
+    if placed
+        .iter()
+        .flatten()
+        .any(|p| !(p.abs().max_element() <= limit))
+    {
+        return Err(Diagnostic::error(
+            "NODE_TRANSFORM_NOT_FINITE",
+            pointer,
+            format!(
+                "('{name}'): placed coordinates exceed the range raycast stores (±{limit:.1e})"
+            ),
+        ));
+    }
+    builder.add_mesh(name, pointer, placed);
+    Ok(())
 }
 
 /// Which buffers the geometry reads: those behind the accessors of mesh primitives (POSITION,
@@ -79,12 +101,12 @@ pub fn needed_buffers(doc: &Document) -> Vec<bool> {
         let Some(v) = view.and_then(|v| doc.item("bufferViews", v)) else {
             return;
         };
-        let buffers = std::iter::once(index_of(v, "buffer")).chain(
-            MESHOPT
-                .iter()
-                .map(|name| extension(v, name).and_then(|e| index_of(e, "buffer"))),
-        );
-        for b in buffers.flatten() {
+        // A meshopt view is decoded from its extension's buffer: its own (fallback) buffer
+        // is never read.
+        let compressed = MESHOPT
+            .iter()
+            .find_map(|name| extension(v, name).map(|e| index_of(e, "buffer")));
+        if let Some(b) = compressed.unwrap_or_else(|| index_of(v, "buffer")) {
             if let Some(flag) = needed.get_mut(b) {
                 *flag = true;
             }
@@ -200,7 +222,7 @@ impl Walk<'_> {
                 None => None,
             };
             match instances {
-                None => add_mesh_object(&mut self.builder, name.clone(), at.clone(), local, world),
+                None => add_mesh_object(&mut self.builder, name.clone(), at.clone(), local, world)?,
                 Some(instances) => {
                     for (k, instance) in instances.iter().enumerate() {
                         let pointer = format!("{at}/extensions/{GPU_INSTANCING}/{k}");
@@ -210,7 +232,7 @@ impl Walk<'_> {
                             pointer,
                             local,
                             &(*world * *instance),
-                        );
+                        )?;
                     }
                 }
             }
