@@ -197,6 +197,14 @@ fn info_says_what_was_decoded() {
 }
 
 #[test]
+fn draco_with_a_fallback_reads_the_fallback() {
+    let scene = load("compressed/knight.draco-fallback.glb");
+    assert!(scene.decoded.is_empty(), "{:?}", scene.decoded);
+    let reference = load("compressed/knight.draco-seq.plain.glb");
+    assert_eq!(largest_difference(&scene, &reference, true), 0.0);
+}
+
+#[test]
 fn meshopt_fallback_file_is_never_read() {
     let dir = std::env::temp_dir().join(format!("raycast-fallback-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -6,6 +6,9 @@
 //                                               accessors: the reference decode of IN
 //   node gltf_helper.mjs draco-optional IN OUT  keep Draco but no longer require it (empty
 //                                               fallback accessors, as BoxDraco.gltf has)
+//   node gltf_helper.mjs draco-fallback DRACO PLAIN OUT
+//                                               DRACO with Draco not required and fallback
+//                                               accessors filled from PLAIN (its reference decode)
 //   node gltf_helper.mjs validate FILE...       run the Khronos glTF-Validator; exit 1 on errors
 import { NodeIO } from '@gltf-transform/core';
 import { ALL_EXTENSIONS } from '@gltf-transform/extensions';
@@ -76,6 +79,66 @@ async function dracoOptional(input, output) {
   writeFileSync(output, Buffer.concat([header, chunk, rest]));
 }
 
+function readGlb(file) {
+  const glb = readFileSync(file);
+  const jsonLength = glb.readUInt32LE(12);
+  const json = JSON.parse(glb.subarray(20, 20 + jsonLength).toString('utf8'));
+  const bin = glb.subarray(20 + jsonLength + 8);
+  return { json, bin };
+}
+
+function writeGlb(file, json, bin) {
+  let text = JSON.stringify(json);
+  text += ' '.repeat((4 - (Buffer.byteLength(text) % 4)) % 4);
+  const chunk = Buffer.from(text, 'utf8');
+  const header = Buffer.alloc(20);
+  header.write('glTF', 0);
+  header.writeUInt32LE(2, 4);
+  header.writeUInt32LE(20 + chunk.length + 8 + bin.length, 8);
+  header.writeUInt32LE(chunk.length, 12);
+  header.writeUInt32LE(0x4e4f534a, 16);
+  const binHeader = Buffer.alloc(8);
+  binHeader.writeUInt32LE(bin.length, 0);
+  binHeader.writeUInt32LE(0x004e4942, 4);
+  writeFileSync(file, Buffer.concat([header, chunk, binHeader, bin]));
+}
+
+// The Draco file's own JSON and streams, plus the plain file's bytes appended to its BIN
+// chunk; each Draco primitive's accessors then point at the plain accessors' data.
+async function dracoFallback(dracoFile, plainFile, output) {
+  const draco = readGlb(dracoFile);
+  const plain = readGlb(plainFile);
+  const json = draco.json;
+  const base = draco.bin.length;
+  json.meshes.forEach((mesh, m) => {
+    mesh.primitives.forEach((prim, p) => {
+      if (!prim.extensions?.KHR_draco_mesh_compression) return;
+      const other = plain.json.meshes[m].primitives[p];
+      const pairs = Object.entries(prim.attributes).map(([k, a]) => [a, other.attributes[k]]);
+      if (prim.indices !== undefined) pairs.push([prim.indices, other.indices]);
+      for (const [ours, theirs] of pairs) {
+        const source = plain.json.accessors[theirs];
+        const view = { ...plain.json.bufferViews[source.bufferView], buffer: 0 };
+        view.byteOffset = (view.byteOffset ?? 0) + base;
+        json.bufferViews.push(view);
+        Object.assign(json.accessors[ours], {
+          bufferView: json.bufferViews.length - 1,
+          byteOffset: source.byteOffset ?? 0,
+          componentType: source.componentType,
+        });
+        // The decoded (quantized) values' bounds, not the source's.
+        for (const key of ['min', 'max']) {
+          if (source[key]) json.accessors[ours][key] = source[key];
+        }
+      }
+    });
+  });
+  json.extensionsRequired = (json.extensionsRequired ?? []).filter((e) => e !== 'KHR_draco_mesh_compression');
+  if (json.extensionsRequired.length === 0) delete json.extensionsRequired;
+  json.buffers[0].byteLength = base + plain.bin.length;
+  writeGlb(output, json, Buffer.concat([draco.bin, plain.bin]));
+}
+
 async function validate(files) {
   let failed = false;
   for (const file of files) {
@@ -98,6 +161,8 @@ const [command, ...args] = process.argv.slice(2);
 const commands = { strip, plain, 'draco-optional': dracoOptional };
 if (command === 'validate') {
   await validate(args);
+} else if (command === 'draco-fallback' && args.length === 3) {
+  await dracoFallback(...args);
 } else if (commands[command] && args.length === 2) {
   await commands[command](args[0], args[1]);
 } else {
