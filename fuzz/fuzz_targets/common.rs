@@ -1,5 +1,6 @@
 //! Shared by the fuzz targets: write the input to a file in a private empty folder (the
-//! asset's folder tree, so nothing outside it can be read) and run `raycast check` on it.
+//! asset's folder tree, so nothing outside it can be read) and run `raycast check` on it,
+//! or the importer as a render runs it.
 
 use raycast::check::{check_asset, Asset, CheckOptions};
 use std::path::PathBuf;
@@ -12,6 +13,17 @@ pub fn tolerate_caught_panics() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     if std::env::var_os("RAYCAST_FUZZ_STRICT").is_none() {
         ONCE.call_once(|| std::panic::set_hook(Box::new(|_| {})));
+    }
+}
+
+/// Writes the input where [`run`] does and loads it as `raycast` and `raycast info` do
+/// (fail-fast); errors are fine, a panic is a bug.
+pub fn load(data: &[u8], name: &str) {
+    let dir = std::env::temp_dir().join(format!("raycast-fuzz-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let path: PathBuf = dir.join(name);
+    if std::fs::write(&path, data).is_ok() {
+        let _ = raycast::import::load(&path, &raycast::import::LoadOptions::default());
     }
 }
 

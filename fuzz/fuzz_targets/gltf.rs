@@ -1,5 +1,6 @@
 #![no_main]
-//! glTF and GLB: the check walker, the importer and the geometric checks.
+//! glTF and GLB: the document layer read collect-all by `check` (with the validator's rules,
+//! the scene build and the geometric checks), and fail-fast as a render reads it.
 
 #[path = "common.rs"]
 mod common;
@@ -11,4 +12,5 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
         "asset.gltf"
     };
     common::run(data, name);
+    common::load(data, name);
 });
