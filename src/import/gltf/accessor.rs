@@ -228,16 +228,24 @@ impl Document {
         let layout = self.layout(index)?;
         let acc = &self.list("accessors")[index];
         let at = format!("/accessors/{index}");
-        let total = layout
+        if layout.count == 0 {
+            let at = format!("{at}/count");
+            return Err(Diagnostic::error(
+                "VALUE_NOT_IN_RANGE",
+                at,
+                "must be at least 1",
+            ));
+        }
+        let Some(total) = layout
             .count
             .checked_mul(layout.comps)
-            .filter(|&t| t > 0 && t <= MAX_VALUES);
-        let Some(total) = total else {
+            .filter(|&t| t <= MAX_VALUES)
+        else {
             return Err(Diagnostic::error(
                 "ASSET_TOO_LARGE",
                 format!("{at}/count"),
                 format!(
-                    "count {} is 0 or more than raycast decodes ({MAX_VALUES} values)",
+                    "count {} is more than raycast decodes ({MAX_VALUES} values)",
                     layout.count
                 ),
             ));
@@ -406,5 +414,37 @@ mod tests {
             serde_json::json!({"componentType": 5123.0, "type": "SCALAR", "count": 2e0});
         let l = Layout::of(&acc).expect("integers written as floats are integers");
         assert_eq!((l.count, l.dequantize(65535.0)), (2, 65535.0));
+    }
+
+    #[test]
+    fn unbacked_sparse_accessor_is_zeros_but_its_sparse_values() {
+        // Buffer: one u8 sparse index (1), padding, then the f32 values (1, 2, 3).
+        let json = serde_json::json!({
+            "asset": {"version": "2.0"},
+            "buffers": [{"byteLength": 16, "uri": "data:application/octet-stream;base64,AQAAAAAAgD8AAABAAABAQA=="}],
+            "bufferViews": [
+                {"buffer": 0, "byteLength": 1},
+                {"buffer": 0, "byteOffset": 4, "byteLength": 12}
+            ],
+            "accessors": [{
+                "componentType": 5126, "count": 3, "type": "VEC3",
+                "sparse": {"count": 1,
+                    "indices": {"bufferView": 0, "componentType": 5121},
+                    "values": {"bufferView": 1}}
+            }]
+        });
+        let mut sink = crate::import::gltf::FailFast::default();
+        let mut doc = Document::parse(json.to_string().into_bytes(), false, &mut sink).unwrap();
+        let here = std::path::Path::new(".");
+        let resources = crate::import::gltf::buffers::Resources {
+            base: here,
+            root: here,
+            allow_outside: false,
+            max_bytes: 1 << 20,
+        };
+        doc.load_buffers(&resources, None, &mut sink);
+        assert_eq!(sink.error, None);
+        let (_, values) = doc.accessor_values(0).unwrap();
+        assert_eq!(values, [0.0, 0.0, 0.0, 1.0, 2.0, 3.0, 0.0, 0.0, 0.0]);
     }
 }
