@@ -107,7 +107,9 @@ pub fn check(
             );
         }
     }
-    Some(built.map_err(|e| crate::Error::in_file(path, e.to_string())))
+    // The importer's verdict keeps the layer's code, so a reader of the report need not
+    // match message strings.
+    Some(built.map_err(|e| crate::Error::in_file(path, format!("{} {e}", e.code))))
 }
 
 /// Runs the `gltf` crate's reference validation where the crate can read the file (it
