@@ -78,7 +78,7 @@ fn add_mesh_object(
     if placed
         .iter()
         .flatten()
-        .any(|p| !(p.abs().max_element() <= limit))
+        .any(|p| !p.is_finite() || p.abs().max_element() > limit)
     {
         return Err(Diagnostic::error(
             "NODE_TRANSFORM_NOT_FINITE",
