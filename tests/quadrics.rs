@@ -194,7 +194,7 @@ fn boundary_trap_with_a_large_quadric() {
     let ray = prepare_ray(&scene, origin, dir);
     let (prim, t, exit) = naive_first_hit(&scene, &octree, &ray);
     assert_eq!(
-        scene.object_of(prim).0.name,
+        scene.object(prim).name,
         "big_sphere",
         "the sphere is found first"
     );

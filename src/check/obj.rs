@@ -56,10 +56,10 @@ pub fn check(
                     .collect::<Result<Vec<f64>, _>>()
                 {
                     Err(_) => f.error("OBJ_PARSE_ERROR", at, format!("bad vertex '{line}'")),
-                    Ok(v) if v.iter().any(|x| !(*x as f32).is_finite()) => f.error(
+                    Ok(v) if v.iter().any(|x| !x.is_finite()) => f.error(
                         "NON_FINITE_POSITION",
                         at,
-                        "the vertex is NaN or infinite (in f32)",
+                        "the vertex is NaN or infinite",
                     ),
                     Ok(_) => {}
                 }
