@@ -51,7 +51,11 @@ fn model_mesh(mesh: &tobj::Mesh) -> std::result::Result<Mesh, String> {
     if let Some(bad) = positions.iter().position(|p| !p.is_finite()) {
         return Err(format!("vertex {} is not finite", bad + 1));
     }
-    if let Some(&bad) = mesh.indices.iter().find(|&&i| i as usize >= positions.len()) {
+    if let Some(&bad) = mesh
+        .indices
+        .iter()
+        .find(|&&i| i as usize >= positions.len())
+    {
         return Err(format!(
             "face refers to vertex {} of {}",
             bad + 1,

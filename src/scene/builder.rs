@@ -256,7 +256,8 @@ impl Layout {
             }
             Item::Mesh(mesh, world) => {
                 let stored = mesh_of.get(&(Arc::as_ptr(&mesh) as usize));
-                let instance = stored.and_then(|&m| Instance::new(m, &meshes[m as usize], &world, part));
+                let instance =
+                    stored.and_then(|&m| Instance::new(m, &meshes[m as usize], &world, part));
                 match instance {
                     Some(instance) => {
                         self.instances.push(instance);
@@ -311,7 +312,8 @@ fn objects(
         match part.kind {
             PartKind::World { count, .. } => object.triangles += count,
             PartKind::Instance(k) => {
-                object.triangles += meshes[instances[k as usize].mesh as usize].set.mesh.len() as u32
+                object.triangles +=
+                    meshes[instances[k as usize].mesh as usize].set.mesh.len() as u32
             }
             PartKind::Quadric(q) => {
                 object.kind = ObjectKind::Quadric;

@@ -77,7 +77,10 @@ impl Mesh {
     /// A mesh from vertices and index triples; `None` when an index is out of range or a
     /// vertex is not finite.
     pub fn new(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Option<Mesh> {
-        let in_range = triangles.iter().flatten().all(|&i| (i as usize) < positions.len());
+        let in_range = triangles
+            .iter()
+            .flatten()
+            .all(|&i| (i as usize) < positions.len());
         (in_range && positions.iter().all(|p| p.is_finite())).then(|| Mesh {
             positions: Positions::exact(positions),
             triangles,
@@ -86,7 +89,10 @@ impl Mesh {
 
     /// A mesh from stored vertices and index triples that are known to be in range.
     pub(crate) fn from_parts(positions: Positions, triangles: Vec<[u32; 3]>) -> Mesh {
-        debug_assert!(triangles.iter().flatten().all(|&i| (i as usize) < positions.len()));
+        debug_assert!(triangles
+            .iter()
+            .flatten()
+            .all(|&i| (i as usize) < positions.len()));
         Mesh {
             positions,
             triangles,
@@ -101,10 +107,12 @@ impl Mesh {
             .iter()
             .map(|tri| {
                 tri.map(|p| {
-                    *index.entry(p.to_array().map(f64::to_bits)).or_insert_with(|| {
-                        positions.push(p);
-                        positions.len() as u32 - 1
-                    })
+                    *index
+                        .entry(p.to_array().map(f64::to_bits))
+                        .or_insert_with(|| {
+                            positions.push(p);
+                            positions.len() as u32 - 1
+                        })
                 })
             })
             .collect();

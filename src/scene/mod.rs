@@ -232,15 +232,16 @@ impl Scene {
         let mut triangles = Vec::new();
         for part in self.object_parts(object) {
             match part.kind {
-                PartKind::World { first, count } => {
-                    triangles.extend((first..first + count).map(|i| self.world.mesh.triangle(i as usize)))
-                }
+                PartKind::World { first, count } => triangles
+                    .extend((first..first + count).map(|i| self.world.mesh.triangle(i as usize))),
                 PartKind::Instance(k) => {
                     let instance = &self.instances[k as usize];
                     let mesh = &self.meshes[instance.mesh as usize].set.mesh;
                     let flip = instance.to_world.matrix3.determinant() < 0.0;
                     triangles.extend((0..mesh.len()).map(|i| {
-                        let [a, b, c] = mesh.triangle(i).map(|p| instance.to_world.transform_point3(p));
+                        let [a, b, c] = mesh
+                            .triangle(i)
+                            .map(|p| instance.to_world.transform_point3(p));
                         if flip {
                             [a, c, b]
                         } else {
@@ -297,7 +298,9 @@ impl Scene {
                 let stored = &self.meshes[instance.mesh as usize];
                 match instance.intersect(stored, origin, dir, hit.t) {
                     Some(inner) => {
-                        let normal = stored.set.normal(inner.prim as usize, Some(&instance.to_world));
+                        let normal = stored
+                            .set
+                            .normal(inner.prim as usize, Some(&instance.to_world));
                         (inner.prim, normal.unwrap_or_else(fallback))
                     }
                     None => (0, fallback()),

@@ -270,9 +270,9 @@ impl Target<'_> {
             Some(inst) => *inst
                 .object
                 .get_or_insert_with(|| builder.new_object(inst.name.clone(), inst.source.clone())),
-            None => *self
-                .object
-                .get_or_insert_with(|| builder.new_object(self.name.to_string(), self.source.to_string())),
+            None => *self.object.get_or_insert_with(|| {
+                builder.new_object(self.name.to_string(), self.source.to_string())
+            }),
         }
     }
 }
