@@ -43,6 +43,11 @@ pub struct SceneBuilder {
     warnings: Vec<String>,
     extensions_used: Vec<String>,
     stage: Option<StageInfo>,
+    /// Meshes seen so far by content hash, so that equal meshes read from different places
+    /// (USD prims referencing one asset, say) are stored once.
+    by_content: HashMap<u64, Vec<Arc<Mesh>>>,
+    /// The stored mesh for each mesh address already placed.
+    by_address: HashMap<usize, Arc<Mesh>>,
 }
 
 impl SceneBuilder {
@@ -72,8 +77,28 @@ impl SceneBuilder {
     /// every use of one mesh: a mesh used several times is stored once.
     pub fn place_mesh(&mut self, id: u32, mesh: Arc<Mesh>, world: DMat4) {
         if !mesh.is_empty() {
+            let mesh = self.canonical(mesh);
             self.push(id, mesh.len() as u32, Item::Mesh(mesh, world));
         }
+    }
+
+    /// The first mesh placed with the same content as `mesh` (compared bit for bit), or
+    /// `mesh` itself.
+    fn canonical(&mut self, mesh: Arc<Mesh>) -> Arc<Mesh> {
+        let address = Arc::as_ptr(&mesh) as usize;
+        if let Some(known) = self.by_address.get(&address) {
+            return Arc::clone(known);
+        }
+        let same = self.by_content.entry(mesh.content_hash()).or_default();
+        let stored = match same.iter().find(|m| ***m == *mesh) {
+            Some(m) => Arc::clone(m),
+            None => {
+                same.push(Arc::clone(&mesh));
+                Arc::clone(&mesh)
+            }
+        };
+        self.by_address.insert(address, Arc::clone(&stored));
+        stored
     }
 
     /// Adds a quadric to object `id`.
@@ -131,6 +156,7 @@ impl SceneBuilder {
             warnings,
             extensions_used,
             stage,
+            ..
         } = self;
         items.sort_by_key(|&(object, first, _)| (object, first));
         let (meshes, mesh_of) = store_instanced(&items);

@@ -127,6 +127,22 @@ impl Mesh {
         self.triangles.len()
     }
 
+    /// A hash of the stored vertices' bits and the index triples: equal meshes hash equally.
+    pub fn content_hash(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        match &self.positions {
+            Positions::F32(p) => p
+                .iter()
+                .for_each(|v| v.to_array().map(f32::to_bits).hash(&mut h)),
+            Positions::F64(p) => p
+                .iter()
+                .for_each(|v| v.to_array().map(f64::to_bits).hash(&mut h)),
+        }
+        self.triangles.hash(&mut h);
+        h.finish()
+    }
+
     /// True when the mesh has no triangle.
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty()
@@ -140,7 +156,12 @@ impl Mesh {
     /// Triangle `i`'s corners, in the mesh frame.
     #[inline(always)]
     pub fn triangle(&self, i: usize) -> [DVec3; 3] {
-        self.triangles[i].map(|v| self.positions.get(v))
+        let [a, b, c] = self.triangles[i].map(|v| v as usize);
+        // One branch per triangle on the storage kind.
+        match &self.positions {
+            Positions::F32(p) => [p[a].as_dvec3(), p[b].as_dvec3(), p[c].as_dvec3()],
+            Positions::F64(p) => [p[a], p[b], p[c]],
+        }
     }
 
     /// Bytes of vertex and index data.
