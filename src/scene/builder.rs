@@ -46,8 +46,9 @@ pub struct SceneBuilder {
     /// Meshes seen so far by content hash, so that equal meshes read from different places
     /// (USD prims referencing one asset, say) are stored once.
     by_content: HashMap<u64, Vec<Arc<Mesh>>>,
-    /// The stored mesh for each mesh address already placed.
-    by_address: HashMap<usize, Arc<Mesh>>,
+    /// Each mesh already placed, by address, with the mesh stored for it (the placed one is
+    /// kept alive so that its address cannot be reused by another mesh).
+    by_address: HashMap<usize, (Arc<Mesh>, Arc<Mesh>)>,
 }
 
 impl SceneBuilder {
@@ -86,8 +87,8 @@ impl SceneBuilder {
     /// `mesh` itself.
     fn canonical(&mut self, mesh: Arc<Mesh>) -> Arc<Mesh> {
         let address = Arc::as_ptr(&mesh) as usize;
-        if let Some(known) = self.by_address.get(&address) {
-            return Arc::clone(known);
+        if let Some((_, stored)) = self.by_address.get(&address) {
+            return Arc::clone(stored);
         }
         let same = self.by_content.entry(mesh.content_hash()).or_default();
         let stored = match same.iter().find(|m| ***m == *mesh) {
@@ -97,7 +98,7 @@ impl SceneBuilder {
                 Arc::clone(&mesh)
             }
         };
-        self.by_address.insert(address, Arc::clone(&stored));
+        self.by_address.insert(address, (mesh, Arc::clone(&stored)));
         stored
     }
 
