@@ -368,16 +368,37 @@ impl PrimitiveSet for Scene {
     }
 
     fn intersect(&self, index: usize, ray: &PreparedRay<SceneRay>, t_max: f64) -> Option<f64> {
+        if index < self.world.mesh.len() {
+            self.world
+                .intersect_triangle(index, &ray.extra.triangle, t_max)
+        } else {
+            self.intersect_other(index, ray, t_max)
+        }
+    }
+}
+
+impl Scene {
+    /// The instance and quadric tests, kept out of line so that the triangle test alone
+    /// inlines into traversal (measured with callgrind: inlining all of them costs
+    /// instructions on scenes without instances).
+    #[inline(never)]
+    fn intersect_other(
+        &self,
+        index: usize,
+        ray: &PreparedRay<SceneRay>,
+        t_max: f64,
+    ) -> Option<f64> {
+        let origin = ray.extra.world_origin;
         match self.top(index) {
             Top::Triangle(i) => self.world.intersect_triangle(i, &ray.extra.triangle, t_max),
             Top::Instance(k) => {
                 let instance = &self.instances[k];
                 let stored = &self.meshes[instance.mesh as usize];
                 instance
-                    .intersect(stored, ray.extra.world_origin, ray.dir, t_max)
+                    .intersect(stored, origin, ray.dir, t_max)
                     .map(|hit| hit.t)
             }
-            Top::Quadric(q) => self.quadrics[q].intersect(ray.extra.world_origin, ray.dir, t_max),
+            Top::Quadric(q) => self.quadrics[q].intersect(origin, ray.dir, t_max),
         }
     }
 }
