@@ -29,7 +29,7 @@ struct Draft {
 #[derive(Debug)]
 enum Item {
     Mesh(Arc<Mesh>, DMat4),
-    Quadric(Quadric),
+    Quadric(Box<Quadric>),
 }
 
 /// Collects objects (meshes in their own frames with f64 transforms, quadrics) and turns
@@ -104,7 +104,7 @@ impl SceneBuilder {
 
     /// Adds a quadric to object `id`.
     pub fn place_quadric(&mut self, id: u32, quadric: Quadric) {
-        self.push(id, 1, Item::Quadric(quadric));
+        self.push(id, 1, Item::Quadric(Box::new(quadric)));
     }
 
     /// Adds a mesh object made of world-space triangles; returns its id.
@@ -277,7 +277,7 @@ impl Layout {
     ) {
         let kind = match item {
             Item::Quadric(quadric) => {
-                self.quadrics.push(quadric);
+                self.quadrics.push(*quadric);
                 self.quadric_parts.push(part);
                 PartKind::Quadric(self.quadrics.len() as u32 - 1)
             }
