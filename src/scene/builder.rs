@@ -42,6 +42,7 @@ pub struct SceneBuilder {
     cameras: Vec<Camera>,
     warnings: Vec<String>,
     extensions_used: Vec<String>,
+    decoded: Vec<String>,
     stage: Option<StageInfo>,
     /// Meshes seen so far by content hash, so that equal meshes read from different places
     /// (USD prims referencing one asset, say) are stored once.
@@ -136,6 +137,11 @@ impl SceneBuilder {
         self.extensions_used = extensions;
     }
 
+    /// Records what was decoded (one line, e.g. an extension and its counts).
+    pub fn note_decoded(&mut self, line: String) {
+        self.decoded.push(line);
+    }
+
     /// Records USD stage metadata.
     pub fn set_stage(&mut self, stage: StageInfo) {
         self.stage = Some(stage);
@@ -156,6 +162,7 @@ impl SceneBuilder {
             cameras,
             warnings,
             extensions_used,
+            decoded,
             stage,
             ..
         } = self;
@@ -200,6 +207,7 @@ impl SceneBuilder {
             cameras,
             warnings,
             extensions_used,
+            decoded,
             stage,
         }
     }

@@ -122,6 +122,8 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// Extensions the file declares (glTF `extensionsUsed`).
     pub extensions_used: Vec<String>,
+    /// What the importer decoded, one line per extension (Draco, meshopt, GPU instancing).
+    pub decoded: Vec<String>,
     /// USD stage metadata (USD files only).
     pub stage: Option<StageInfo>,
 }

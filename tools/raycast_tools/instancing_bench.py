@@ -1,7 +1,6 @@
-#!/usr/bin/env python3
 """Memory and build time of instanced scenes, for two raycast binaries (before and after).
 
-    .venv/bin/python tools/instancing_bench.py BEFORE_BINARY AFTER_BINARY [--runs 3]
+    python -m raycast_tools instancing-bench BEFORE_BINARY AFTER_BINARY [--runs 3]
 
 Scenes: the bunny drawn by 1 and by 64 glTF nodes (one mesh), the 72-bunny bench scene
 (tools/bench.py's generator) and the OpenChessSet (../shared/assets; skipped with a message
@@ -19,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench import BUNNY, CHESS, instances, load_triangles, write_gltf
+from .bench import BUNNY, CHESS, instances, load_triangles, write_gltf
 
 
 def run(binary, scene, out):
@@ -32,14 +31,14 @@ def run(binary, scene, out):
     return timings["load"], timings["build"], peak_kib / 1024
 
 
-def main():
+def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("before", type=Path)
     parser.add_argument("after", type=Path)
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--chess", type=Path, default=CHESS,
                         help="the OpenChessSet's chess_set.usda (default: ../shared/assets/...)")
-    a = parser.parse_args()
+    a = parser.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="raycast-instancing-"))
     rng = np.random.default_rng(7)
     bunny = load_triangles(BUNNY)
@@ -62,7 +61,3 @@ def main():
             load, build, peak = (statistics.median(r[k] for r in runs) for k in range(3))
             print(f"| {title} | {label} | {load:.3f} | {build:.3f} | {load + build:.3f} "
                   f"| {peak:.0f} |", flush=True)
-
-
-if __name__ == "__main__":
-    main()
