@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from .bench import BUNNY, CHESS, instances, load_triangles, write_gltf
+from .cli import prog
 
 
 def run(binary, scene, out):
@@ -32,7 +33,9 @@ def run(binary, scene, out):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=prog("instancing-bench"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("before", type=Path)
     parser.add_argument("after", type=Path)
     parser.add_argument("--runs", type=int, default=3)
