@@ -24,8 +24,22 @@ from .cli import prog
 
 def run(binary, scene, out):
     """(load s, build s, peak MiB) of one render."""
-    cmd = ["/usr/bin/time", "-f", "%M", str(binary), str(scene), "--width", "256",
-           "--height", "256", "--quiet", "--format", "png", "--out", str(out)]
+    cmd = [
+        "/usr/bin/time",
+        "-f",
+        "%M",
+        str(binary),
+        str(scene),
+        "--width",
+        "256",
+        "--height",
+        "256",
+        "--quiet",
+        "--format",
+        "png",
+        "--out",
+        str(out),
+    ]
     done = subprocess.run(cmd, capture_output=True, text=True, check=True)
     peak_kib = int(done.stderr.strip().splitlines()[-1])
     timings = json.loads((out / "raycast.json").read_text())["timings"]
@@ -39,8 +53,12 @@ def main(argv=None):
     parser.add_argument("before", type=Path)
     parser.add_argument("after", type=Path)
     parser.add_argument("--runs", type=int, default=3)
-    parser.add_argument("--chess", type=Path, default=CHESS,
-                        help="the OpenChessSet's chess_set.usda (default: ../shared/assets/...)")
+    parser.add_argument(
+        "--chess",
+        type=Path,
+        default=CHESS,
+        help="the OpenChessSet's chess_set.usda (default: ../shared/assets/...)",
+    )
     a = parser.parse_args(argv)
     tmp = Path(tempfile.mkdtemp(prefix="raycast-instancing-"))
     rng = np.random.default_rng(7)
@@ -54,13 +72,18 @@ def main(argv=None):
     if a.chess.exists():
         scenes.append(("OpenChessSet", a.chess))
     else:
-        print(f"instancing_bench: {a.chess} not found (../shared/assets missing): chess set skipped",
-              file=sys.stderr)
+        print(
+            f"instancing_bench: {a.chess} not found (../shared/assets missing): chess set skipped",
+            file=sys.stderr,
+        )
     print("| scene | binary | load s | build s | load+build s | peak MiB |")
     print("|---|---|---|---|---|---|")
     for title, path in scenes:
         for label, binary in (("before", a.before), ("after", a.after)):
             runs = [run(binary, path, tmp / f"out_{label}") for _ in range(a.runs)]
             load, build, peak = (statistics.median(r[k] for r in runs) for k in range(3))
-            print(f"| {title} | {label} | {load:.3f} | {build:.3f} | {load + build:.3f} "
-                  f"| {peak:.0f} |", flush=True)
+            print(
+                f"| {title} | {label} | {load:.3f} | {build:.3f} | {load + build:.3f} "
+                f"| {peak:.0f} |",
+                flush=True,
+            )

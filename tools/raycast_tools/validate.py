@@ -627,8 +627,10 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
         if so.get("kind") == "quadric" and str(so.get("source", "")).startswith("/nodes/"):
             # "/nodes/3" or "/nodes/3/extensions/RAYCAST_quadric"; a node drawing a mesh
             # and a quadric is one object whose quadric is the prim after its triangles.
-            quad_node_of_id[int(so["id"])] = (int(so["source"].split("/")[2]),
-                                              int(so.get("triangles", 0)))
+            quad_node_of_id[int(so["id"])] = (
+                int(so["source"].split("/")[2]),
+                int(so.get("triangles", 0)),
+            )
     rc_obj = np.full(n, -1, dtype=np.int64)
     valid_id = (rid > 0) & (rid < len(omap))
     rc_obj[valid_id] = omap[rid[valid_id]]
