@@ -331,3 +331,47 @@ fn obj_vertices_keep_their_f64_digits() {
     let tris = scene.mesh_triangles(object);
     assert_eq!(tris, read_obj(&fixture("obj/far_triangle.obj")));
 }
+
+/// A PointInstancer's half-precision orientation goes into the rotation matrix as stored, not
+/// normalised, as usd-core's ComputeInstanceTransformsAtTime does. Expected: the rows of the
+/// matrix usd-core 25 computes for this file (Gf row vectors = images of the basis vectors);
+/// the unit cube prototype (±1) then spans Σ|row_i[axis]| on each axis.
+#[test]
+fn point_instancer_orientations_are_not_normalised() {
+    let dir = std::env::temp_dir().join(format!("raycast-pi-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("pi.usda");
+    std::fs::write(
+        &path,
+        "#usda 1.0\n\ndef PointInstancer \"pi\"\n{\n    rel prototypes = </pi/proto>\n    \
+         int[] protoIndices = [0]\n    point3f[] positions = [(0, 0, 0)]\n    \
+         quath[] orientations = [(0.9, 0.3, 0.2, 0.1)]\n\n    def Cube \"proto\"\n    {\n    }\n}\n",
+    )
+    .unwrap();
+    let scene = import::load(&path, &LoadOptions::default()).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let rows: [[f64; 3]; 3] = [
+        [0.9000488221645355, 0.2999267578125, -0.29987794160842896],
+        [
+            -0.059946298599243164,
+            0.7999511659145355,
+            0.5800097584724426,
+        ],
+        [0.4198681712150574, -0.500048816204071, 0.7399804592132568],
+    ];
+    let half = DVec3::from_array([0, 1, 2].map(|axis| rows.iter().map(|r| r[axis].abs()).sum()));
+    assert_eq!(scene.objects.len(), 1);
+    assert_eq!(scene.objects[0].name, "/pi[0]");
+    let b = scene.object_bounds(&scene.objects[0]);
+    assert!(
+        (b.max - half).abs().max_element() < 1e-12,
+        "{:?} vs {half:?}",
+        b.max
+    );
+    assert!(
+        (b.min + half).abs().max_element() < 1e-12,
+        "{:?} vs {:?}",
+        b.min,
+        -half
+    );
+}
