@@ -558,7 +558,7 @@ impl Loader {
                 None
             }
             mesh::MeshRead::Triangles {
-                triangles,
+                mesh,
                 subdivided,
                 degenerate_faces,
             } => {
@@ -569,7 +569,7 @@ impl Loader {
                     ));
                 }
                 Some(CachedMesh {
-                    mesh: Arc::new(Mesh::from_soup(&triangles)),
+                    mesh: Arc::new(mesh),
                     subdivided,
                 })
             }
