@@ -85,8 +85,9 @@ impl SceneInfo {
                         kind: o.kind,
                         source: o.source.clone(),
                         triangles: o.triangles,
-                        quadric_type: (o.kind == ObjectKind::Quadric)
-                            .then(|| scene.quadrics()[o.first as usize].kind().name()),
+                        quadric_type: o
+                            .quadric
+                            .map(|q| scene.quadrics()[q as usize].kind().name()),
                         bounds: [b.min.to_array(), b.max.to_array()],
                     }
                 })

@@ -310,9 +310,10 @@ pub fn render(
             .map(|i| hits[i].as_ref().map_or(miss, |h| f(i, h)))
             .collect::<Vec<DVec3>>()
     };
-    let fill_u32 = |f: &(dyn Fn(&Hit) -> u32 + Sync), miss: u32| {
-        hits.par_iter()
-            .map(|h| h.as_ref().map_or(miss, f))
+    let fill_u32 = |f: &(dyn Fn(usize, &Hit) -> u32 + Sync), miss: u32| {
+        (0..n)
+            .into_par_iter()
+            .map(|i| hits[i].as_ref().map_or(miss, |h| f(i, h)))
             .collect::<Vec<u32>>()
     };
     let point = |i: usize, h: &Hit| source.ray(i).at(h.t);
@@ -335,14 +336,18 @@ pub fn render(
             Aov::Normal => {
                 let normal = |i: usize, h: &Hit| {
                     let ray = source.ray(i);
-                    tracer.scene.normal(h.prim, ray.origin, ray.dir, h.t)
+                    tracer.scene.locate(h, ray.origin, ray.dir).normal
                 };
                 buffers.normal = Some(fill3(&normal, DVec3::ZERO))
             }
             Aov::Position => buffers.position = Some(fill3(&point, DVec3::INFINITY)),
-            Aov::Id => buffers.id = Some(fill_u32(&|h| tracer.scene.object_of(h.prim).0.id, 0)),
+            Aov::Id => buffers.id = Some(fill_u32(&|_, h| tracer.scene.object(h.prim).id, 0)),
             Aov::Prim => {
-                buffers.prim = Some(fill_u32(&|h| tracer.scene.object_of(h.prim).1, u32::MAX))
+                let prim = |i: usize, h: &Hit| {
+                    let ray = source.ray(i);
+                    tracer.scene.locate(h, ray.origin, ray.dir).prim
+                };
+                buffers.prim = Some(fill_u32(&prim, u32::MAX))
             }
         }
     }

@@ -14,11 +14,7 @@ fn world_triangles(scene: &Scene) -> Vec<(String, Vec<[DVec3; 3]>)> {
         .objects
         .iter()
         .map(|o| {
-            let triangles = scene
-                .mesh_triangles(o)
-                .iter()
-                .map(|t| t.map(|v| v.as_dvec3() + scene.anchor))
-                .collect();
+            let triangles = scene.mesh_triangles(o);
             (o.name.clone(), triangles)
         })
         .collect()

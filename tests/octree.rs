@@ -64,7 +64,7 @@ fn boundary_trap_is_not_fallen_into() {
     let ray = prepare_ray(&scene, origin, dir);
     let (prim, t, exit) = naive_first_hit(&scene, &octree, &ray);
     assert_eq!(
-        scene.object_of(prim).0.name,
+        scene.object(prim).name,
         "big",
         "the trap needs the big triangle first"
     );
@@ -76,7 +76,7 @@ fn boundary_trap_is_not_fallen_into() {
     // The octree's answer is the nearer quad, exactly as brute force finds it.
     let hit = octree.intersect(&scene, &ray, f64::INFINITY).unwrap();
     assert_eq!(Some(hit), brute_force(&scene, &ray));
-    assert_eq!(scene.object_of(hit.prim).0.name, "near");
+    assert_eq!(scene.object(hit.prim).name, "near");
     assert!((hit.t - 14.0).abs() < 1e-12);
     let sample = cast_one(&scene, [-12.0, 0.25, 0.25], [1.0, 0.0, 0.0]);
     assert_hit(&sample, "near", 14.0, [-1.0, 0.0, 0.0], &[0]);

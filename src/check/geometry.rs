@@ -11,7 +11,7 @@
 use super::{CheckOptions, Findings, SceneStats};
 use crate::geometry::triangle::WatertightRay;
 use crate::scene::{ObjectKind, Scene};
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use std::collections::HashMap;
 
 /// Largest fraction of boundary edges for which a mesh counts as meant to be closed.
@@ -46,9 +46,9 @@ impl Topology {
 }
 
 /// Welds vertices by their exact bits and counts edge uses.
-pub fn topology(triangles: &[[Vec3; 3]]) -> Topology {
-    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
-    let mut id = |v: Vec3| {
+pub fn topology(triangles: &[[DVec3; 3]]) -> Topology {
+    let mut ids: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut id = |v: DVec3| {
         let key = [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
         let next = ids.len() as u32;
         *ids.entry(key).or_insert(next)
@@ -57,7 +57,7 @@ pub fn topology(triangles: &[[Vec3; 3]]) -> Topology {
     let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
     let mut topo = Topology::default();
     for tri in triangles {
-        let [a, b, c] = tri.map(|v| v.as_dvec3());
+        let [a, b, c] = tri.map(|v| v);
         if (b - a).cross(c - a).length_squared() == 0.0 {
             topo.degenerate += 1;
         }
@@ -88,15 +88,15 @@ pub fn topology(triangles: &[[Vec3; 3]]) -> Topology {
 }
 
 /// Signed volume enclosed by the triangles (positive when normals point outward).
-pub fn signed_volume(triangles: &[[Vec3; 3]]) -> f64 {
+pub fn signed_volume(triangles: &[[DVec3; 3]]) -> f64 {
     let Some(first) = triangles.first() else {
         return 0.0;
     };
-    let o = first[0].as_dvec3();
+    let o = first[0];
     triangles
         .iter()
         .map(|t| {
-            let [a, b, c] = t.map(|v| v.as_dvec3() - o);
+            let [a, b, c] = t.map(|v| v - o);
             a.dot(b.cross(c))
         })
         .sum::<f64>()
@@ -118,10 +118,10 @@ fn directions(n: usize) -> Vec<DVec3> {
 
 /// Casts `rays` lines through the mesh's bounds; returns how many cross its surface an odd
 /// number of times (through a closed surface the count is always even).
-pub fn odd_crossings(triangles: &[[Vec3; 3]], rays: usize) -> (usize, usize) {
+pub fn odd_crossings(triangles: &[[DVec3; 3]], rays: usize) -> (usize, usize) {
     let (min, max) = triangles.iter().flatten().fold(
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), v| (lo.min(v.as_dvec3()), hi.max(v.as_dvec3())),
+        |(lo, hi), v| (lo.min(*v), hi.max(*v)),
     );
     let centre = (min + max) * 0.5;
     let half = (max - min) * 0.5;
@@ -208,7 +208,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
             continue;
         }
         let at = object.source.clone();
-        let topo = topology(triangles);
+        let topo = topology(&triangles);
         if topo.degenerate > 0 {
             f.warn(
                 "DEGENERATE_TRIANGLES",
@@ -235,7 +235,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
             && ((topo.boundary as f64) <= NEARLY_CLOSED * topo.edges as f64
                 || (topo.boundary <= 6 && topo.edges >= 12));
         if topo.closed() {
-            let (odd, rays) = odd_crossings(triangles, HOLE_RAYS);
+            let (odd, rays) = odd_crossings(&triangles, HOLE_RAYS);
             if odd > 0 {
                 f.warn(
                     "MESH_HOLES",
@@ -246,7 +246,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
                     ),
                 );
             }
-            let volume = signed_volume(triangles);
+            let volume = signed_volume(&triangles);
             if volume < 0.0 {
                 f.warn(
                     "INVERTED_NORMALS",
@@ -258,7 +258,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
                 );
             }
         } else if nearly {
-            let (odd, rays) = odd_crossings(triangles, HOLE_RAYS);
+            let (odd, rays) = odd_crossings(&triangles, HOLE_RAYS);
             let escaped = if odd > 0 {
                 format!("; {odd} of {rays} rays through it escape through a hole")
             } else {
@@ -290,8 +290,8 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
 mod tests {
     use super::*;
 
-    fn cube() -> Vec<[Vec3; 3]> {
-        let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    fn cube() -> Vec<[DVec3; 3]> {
+        let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
         let quads = [
             [v(0., 0., 0.), v(0., 1., 0.), v(1., 1., 0.), v(1., 0., 0.)],
             [v(0., 0., 1.), v(1., 0., 1.), v(1., 1., 1.), v(0., 1., 1.)],

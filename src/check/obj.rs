@@ -56,11 +56,9 @@ pub fn check(
                     .collect::<Result<Vec<f64>, _>>()
                 {
                     Err(_) => f.error("OBJ_PARSE_ERROR", at, format!("bad vertex '{line}'")),
-                    Ok(v) if v.iter().any(|x| !(*x as f32).is_finite()) => f.error(
-                        "NON_FINITE_POSITION",
-                        at,
-                        "the vertex is NaN or infinite (in f32)",
-                    ),
+                    Ok(v) if v.iter().any(|x| !x.is_finite()) => {
+                        f.error("NON_FINITE_POSITION", at, "the vertex is NaN or infinite")
+                    }
                     Ok(_) => {}
                 }
             }

@@ -1,10 +1,10 @@
 //! Triangles: the watertight ray test and the exact triangle/box overlap test.
 //!
-//! Vertices are stored as f32 (relative to the scene anchor) and promoted to f64 for every test,
-//! so the arithmetic error is far below the storage precision.
+//! Every test works in f64 on the vertices as stored (f32 file data promoted exactly, or f64),
+//! so the only rounding is that of the arithmetic itself.
 
 use super::Aabb;
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 
 /// Per-ray constants of the watertight test (Woop, Benthin and Wald, JCGT 2013): the axis
 /// permutation that makes z the dominant direction component, and the shear that maps the ray
@@ -45,7 +45,7 @@ impl WatertightRay {
     /// Watertight: a ray through a shared edge or vertex hits at least one of the triangles
     /// sharing it, because the edge functions of a shared edge are exact negatives of each
     /// other and a zero counts as inside.
-    pub fn intersect(&self, tri: &[Vec3; 3], t_max: f64) -> Option<f64> {
+    pub fn intersect(&self, tri: &[DVec3; 3], t_max: f64) -> Option<f64> {
         // One instance per axis permutation, so the permuted components are fixed fields.
         match self.axes {
             [1, 2, 0] => self.intersect_in::<1, 2, 0>(tri, t_max),
@@ -61,12 +61,12 @@ impl WatertightRay {
     #[inline(always)]
     fn intersect_in<const KX: usize, const KY: usize, const KZ: usize>(
         &self,
-        tri: &[Vec3; 3],
+        tri: &[DVec3; 3],
         t_max: f64,
     ) -> Option<f64> {
         // Moves a vertex into the ray's sheared frame (z not yet scaled).
-        let sheared = |v: Vec3| {
-            let p = (v.as_dvec3() - self.origin).to_array();
+        let sheared = |v: DVec3| {
+            let p = (v - self.origin).to_array();
             DVec3::new(
                 p[KX] - self.shear.x * p[KZ],
                 p[KY] - self.shear.y * p[KZ],
@@ -97,8 +97,8 @@ impl WatertightRay {
 
 /// Unit geometric normal of a triangle from its winding (counter-clockwise = front), or
 /// `None` for a degenerate triangle.
-pub fn geometric_normal(tri: &[Vec3; 3]) -> Option<DVec3> {
-    let [a, b, c] = tri.map(|v| v.as_dvec3());
+pub fn geometric_normal(tri: &[DVec3; 3]) -> Option<DVec3> {
+    let [a, b, c] = *tri;
     (b - a).cross(c - a).try_normalize()
 }
 
@@ -106,10 +106,10 @@ pub fn geometric_normal(tri: &[Vec3; 3]) -> Option<DVec3> {
 ///
 /// Axes: the three box normals, the triangle normal and the nine edge/box-axis cross products
 /// (Akenine-Möller 2001). Computed in f64 on the exact f32 vertex values.
-pub fn overlaps_box(tri: &[Vec3; 3], aabb: &Aabb) -> bool {
+pub fn overlaps_box(tri: &[DVec3; 3], aabb: &Aabb) -> bool {
     let centre = aabb.center();
     let half = aabb.size() * 0.5;
-    let v = tri.map(|p| p.as_dvec3() - centre);
+    let v = tri.map(|p| p - centre);
     let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
     let separated = |axis: DVec3| {
         let p = [axis.dot(v[0]), axis.dot(v[1]), axis.dot(v[2])];
@@ -128,10 +128,10 @@ pub fn overlaps_box(tri: &[Vec3; 3], aabb: &Aabb) -> bool {
 /// Bounds of the part of the triangle inside `cell` (Sutherland–Hodgman clipping against the
 /// six faces), or `None` when clipping leaves nothing. The clipped vertices carry rounding of
 /// a few ulps of the coordinates; callers grow the box by their margin.
-pub fn clipped_bounds(tri: &[Vec3; 3], cell: &Aabb) -> Option<Aabb> {
+pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
     let mut polygon = Polygon::default();
     for v in tri {
-        polygon.push(v.as_dvec3());
+        polygon.push(*v);
     }
     for axis in 0..3 {
         polygon.clip(axis, cell.min[axis], 1.0);
@@ -187,11 +187,11 @@ impl Polygon {
 /// reduce to comparing the triangle's bounds with the cell's midplanes, and for the other ten
 /// axes each projection of the triangle is computed once and compared with every octant still
 /// in question.
-pub fn octant_mask(tri: &[Vec3; 3], cell: &Aabb, margin: f64) -> u8 {
+pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64) -> u8 {
     let centre = cell.center();
     let quarter = cell.size() * 0.25;
     let half = quarter + DVec3::splat(margin);
-    let v = tri.map(|p| p.as_dvec3() - centre);
+    let v = tri.map(|p| p - centre);
     let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
     // Box axes: octant i spans [c - half, c + half] with c = ±quarter on each axis.
     let mut mask = 0u8;
@@ -240,10 +240,10 @@ fn octant_offset(i: usize, quarter: DVec3) -> DVec3 {
 mod tests {
     use super::*;
 
-    const TRI: [Vec3; 3] = [
-        Vec3::new(-1.0, -1.0, 0.0),
-        Vec3::new(1.0, -1.0, 0.0),
-        Vec3::new(0.0, 1.0, 0.0),
+    const TRI: [DVec3; 3] = [
+        DVec3::new(-1.0, -1.0, 0.0),
+        DVec3::new(1.0, -1.0, 0.0),
+        DVec3::new(0.0, 1.0, 0.0),
     ];
 
     #[test]
@@ -275,19 +275,19 @@ mod tests {
         let tris = [
             TRI,
             [
-                Vec3::new(0.1, 0.1, 0.1),
-                Vec3::new(0.9, 0.2, 0.3),
-                Vec3::new(0.2, 0.8, 0.9),
+                DVec3::new(0.1, 0.1, 0.1),
+                DVec3::new(0.9, 0.2, 0.3),
+                DVec3::new(0.2, 0.8, 0.9),
             ],
             [
-                Vec3::new(-0.9, 0.8, -0.1),
-                Vec3::new(0.95, -0.9, 0.2),
-                Vec3::new(0.7, 0.9, 0.05),
+                DVec3::new(-0.9, 0.8, -0.1),
+                DVec3::new(0.95, -0.9, 0.2),
+                DVec3::new(0.7, 0.9, 0.05),
             ],
             [
-                Vec3::new(0.5, -2.0, 0.5),
-                Vec3::new(0.5, 2.0, 0.5),
-                Vec3::new(-3.0, 0.0, -0.2),
+                DVec3::new(0.5, -2.0, 0.5),
+                DVec3::new(0.5, 2.0, 0.5),
+                DVec3::new(-3.0, 0.0, -0.2),
             ],
         ];
         for tri in &tris {
@@ -300,7 +300,7 @@ mod tests {
 
     #[test]
     fn clipping_bounds_the_part_inside_the_cell() {
-        let v = |x, y, z| Vec3::new(x, y, z);
+        let v = |x, y, z| DVec3::new(x, y, z);
         // The hypotenuse x + y = 2 leaves the whole unit square inside.
         let big = [v(-1.0, -1.0, 0.0), v(3.0, -1.0, 0.0), v(-1.0, 3.0, 0.0)];
         let unit = Aabb::new(DVec3::ZERO, DVec3::ONE);

@@ -1,9 +1,12 @@
 //! Wavefront OBJ through `tobj`: polygons triangulated, one object per OBJ object or group.
+//! Coordinates are read as f64 (tobj's `use_f64`), so the file's decimal numbers keep the
+//! digits an f64 holds; each object is an indexed mesh in world coordinates.
 
 use crate::error::{Error, Result};
-use crate::scene::{Scene, SceneBuilder};
-use glam::DVec3;
+use crate::scene::{Mesh, Scene, SceneBuilder};
+use glam::{DMat4, DVec3};
 use std::path::Path;
+use std::sync::Arc;
 
 /// Loads an OBJ file. Materials are not read.
 pub fn load(path: &Path) -> Result<Scene> {
@@ -22,14 +25,15 @@ pub fn load(path: &Path) -> Result<Scene> {
     .map_err(|e| Error::in_file(path, format!("not a valid OBJ file: {e}")))?;
     let mut builder = SceneBuilder::new();
     for (index, model) in models.iter().enumerate() {
-        let triangles = model_triangles(&model.mesh)
+        let mesh = model_mesh(&model.mesh)
             .map_err(|e| Error::in_file(path, format!("object '{}': {e}", model.name)))?;
         let name = if model.name.is_empty() {
             format!("object{index}")
         } else {
             model.name.clone()
         };
-        builder.add_mesh(name.clone(), format!("obj:{name}"), triangles);
+        let id = builder.new_object(name.clone(), format!("obj:{name}"));
+        builder.place_mesh(id, Arc::new(mesh), DMat4::IDENTITY);
     }
     if builder.object_count() == 0 {
         builder.warn("the file holds no faces");
@@ -37,25 +41,31 @@ pub fn load(path: &Path) -> Result<Scene> {
     Ok(builder.finish(path.to_path_buf()))
 }
 
-/// The triangles of one OBJ model, with every index and coordinate checked.
-fn model_triangles(mesh: &tobj::Mesh) -> std::result::Result<Vec<[DVec3; 3]>, String> {
+/// The indexed mesh of one OBJ model, with every index and coordinate checked.
+fn model_mesh(mesh: &tobj::Mesh) -> std::result::Result<Mesh, String> {
     let positions: Vec<DVec3> = mesh
         .positions
         .chunks_exact(3)
-        .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+        .map(|p| DVec3::new(p[0], p[1], p[2]))
         .collect();
     if let Some(bad) = positions.iter().position(|p| !p.is_finite()) {
         return Err(format!("vertex {} is not finite", bad + 1));
     }
-    mesh.indices
+    if let Some(&bad) = mesh
+        .indices
+        .iter()
+        .find(|&&i| i as usize >= positions.len())
+    {
+        return Err(format!(
+            "face refers to vertex {} of {}",
+            bad + 1,
+            positions.len()
+        ));
+    }
+    let triangles = mesh
+        .indices
         .chunks_exact(3)
-        .map(|face| {
-            let corner = |i: u32| {
-                positions.get(i as usize).copied().ok_or_else(|| {
-                    format!("face refers to vertex {} of {}", i + 1, positions.len())
-                })
-            };
-            Ok([corner(face[0])?, corner(face[1])?, corner(face[2])?])
-        })
-        .collect()
+        .map(|f| [f[0], f[1], f[2]])
+        .collect();
+    Mesh::new(positions, triangles).ok_or_else(|| "invalid mesh".to_string())
 }

@@ -31,6 +31,10 @@ COMMANDS = {
     "random-quadrics": ("random_quadric_scenes", "write random quadric scenes for validation"),
     "usd-counts": ("usd_counts", "count what a USD stage draws, with usd-core"),
     "thread-scaling": ("thread_scaling", "octree and BVH2 trace time from 1 to 16 threads"),
+    "instancing-bench": (
+        "instancing_bench",
+        "memory and build time of instanced scenes, two binaries (reports/instancing.md)",
+    ),
 }
 
 

@@ -491,7 +491,7 @@ def map_objects(ref: RefScene, sidecar_objects):
     rest = []
     for so in sidecar_objects:
         oid = int(so["id"])
-        if so.get("kind") == "quadric":
+        if so.get("kind") == "quadric" and not so.get("triangles"):
             continue
         src = so.get("source", "")
         k = by_key.get(src)
@@ -625,13 +625,17 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
     quad_node_of_id = {}
     for so in sobjs:
         if so.get("kind") == "quadric" and str(so.get("source", "")).startswith("/nodes/"):
-            # "/nodes/3" or "/nodes/3/extensions/RAYCAST_quadric"
-            quad_node_of_id[int(so["id"])] = int(so["source"].split("/")[2])
+            # "/nodes/3" or "/nodes/3/extensions/RAYCAST_quadric"; a node drawing a mesh
+            # and a quadric is one object whose quadric is the prim after its triangles.
+            quad_node_of_id[int(so["id"])] = (
+                int(so["source"].split("/")[2]),
+                int(so.get("triangles", 0)),
+            )
     rc_obj = np.full(n, -1, dtype=np.int64)
     valid_id = (rid > 0) & (rid < len(omap))
     rc_obj[valid_id] = omap[rid[valid_id]]
-    for oid, node in quad_node_of_id.items():
-        rc_obj[rid == oid] = -(node + 2)
+    for oid, (node, triangles) in quad_node_of_id.items():
+        rc_obj[(rid == oid) & (rprim >= triangles)] = -(node + 2)
     # raycast's own hit triangle, for graze and edge tests
     rc_tri = np.full(n, -1, dtype=np.int64)
     okr = rc_obj >= 0

@@ -10,12 +10,12 @@ use super::mesh::DRACO;
 use super::node::{local_transform, Node};
 use super::QUADRIC_EXTENSION;
 use crate::camera::Camera;
-use crate::import::place;
 use crate::quadric::{Quadric, QuadricSpec};
-use crate::scene::{Scene, SceneBuilder};
-use glam::{DMat4, DVec3};
+use crate::scene::{Mesh, Scene, SceneBuilder};
+use glam::DMat4;
 use std::collections::HashMap;
 use std::path::Path;
+use std::sync::Arc;
 
 /// Most node instances one file may expand to (guards against exponential node sharing).
 pub const MAX_NODE_VISITS: usize = 10_000_000;
@@ -58,38 +58,39 @@ pub fn build(doc: &Document, choice: Option<&str>, path: &Path) -> Result<Scene,
     Ok(walk.builder.finish(path.to_path_buf()))
 }
 
-/// Adds one placed mesh to the scene: the mesh's triangles in its own frame, the f64 world
-/// matrix of the node (or instance), and the object's name and source pointer. Every mesh
-/// object of a glTF scene goes through here. Refuses placed coordinates beyond the f32 range
-/// (the scene stores f32), which large but finite transforms, such as a corrupt GPU instance
-/// scale, can reach.
+/// Adds one placed mesh to the scene as a new object: the mesh in its own frame (stored once
+/// however many nodes place it), the f64 world matrix of the node (or instance), and the
+/// object's name and source pointer; returns the object's id, `None` for an empty mesh. Every
+/// mesh object of a glTF scene goes through here. Refuses placements whose bounds reach beyond
+/// ±f32::MAX/2, which large but finite transforms, such as a corrupt GPU instance scale, can
+/// reach and no real scene needs.
 fn add_mesh_object(
     builder: &mut SceneBuilder,
     name: String,
     pointer: String,
-    local: &[[DVec3; 3]],
+    mesh: &Arc<Mesh>,
     world: &DMat4,
-) -> Result<(), Diagnostic> {
-    if local.is_empty() {
-        return Ok(());
+) -> Result<Option<u32>, Diagnostic> {
+    if mesh.is_empty() {
+        return Ok(None);
     }
-    let placed = place(local, world);
     let limit = f32::MAX as f64 / 2.0;
-    if placed
+    let corners = mesh.bounds().corners().map(|c| world.transform_point3(c));
+    if corners
         .iter()
-        .flatten()
         .any(|p| !p.is_finite() || p.abs().max_element() > limit)
     {
         return Err(Diagnostic::error(
             "NODE_TRANSFORM_NOT_FINITE",
             pointer,
             format!(
-                "('{name}'): placed coordinates exceed the range raycast stores (±{limit:.1e})"
+                "('{name}'): placed coordinates exceed the range raycast accepts (±{limit:.1e})"
             ),
         ));
     }
-    builder.add_mesh(name, pointer, placed);
-    Ok(())
+    let id = builder.new_object(name, pointer);
+    builder.place_mesh(id, Arc::clone(mesh), *world);
+    Ok(Some(id))
 }
 
 /// Which buffers the geometry reads: those behind the accessors of mesh primitives (POSITION,
@@ -153,8 +154,8 @@ pub fn needed_buffers(doc: &Document) -> Vec<bool> {
 struct Walk<'a> {
     doc: &'a Document,
     builder: SceneBuilder,
-    /// Triangles of each mesh read so far, in the mesh's frame.
-    meshes: HashMap<usize, Vec<[DVec3; 3]>>,
+    /// Each mesh read so far, in its own frame (f32 as the file stores it), by index.
+    meshes: HashMap<usize, Arc<Mesh>>,
 }
 
 impl Walk<'_> {
@@ -208,12 +209,14 @@ impl Walk<'_> {
         Ok(())
     }
 
-    /// The node's mesh (once, or per GPU instance), quadric and camera.
+    /// The node's mesh (once, or per GPU instance), quadric and camera. A node is one object
+    /// (its mesh and its quadric together); each GPU instance is one object.
     fn add_node(&mut self, node: &Node, world: &DMat4) -> Result<(), Diagnostic> {
         let at = node.pointer();
         let name = node
             .name
             .map_or_else(|| format!("node{}", node.index), String::from);
+        let mut object = None;
         if let Some(mesh) = node.mesh {
             self.read_mesh(mesh).map_err(|e| e.within(&at))?;
             let local = &self.meshes[&mesh];
@@ -222,7 +225,10 @@ impl Walk<'_> {
                 None => None,
             };
             match instances {
-                None => add_mesh_object(&mut self.builder, name.clone(), at.clone(), local, world)?,
+                None => {
+                    object =
+                        add_mesh_object(&mut self.builder, name.clone(), at.clone(), local, world)?
+                }
                 Some(instances) => {
                     for (k, instance) in instances.iter().enumerate() {
                         let pointer = format!("{at}/extensions/{GPU_INSTANCING}/{k}");
@@ -247,11 +253,13 @@ impl Walk<'_> {
                         format!("('{name}'): {e}"),
                     )
                 })?;
-            self.builder.add_quadric(
-                name.clone(),
-                format!("{at}/extensions/{QUADRIC_EXTENSION}"),
-                quadric,
-            );
+            match object {
+                Some(id) => self.builder.place_quadric(id, quadric),
+                None => {
+                    let pointer = format!("{at}/extensions/{QUADRIC_EXTENSION}");
+                    self.builder.add_quadric(name.clone(), pointer, quadric);
+                }
+            }
         }
         if let Some(camera) = node.camera {
             self.add_camera(camera, &name, world);
@@ -289,7 +297,8 @@ impl Walk<'_> {
                 Err(e) => return Err(e),
             }
         }
-        self.meshes.insert(mesh, triangles);
+        self.meshes
+            .insert(mesh, Arc::new(Mesh::from_soup(&triangles)));
         Ok(())
     }
 

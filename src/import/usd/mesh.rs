@@ -1,14 +1,15 @@
 //! UsdGeomMesh: polygons triangulated as fans in the prim's local space.
 
 use super::value;
-use glam::DVec3;
+use crate::scene::Mesh;
 use openusd::usd::Prim;
 
 /// What reading a mesh gave.
 pub enum MeshRead {
-    /// Local-space triangles, in face order, winding made counter-clockwise-is-front.
+    /// The mesh in its own frame: the points as stored, triangles in face order (fans),
+    /// winding made counter-clockwise-is-front.
     Triangles {
-        triangles: Vec<[DVec3; 3]>,
+        mesh: Mesh,
         /// The mesh is a subdivision surface (drawn as its control cage).
         subdivided: bool,
         /// Faces with fewer than three vertices that were dropped.
@@ -90,7 +91,7 @@ fn read_checked(prim: &Prim) -> Result<MeshRead, String> {
     // USD's fallback subdivisionScheme is catmullClark: a mesh is a subdivision surface
     // unless it says `none`.
     let subdivided = value::token(prim, "subdivisionScheme")?.as_deref() != Some("none");
-    let mut triangles = Vec::with_capacity(indices.len());
+    let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(indices.len());
     let mut degenerate_faces = 0;
     let mut start = 0usize;
     for &count in &counts {
@@ -100,7 +101,7 @@ fn read_checked(prim: &Prim) -> Result<MeshRead, String> {
             degenerate_faces += 1;
             continue;
         }
-        let p = |k: usize| points[face[k] as usize];
+        let p = |k: usize| face[k] as u32;
         for k in 1..face.len() - 1 {
             triangles.push(if left_handed {
                 [p(0), p(k + 1), p(k)]
@@ -114,8 +115,12 @@ fn read_checked(prim: &Prim) -> Result<MeshRead, String> {
             "{path}: empty mesh (no face has three vertices): skipped"
         )));
     }
+    // Indices and points were checked above, so this always succeeds.
+    let Some(mesh) = Mesh::new(points, triangles) else {
+        return Ok(MeshRead::Skip(format!("{path}: invalid mesh: skipped")));
+    };
     Ok(MeshRead::Triangles {
-        triangles,
+        mesh,
         subdivided,
         degenerate_faces,
     })

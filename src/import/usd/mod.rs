@@ -25,11 +25,11 @@ mod shapes;
 mod value;
 mod xform;
 
-use super::{place, LoadOptions};
+use super::LoadOptions;
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
 use crate::quadric::Quadric;
-use crate::scene::{Scene, SceneBuilder, StageInfo};
+use crate::scene::{Mesh, Scene, SceneBuilder, StageInfo};
 use glam::{DMat4, DVec3};
 use openusd::sdf;
 use openusd::usd::{Prim, Stage};
@@ -37,6 +37,7 @@ use shapes::Part;
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::Path;
 use std::rc::Rc;
+use std::sync::Arc;
 
 /// Deepest nesting of braces, parentheses and brackets accepted in a text layer: the USD
 /// reader parses recursively, so a hostile file could otherwise exhaust the stack.
@@ -243,15 +244,37 @@ struct Instance {
     root: String,
     /// Prim path of the instancer (the object's source).
     source: String,
-    /// The instance's triangles, in world space.
-    triangles: Vec<[DVec3; 3]>,
+    /// The instance's object, once something in it is drawn.
+    object: Option<u32>,
 }
 
-/// Local triangles of a mesh prim, shared by every instance that draws it.
+/// A mesh prim's mesh in its own frame, shared by every instance that draws it.
 #[derive(Clone)]
 struct CachedMesh {
-    triangles: Rc<Vec<[DVec3; 3]>>,
+    mesh: Arc<Mesh>,
     subdivided: bool,
+}
+
+/// Where a prim's parts go: one object for the prim, created when its first part is drawn, or
+/// the object of the point instance being walked.
+struct Target<'a> {
+    name: &'a str,
+    source: &'a str,
+    instance: &'a mut Option<Instance>,
+    object: Option<u32>,
+}
+
+impl Target<'_> {
+    fn id(&mut self, builder: &mut SceneBuilder) -> u32 {
+        match self.instance {
+            Some(inst) => *inst
+                .object
+                .get_or_insert_with(|| builder.new_object(inst.name.clone(), inst.source.clone())),
+            None => *self.object.get_or_insert_with(|| {
+                builder.new_object(self.name.to_string(), self.source.to_string())
+            }),
+        }
+    }
 }
 
 struct Loader {
@@ -455,7 +478,8 @@ impl Loader {
         Ok(())
     }
 
-    /// Draws what the prim itself defines: a mesh, a gprim, a quadric, a camera.
+    /// Draws what the prim itself defines: a mesh, a gprim, a quadric, a camera. Everything
+    /// it draws is one object (inside a point instance, the instance's object).
     fn draw(
         &mut self,
         prim: &Prim,
@@ -465,14 +489,20 @@ impl Loader {
     ) -> std::result::Result<(), String> {
         let name = Self::object_name(prim, instance);
         let source = prim.path().to_string();
+        let mut target = Target {
+            name: &name,
+            source: &source,
+            instance,
+            object: None,
+        };
         if type_name == "Mesh" {
             if let Some(mesh) = self.mesh(prim)? {
                 if mesh.subdivided {
                     self.note("subdivision meshes drawn as their control cage", prim);
                 }
-                let triangles = place(&mesh.triangles, &world);
-                if triangles.iter().flatten().all(|p| p.is_finite()) {
-                    self.add_triangles(name.clone(), source.clone(), triangles, instance);
+                if mesh.mesh.places_finitely(&world) {
+                    let id = target.id(&mut self.builder);
+                    self.builder.place_mesh(id, mesh.mesh, world);
                 } else {
                     self.warnings.push(format!(
                         "{source}: its projective transform sends points to infinity: skipped"
@@ -485,27 +515,16 @@ impl Loader {
                 Ok(parts) => {
                     for part in parts {
                         match part {
-                            Part::Quadric {
-                                suffix,
-                                spec,
-                                frame,
-                            } => {
+                            Part::Quadric { spec, frame, .. } => {
                                 let quadric = Quadric::new(&spec, world * frame)
                                     .map_err(|e| format!("{source} ({type_name}): {e}"))?;
-                                self.builder.add_quadric(
-                                    format!("{name}{suffix}"),
-                                    source.clone(),
-                                    quadric,
-                                );
+                                let id = target.id(&mut self.builder);
+                                self.builder.place_quadric(id, quadric);
                             }
-                            Part::Mesh { suffix, triangles } => {
-                                let triangles = place(&triangles, &world);
-                                self.add_triangles(
-                                    format!("{name}{suffix}"),
-                                    source.clone(),
-                                    triangles,
-                                    instance,
-                                );
+                            Part::Mesh { triangles, .. } => {
+                                let id = target.id(&mut self.builder);
+                                let mesh = Arc::new(Mesh::from_soup(&triangles));
+                                self.builder.place_mesh(id, mesh, world);
                             }
                         }
                     }
@@ -518,28 +537,10 @@ impl Loader {
             let quadric = quadric::read(prim)
                 .and_then(|spec| Quadric::new(&spec, world))
                 .map_err(|e| format!("{source}: raycast:quadric: {e}"))?;
-            self.builder.add_quadric(name, source, quadric);
+            let id = target.id(&mut self.builder);
+            self.builder.place_quadric(id, quadric);
         }
         Ok(())
-    }
-
-    /// Adds a mesh object, or inside a point instance adds the triangles to the instance.
-    fn add_triangles(
-        &mut self,
-        name: String,
-        source: String,
-        triangles: Vec<[DVec3; 3]>,
-        instance: &mut Option<Instance>,
-    ) {
-        if triangles.is_empty() {
-            return;
-        }
-        match instance {
-            Some(inst) => inst.triangles.extend(triangles),
-            None => {
-                self.builder.add_mesh(name, source, triangles);
-            }
-        }
     }
 
     /// A mesh's local triangles, read once per prototype.
@@ -557,7 +558,7 @@ impl Loader {
                 None
             }
             mesh::MeshRead::Triangles {
-                triangles,
+                mesh,
                 subdivided,
                 degenerate_faces,
             } => {
@@ -568,7 +569,7 @@ impl Loader {
                     ));
                 }
                 Some(CachedMesh {
-                    triangles: Rc::new(triangles),
+                    mesh: Arc::new(mesh),
                     subdivided,
                 })
             }
@@ -719,30 +720,35 @@ impl Loader {
                 bad_index += 1;
                 continue;
             };
+            // As usd-core's ComputeInstanceTransformsAtTime: the quaternion goes into the
+            // rotation formula as stored, not normalised (half-precision orientations are a
+            // little off unit length, and usd-core places them so).
             let rotation = orientations
                 .as_ref()
                 .map(|q| q[i])
-                .filter(|q| q.is_finite() && q.length_squared() > 0.0)
-                .map_or(glam::DQuat::IDENTITY, |q| q.normalize());
+                .filter(|q| q.is_finite())
+                .unwrap_or(glam::DQuat::IDENTITY);
             let scale = scales.as_ref().map_or(DVec3::ONE, |s| s[i]);
             let instance_world =
                 world * DMat4::from_scale_rotation_translation(scale, rotation, positions[i]);
-            let mut inner = Some(Instance {
-                name: format!("{base_name}[{i}]"),
-                root: target.path().to_string(),
-                source: path.clone(),
-                triangles: Vec::new(),
+            // Nested in an outer instance, this instance draws into the outer one's object.
+            let mut inner = Some(match outer {
+                Some(outer) => Instance {
+                    name: outer.name.clone(),
+                    root: target.path().to_string(),
+                    source: outer.source.clone(),
+                    object: outer.object,
+                },
+                None => Instance {
+                    name: format!("{base_name}[{i}]"),
+                    root: target.path().to_string(),
+                    source: path.clone(),
+                    object: None,
+                },
             });
             self.walk(target, instance_world, None, &mut inner, depth + 1)?;
-            let Some(inner) = inner.filter(|inner| !inner.triangles.is_empty()) else {
-                continue;
-            };
-            match outer {
-                Some(outer) => outer.triangles.extend(inner.triangles),
-                None => {
-                    self.builder
-                        .add_mesh(inner.name, inner.source, inner.triangles);
-                }
+            if let (Some(outer), Some(inner)) = (outer.as_mut(), inner) {
+                outer.object = inner.object;
             }
         }
         if bad_index > 0 {

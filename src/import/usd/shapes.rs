@@ -33,8 +33,6 @@ pub const CAP_SEGMENTS: usize = 512;
 pub enum Part {
     /// An analytic quadric given in the canonical frame `frame` (canonical → prim local).
     Quadric {
-        /// Appended to the prim path to name the object (empty for the main surface).
-        suffix: &'static str,
         /// The quadric in canonical coordinates.
         spec: Box<QuadricSpec>,
         /// Canonical → local matrix.
@@ -42,8 +40,6 @@ pub enum Part {
     },
     /// Triangles in the prim's local space.
     Mesh {
-        /// Appended to the prim path to name the object.
-        suffix: &'static str,
         /// Local-space triangles, counter-clockwise front.
         triangles: Vec<[DVec3; 3]>,
     },
@@ -100,7 +96,7 @@ pub fn parts(prim: &Prim, type_name: &str) -> Result<Result<Vec<Part>, String>, 
             if r == 0.0 {
                 return empty("radius 0");
             }
-            let part = sphere("", r, 0.0, None).map_err(|e| format!("{path}: {e}"))?;
+            let part = sphere(r, 0.0, None).map_err(|e| format!("{path}: {e}"))?;
             Ok(Ok(vec![part]))
         }
         "Cube" => {
@@ -109,7 +105,6 @@ pub fn parts(prim: &Prim, type_name: &str) -> Result<Result<Vec<Part>, String>, 
                 return empty("size 0");
             }
             Ok(Ok(vec![Part::Mesh {
-                suffix: "",
                 triangles: cube_triangles(s / 2.0),
             }]))
         }
@@ -152,15 +147,12 @@ pub fn parts(prim: &Prim, type_name: &str) -> Result<Result<Vec<Part>, String>, 
             let mut parts = Vec::new();
             if h > 0.0 {
                 parts.push(Part::Quadric {
-                    suffix: "",
                     spec: Box::new(side(r, r, h).map_err(|e| format!("{path}: {e}"))?),
                     frame,
                 });
             }
-            for (suffix, centre) in [(":top", h / 2.0), (":bottom", -h / 2.0)] {
-                parts.push(
-                    sphere(suffix, r, centre, Some(frame)).map_err(|e| format!("{path}: {e}"))?,
-                );
+            for centre in [h / 2.0, -h / 2.0] {
+                parts.push(sphere(r, centre, Some(frame)).map_err(|e| format!("{path}: {e}"))?);
             }
             Ok(Ok(parts))
         }
@@ -184,7 +176,6 @@ pub fn parts(prim: &Prim, type_name: &str) -> Result<Result<Vec<Part>, String>, 
             )
             .map_err(|e| format!("{path}: {e}"))?;
             Ok(Ok(vec![Part::Quadric {
-                suffix: "",
                 spec: Box::new(spec),
                 frame: DMat4::IDENTITY,
             }]))
@@ -196,8 +187,8 @@ pub fn parts(prim: &Prim, type_name: &str) -> Result<Result<Vec<Part>, String>, 
 }
 
 /// A sphere of radius `r` centred at `w = centre` on the canonical axis; with a frame it is
-/// the hemisphere on the far side of `w = centre` (`+` for a positive centre, `−` else).
-fn sphere(suffix: &'static str, r: f64, centre: f64, frame: Option<DMat4>) -> Result<Part, String> {
+/// the hemisphere on the far side of `w = centre` (`+` for a centre of positive sign, `−` else).
+fn sphere(r: f64, centre: f64, frame: Option<DMat4>) -> Result<Part, String> {
     let coefficients = [
         1.0,
         1.0,
@@ -211,7 +202,7 @@ fn sphere(suffix: &'static str, r: f64, centre: f64, frame: Option<DMat4>) -> Re
         centre * centre - r * r,
     ];
     let bounds = frame.map(|_| {
-        let (lo, hi) = if suffix == ":top" {
+        let (lo, hi) = if centre.is_sign_positive() {
             (centre, centre + r)
         } else {
             (centre - r, centre)
@@ -220,7 +211,6 @@ fn sphere(suffix: &'static str, r: f64, centre: f64, frame: Option<DMat4>) -> Re
     });
     let spec = Box::new(QuadricSpec::from_coefficients(coefficients, bounds)?);
     Ok(Part::Quadric {
-        suffix,
         spec,
         frame: frame.unwrap_or(DMat4::IDENTITY),
     })
@@ -252,7 +242,6 @@ fn side(bottom: f64, top: f64, h: f64) -> Result<QuadricSpec, String> {
 /// Side and caps of a cylinder, cone or frustum, placed by `frame`.
 fn frustum(bottom: f64, top: f64, h: f64, frame: DMat4) -> Result<Vec<Part>, String> {
     let mut parts = vec![Part::Quadric {
-        suffix: "",
         spec: Box::new(side(bottom, top, h)?),
         frame,
     }];
@@ -264,7 +253,6 @@ fn frustum(bottom: f64, top: f64, h: f64, frame: DMat4) -> Result<Vec<Part>, Str
         caps.extend(disc(top, h / 2.0, true));
     }
     parts.push(Part::Mesh {
-        suffix: ":caps",
         triangles: crate::import::place(&caps, &frame),
     });
     Ok(parts)

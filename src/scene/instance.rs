@@ -1,0 +1,97 @@
+//! Instances: one stored mesh, with its own octree, placed in the world by an f64 transform.
+//!
+//! A ray meets an instance the way it meets a quadric: it moves into the mesh's frame in f64
+//! (`o' = T⁻¹ o`, `d' = T⁻¹ d`, not renormalised, so the parameter `t` is the same in both
+//! frames), and the watertight test runs against the vertices as stored.
+
+use super::mesh::MeshSet;
+use crate::accel::{Hit, Octree, OctreeParams, PreparedRay};
+use crate::geometry::triangle::WatertightRay;
+use crate::geometry::Aabb;
+use glam::{DAffine3, DMat4, DVec3};
+
+/// A mesh stored once, with the octree over its triangles in its own frame.
+#[derive(Debug, Clone)]
+pub struct StoredMesh {
+    /// The mesh and the anchor of its octree's coordinates.
+    pub set: MeshSet,
+    /// The octree over `set`.
+    pub octree: Octree,
+}
+
+impl StoredMesh {
+    /// Stores `set` and builds its octree.
+    pub fn new(set: MeshSet, params: OctreeParams) -> StoredMesh {
+        let octree = Octree::build(&set, params);
+        StoredMesh { set, octree }
+    }
+
+    /// Bytes of vertices, indices and octree.
+    pub fn bytes(&self) -> usize {
+        self.set.mesh.bytes() + self.octree.bytes()
+    }
+}
+
+/// One placement of a stored mesh.
+#[derive(Debug, Clone)]
+pub struct Instance {
+    /// Index of the stored mesh.
+    pub mesh: u32,
+    /// Mesh frame to world.
+    pub to_world: DAffine3,
+    /// World to mesh frame.
+    pub to_local: DAffine3,
+    /// World bounds (the mesh bounds' corners placed, padded for their rounding).
+    pub bounds: Aabb,
+    /// The scene part it draws.
+    pub part: u32,
+}
+
+impl Instance {
+    /// An instance of `mesh` placed by `world`; `None` unless `world` is an invertible affine
+    /// map (projective or singular placements are stored as placed triangles instead).
+    pub fn new(mesh: u32, stored: &StoredMesh, world: &DMat4, part: u32) -> Option<Instance> {
+        if world.row(3) != glam::DVec4::W {
+            return None;
+        }
+        let to_world = DAffine3::from_mat4(*world);
+        let det = to_world.matrix3.determinant();
+        if !det.is_finite() || det == 0.0 {
+            return None;
+        }
+        let to_local = to_world.inverse();
+        if !to_local.is_finite() {
+            return None;
+        }
+        let local = stored.set.mesh.bounds();
+        let bounds = Aabb::from_points(local.corners().map(|c| to_world.transform_point3(c)));
+        let reach = bounds.min.abs().max(bounds.max.abs()).max_element();
+        Some(Instance {
+            mesh,
+            to_world,
+            to_local,
+            bounds: bounds.expanded(1e-12 * reach),
+            part,
+        })
+    }
+
+    /// The nearest hit with `0 < t <= t_max` of the world ray `origin + t · dir`: its `t`
+    /// and the triangle's index in the mesh. Deterministic: the inner octree returns what
+    /// a test of every triangle would, ties going to the smaller index.
+    pub fn intersect(
+        &self,
+        stored: &StoredMesh,
+        origin: DVec3,
+        dir: DVec3,
+        t_max: f64,
+    ) -> Option<Hit> {
+        let o = self.to_local.transform_point3(origin);
+        let d = self.to_local.transform_vector3(dir) + DVec3::ZERO;
+        let ray = PreparedRay {
+            local_origin: o - stored.set.anchor,
+            dir: d,
+            extra: WatertightRay::new(o, d),
+        };
+        stored.octree.intersect(&stored.set, &ray, t_max)
+    }
+}

@@ -1,0 +1,285 @@
+//! Triangle meshes stored as the file gives them: indexed vertices in the mesh's own frame, in
+//! f32 where every coordinate is an f32 value (glTF accessors, USD `points`) and in f64 otherwise
+//! (OBJ text read as f64, or triangles already placed in the world by an f64 transform).
+//!
+//! # Layout
+//! Indexed vertices: a closed mesh has about half as many vertices as triangles, so f64
+//! vertices cost `24 · V + 12 · T ≈ 24` bytes per triangle and f32 vertices about 18, against 36
+//! for the f32 triangle soup stored before (plus its 4-byte object index, kept here). The
+//! triangle test fetches three indices and three vertices instead of one 36-byte record; the
+//! branch on the storage kind is the same for every triangle of a mesh, so it predicts well.
+
+use crate::accel::{PreparedRay, PrimitiveSet};
+use crate::geometry::triangle::{self, WatertightRay};
+use crate::geometry::Aabb;
+use glam::{DAffine3, DVec3, Vec3};
+use std::collections::HashMap;
+
+/// Vertex positions in the precision the file stores them.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Positions {
+    /// Every coordinate is an f32 value (stored exactly).
+    F32(Vec<Vec3>),
+    /// Coordinates that need f64.
+    F64(Vec<DVec3>),
+}
+
+impl Positions {
+    /// Stores `points` in f32 when that is exact for every coordinate, else in f64.
+    pub fn exact(points: Vec<DVec3>) -> Positions {
+        let fits = |p: &DVec3| p.as_vec3().as_dvec3() == *p;
+        if points.iter().all(fits) {
+            Positions::F32(points.iter().map(|p| p.as_vec3()).collect())
+        } else {
+            Positions::F64(points)
+        }
+    }
+
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        match self {
+            Positions::F32(p) => p.len(),
+            Positions::F64(p) => p.len(),
+        }
+    }
+
+    /// True when there is no vertex.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Vertex `i`, promoted to f64 (exact).
+    #[inline(always)]
+    pub fn get(&self, i: u32) -> DVec3 {
+        match self {
+            Positions::F32(p) => p[i as usize].as_dvec3(),
+            Positions::F64(p) => p[i as usize],
+        }
+    }
+
+    /// Bytes of vertex data.
+    pub fn bytes(&self) -> usize {
+        match self {
+            Positions::F32(p) => p.len() * 12,
+            Positions::F64(p) => p.len() * 24,
+        }
+    }
+}
+
+/// An indexed triangle mesh in its own frame. Counter-clockwise winding is the front.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh {
+    positions: Positions,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// A mesh from vertices and index triples; `None` when an index is out of range or a
+    /// vertex is not finite.
+    pub fn new(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Option<Mesh> {
+        let in_range = triangles
+            .iter()
+            .flatten()
+            .all(|&i| (i as usize) < positions.len());
+        (in_range && positions.iter().all(|p| p.is_finite())).then(|| Mesh {
+            positions: Positions::exact(positions),
+            triangles,
+        })
+    }
+
+    /// A mesh from stored vertices and index triples that are known to be in range.
+    pub(crate) fn from_parts(positions: Positions, triangles: Vec<[u32; 3]>) -> Mesh {
+        debug_assert!(triangles
+            .iter()
+            .flatten()
+            .all(|&i| (i as usize) < positions.len()));
+        Mesh {
+            positions,
+            triangles,
+        }
+    }
+
+    /// A mesh from a triangle soup: corners with the same bits become one vertex.
+    pub fn from_soup(soup: &[[DVec3; 3]]) -> Mesh {
+        let mut index: HashMap<[u64; 3], u32> = HashMap::with_capacity(soup.len());
+        let mut positions = Vec::with_capacity(soup.len());
+        let triangles = soup
+            .iter()
+            .map(|tri| {
+                tri.map(|p| {
+                    *index
+                        .entry(p.to_array().map(f64::to_bits))
+                        .or_insert_with(|| {
+                            positions.push(p);
+                            positions.len() as u32 - 1
+                        })
+                })
+            })
+            .collect();
+        Mesh {
+            positions: Positions::exact(positions),
+            triangles,
+        }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// A hash of the stored vertices' bits and the index triples: equal meshes hash equally.
+    pub fn content_hash(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        match &self.positions {
+            Positions::F32(p) => p
+                .iter()
+                .for_each(|v| v.to_array().map(f32::to_bits).hash(&mut h)),
+            Positions::F64(p) => p
+                .iter()
+                .for_each(|v| v.to_array().map(f64::to_bits).hash(&mut h)),
+        }
+        self.triangles.hash(&mut h);
+        h.finish()
+    }
+
+    /// True when the mesh has no triangle.
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// The stored vertices.
+    pub fn positions(&self) -> &Positions {
+        &self.positions
+    }
+
+    /// Triangle `i`'s corners, in the mesh frame.
+    #[inline(always)]
+    pub fn triangle(&self, i: usize) -> [DVec3; 3] {
+        let [a, b, c] = self.triangles[i].map(|v| v as usize);
+        // One branch per triangle on the storage kind.
+        match &self.positions {
+            Positions::F32(p) => [p[a].as_dvec3(), p[b].as_dvec3(), p[c].as_dvec3()],
+            Positions::F64(p) => [p[a], p[b], p[c]],
+        }
+    }
+
+    /// Bytes of vertex and index data.
+    pub fn bytes(&self) -> usize {
+        self.positions.bytes() + self.triangles.len() * 12
+    }
+
+    /// Bounds of all vertices used by a triangle, in the mesh frame.
+    pub fn bounds(&self) -> Aabb {
+        (0..self.len())
+            .flat_map(|i| self.triangle(i))
+            .fold(Aabb::EMPTY, Aabb::grow)
+    }
+
+    /// False when the projective transform `world` sends a vertex to infinity.
+    pub fn places_finitely(&self, world: &glam::DMat4) -> bool {
+        world.row(3) == glam::DVec4::W
+            || (0..self.positions.len() as u32)
+                .all(|i| world.project_point3(self.positions.get(i)).is_finite())
+    }
+
+    /// Appends this mesh placed by `world` (f64) to the f64 point and index lists, flipping the
+    /// winding under a mirroring transform so that counter-clockwise stays the front.
+    /// Projective transforms divide by `w`, as USD does.
+    pub(crate) fn place_into(
+        &self,
+        world: &glam::DMat4,
+        points: &mut Vec<DVec3>,
+        triangles: &mut Vec<[u32; 3]>,
+    ) {
+        let base = points.len() as u32;
+        let projective = world.row(3) != glam::DVec4::W;
+        points.extend((0..self.positions.len() as u32).map(|i| {
+            let p = self.positions.get(i);
+            if projective {
+                world.project_point3(p)
+            } else {
+                world.transform_point3(p)
+            }
+        }));
+        let flip = world.determinant() < 0.0;
+        triangles.extend(self.triangles.iter().map(|&[a, b, c]| {
+            if flip {
+                [base + a, base + c, base + b]
+            } else {
+                [base + a, base + b, base + c]
+            }
+        }));
+    }
+}
+
+/// A mesh as a [`PrimitiveSet`]: the acceleration structure works in coordinates relative to
+/// `anchor` (so that cells deep in a far-away mesh keep their digits), while the ray test runs
+/// on the stored vertices with the ray in the mesh frame.
+#[derive(Debug, Clone)]
+pub struct MeshSet {
+    /// The mesh (shared with the importer's cache while the scene is built).
+    pub mesh: std::sync::Arc<Mesh>,
+    /// Frame position that the acceleration structure's coordinates are relative to.
+    pub anchor: DVec3,
+}
+
+impl MeshSet {
+    /// Triangle `i` relative to the anchor. Where the anchor is not zero the vertices lie
+    /// within 1/64 of their distance from the origin (see `Scene`), so the subtraction is exact
+    /// on large coordinates and rounds by far less than the octree's margin on small ones.
+    fn local(&self, i: usize) -> [DVec3; 3] {
+        self.mesh.triangle(i).map(|p| p - self.anchor)
+    }
+
+    /// The watertight test of triangle `i` against a ray prepared in the mesh frame.
+    #[inline]
+    pub fn intersect_triangle(&self, i: usize, ray: &WatertightRay, t_max: f64) -> Option<f64> {
+        ray.intersect(&self.mesh.triangle(i), t_max)
+    }
+
+    /// Unit normal of triangle `i` from its winding, mapped to the world by `to_world` (the
+    /// cofactor matrix keeps it perpendicular and, with the winding flip of a mirroring
+    /// placement, on the front side); `None` for a degenerate triangle.
+    pub fn normal(&self, i: usize, to_world: Option<&DAffine3>) -> Option<DVec3> {
+        let n = triangle::geometric_normal(&self.mesh.triangle(i))?;
+        match to_world {
+            None => Some(n),
+            Some(m) => (m.matrix3.inverse().transpose() * n).try_normalize(),
+        }
+    }
+}
+
+impl PrimitiveSet for MeshSet {
+    type RayData = WatertightRay;
+
+    fn len(&self) -> usize {
+        self.mesh.len()
+    }
+
+    fn bounds(&self, index: usize) -> Aabb {
+        Aabb::from_points(self.local(index))
+    }
+
+    fn overlaps(&self, index: usize, cell: &Aabb) -> bool {
+        triangle::overlaps_box(&self.local(index), cell)
+    }
+
+    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64) -> u8 {
+        triangle::octant_mask(&self.local(index), cell, margin)
+    }
+
+    fn clipped_bounds(&self, index: usize, cell: &Aabb) -> Option<Aabb> {
+        // Clipping a triangle that only touches the cell can round away to nothing.
+        triangle::clipped_bounds(&self.local(index), cell)
+            .or_else(|| self.bounds(index).common(*cell))
+    }
+
+    fn prepare(&self, local_origin: DVec3, dir: DVec3) -> WatertightRay {
+        WatertightRay::new(local_origin + self.anchor, dir)
+    }
+
+    fn intersect(&self, index: usize, ray: &PreparedRay<WatertightRay>, t_max: f64) -> Option<f64> {
+        self.intersect_triangle(index, &ray.extra, t_max)
+    }
+}

@@ -1,0 +1,412 @@
+//! The scene model: meshes stored as the file gives them, instances, quadrics, the object
+//! table and the cameras.
+//!
+//! # Storage
+//! A mesh keeps its vertices in its own frame and in the file's precision (see [`mesh`]);
+//! every transform is f64. A mesh drawn once is placed in the world in f64 (its triangles join
+//! the scene's world mesh, stored in f64 unless every placed coordinate is an f32 value); a mesh
+//! drawn several times is stored once with its own octree, and each use is an [`Instance`]. The
+//! scene's top-level primitives are the world mesh's triangles, the instances and the quadrics,
+//! in that order, and one octree is built over them all.
+//!
+//! The acceleration structure works in coordinates relative to [`Scene::anchor`]: the centre of
+//! the scene's bounds when the scene lies far from the world origin (more than 64 times its size
+//! away), so that deep cells keep their digits, and the origin otherwise. The ray tests use the
+//! world ray against the stored vertices, so nothing is rounded before a ray is cast.
+//!
+//! # Objects
+//! One [`Object`] per scene object (a glTF node, an OBJ object, a USD prim or point instance).
+//! An object is made of parts (placed meshes and quadrics); its primitives are numbered in the
+//! order its parts were added, a mesh counting one per triangle and a quadric one, which is what
+//! the `prim` buffer reports.
+
+mod builder;
+pub mod instance;
+pub mod mesh;
+
+pub use builder::SceneBuilder;
+pub use instance::{Instance, StoredMesh};
+pub use mesh::{Mesh, MeshSet, Positions};
+
+use crate::accel::{octants_by_overlap, Hit, PreparedRay, PrimitiveSet};
+use crate::camera::Camera;
+use crate::geometry::triangle::WatertightRay;
+use crate::geometry::Aabb;
+use crate::quadric::Quadric;
+use glam::DVec3;
+use serde::Serialize;
+use std::ops::Range;
+use std::path::PathBuf;
+
+/// What an object is made of.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ObjectKind {
+    /// Triangle meshes only.
+    Mesh,
+    /// An analytic quadric surface, possibly with mesh parts (a USD cylinder's caps).
+    Quadric,
+}
+
+/// One entry of the object table: a glTF node, an OBJ object or group, a USD prim or point
+/// instance, a quadric.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Object {
+    /// Stable 1-based id, written to the `id` buffer (0 means no hit).
+    pub id: u32,
+    /// Node, object or prim name.
+    pub name: String,
+    /// Mesh or quadric.
+    pub kind: ObjectKind,
+    /// Where it came from: a JSON pointer such as `/nodes/3`, `obj:<name>` or a prim path.
+    pub source: String,
+    /// Number of triangles drawn (0 for a plain quadric).
+    pub triangles: u32,
+    /// Index of its first quadric in [`Scene::quadrics`], if it has one.
+    #[serde(skip)]
+    pub quadric: Option<u32>,
+    /// Its parts, as a range of the scene's part list.
+    #[serde(skip)]
+    parts: Range<u32>,
+}
+
+/// One part of an object: a run of world-mesh triangles, an instance or a quadric.
+#[derive(Debug, Clone, Copy)]
+struct Part {
+    /// Index into the object table.
+    object: u32,
+    /// Number of the part's first primitive among its object's primitives.
+    first_prim: u32,
+    kind: PartKind,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum PartKind {
+    /// World-mesh triangles `first..first + count`.
+    World { first: u32, count: u32 },
+    /// Instance index.
+    Instance(u32),
+    /// Quadric index.
+    Quadric(u32),
+}
+
+/// USD stage metadata, after USD's fallbacks (`upAxis` Y, `metersPerUnit` 0.01).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct StageInfo {
+    /// The stage's up axis, `Y` or `Z`.
+    pub up_axis: String,
+    /// Metres per scene unit.
+    pub meters_per_unit: f64,
+}
+
+/// A loaded scene, ready for an acceleration structure.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The file it was loaded from.
+    pub path: PathBuf,
+    /// World position that the acceleration structure's coordinates are relative to.
+    pub anchor: DVec3,
+    world: MeshSet,
+    world_parts: Vec<u32>,
+    meshes: Vec<StoredMesh>,
+    instances: Vec<Instance>,
+    quadrics: Vec<Quadric>,
+    quadric_parts: Vec<u32>,
+    parts: Vec<Part>,
+    /// The object table, in id order.
+    pub objects: Vec<Object>,
+    /// Cameras defined by the file.
+    pub cameras: Vec<Camera>,
+    /// Things the importer skipped or repaired, one line each.
+    pub warnings: Vec<String>,
+    /// Extensions the file declares (glTF `extensionsUsed`).
+    pub extensions_used: Vec<String>,
+    /// What the importer decoded, one line per extension (Draco, meshopt, GPU instancing).
+    pub decoded: Vec<String>,
+    /// USD stage metadata (USD files only).
+    pub stage: Option<StageInfo>,
+}
+
+/// Per-ray data of the scene's primitives.
+#[derive(Debug, Clone, Copy)]
+pub struct SceneRay {
+    triangle: WatertightRay,
+    world_origin: DVec3,
+}
+
+/// What a hit is, resolved for the `id`, `prim` and `normal` buffers.
+#[derive(Debug, Clone, Copy)]
+pub struct Located<'a> {
+    /// The object hit.
+    pub object: &'a Object,
+    /// The primitive's number inside the object (see the module docs).
+    pub prim: u32,
+    /// Unit world normal: the triangle's winding normal or the quadric's gradient direction.
+    pub normal: DVec3,
+}
+
+/// Which kind of top-level primitive an index is.
+enum Top {
+    Triangle(usize),
+    Instance(usize),
+    Quadric(usize),
+}
+
+impl Scene {
+    fn top(&self, index: usize) -> Top {
+        let t = self.world.mesh.len();
+        let i = self.instances.len();
+        if index < t {
+            Top::Triangle(index)
+        } else if index < t + i {
+            Top::Instance(index - t)
+        } else {
+            Top::Quadric(index - t - i)
+        }
+    }
+
+    /// Number of triangles drawn (an instanced mesh counts once per instance).
+    pub fn triangle_count(&self) -> usize {
+        self.world.mesh.len()
+            + self
+                .instances
+                .iter()
+                .map(|i| self.meshes[i.mesh as usize].set.mesh.len())
+                .sum::<usize>()
+    }
+
+    /// Number of triangles stored (an instanced mesh counts once).
+    pub fn stored_triangle_count(&self) -> usize {
+        self.world.mesh.len() + self.meshes.iter().map(|m| m.set.mesh.len()).sum::<usize>()
+    }
+
+    /// The instances.
+    pub fn instances(&self) -> &[Instance] {
+        &self.instances
+    }
+
+    /// Bytes of stored geometry: vertices, indices, per-triangle part indices, instanced
+    /// meshes with their octrees, instance records and quadrics.
+    pub fn geometry_bytes(&self) -> usize {
+        self.world.mesh.bytes()
+            + self.world_parts.len() * 4
+            + self.meshes.iter().map(StoredMesh::bytes).sum::<usize>()
+            + self.instances.len() * std::mem::size_of::<Instance>()
+            + self.quadrics.len() * std::mem::size_of::<Quadric>()
+    }
+
+    /// The quadrics, in primitive order.
+    pub fn quadrics(&self) -> &[Quadric] {
+        &self.quadrics
+    }
+
+    /// World-space bounds of everything in the scene (empty box for an empty scene).
+    pub fn world_bounds(&self) -> Aabb {
+        let local = (0..self.len())
+            .map(|i| PrimitiveSet::bounds(self, i))
+            .fold(Aabb::EMPTY, Aabb::union);
+        if local.is_empty() {
+            local
+        } else {
+            local.translated(-self.anchor)
+        }
+    }
+
+    /// The top-level primitives of a part.
+    fn part_prims(&self, part: &Part) -> Range<usize> {
+        let t = self.world.mesh.len();
+        let i = self.instances.len();
+        match part.kind {
+            PartKind::World { first, count } => first as usize..(first + count) as usize,
+            PartKind::Instance(k) => t + k as usize..t + k as usize + 1,
+            PartKind::Quadric(q) => t + i + q as usize..t + i + q as usize + 1,
+        }
+    }
+
+    fn object_parts(&self, object: &Object) -> &[Part] {
+        &self.parts[object.parts.start as usize..object.parts.end as usize]
+    }
+
+    /// An object's triangles in world coordinates (f64), instances placed; empty for a plain
+    /// quadric. Used by `raycast check` for topology and hole tests.
+    pub fn mesh_triangles(&self, object: &Object) -> Vec<[DVec3; 3]> {
+        let mut triangles = Vec::new();
+        for part in self.object_parts(object) {
+            match part.kind {
+                PartKind::World { first, count } => triangles
+                    .extend((first..first + count).map(|i| self.world.mesh.triangle(i as usize))),
+                PartKind::Instance(k) => {
+                    let instance = &self.instances[k as usize];
+                    let mesh = &self.meshes[instance.mesh as usize].set.mesh;
+                    let flip = instance.to_world.matrix3.determinant() < 0.0;
+                    triangles.extend((0..mesh.len()).map(|i| {
+                        let [a, b, c] = mesh
+                            .triangle(i)
+                            .map(|p| instance.to_world.transform_point3(p));
+                        if flip {
+                            [a, c, b]
+                        } else {
+                            [a, b, c]
+                        }
+                    }));
+                }
+                PartKind::Quadric(_) => {}
+            }
+        }
+        triangles
+    }
+
+    /// World-space bounds of one object.
+    pub fn object_bounds(&self, object: &Object) -> Aabb {
+        self.object_parts(object)
+            .iter()
+            .flat_map(|part| self.part_prims(part))
+            .map(|i| PrimitiveSet::bounds(self, i))
+            .fold(Aabb::EMPTY, Aabb::union)
+            .translated(-self.anchor)
+    }
+
+    fn part_of(&self, prim: u32) -> &Part {
+        let part = match self.top(prim as usize) {
+            Top::Triangle(i) => self.world_parts[i],
+            Top::Instance(k) => self.instances[k].part,
+            Top::Quadric(q) => self.quadric_parts[q],
+        };
+        &self.parts[part as usize]
+    }
+
+    /// The object a top-level primitive belongs to.
+    pub fn object(&self, prim: u32) -> &Object {
+        &self.objects[self.part_of(prim).object as usize]
+    }
+
+    /// Resolves a hit of the ray `origin + t · dir`: the object, the primitive's number inside
+    /// it and the unit world normal (finite for every hit). A hit on an instance traces the
+    /// instance's own octree again, up to the hit's `t`, to find the triangle.
+    pub fn locate(&self, hit: &Hit, origin: DVec3, dir: DVec3) -> Located<'_> {
+        let part = self.part_of(hit.prim);
+        let fallback = || -dir.normalize_or_zero();
+        let (prim, normal) = match self.top(hit.prim as usize) {
+            Top::Triangle(i) => {
+                let PartKind::World { first, .. } = part.kind else {
+                    unreachable!("world triangles belong to world parts")
+                };
+                let normal = self.world.normal(i, None).unwrap_or_else(fallback);
+                (i as u32 - first, normal)
+            }
+            Top::Instance(k) => {
+                let instance = &self.instances[k];
+                let stored = &self.meshes[instance.mesh as usize];
+                match instance.intersect(stored, origin, dir, hit.t) {
+                    Some(inner) => {
+                        let normal = stored
+                            .set
+                            .normal(inner.prim as usize, Some(&instance.to_world));
+                        (inner.prim, normal.unwrap_or_else(fallback))
+                    }
+                    None => (0, fallback()),
+                }
+            }
+            Top::Quadric(q) => (0, self.quadrics[q].normal(origin, dir, hit.t)),
+        };
+        Located {
+            object: &self.objects[part.object as usize],
+            prim: part.first_prim + prim,
+            normal,
+        }
+    }
+}
+
+impl PrimitiveSet for Scene {
+    type RayData = SceneRay;
+
+    fn len(&self) -> usize {
+        self.world.mesh.len() + self.instances.len() + self.quadrics.len()
+    }
+
+    fn bounds(&self, index: usize) -> Aabb {
+        match self.top(index) {
+            Top::Triangle(i) => self.world.bounds(i),
+            Top::Instance(k) => self.instances[k].bounds.translated(self.anchor),
+            Top::Quadric(q) => {
+                let [min, max] = self.quadrics[q].bounds();
+                Aabb::new(min, max).translated(self.anchor)
+            }
+        }
+    }
+
+    fn overlaps(&self, index: usize, cell: &Aabb) -> bool {
+        match self.top(index) {
+            Top::Triangle(i) => self.world.overlaps(i, cell),
+            Top::Instance(_) => self.bounds(index).overlaps(cell),
+            Top::Quadric(q) => {
+                let world = cell.translated(-self.anchor);
+                self.quadrics[q].may_overlap_box(world.min, world.max)
+            }
+        }
+    }
+
+    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64) -> u8 {
+        match self.top(index) {
+            Top::Triangle(i) => self.world.child_mask(i, cell, margin),
+            _ => octants_by_overlap(self, index, cell, margin),
+        }
+    }
+
+    fn clipped_bounds(&self, index: usize, cell: &Aabb) -> Option<Aabb> {
+        match self.top(index) {
+            Top::Triangle(i) => self.world.clipped_bounds(i, cell),
+            _ => self.bounds(index).common(*cell),
+        }
+    }
+
+    fn prepare(&self, local_origin: DVec3, dir: DVec3) -> SceneRay {
+        let world_origin = local_origin + self.anchor;
+        SceneRay {
+            triangle: WatertightRay::new(world_origin, dir),
+            world_origin,
+        }
+    }
+
+    fn intersect(&self, index: usize, ray: &PreparedRay<SceneRay>, t_max: f64) -> Option<f64> {
+        if index < self.world.mesh.len() {
+            self.world
+                .intersect_triangle(index, &ray.extra.triangle, t_max)
+        } else {
+            self.intersect_other(index, ray, t_max)
+        }
+    }
+}
+
+impl Scene {
+    /// The instance and quadric tests, kept out of line so that the triangle test alone
+    /// inlines into traversal (measured with callgrind: inlining all of them costs
+    /// instructions on scenes without instances).
+    #[inline(never)]
+    fn intersect_other(
+        &self,
+        index: usize,
+        ray: &PreparedRay<SceneRay>,
+        t_max: f64,
+    ) -> Option<f64> {
+        let origin = ray.extra.world_origin;
+        match self.top(index) {
+            Top::Triangle(i) => self.world.intersect_triangle(i, &ray.extra.triangle, t_max),
+            Top::Instance(k) => {
+                let instance = &self.instances[k];
+                let stored = &self.meshes[instance.mesh as usize];
+                instance
+                    .intersect(stored, origin, ray.dir, t_max)
+                    .map(|hit| hit.t)
+            }
+            Top::Quadric(q) => self.quadrics[q].intersect(origin, ray.dir, t_max),
+        }
+    }
+}
+
+/// True when a scene lies close enough to the origin, relative to its size, that coordinates
+/// relative to the origin keep their digits in deep octree cells.
+fn near_origin(bounds: &Aabb) -> bool {
+    bounds.center().abs().max_element() <= 64.0 * bounds.size().max_element()
+}
