@@ -5,6 +5,7 @@ use crate::accel::OctreeParams;
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
 use crate::import::{self, LoadOptions};
+use crate::output::request::{self, buffer_bytes, check_memory};
 use crate::output::sidecar::{self, CameraInfo, Sidecar, Stats, Timings};
 use crate::output::{self, Format, Layout, Staging};
 use crate::render::{self, AccelKind, AccelStructure, Aov, CameraView, RaySource, Tracer};
@@ -51,13 +52,16 @@ pub struct RenderJob {
     pub octree: OctreeParams,
     /// The acceleration structure to build.
     pub accel: AccelKind,
+    /// Refuse a run whose buffers need more bytes than this; `None`: the memory the system
+    /// reports available.
+    pub max_memory: Option<u64>,
 }
 
 /// Default image width and height.
 const DEFAULT_SIZE: usize = 512;
 
 /// Largest image side accepted.
-const MAX_SIDE: usize = 1 << 15;
+pub const MAX_SIDE: usize = 1 << 15;
 
 impl RenderJob {
     /// The output folder this job writes to.
@@ -70,7 +74,26 @@ impl RenderJob {
 }
 
 /// Runs a render job; `progress(done, total)` is called as rays complete.
-pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Sidecar> {
+///
+/// The request is checked before the scene is loaded: every format and AOV must give a file,
+/// and the output folder must be writable. The buffers' memory is estimated before tracing.
+pub fn run(job: &RenderJob, progress: impl FnMut(usize, usize)) -> Result<Sidecar> {
+    let formats = check_request(job)?;
+    let out = job.out_dir();
+    let created = request::prepare_folder(&out)?;
+    let result = run_checked(job, &formats, progress);
+    if result.is_err() {
+        request::remove_created_folder(&out, created.as_deref());
+    }
+    result
+}
+
+/// [`run`] after the request checks.
+fn run_checked(
+    job: &RenderJob,
+    formats: &[Format],
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Sidecar> {
     let started = Instant::now();
     let scene = import::load(&job.scene, &job.load)?;
     let load = started.elapsed().as_secs_f64();
@@ -79,15 +102,28 @@ pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Si
         .as_deref()
         .map(output::npy::read_rays)
         .transpose()?;
-    if rays.is_some() && job.aovs.contains(&Aov::Z) {
-        return Err(Error::msg(
-            "the z AOV needs a camera; it is not available with --rays",
-        ));
-    }
     let view = match rays {
         Some(_) => None,
         None => Some(camera_view(&scene, job)?),
     };
+    let layout = match (&view, &rays) {
+        (Some(v), _) => Layout::Image {
+            width: v.width,
+            height: v.height,
+        },
+        (None, rays) => Layout::Rays(rays.as_ref().map_or(0, Vec::len)),
+    };
+    check_memory(
+        buffer_bytes(&job.aovs, formats, layout),
+        job.max_memory,
+        &match layout {
+            Layout::Image { width, height } => format!(
+                "{width}x{height} pixels of --aov {}",
+                request::names(&job.aovs)
+            ),
+            Layout::Rays(n) => format!("{n} rays of --aov {}", request::names(&job.aovs)),
+        },
+    )?;
     let started = Instant::now();
     let accel = AccelStructure::build(&scene, job.accel, job.octree);
     let build = started.elapsed().as_secs_f64();
@@ -106,23 +142,12 @@ pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Si
     let trace = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
-    let layout = match &view {
-        Some(v) => Layout::Image {
-            width: v.width,
-            height: v.height,
-        },
-        None => Layout::Rays(total),
-    };
-    let formats = job.formats.clone().unwrap_or_else(|| match layout {
-        Layout::Image { .. } => vec![Format::Exr, Format::Png],
-        Layout::Rays(_) => vec![Format::Npy],
-    });
     let mut staging = Staging::new(&job.out_dir())?;
     staging.protect(&job.scene);
     if let Some(rays) = &job.rays {
         staging.protect(rays);
     }
-    let depth_png_range = output::write_buffers(&mut staging, &buffers, layout, &formats)?;
+    let depth_png_range = output::write_buffers(&mut staging, &buffers, layout, formats)?;
     let write = started.elapsed().as_secs_f64();
     let mut files = staging.names();
     files.push("raycast.json".into());
@@ -176,12 +201,30 @@ pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Si
     Ok(sidecar)
 }
 
+/// Checks what can be checked before loading (see [`run`]); returns the formats to write,
+/// merged.
+fn check_request(job: &RenderJob) -> Result<Vec<Format>> {
+    let rays_mode = job.rays.is_some();
+    if rays_mode && job.aovs.contains(&Aov::Z) {
+        return Err(Error::usage(
+            "the z AOV needs a camera; it is not available with --rays",
+        ));
+    }
+    let formats = match &job.formats {
+        Some(formats) => request::merge_formats(formats),
+        None if rays_mode => vec![Format::Npy],
+        None => vec![Format::Exr, Format::Png],
+    };
+    request::check_files(&job.aovs, &formats, rays_mode)?;
+    Ok(formats)
+}
+
 /// The camera and image size for camera mode.
 fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
     let mut camera = choose_camera(scene, &job.camera)?;
     if let Some(fov) = job.camera.fov_degrees {
         if !(fov > 0.0 && fov < 180.0) {
-            return Err(Error::msg(format!(
+            return Err(Error::usage(format!(
                 "--fov must lie between 0 and 180 degrees, got {fov}"
             )));
         }
@@ -191,7 +234,7 @@ fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
     }
     if let Some(height) = job.camera.ortho_height {
         if !(height > 0.0 && height.is_finite()) {
-            return Err(Error::msg(format!(
+            return Err(Error::usage(format!(
                 "--ortho must be a positive height, got {height}"
             )));
         }
@@ -209,7 +252,7 @@ fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
         (None, None, None) => (DEFAULT_SIZE, DEFAULT_SIZE),
     };
     if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
-        return Err(Error::msg(format!(
+        return Err(Error::usage(format!(
             "image size {width}x{height} is out of range (1 to {MAX_SIDE} per side)"
         )));
     }

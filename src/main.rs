@@ -81,10 +81,10 @@ struct RenderArgs {
     #[arg(long, value_delimiter = ',', default_value = "depth")]
     aov: Vec<Aov>,
     /// Image width in pixels (default 512, or from the camera's aspect ratio).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_side)]
     width: Option<usize>,
     /// Image height in pixels.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_side)]
     height: Option<usize>,
     /// Camera from the file, by index or name (default: the first, else a framing view).
     #[arg(long, value_name = "N|NAME", conflicts_with = "eye")]
@@ -99,10 +99,10 @@ struct RenderArgs {
     #[arg(long, value_parser = parse_vec3, requires = "eye", allow_hyphen_values = true)]
     up: Option<DVec3>,
     /// Perspective projection with this vertical field of view in degrees.
-    #[arg(long, conflicts_with = "ortho")]
+    #[arg(long, conflicts_with = "ortho", value_parser = parse_fov)]
     fov: Option<f64>,
     /// Orthographic projection with this view height in scene units.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_positive)]
     ortho: Option<f64>,
     /// Trace the rays of an (N, 6) .npy file (origin xyz, direction xyz) instead of a camera.
     #[arg(long, value_name = "FILE.npy", conflicts_with_all = ["camera", "eye", "width", "height", "fov", "ortho"])]
@@ -121,8 +121,12 @@ struct RenderArgs {
     #[arg(long, default_value = "octree")]
     accel: AccelKind,
     /// Worker threads (default: all cores). The output does not depend on it.
-    #[arg(long)]
-    threads: Option<usize>,
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    threads: Option<u32>,
+    /// Refuse a render whose buffers would need more memory than this (bytes; K, M, G, T
+    /// suffixes; default: the memory the system reports available).
+    #[arg(long, value_name = "SIZE", value_parser = raycast::check::parse_size)]
+    max_memory: Option<u64>,
     /// Print nothing but errors.
     #[arg(long, short)]
     quiet: bool,
@@ -145,7 +149,38 @@ fn parse_vec3(text: &str) -> Result<DVec3, String> {
     }
 }
 
+/// An image side in pixels: 1 to 32768.
+fn parse_side(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n) if (1..=job::MAX_SIDE).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "'{text}' is not an image side (1 to {} pixels)",
+            job::MAX_SIDE
+        )),
+    }
+}
+
+/// A vertical field of view strictly between 0 and 180 degrees.
+fn parse_fov(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v < 180.0 => Ok(v),
+        _ => Err(format!(
+            "'{text}' is not a field of view (between 0 and 180 degrees)"
+        )),
+    }
+}
+
+/// A positive finite number.
+fn parse_positive(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("'{text}' is not a positive number")),
+    }
+}
+
 fn main() -> ExitCode {
+    // Ctrl-C: remove temporary output files, then exit as a shell expects (128 + SIGINT).
+    let _ = ctrlc::set_handler(|| raycast::output::remove_partial_files_and_exit(130));
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Info(args)) => info(args),
@@ -156,7 +191,10 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("raycast: error: {e}");
-            ExitCode::from(1)
+            ExitCode::from(match e.kind {
+                raycast::error::ErrorKind::Usage => 2,
+                raycast::error::ErrorKind::Failure => 1,
+            })
         }
     }
 }
@@ -189,7 +227,7 @@ fn print_stdout(text: &str) -> raycast::Result<()> {
 fn render(args: RenderArgs) -> raycast::Result<()> {
     if let Some(threads) = args.threads {
         rayon::ThreadPoolBuilder::new()
-            .num_threads(threads.max(1))
+            .num_threads(threads as usize)
             .build_global()
             .map_err(|e| raycast::Error::msg(format!("cannot start {threads} threads: {e}")))?;
     }
@@ -214,6 +252,7 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         formats: args.format,
         octree: OctreeParams::default(),
         accel: args.accel,
+        max_memory: args.max_memory,
     };
     let bar = Progress::new(args.quiet);
     let sidecar = job::run(&job, |done, total| bar.update(done, total))?;

@@ -2,36 +2,7 @@
 
 mod common;
 use common::*;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn raycast(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raycast"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-/// Runs raycast and asserts that it succeeded, showing its error output otherwise.
-fn raycast_ok(args: &[&str]) -> Output {
-    let result = raycast(args);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
-    result
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("raycast-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
-
-fn arg(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use std::path::PathBuf;
 
 #[test]
 fn default_render_writes_exr_png_and_sidecar() {

@@ -2,6 +2,9 @@
 //! an independent reference: mpmath at 200–300 bits on the exact f64 inputs (the values are
 //! stored here) or analysis stated next to the test.
 
+// The reference values are stored with the digits mpmath printed.
+#![allow(clippy::excessive_precision)]
+
 use glam::{DMat3, DMat4, DVec3};
 
 use super::{Quadric, QuadricSpec};

@@ -1,0 +1,195 @@
+//! What a render writes, and what it refuses before doing any work: memory, formats, the
+//! output folder, interrupted and repeated runs.
+
+mod common;
+use common::*;
+
+/// The partial files (`.NAME.partial-PID`) left in `dir`.
+fn partial_files(dir: &std::path::Path) -> Vec<String> {
+    file_names(dir)
+        .into_iter()
+        .filter(|n| n.contains(".partial-"))
+        .collect()
+}
+
+#[test]
+fn buffers_beyond_max_memory_are_refused_before_allocating() {
+    let out = temp_dir("memory");
+    let cube = fixture("gltf/cube.gltf");
+    let result = raycast(&[
+        arg(&cube),
+        "--width",
+        "24000",
+        "--height",
+        "24000",
+        "--aov",
+        "depth,normal,position,id",
+        "--max-memory",
+        "1G",
+        "--out",
+        arg(&out),
+    ]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{stderr}");
+    // 576e6 pixels × (24 hit + 60 buffers + 2 × 12 for the normal's EXR) bytes = 57.9 GiB.
+    assert!(stderr.contains("need about 57.9 GiB"), "{stderr}");
+    assert!(stderr.contains("--max-memory"), "{stderr}");
+    assert!(file_names(&out).is_empty(), "{:?}", file_names(&out));
+}
+
+#[test]
+fn repeated_formats_merge_and_leave_no_partial_files() {
+    let out = temp_dir("png-png");
+    let cube = fixture("gltf/cube.gltf");
+    raycast_ok(&[
+        arg(&cube),
+        "--aov",
+        "depth,id",
+        "--format",
+        "png,png",
+        "--width",
+        "16",
+        "--out",
+        arg(&out),
+        "--quiet",
+    ]);
+    assert_eq!(file_names(&out), ["depth.png", "id.png", "raycast.json"]);
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    assert_eq!(
+        json["files"],
+        serde_json::json!(["depth.png", "id.png", "raycast.json"])
+    );
+}
+
+#[test]
+fn requests_that_write_no_file_are_usage_errors() {
+    let dir = temp_dir("no-file");
+    std::fs::create_dir_all(&dir).unwrap();
+    let rays = dir.join("rays.npy");
+    write_rays(&rays, &[[0.0, 0.0, 5.0, 0.0, 0.0, -1.0]]);
+    let cube = fixture("gltf/cube.gltf");
+    let out = dir.join("out");
+    let cases: [(Vec<&str>, &str); 3] = [
+        (vec!["--rays", arg(&rays), "--format", "png"], "png"),
+        (vec!["--aov", "position", "--format", "png"], "position"),
+        (vec!["--rays", arg(&rays), "--format", "npy,exr"], "exr"),
+    ];
+    for (extra, named) in cases {
+        let mut args = vec![arg(&cube), "--out", arg(&out)];
+        args.extend(extra.iter().copied());
+        let result = raycast(&args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert!(stderr.contains(named), "{extra:?}: {stderr}");
+        assert!(!out.exists(), "{extra:?} created the output folder");
+    }
+}
+
+#[test]
+fn a_run_replaces_an_earlier_runs_files_and_nothing_else() {
+    let out = temp_dir("reuse");
+    let cube = fixture("gltf/cube.gltf");
+    raycast_ok(&[arg(&cube), "--width", "16", "--out", arg(&out), "--quiet"]);
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    std::fs::write(out.join("normal.exr"), "not listed by the earlier run").unwrap();
+    let rays = out.join("rays.npy");
+    write_rays(&rays, &[[0.0, 0.0, 5.0, 0.0, 0.0, -1.0]]);
+    raycast_ok(&[
+        arg(&cube),
+        "--rays",
+        arg(&rays),
+        "--out",
+        arg(&out),
+        "--quiet",
+    ]);
+    assert_eq!(
+        file_names(&out),
+        [
+            "depth.npy",
+            "normal.exr",
+            "notes.txt",
+            "raycast.json",
+            "rays.npy"
+        ]
+    );
+}
+
+#[test]
+fn output_folder_problems_are_found_before_loading() {
+    let dir = temp_dir("out-problems");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("a-file");
+    std::fs::write(&file, "x").unwrap();
+    // A truncated scene: had it been loaded first, the error would be about the GLB.
+    let broken = fixture("bad/truncated.glb");
+    let result = raycast(&[arg(&broken), "--out", arg(&file)]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("a-file: is a file, not a folder"),
+        "{stderr}"
+    );
+    let below = file.join("out");
+    let result = raycast(&[arg(&broken), "--out", arg(&below)]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("a-file/out: cannot create the output folder"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("partial"), "{stderr}");
+}
+
+#[test]
+fn invalid_option_values_exit_with_2() {
+    let cube = fixture("gltf/cube.gltf");
+    for bad in [
+        ["--width", "0"],
+        ["--height", "0"],
+        ["--width", "40000"],
+        ["--fov", "0"],
+        ["--fov", "180"],
+        ["--ortho", "0"],
+        ["--ortho", "inf"],
+        ["--threads", "0"],
+        ["--eye", "nan,0,0"],
+    ] {
+        let mut args = vec![arg(&cube)];
+        args.extend(bad);
+        if bad[0] == "--eye" {
+            args.extend(["--target", "0,0,0"]);
+        }
+        let result = raycast(&args);
+        assert_eq!(result.status.code(), Some(2), "{bad:?}");
+    }
+}
+
+#[test]
+fn ctrl_c_removes_partial_files() {
+    let out = temp_dir("interrupt");
+    let cube = fixture("gltf/cube.gltf");
+    let mut child = std::process::Command::new(raycast_bin())
+        .args([arg(&cube), "--width", "2000", "--height", "2000"])
+        .args(["--aov", "depth,normal,position", "--format", "exr,png,npy"])
+        .args(["--out", arg(&out), "--quiet"])
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    let mut interrupted = false;
+    while child.try_wait().unwrap().is_none() && started.elapsed().as_secs() < 120 {
+        if !partial_files(&out).is_empty() {
+            std::process::Command::new("kill")
+                .args(["-INT", &child.id().to_string()])
+                .status()
+                .unwrap();
+            interrupted = true;
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let status = child.wait().unwrap();
+    assert!(interrupted, "the render ended before writing: {status:?}");
+    assert_eq!(partial_files(&out), Vec::<String>::new());
+    assert_eq!(status.code(), Some(130));
+}
