@@ -4,6 +4,7 @@
 use crate::accel::OctreeParams;
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
+use crate::geometry::Ray;
 use crate::import::{self, LoadOptions};
 use crate::output::request::{self, buffer_bytes, check_memory};
 use crate::output::sidecar::{self, CameraInfo, Sidecar, Stats, Timings};
@@ -11,7 +12,7 @@ use crate::output::{self, Format, Layout, Staging};
 use crate::render::{self, AccelKind, AccelStructure, Aov, CameraView, RaySource, Tracer};
 use crate::scene::Scene;
 use glam::DVec3;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// How to choose the camera.
@@ -52,6 +53,9 @@ pub struct RenderJob {
     pub octree: OctreeParams,
     /// The acceleration structure to build.
     pub accel: AccelKind,
+    /// A ray that cannot be traced (non-finite origin or direction, zero direction) is an
+    /// error, not a miss with a warning.
+    pub strict_rays: bool,
     /// Refuse a run whose buffers need more bytes than this; `None`: the memory the system
     /// reports available.
     pub max_memory: Option<u64>,
@@ -97,10 +101,11 @@ fn run_checked(
     let started = Instant::now();
     let scene = import::load(&job.scene, &job.load)?;
     let load = started.elapsed().as_secs_f64();
+    let mut warnings = scene.warnings.clone();
     let rays = job
         .rays
         .as_deref()
-        .map(output::npy::read_rays)
+        .map(|path| read_rays(path, job.strict_rays, &mut warnings))
         .transpose()?;
     let view = match rays {
         Some(_) => None,
@@ -192,13 +197,33 @@ fn run_checked(
         },
         stage: scene.stage.clone(),
         decoded: scene.decoded.clone(),
-        warnings: scene.warnings.clone(),
+        warnings,
     };
     let json = serde_json::to_string_pretty(&sidecar).map_err(|e| Error::msg(e.to_string()))?;
     let path = staging.file("raycast.json");
     std::fs::write(&path, json).map_err(|e| Error::in_file(&path, format!("cannot write: {e}")))?;
     staging.commit()?;
     Ok(sidecar)
+}
+
+/// Reads a ray file. Untraceable rays are misses with one warning, or with `strict` an error
+/// naming the first.
+fn read_rays(path: &Path, strict: bool, warnings: &mut Vec<String>) -> Result<Vec<Ray>> {
+    let file = output::npy::read_rays(path)?;
+    if let Some(first) = file.untraceable.first() {
+        if strict {
+            return Err(Error::in_file(path, format!("{first} (--strict-rays)")));
+        }
+        let n = file.untraceable.len();
+        warnings.push(format!(
+            "{}: {n} {} a non-finite origin or direction or a zero direction and {} as \
+             misses (first: {first}); --strict-rays makes this an error",
+            path.display(),
+            if n == 1 { "ray has" } else { "rays have" },
+            if n == 1 { "counts" } else { "count" },
+        ));
+    }
+    Ok(file.rays)
 }
 
 /// Checks what can be checked before loading (see [`run`]); returns the formats to write,

@@ -107,6 +107,10 @@ struct RenderArgs {
     /// Trace the rays of an (N, 6) .npy file (origin xyz, direction xyz) instead of a camera.
     #[arg(long, value_name = "FILE.npy", conflicts_with_all = ["camera", "eye", "width", "height", "fov", "ortho"])]
     rays: Option<PathBuf>,
+    /// With --rays: a ray with a non-finite origin or direction, or a zero direction, is an
+    /// error (default: a miss, counted in the warnings).
+    #[arg(long, requires = "rays")]
+    strict_rays: bool,
     /// Output folder (default: <scene stem>.raycast).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -253,6 +257,7 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         octree: OctreeParams::default(),
         accel: args.accel,
         max_memory: args.max_memory,
+        strict_rays: args.strict_rays,
     };
     let bar = Progress::new(args.quiet);
     let sidecar = job::run(&job, |done, total| bar.update(done, total))?;

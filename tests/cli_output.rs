@@ -193,3 +193,94 @@ fn ctrl_c_removes_partial_files() {
     assert_eq!(partial_files(&out), Vec::<String>::new());
     assert_eq!(status.code(), Some(130));
 }
+
+#[test]
+fn untraceable_rays_are_misses_counted_in_the_warnings() {
+    let dir = temp_dir("nan-rays");
+    std::fs::create_dir_all(&dir).unwrap();
+    let rays = dir.join("rays.npy");
+    write_rays(
+        &rays,
+        &[
+            [0.0, 0.0, 5.0, 0.0, 0.0, -1.0],
+            [f64::NAN, 0.0, 5.0, 0.0, 0.0, -1.0],
+            [0.0, 0.0, 5.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 5.0, f64::INFINITY, 0.0, -1.0],
+        ],
+    );
+    let cube = fixture("gltf/cube.gltf");
+    let out = dir.join("out");
+    raycast_ok(&[
+        arg(&cube),
+        "--rays",
+        arg(&rays),
+        "--out",
+        arg(&out),
+        "--quiet",
+    ]);
+    let (_, depth) = read_f64(&out.join("depth.npy"));
+    assert_eq!(depth, [4.0, f64::INFINITY, f64::INFINITY, f64::INFINITY]);
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    let warnings = json["warnings"].to_string();
+    assert!(
+        warnings.contains("3 rays have a non-finite origin or direction or a zero direction"),
+        "{warnings}"
+    );
+    assert!(
+        warnings.contains("first: ray 1: the origin is not finite"),
+        "{warnings}"
+    );
+    let strict = dir.join("strict");
+    let result = raycast(&[
+        arg(&cube),
+        "--rays",
+        arg(&rays),
+        "--out",
+        arg(&strict),
+        "--strict-rays",
+    ]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("rays.npy: ray 1: the origin is not finite"),
+        "{stderr}"
+    );
+    assert!(!strict.exists());
+}
+
+#[test]
+fn fortran_ordered_ray_files_are_read() {
+    let dir = temp_dir("fortran-rays");
+    std::fs::create_dir_all(&dir).unwrap();
+    // What numpy writes for `rays.T` of a C-order (6, 2) array: a (2, 6) array with
+    // 'fortran_order': True whose data holds the columns one after another.
+    let rows = [
+        [0.0f64, 0.0, 5.0, 0.0, 0.0, -1.0],
+        [3.0, 0.0, 5.0, 0.0, 0.0, -1.0],
+    ];
+    let header = "{'descr': '<f8', 'fortran_order': True, 'shape': (2, 6), }";
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    let padded = format!("{header}{}\n", " ".repeat(63 - (10 + header.len()) % 64));
+    bytes.extend_from_slice(&(padded.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(padded.as_bytes());
+    for c in 0..6 {
+        for row in &rows {
+            bytes.extend_from_slice(&row[c].to_le_bytes());
+        }
+    }
+    let rays = dir.join("rays.npy");
+    std::fs::write(&rays, bytes).unwrap();
+    let out = dir.join("out");
+    let cube = fixture("gltf/cube.gltf");
+    raycast_ok(&[
+        arg(&cube),
+        "--rays",
+        arg(&rays),
+        "--out",
+        arg(&out),
+        "--quiet",
+    ]);
+    let (_, depth) = read_f64(&out.join("depth.npy"));
+    assert_eq!(depth, [4.0, f64::INFINITY]);
+}
