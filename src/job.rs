@@ -215,12 +215,14 @@ fn read_rays(path: &Path, strict: bool, warnings: &mut Vec<String>) -> Result<Ve
             return Err(Error::in_file(path, format!("{first} (--strict-rays)")));
         }
         let n = file.untraceable.len();
+        let (rays, counted) = match n {
+            1 => ("ray has", "counts as a miss"),
+            _ => ("rays have", "count as misses"),
+        };
         warnings.push(format!(
-            "{}: {n} {} a non-finite origin or direction or a zero direction and {} as \
-             misses (first: {first}); --strict-rays makes this an error",
+            "{}: {n} {rays} a non-finite origin or direction or a zero direction and {counted} \
+             (first: {first}); --strict-rays makes this an error",
             path.display(),
-            if n == 1 { "ray has" } else { "rays have" },
-            if n == 1 { "counts" } else { "count" },
         ));
     }
     Ok(file.rays)

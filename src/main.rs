@@ -14,7 +14,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-/// Exact ray casting of glTF and OBJ scenes with triangle meshes and analytic quadrics.
+/// Exact ray casting of glTF, USD and OBJ scenes with triangle meshes and analytic quadrics.
 #[derive(Parser)]
 #[command(
     name = "raycast",
@@ -39,8 +39,9 @@ enum Command {
 
 #[derive(Args)]
 struct InfoArgs {
-    /// Scene file (.gltf, .glb, .obj).
-    scene: PathBuf,
+    /// Scene files (.gltf, .glb, .obj, .usda, .usdc, .usd, .usdz).
+    #[arg(required = true)]
+    scenes: Vec<PathBuf>,
     /// glTF scene by index or name.
     #[arg(long = "scene", value_name = "N|NAME")]
     scene_choice: Option<String>,
@@ -74,7 +75,7 @@ impl PathArgs {
 
 #[derive(Args)]
 struct RenderArgs {
-    /// Scene file (.gltf, .glb, .obj).
+    /// Scene file (.gltf, .glb, .obj, .usda, .usdc, .usd, .usdz).
     #[arg(required = true)]
     scene: Option<PathBuf>,
     /// Buffers to compute: depth, z, normal, position, id, prim.
@@ -203,18 +204,46 @@ fn main() -> ExitCode {
     }
 }
 
+/// `raycast info`: each file in turn (text blocks, or one JSON object per file; a JSON array
+/// for several files). A file that fails is reported and the others still printed; the run
+/// then fails.
 fn info(args: InfoArgs) -> raycast::Result<()> {
     let options = args.paths.load_options(args.scene_choice);
-    let scene = import::load(&args.scene, &options)?;
-    let info = SceneInfo::new(&scene);
+    let mut failed = None;
+    let mut infos = Vec::new();
+    for path in &args.scenes {
+        match import::load(path, &options) {
+            Ok(scene) => infos.push(SceneInfo::new(&scene)),
+            Err(e) if args.scenes.len() == 1 => return Err(e),
+            Err(e) => {
+                eprintln!("raycast: error: {e}");
+                failed = Some(e);
+            }
+        }
+    }
     let text = if args.json {
-        let json =
-            serde_json::to_string_pretty(&info).map_err(|e| raycast::Error::msg(e.to_string()))?;
-        format!("{json}\n")
+        let json = match &infos[..] {
+            [one] if args.scenes.len() == 1 => serde_json::to_string_pretty(one),
+            all => serde_json::to_string_pretty(all),
+        };
+        format!(
+            "{}\n",
+            json.map_err(|e| raycast::Error::msg(e.to_string()))?
+        )
     } else {
-        info.to_string()
+        infos
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join("\n")
     };
-    print_stdout(&text)
+    print_stdout(&text)?;
+    match failed {
+        Some(_) => Err(raycast::Error::msg(
+            "some files could not be read (see above)",
+        )),
+        None => Ok(()),
+    }
 }
 
 /// Writes `text` to standard output; a closed pipe (`raycast info x | head`) is not an error.

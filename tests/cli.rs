@@ -180,7 +180,11 @@ fn bad_inputs_fail_cleanly_naming_the_file() {
         (fixture("does_not_exist.gltf"), vec![], "cannot read"),
         (fixture("README.md"), vec![], "unsupported file type"),
         (cube.clone(), vec!["--rays", "BAD_RAYS"], "shape"),
-        (cube.clone(), vec!["--rays", "NAN_RAYS"], "non-finite"),
+        (
+            cube.clone(),
+            vec!["--rays", "NAN_RAYS", "--strict-rays"],
+            "not finite",
+        ),
         (cube.clone(), vec!["--camera", "nope"], "no camera 'nope'"),
     ];
     let bad_rays = fixture("bad/bad_rays.npy");

@@ -3,6 +3,7 @@
 pub mod gltf;
 pub mod obj;
 pub mod paths;
+mod sniff;
 pub mod usd;
 
 use crate::error::{Error, Result};
@@ -21,12 +22,14 @@ pub struct LoadOptions {
     pub allow_outside: bool,
 }
 
-/// Loads a `.gltf`, `.glb` or `.obj` file, choosing the importer by extension.
+/// Loads a `.gltf`, `.glb`, `.obj`, `.usda`, `.usdc`, `.usd` or `.usdz` file, choosing the
+/// importer by extension after checking that the content is that format.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
+    sniff::check_content(path, extension.as_deref().unwrap_or_default())?;
     match extension.as_deref() {
         Some("gltf") | Some("glb") => gltf::load(path, options),
         Some("obj") => obj::load(path),
