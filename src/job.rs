@@ -248,7 +248,9 @@ fn check_request(job: &RenderJob) -> Result<Vec<Format>> {
 
 /// The camera and image size for camera mode.
 fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
-    let mut camera = choose_camera(scene, &job.camera)?;
+    let chosen = choose_camera(scene, &job.camera)?;
+    let auto = chosen.is_none();
+    let mut camera = chosen.unwrap_or_else(|| framing(scene, 1.0));
     if let Some(fov) = job.camera.fov_degrees {
         if !(fov > 0.0 && fov < 180.0) {
             return Err(Error::usage(format!(
@@ -283,31 +285,57 @@ fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
             "image size {width}x{height} is out of range (1 to {MAX_SIDE} per side)"
         )));
     }
+    if auto {
+        let projection = camera.projection;
+        camera = Camera {
+            projection,
+            ..framing(scene, width as f64 / height as f64)
+        };
+    }
     Ok(CameraView::new(camera, width, height))
 }
 
-fn choose_camera(scene: &Scene, choice: &CameraChoice) -> Result<Camera> {
+/// The automatic camera for an image of width / height `aspect`, upright in the stage's up
+/// axis (+Z for a Z-up USD stage, +Y otherwise).
+fn framing(scene: &Scene, aspect: f64) -> Camera {
+    let up = match &scene.stage {
+        Some(stage) if stage.up_axis == "Z" => DVec3::Z,
+        _ => DVec3::Y,
+    };
+    Camera::framing_image(&scene.world_bounds(), aspect, up)
+}
+
+/// The camera asked for, or the file's first; `None` for the automatic framing camera.
+fn choose_camera(scene: &Scene, choice: &CameraChoice) -> Result<Option<Camera>> {
     if let Some((eye, target, up)) = choice.look_at {
         let projection = Projection::Perspective { yfov: 0.8 };
-        return Camera::look_at(eye, target, up, projection);
+        return Camera::look_at(eye, target, up, projection).map(Some);
     }
-    match &choice.name {
-        Some(name) => scene
-            .cameras
-            .iter()
-            .enumerate()
-            .find(|(i, c)| name.parse::<usize>() == Ok(*i) || &c.name == name)
-            .map(|(_, c)| c.clone())
-            .ok_or_else(|| {
-                Error::in_file(
-                    &scene.path,
-                    format!("no camera '{name}' (the file has {})", scene.cameras.len()),
-                )
-            }),
-        None => Ok(scene
-            .cameras
-            .first()
-            .cloned()
-            .unwrap_or_else(|| Camera::framing(&scene.world_bounds()))),
+    let Some(name) = &choice.name else {
+        return Ok(scene.cameras.first().cloned());
+    };
+    scene
+        .cameras
+        .iter()
+        .enumerate()
+        .find(|(i, c)| name.parse::<usize>() == Ok(*i) || &c.name == name)
+        .map(|(_, c)| Some(c.clone()))
+        .ok_or_else(|| Error::in_file(&scene.path, no_camera(name, scene)))
+}
+
+/// The message for a camera name that the file does not have: the names it has.
+fn no_camera(name: &str, scene: &Scene) -> String {
+    if scene.cameras.is_empty() {
+        return format!("no camera '{name}': the file has no cameras");
     }
+    let names: Vec<String> = scene
+        .cameras
+        .iter()
+        .enumerate()
+        .map(|(i, c)| format!("{i} '{}'", c.name))
+        .collect();
+    format!(
+        "no camera '{name}'; the file's cameras are {}",
+        names.join(", ")
+    )
 }
