@@ -172,7 +172,7 @@ impl fmt::Display for SceneInfo {
 }
 
 /// `n` and the noun, plural unless `n` is 1: `1 object`, `2 objects`.
-fn count(n: usize, noun: &str) -> String {
+pub(crate) fn count(n: usize, noun: &str) -> String {
     if n == 1 {
         format!("{n} {noun}")
     } else {
