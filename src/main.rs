@@ -10,7 +10,7 @@ use raycast::job::{self, CameraChoice, RenderJob};
 use raycast::output::Format;
 use raycast::render::{AccelKind, Aov};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -48,6 +48,9 @@ struct InfoArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
+    /// Seconds the USD reader may take on one file (it reads it in a child process first).
+    #[arg(long, value_name = "SECS", default_value_t = 120.0, value_parser = parse_positive)]
+    usd_timeout: f64,
     #[command(flatten)]
     paths: PathArgs,
 }
@@ -64,6 +67,18 @@ struct PathArgs {
 }
 
 impl PathArgs {
+    /// The same options for a child `raycast info` (see [`probe_usd`]).
+    fn child_args(&self) -> Vec<std::ffi::OsString> {
+        let mut args = Vec::new();
+        if let Some(root) = &self.root {
+            args.extend(["--root".into(), root.clone().into_os_string()]);
+        }
+        if self.allow_outside {
+            args.push("--allow-outside".into());
+        }
+        args
+    }
+
     fn load_options(self, scene: Option<String>) -> LoadOptions {
         LoadOptions {
             scene,
@@ -132,6 +147,10 @@ struct RenderArgs {
     /// suffixes; default: the memory the system reports available).
     #[arg(long, value_name = "SIZE", value_parser = raycast::check::parse_size)]
     max_memory: Option<u64>,
+    /// Seconds the USD reader may take on the scene (it reads it in a child process first,
+    /// so that a reader crash or hang ends with a one-line error).
+    #[arg(long, value_name = "SECS", default_value_t = 120.0, value_parser = parse_positive)]
+    usd_timeout: f64,
     /// Print nothing but errors.
     #[arg(long, short)]
     quiet: bool,
@@ -208,11 +227,12 @@ fn main() -> ExitCode {
 /// for several files). A file that fails is reported and the others still printed; the run
 /// then fails.
 fn info(args: InfoArgs) -> raycast::Result<()> {
+    let child_args = args.paths.child_args();
     let options = args.paths.load_options(args.scene_choice);
     let mut failed = None;
     let mut infos = Vec::new();
     for path in &args.scenes {
-        match import::load(path, &options) {
+        match probe_usd(path, args.usd_timeout, &child_args).and_then(|()| import::load(path, &options)) {
             Ok(scene) => infos.push(SceneInfo::new(&scene)),
             Err(e) if args.scenes.len() == 1 => return Err(e),
             Err(e) => {
@@ -246,6 +266,24 @@ fn info(args: InfoArgs) -> raycast::Result<()> {
     }
 }
 
+/// Reads a USD scene in a child process first (see [`raycast::check::usd::probe`]), unless
+/// this process is that child; other formats pass.
+fn probe_usd(path: &Path, timeout: f64, child_args: &[std::ffi::OsString]) -> raycast::Result<()> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let usd = matches!(extension.as_deref(), Some("usda" | "usdc" | "usd" | "usdz"));
+    if !usd || std::env::var_os(raycast::check::usd::PROBE_CHILD).is_some() {
+        return Ok(());
+    }
+    let Ok(exe) = std::env::current_exe() else {
+        return Ok(());
+    };
+    raycast::check::usd::probe(&exe, path, child_args, Duration::from_secs_f64(timeout))
+        .map_err(raycast::Error::msg)
+}
+
 /// Writes `text` to standard output; a closed pipe (`raycast info x | head`) is not an error.
 fn print_stdout(text: &str) -> raycast::Result<()> {
     use std::io::Write;
@@ -263,6 +301,9 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
             .num_threads(threads as usize)
             .build_global()
             .map_err(|e| raycast::Error::msg(format!("cannot start {threads} threads: {e}")))?;
+    }
+    if let Some(scene) = &args.scene {
+        probe_usd(scene, args.usd_timeout, &args.paths.child_args())?;
     }
     let look_at = args
         .eye

@@ -101,3 +101,30 @@ fn info_columns_stay_aligned_for_long_names() {
     assert_eq!(columns[0], columns[1], "{out}");
     assert!(out.contains("2 objects, 2 triangles, 0 quadrics"), "{out}");
 }
+
+#[test]
+fn usd_reader_crashes_and_hangs_end_with_one_line() {
+    let out = temp_dir("fuzz-usd");
+    let files = [
+        "fuzz-hang/usd/openusd_instancing_recursion_1.usda",
+        "fuzz-hang/usd/openusd_instancing_recursion_2.usda",
+        "fuzz/usd/deep_nesting.usda",
+        "fuzz/usd/openusd_usdc_huge_array.usdc",
+        "fuzz/usd/openusd_usdc_token_index.usdc",
+    ];
+    for file in files {
+        let scene = fixture(file);
+        for args in [
+            vec![arg(&scene), "--usd-timeout", "3", "--out", arg(&out)],
+            vec!["info", arg(&scene), "--usd-timeout", "3"],
+        ] {
+            let result = raycast(&args);
+            let stderr = stderr(&result);
+            assert_eq!(result.status.code(), Some(1), "{args:?}: {stderr}");
+            assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+            assert!(stderr.contains(file), "{args:?}: {stderr}");
+            assert!(!stderr.contains("panicked at"), "{args:?}: {stderr}");
+        }
+    }
+    assert!(!out.exists());
+}
