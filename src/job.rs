@@ -56,6 +56,9 @@ pub struct RenderJob {
     /// A ray that cannot be traced (non-finite origin or direction, zero direction) is an
     /// error, not a miss with a warning.
     pub strict_rays: bool,
+    /// The distance range mapped into the depth and z previews, near to far; `None` for the
+    /// 1st to 99th percentile of the hits.
+    pub depth_range: Option<[f64; 2]>,
     /// Refuse a run whose buffers need more bytes than this; `None`: the memory the system
     /// reports available.
     pub max_memory: Option<u64>,
@@ -152,7 +155,8 @@ fn run_checked(
     if let Some(rays) = &job.rays {
         staging.protect(rays);
     }
-    let depth_png_range = output::write_buffers(&mut staging, &buffers, layout, formats)?;
+    let depth_png_range =
+        output::write_buffers(&mut staging, &buffers, layout, formats, job.depth_range)?;
     let write = started.elapsed().as_secs_f64();
     let mut files = staging.names();
     files.push("raycast.json".into());

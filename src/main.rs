@@ -147,6 +147,10 @@ struct RenderArgs {
     /// suffixes; default: the memory the system reports available).
     #[arg(long, value_name = "SIZE", value_parser = raycast::check::parse_size)]
     max_memory: Option<u64>,
+    /// Distances mapped to the depth and z previews, NEAR,FAR (default: the 1st to 99th
+    /// percentile of the hits).
+    #[arg(long, value_name = "NEAR,FAR", value_parser = parse_range, allow_hyphen_values = true)]
+    depth_range: Option<[f64; 2]>,
     /// Seconds the USD reader may take on the scene (it reads it in a child process first,
     /// so that a reader crash or hang ends with a one-line error).
     #[arg(long, value_name = "SECS", default_value_t = 120.0, value_parser = parse_positive)]
@@ -191,6 +195,18 @@ fn parse_fov(text: &str) -> Result<f64, String> {
         _ => Err(format!(
             "'{text}' is not a field of view (between 0 and 180 degrees)"
         )),
+    }
+}
+
+/// Two finite numbers NEAR,FAR with NEAR < FAR.
+fn parse_range(text: &str) -> Result<[f64; 2], String> {
+    let values: Vec<f64> = text
+        .split(',')
+        .filter_map(|v| v.trim().parse().ok())
+        .collect();
+    match values[..] {
+        [near, far] if near.is_finite() && far.is_finite() && near < far => Ok([near, far]),
+        _ => Err(format!("expected NEAR,FAR with NEAR < FAR, got '{text}'")),
     }
 }
 
@@ -328,6 +344,7 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         accel: args.accel,
         max_memory: args.max_memory,
         strict_rays: args.strict_rays,
+        depth_range: args.depth_range,
     };
     let bar = Progress::new(args.quiet);
     let sidecar = job::run(&job, |done, total| bar.update(done, total))?;

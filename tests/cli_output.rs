@@ -284,3 +284,55 @@ fn fortran_ordered_ray_files_are_read() {
     let (_, depth) = read_f64(&out.join("depth.npy"));
     assert_eq!(depth, [4.0, f64::INFINITY]);
 }
+
+/// Distinct grey levels of the depth preview inside the centre square (the near quad).
+fn quad_grey_levels(png: &std::path::Path) -> usize {
+    let image = image::open(png).unwrap().to_rgb8();
+    let mut levels: Vec<u8> = (40..88)
+        .flat_map(|y| (40..88).map(move |x| (x, y)))
+        .map(|(x, y)| image.get_pixel(x, y).0[0])
+        .collect();
+    levels.sort_unstable();
+    levels.dedup();
+    levels.len()
+}
+
+#[test]
+fn a_far_outlier_does_not_wash_out_the_depth_preview() {
+    let dir = temp_dir("depth-preview");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("near-and-far.obj");
+    // A 2×2 quad 3 units away fills the centre; a small triangle 1000 units away sits in a
+    // corner of the view (a few pixels).
+    std::fs::write(
+        &scene,
+        "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv 375 375 -1000\nv 410 375 -1000\nv 375 410 -1000\n\
+         f 1 2 3\nf 1 3 4\nf 5 6 7\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let view = [
+        "--eye", "0,0,3", "--target", "0,0,0", "--width", "128", "--height", "128",
+    ];
+    let mut args = vec![
+        arg(&scene),
+        "--format",
+        "png",
+        "--out",
+        arg(&out),
+        "--quiet",
+    ];
+    args.extend(view);
+    raycast_ok(&args);
+    // The hits' depths run from 3 to 3.32 (the quad) and 1003 (a few pixels): with the range
+    // from the 1st to 99th percentile the centre of the quad (3 to 3.05) shows some fifty grey
+    // levels; mapped from the full range it is one flat white.
+    let levels = quad_grey_levels(&out.join("depth.png"));
+    assert!(levels >= 40, "the quad shows {levels} grey levels");
+    args.extend(["--depth-range", "3,1003"]);
+    raycast_ok(&args);
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    assert_eq!(json["depth_png_range"], serde_json::json!([3.0, 1003.0]));
+    assert!(quad_grey_levels(&out.join("depth.png")) <= 2);
+}

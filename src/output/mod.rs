@@ -198,14 +198,17 @@ impl Drop for Staging {
 }
 
 /// Writes every buffer of `buffers` in every format of `formats` (EXR and PNG only for
-/// images). Returns the depth range mapped into `depth.png`, if one was written.
+/// images). The distance previews map `depth_range` (default: the 1st to 99th percentile of the
+/// finite values, see [`png::percentile_range`]). Returns the depth range mapped into
+/// `depth.png`, if one was written.
 pub fn write_buffers(
     staging: &mut Staging,
     buffers: &Buffers,
     layout: Layout,
     formats: &[Format],
+    depth_range: Option<[f64; 2]>,
 ) -> Result<Option<[f64; 2]>> {
-    let mut depth_range = None;
+    let mut written_range = None;
     for format in request::merge_formats(formats) {
         for aov in Aov::ALL {
             match (format, layout) {
@@ -214,15 +217,15 @@ pub fn write_buffers(
                     write_exr(staging, buffers, aov, width, height)?
                 }
                 (Format::Png, Layout::Image { width, .. }) => {
-                    if let Some(range) = write_png(staging, buffers, aov, width)? {
-                        depth_range = depth_range.or(Some(range));
+                    if let Some(range) = write_png(staging, buffers, aov, width, depth_range)? {
+                        written_range = written_range.or(Some(range));
                     }
                 }
                 (Format::Exr | Format::Png, Layout::Rays(_)) => {}
             }
         }
     }
-    Ok(depth_range)
+    Ok(written_range)
 }
 
 fn shape(layout: Layout, components: usize) -> Vec<usize> {
@@ -317,9 +320,12 @@ fn write_png(
     b: &Buffers,
     aov: Aov,
     width: usize,
+    depth_range: Option<[f64; 2]>,
 ) -> Result<Option<[f64; 2]>> {
     let distance = |v: &Vec<f64>| {
-        let range = png::finite_range(v).unwrap_or([0.0, 1.0]);
+        let range = depth_range
+            .or_else(|| png::percentile_range(v))
+            .unwrap_or([0.0, 1.0]);
         (png::distance_image(v, width, range), Some(range))
     };
     let image = match aov {
