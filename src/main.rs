@@ -248,7 +248,9 @@ fn info(args: InfoArgs) -> raycast::Result<()> {
     let mut failed = None;
     let mut infos = Vec::new();
     for path in &args.scenes {
-        match probe_usd(path, args.usd_timeout, &child_args).and_then(|()| import::load(path, &options)) {
+        match probe_usd(path, args.usd_timeout, &child_args)
+            .and_then(|()| import::load(path, &options))
+        {
             Ok(scene) => infos.push(SceneInfo::new(&scene)),
             Err(e) if args.scenes.len() == 1 => return Err(e),
             Err(e) => {

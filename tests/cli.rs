@@ -342,7 +342,7 @@ fn a_buffer_outside_the_root_is_refused_by_render_info_and_check() {
     std::fs::create_dir_all(dir.join("elsewhere")).unwrap();
     std::fs::copy(fixture("gltf/cube.bin"), dir.join("elsewhere/cube.bin")).unwrap();
     let out = dir.join("out");
-    let runs = |extra: &[&str]| -> Vec<Output> {
+    let runs = |extra: &[&str]| -> Vec<std::process::Output> {
         let scene = arg(&scene);
         let render = [&[scene, "--out", arg(&out), "--quiet"][..], extra].concat();
         let info = [&["info", scene][..], extra].concat();

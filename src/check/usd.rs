@@ -316,7 +316,11 @@ pub fn probe(
     timeout: std::time::Duration,
 ) -> std::result::Result<(), String> {
     let mut command = std::process::Command::new(exe);
-    command.arg("info").arg(path).args(args).env(PROBE_CHILD, "1");
+    command
+        .arg("info")
+        .arg(path)
+        .args(args)
+        .env(PROBE_CHILD, "1");
     let (status, _, stderr) =
         run_child(command, timeout).map_err(|e| format!("cannot start the USD reader: {e}"))?;
     match status.and_then(|s| s.code()) {
