@@ -165,10 +165,12 @@ fn main() {
         .rays
         .iter()
         .map(|(name, path)| {
-            let rays = npy::read_rays(path).unwrap_or_else(|e| {
-                eprintln!("trace: {e}");
-                std::process::exit(1)
-            });
+            let rays = npy::read_rays(path)
+                .map(|file| file.rays)
+                .unwrap_or_else(|e| {
+                    eprintln!("trace: {e}");
+                    std::process::exit(1)
+                });
             (name.clone(), rays)
         })
         .collect();

@@ -74,6 +74,70 @@ impl Camera {
         Camera::framing_from(bounds, DVec3::new(0.4, 0.3, 1.0))
     }
 
+    /// The automatic camera: a perspective view (0.8 rad vertical field of view) from the
+    /// front, slightly from the right and above, with `up` (+Y, or +Z for a Z-up USD stage) as
+    /// the vertical, placed so that every corner of `bounds` lies inside an image of width /
+    /// height `aspect` (a wide image of a wide scene is filled across, not just top to bottom).
+    pub fn framing_image(bounds: &Aabb, aspect: f64, up: DVec3) -> Camera {
+        let bounds = if bounds.is_empty() {
+            Aabb::new(DVec3::splat(-1.0), DVec3::ONE)
+        } else {
+            *bounds
+        };
+        let centre = bounds.center();
+        // The front of a Z-up scene is its -Y side (+Z of a Y-up one turned up to +Z).
+        let direction = if up == DVec3::Z {
+            DVec3::new(0.4, -1.0, 0.3)
+        } else {
+            DVec3::new(0.4, 0.3, 1.0)
+        };
+        let yfov: f64 = 0.8;
+        let mut camera = Camera::look_at(
+            centre + direction,
+            centre,
+            up,
+            Projection::Perspective { yfov },
+        )
+        .expect("framing directions are never parallel to the up axis");
+        let [right, up, back] = [
+            camera.to_world.x_axis,
+            camera.to_world.y_axis,
+            camera.to_world.z_axis,
+        ]
+        .map(|a| a.truncate());
+        let (ty, tx) = ((yfov * 0.5).tan(), (yfov * 0.5).tan() * aspect);
+        let (mut distance, mut nearest) = (0.0f64, 0.0f64);
+        for i in 0..8 {
+            let corner = DVec3::new(
+                if i & 1 == 0 {
+                    bounds.min.x
+                } else {
+                    bounds.max.x
+                },
+                if i & 2 == 0 {
+                    bounds.min.y
+                } else {
+                    bounds.max.y
+                },
+                if i & 4 == 0 {
+                    bounds.min.z
+                } else {
+                    bounds.max.z
+                },
+            ) - centre;
+            let (x, y, z) = (corner.dot(right), corner.dot(up), corner.dot(back));
+            distance = distance.max(z + x.abs() / tx).max(z + y.abs() / ty);
+            nearest = nearest.max(z);
+        }
+        let size = bounds.size().max_element().max(1e-9);
+        let distance = (distance * 1.05).max(nearest + 1e-3 * size);
+        camera.to_world.w_axis = (centre + back * distance).extend(1.0);
+        camera.name = "auto".into();
+        camera.source = "auto (frames the whole scene)".into();
+        camera.znear = distance - nearest;
+        camera
+    }
+
     /// A perspective camera framing all of `bounds`, looking at its centre from `direction`
     /// (not parallel to +Y), 0.8 rad vertical field of view.
     pub fn framing_from(bounds: &Aabb, direction: DVec3) -> Camera {

@@ -10,6 +10,19 @@ pub struct Error {
     pub path: Option<PathBuf>,
     /// What is wrong, in one line.
     pub message: String,
+    /// Whether the request itself is invalid (the command line exits 2) or the run failed
+    /// (exit 1).
+    pub kind: ErrorKind,
+}
+
+/// What kind of failure an [`Error`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// The input or the run failed.
+    Failure,
+    /// The request cannot be carried out as asked: an invalid option value or combination, an
+    /// output folder that cannot be written.
+    Usage,
 }
 
 /// Result type used throughout the crate.
@@ -21,6 +34,7 @@ impl Error {
         Error {
             path: Some(path.as_ref().to_path_buf()),
             message: message.into(),
+            kind: ErrorKind::Failure,
         }
     }
 
@@ -29,6 +43,23 @@ impl Error {
         Error {
             path: None,
             message: message.into(),
+            kind: ErrorKind::Failure,
+        }
+    }
+
+    /// A usage error (see [`ErrorKind::Usage`]) that concerns no particular file.
+    pub fn usage(message: impl Into<String>) -> Self {
+        Error {
+            kind: ErrorKind::Usage,
+            ..Error::msg(message)
+        }
+    }
+
+    /// This error marked as a usage error.
+    pub fn as_usage(self) -> Self {
+        Error {
+            kind: ErrorKind::Usage,
+            ..self
         }
     }
 

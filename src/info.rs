@@ -116,22 +116,28 @@ impl fmt::Display for SceneInfo {
         writeln!(f, "{}", self.scene)?;
         writeln!(
             f,
-            "  {} objects, {} triangles, {} quadrics",
-            self.objects.len(),
-            self.triangles,
-            self.quadrics
+            "  {}, {}, {}",
+            count(self.objects.len(), "object"),
+            count(self.triangles, "triangle"),
+            count(self.quadrics, "quadric")
         )?;
         if let Some([min, max]) = self.bounds {
-            writeln!(f, "  bounds {min:?} .. {max:?}")?;
+            let scale = min.iter().chain(&max).fold(0.0, |m: f64, v| m.max(v.abs()));
+            let point = |p: [f64; 3]| p.map(|v| tidy(v, scale)).join(", ");
+            writeln!(f, "  bounds [{}] .. [{}]", point(min), point(max))?;
         }
+        // One name column for objects and cameras, as wide as the longest name (USD paths).
+        let names = self.objects.iter().map(|o| o.name.chars().count());
+        let camera_names = self.cameras.iter().map(|c| c.name.chars().count());
+        let width = names.chain(camera_names).fold(32, usize::max);
         for o in &self.objects {
             let what = match o.quadric_type {
                 Some(kind) => format!("quadric ({kind})"),
-                None => format!("{} triangles", o.triangles),
+                None => count(o.triangles as usize, "triangle"),
             };
             writeln!(
                 f,
-                "  object {:>4}  {:<32} {what:<24} {}",
+                "  object {:>4}  {:<width$} {what:<24} {}",
                 o.id, o.name, o.source
             )?;
         }
@@ -142,7 +148,7 @@ impl fmt::Display for SceneInfo {
             };
             writeln!(
                 f,
-                "  camera {:>4}  {:<32} {projection}, eye {:?}",
+                "  camera {:>4}  {:<width$} {projection}, eye {:?}",
                 c.index, c.name, c.eye
             )?;
         }
@@ -163,5 +169,53 @@ impl fmt::Display for SceneInfo {
             writeln!(f, "  warning: {w}")?;
         }
         Ok(())
+    }
+}
+
+/// `n` and the noun, plural unless `n` is 1: `1 object`, `2 objects`.
+pub(crate) fn count(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("{n} {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
+/// `v` to ten significant digits of `scale` (the box's size), trailing zeros dropped: the
+/// bounds' rounding padding (`2.000000000002`) is noise at that scale.
+fn tidy(v: f64, scale: f64) -> String {
+    let magnitude = if scale > 0.0 {
+        scale.log10().floor() as i32
+    } else {
+        0
+    };
+    let decimals = (9 - magnitude).clamp(0, 17) as usize;
+    let text = format!("{v:.decimals$}");
+    let text = if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    };
+    if text == "-0" {
+        "0".into()
+    } else {
+        text
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounds_print_without_rounding_noise() {
+        assert_eq!(tidy(-2.000000000002, 28.0), "-2");
+        assert_eq!(tidy(15.000000000015, 28.0), "15");
+        assert_eq!(tidy(1.000000002001, 2.0), "1.000000002");
+        assert_eq!(tidy(0.125, 1.0), "0.125");
+        assert_eq!(tidy(-1e-13, 1.0), "0");
+        assert_eq!(tidy(123456789012.0, 1e11), "123456789012");
+        assert_eq!(count(1, "object"), "1 object");
+        assert_eq!(count(0, "quadric"), "0 quadrics");
     }
 }

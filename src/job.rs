@@ -4,13 +4,15 @@
 use crate::accel::OctreeParams;
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
+use crate::geometry::Ray;
 use crate::import::{self, LoadOptions};
+use crate::output::request::{self, buffer_bytes, check_memory};
 use crate::output::sidecar::{self, CameraInfo, Sidecar, Stats, Timings};
 use crate::output::{self, Format, Layout, Staging};
 use crate::render::{self, AccelKind, AccelStructure, Aov, CameraView, RaySource, Tracer};
 use crate::scene::Scene;
 use glam::DVec3;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// How to choose the camera.
@@ -51,13 +53,22 @@ pub struct RenderJob {
     pub octree: OctreeParams,
     /// The acceleration structure to build.
     pub accel: AccelKind,
+    /// A ray that cannot be traced (non-finite origin or direction, zero direction) is an
+    /// error, not a miss with a warning.
+    pub strict_rays: bool,
+    /// The distance range mapped into the depth and z previews, near to far; `None` for the
+    /// 1st to 99th percentile of the hits.
+    pub depth_range: Option<[f64; 2]>,
+    /// Refuse a run whose buffers need more bytes than this; `None`: the memory the system
+    /// reports available.
+    pub max_memory: Option<u64>,
 }
 
 /// Default image width and height.
 const DEFAULT_SIZE: usize = 512;
 
 /// Largest image side accepted.
-const MAX_SIDE: usize = 1 << 15;
+pub const MAX_SIDE: usize = 1 << 15;
 
 impl RenderJob {
     /// The output folder this job writes to.
@@ -70,24 +81,57 @@ impl RenderJob {
 }
 
 /// Runs a render job; `progress(done, total)` is called as rays complete.
-pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Sidecar> {
+///
+/// The request is checked before the scene is loaded: every format and AOV must give a file,
+/// and the output folder must be writable. The buffers' memory is estimated before tracing.
+pub fn run(job: &RenderJob, progress: impl FnMut(usize, usize)) -> Result<Sidecar> {
+    let formats = check_request(job)?;
+    let out = job.out_dir();
+    let created = request::prepare_folder(&out)?;
+    let result = run_checked(job, &formats, progress);
+    if result.is_err() {
+        request::remove_created_folder(&out, created.as_deref());
+    }
+    result
+}
+
+/// [`run`] after the request checks.
+fn run_checked(
+    job: &RenderJob,
+    formats: &[Format],
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Sidecar> {
     let started = Instant::now();
     let scene = import::load(&job.scene, &job.load)?;
     let load = started.elapsed().as_secs_f64();
+    let mut warnings = scene.warnings.clone();
     let rays = job
         .rays
         .as_deref()
-        .map(output::npy::read_rays)
+        .map(|path| read_rays(path, job.strict_rays, &mut warnings))
         .transpose()?;
-    if rays.is_some() && job.aovs.contains(&Aov::Z) {
-        return Err(Error::msg(
-            "the z AOV needs a camera; it is not available with --rays",
-        ));
-    }
     let view = match rays {
         Some(_) => None,
         None => Some(camera_view(&scene, job)?),
     };
+    let layout = match (&view, &rays) {
+        (Some(v), _) => Layout::Image {
+            width: v.width,
+            height: v.height,
+        },
+        (None, rays) => Layout::Rays(rays.as_ref().map_or(0, Vec::len)),
+    };
+    check_memory(
+        buffer_bytes(&job.aovs, formats, layout),
+        job.max_memory,
+        &match layout {
+            Layout::Image { width, height } => format!(
+                "{width}x{height} pixels of --aov {}",
+                request::names(&job.aovs)
+            ),
+            Layout::Rays(n) => format!("{n} rays of --aov {}", request::names(&job.aovs)),
+        },
+    )?;
     let started = Instant::now();
     let accel = AccelStructure::build(&scene, job.accel, job.octree);
     let build = started.elapsed().as_secs_f64();
@@ -106,23 +150,13 @@ pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Si
     let trace = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
-    let layout = match &view {
-        Some(v) => Layout::Image {
-            width: v.width,
-            height: v.height,
-        },
-        None => Layout::Rays(total),
-    };
-    let formats = job.formats.clone().unwrap_or_else(|| match layout {
-        Layout::Image { .. } => vec![Format::Exr, Format::Png],
-        Layout::Rays(_) => vec![Format::Npy],
-    });
     let mut staging = Staging::new(&job.out_dir())?;
     staging.protect(&job.scene);
     if let Some(rays) = &job.rays {
         staging.protect(rays);
     }
-    let depth_png_range = output::write_buffers(&mut staging, &buffers, layout, &formats)?;
+    let depth_png_range =
+        output::write_buffers(&mut staging, &buffers, layout, formats, job.depth_range)?;
     let write = started.elapsed().as_secs_f64();
     let mut files = staging.names();
     files.push("raycast.json".into());
@@ -167,7 +201,7 @@ pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Si
         },
         stage: scene.stage.clone(),
         decoded: scene.decoded.clone(),
-        warnings: scene.warnings.clone(),
+        warnings,
     };
     let json = serde_json::to_string_pretty(&sidecar).map_err(|e| Error::msg(e.to_string()))?;
     let path = staging.file("raycast.json");
@@ -176,12 +210,54 @@ pub fn run(job: &RenderJob, mut progress: impl FnMut(usize, usize)) -> Result<Si
     Ok(sidecar)
 }
 
+/// Reads a ray file. Untraceable rays are misses with one warning, or with `strict` an error
+/// naming the first.
+fn read_rays(path: &Path, strict: bool, warnings: &mut Vec<String>) -> Result<Vec<Ray>> {
+    let file = output::npy::read_rays(path)?;
+    if let Some(first) = file.untraceable.first() {
+        if strict {
+            return Err(Error::in_file(path, format!("{first} (--strict-rays)")));
+        }
+        let n = file.untraceable.len();
+        let (rays, counted) = match n {
+            1 => ("ray has", "counts as a miss"),
+            _ => ("rays have", "count as misses"),
+        };
+        warnings.push(format!(
+            "{}: {n} {rays} a non-finite origin or direction or a zero direction and {counted} \
+             (first: {first}); --strict-rays makes this an error",
+            path.display(),
+        ));
+    }
+    Ok(file.rays)
+}
+
+/// Checks what can be checked before loading (see [`run`]); returns the formats to write,
+/// merged.
+fn check_request(job: &RenderJob) -> Result<Vec<Format>> {
+    let rays_mode = job.rays.is_some();
+    if rays_mode && job.aovs.contains(&Aov::Z) {
+        return Err(Error::usage(
+            "the z AOV needs a camera; it is not available with --rays",
+        ));
+    }
+    let formats = match &job.formats {
+        Some(formats) => request::merge_formats(formats),
+        None if rays_mode => vec![Format::Npy],
+        None => vec![Format::Exr, Format::Png],
+    };
+    request::check_files(&job.aovs, &formats, rays_mode)?;
+    Ok(formats)
+}
+
 /// The camera and image size for camera mode.
 fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
-    let mut camera = choose_camera(scene, &job.camera)?;
+    let chosen = choose_camera(scene, &job.camera)?;
+    let auto = chosen.is_none();
+    let mut camera = chosen.unwrap_or_else(|| framing(scene, 1.0));
     if let Some(fov) = job.camera.fov_degrees {
         if !(fov > 0.0 && fov < 180.0) {
-            return Err(Error::msg(format!(
+            return Err(Error::usage(format!(
                 "--fov must lie between 0 and 180 degrees, got {fov}"
             )));
         }
@@ -191,7 +267,7 @@ fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
     }
     if let Some(height) = job.camera.ortho_height {
         if !(height > 0.0 && height.is_finite()) {
-            return Err(Error::msg(format!(
+            return Err(Error::usage(format!(
                 "--ortho must be a positive height, got {height}"
             )));
         }
@@ -209,35 +285,61 @@ fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
         (None, None, None) => (DEFAULT_SIZE, DEFAULT_SIZE),
     };
     if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
-        return Err(Error::msg(format!(
+        return Err(Error::usage(format!(
             "image size {width}x{height} is out of range (1 to {MAX_SIDE} per side)"
         )));
+    }
+    if auto {
+        let projection = camera.projection;
+        camera = Camera {
+            projection,
+            ..framing(scene, width as f64 / height as f64)
+        };
     }
     Ok(CameraView::new(camera, width, height))
 }
 
-fn choose_camera(scene: &Scene, choice: &CameraChoice) -> Result<Camera> {
+/// The automatic camera for an image of width / height `aspect`, upright in the stage's up
+/// axis (+Z for a Z-up USD stage, +Y otherwise).
+fn framing(scene: &Scene, aspect: f64) -> Camera {
+    let up = match &scene.stage {
+        Some(stage) if stage.up_axis == "Z" => DVec3::Z,
+        _ => DVec3::Y,
+    };
+    Camera::framing_image(&scene.world_bounds(), aspect, up)
+}
+
+/// The camera asked for, or the file's first; `None` for the automatic framing camera.
+fn choose_camera(scene: &Scene, choice: &CameraChoice) -> Result<Option<Camera>> {
     if let Some((eye, target, up)) = choice.look_at {
         let projection = Projection::Perspective { yfov: 0.8 };
-        return Camera::look_at(eye, target, up, projection);
+        return Camera::look_at(eye, target, up, projection).map(Some);
     }
-    match &choice.name {
-        Some(name) => scene
-            .cameras
-            .iter()
-            .enumerate()
-            .find(|(i, c)| name.parse::<usize>() == Ok(*i) || &c.name == name)
-            .map(|(_, c)| c.clone())
-            .ok_or_else(|| {
-                Error::in_file(
-                    &scene.path,
-                    format!("no camera '{name}' (the file has {})", scene.cameras.len()),
-                )
-            }),
-        None => Ok(scene
-            .cameras
-            .first()
-            .cloned()
-            .unwrap_or_else(|| Camera::framing(&scene.world_bounds()))),
+    let Some(name) = &choice.name else {
+        return Ok(scene.cameras.first().cloned());
+    };
+    scene
+        .cameras
+        .iter()
+        .enumerate()
+        .find(|(i, c)| name.parse::<usize>() == Ok(*i) || &c.name == name)
+        .map(|(_, c)| Some(c.clone()))
+        .ok_or_else(|| Error::in_file(&scene.path, no_camera(name, scene)))
+}
+
+/// The message for a camera name that the file does not have: the names it has.
+fn no_camera(name: &str, scene: &Scene) -> String {
+    if scene.cameras.is_empty() {
+        return format!("no camera '{name}': the file has no cameras");
     }
+    let names: Vec<String> = scene
+        .cameras
+        .iter()
+        .enumerate()
+        .map(|(i, c)| format!("{i} '{}'", c.name))
+        .collect();
+    format!(
+        "no camera '{name}'; the file's cameras are {}",
+        names.join(", ")
+    )
 }

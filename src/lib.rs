@@ -1,7 +1,7 @@
 //! # raycast
 //!
-//! An exact ray caster for glTF and OBJ scenes that mix triangle meshes with analytic quadric
-//! surfaces. The pipeline: [`import`] a file into a [`scene::Scene`] (world-space triangles,
+//! An exact ray caster for glTF, USD (`.usda`, `.usdc`, `.usd`, `.usdz`) and OBJ scenes that
+//! mix triangle meshes with analytic quadric surfaces. The pipeline: [`import`] a file into a [`scene::Scene`] (world-space triangles,
 //! quadrics, an object table and cameras), build an [`accel::Octree`] over all primitives,
 //! trace rays from a [`camera::Camera`] or a ray file with [`render`], and write depth,
 //! normal, position and id buffers with [`output`].

@@ -10,11 +10,11 @@ use raycast::job::{self, CameraChoice, RenderJob};
 use raycast::output::Format;
 use raycast::render::{AccelKind, Aov};
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-/// Exact ray casting of glTF and OBJ scenes with triangle meshes and analytic quadrics.
+/// Exact ray casting of glTF, USD and OBJ scenes with triangle meshes and analytic quadrics.
 #[derive(Parser)]
 #[command(
     name = "raycast",
@@ -39,14 +39,18 @@ enum Command {
 
 #[derive(Args)]
 struct InfoArgs {
-    /// Scene file (.gltf, .glb, .obj).
-    scene: PathBuf,
+    /// Scene files (.gltf, .glb, .obj, .usda, .usdc, .usd, .usdz).
+    #[arg(required = true)]
+    scenes: Vec<PathBuf>,
     /// glTF scene by index or name.
     #[arg(long = "scene", value_name = "N|NAME")]
     scene_choice: Option<String>,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
+    /// Seconds the USD reader may take on one file (it reads it in a child process first).
+    #[arg(long, value_name = "SECS", default_value_t = 120.0, value_parser = parse_positive)]
+    usd_timeout: f64,
     #[command(flatten)]
     paths: PathArgs,
 }
@@ -63,6 +67,18 @@ struct PathArgs {
 }
 
 impl PathArgs {
+    /// The same options for a child `raycast info` (see [`probe_usd`]).
+    fn child_args(&self) -> Vec<std::ffi::OsString> {
+        let mut args = Vec::new();
+        if let Some(root) = &self.root {
+            args.extend(["--root".into(), root.clone().into_os_string()]);
+        }
+        if self.allow_outside {
+            args.push("--allow-outside".into());
+        }
+        args
+    }
+
     fn load_options(self, scene: Option<String>) -> LoadOptions {
         LoadOptions {
             scene,
@@ -74,17 +90,17 @@ impl PathArgs {
 
 #[derive(Args)]
 struct RenderArgs {
-    /// Scene file (.gltf, .glb, .obj).
+    /// Scene file (.gltf, .glb, .obj, .usda, .usdc, .usd, .usdz).
     #[arg(required = true)]
     scene: Option<PathBuf>,
     /// Buffers to compute: depth, z, normal, position, id, prim.
     #[arg(long, value_delimiter = ',', default_value = "depth")]
     aov: Vec<Aov>,
     /// Image width in pixels (default 512, or from the camera's aspect ratio).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_side)]
     width: Option<usize>,
     /// Image height in pixels.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_side)]
     height: Option<usize>,
     /// Camera from the file, by index or name (default: the first, else a framing view).
     #[arg(long, value_name = "N|NAME", conflicts_with = "eye")]
@@ -99,14 +115,18 @@ struct RenderArgs {
     #[arg(long, value_parser = parse_vec3, requires = "eye", allow_hyphen_values = true)]
     up: Option<DVec3>,
     /// Perspective projection with this vertical field of view in degrees.
-    #[arg(long, conflicts_with = "ortho")]
+    #[arg(long, conflicts_with = "ortho", value_parser = parse_fov)]
     fov: Option<f64>,
     /// Orthographic projection with this view height in scene units.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_positive)]
     ortho: Option<f64>,
     /// Trace the rays of an (N, 6) .npy file (origin xyz, direction xyz) instead of a camera.
     #[arg(long, value_name = "FILE.npy", conflicts_with_all = ["camera", "eye", "width", "height", "fov", "ortho"])]
     rays: Option<PathBuf>,
+    /// With --rays: a ray with a non-finite origin or direction, or a zero direction, is an
+    /// error (default: a miss, counted in the warnings).
+    #[arg(long, requires = "rays")]
+    strict_rays: bool,
     /// Output folder (default: <scene stem>.raycast).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -121,8 +141,20 @@ struct RenderArgs {
     #[arg(long, default_value = "octree")]
     accel: AccelKind,
     /// Worker threads (default: all cores). The output does not depend on it.
-    #[arg(long)]
-    threads: Option<usize>,
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    threads: Option<u32>,
+    /// Refuse a render whose buffers would need more memory than this (bytes; K, M, G, T
+    /// suffixes; default: the memory the system reports available).
+    #[arg(long, value_name = "SIZE", value_parser = raycast::check::parse_size)]
+    max_memory: Option<u64>,
+    /// Distances mapped to the depth and z previews, NEAR,FAR (default: the 1st to 99th
+    /// percentile of the hits).
+    #[arg(long, value_name = "NEAR,FAR", value_parser = parse_range, allow_hyphen_values = true)]
+    depth_range: Option<[f64; 2]>,
+    /// Seconds the USD reader may take on the scene (it reads it in a child process first,
+    /// so that a reader crash or hang ends with a one-line error).
+    #[arg(long, value_name = "SECS", default_value_t = 120.0, value_parser = parse_positive)]
+    usd_timeout: f64,
     /// Print nothing but errors.
     #[arg(long, short)]
     quiet: bool,
@@ -145,7 +177,50 @@ fn parse_vec3(text: &str) -> Result<DVec3, String> {
     }
 }
 
+/// An image side in pixels: 1 to 32768.
+fn parse_side(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n) if (1..=job::MAX_SIDE).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "'{text}' is not an image side (1 to {} pixels)",
+            job::MAX_SIDE
+        )),
+    }
+}
+
+/// A vertical field of view strictly between 0 and 180 degrees.
+fn parse_fov(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v < 180.0 => Ok(v),
+        _ => Err(format!(
+            "'{text}' is not a field of view (between 0 and 180 degrees)"
+        )),
+    }
+}
+
+/// Two finite numbers NEAR,FAR with NEAR < FAR.
+fn parse_range(text: &str) -> Result<[f64; 2], String> {
+    let values: Vec<f64> = text
+        .split(',')
+        .filter_map(|v| v.trim().parse().ok())
+        .collect();
+    match values[..] {
+        [near, far] if near.is_finite() && far.is_finite() && near < far => Ok([near, far]),
+        _ => Err(format!("expected NEAR,FAR with NEAR < FAR, got '{text}'")),
+    }
+}
+
+/// A positive finite number.
+fn parse_positive(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("'{text}' is not a positive number")),
+    }
+}
+
 fn main() -> ExitCode {
+    // Ctrl-C: remove temporary output files, then exit as a shell expects (128 + SIGINT).
+    let _ = ctrlc::set_handler(|| raycast::output::remove_partial_files_and_exit(130));
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Info(args)) => info(args),
@@ -156,23 +231,75 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("raycast: error: {e}");
-            ExitCode::from(1)
+            ExitCode::from(match e.kind {
+                raycast::error::ErrorKind::Usage => 2,
+                raycast::error::ErrorKind::Failure => 1,
+            })
         }
     }
 }
 
+/// `raycast info`: each file in turn (text blocks, or one JSON object per file; a JSON array
+/// for several files). A file that fails is reported and the others still printed; the run
+/// then fails.
 fn info(args: InfoArgs) -> raycast::Result<()> {
+    let child_args = args.paths.child_args();
     let options = args.paths.load_options(args.scene_choice);
-    let scene = import::load(&args.scene, &options)?;
-    let info = SceneInfo::new(&scene);
+    let mut failed = None;
+    let mut infos = Vec::new();
+    for path in &args.scenes {
+        match probe_usd(path, args.usd_timeout, &child_args)
+            .and_then(|()| import::load(path, &options))
+        {
+            Ok(scene) => infos.push(SceneInfo::new(&scene)),
+            Err(e) if args.scenes.len() == 1 => return Err(e),
+            Err(e) => {
+                eprintln!("raycast: error: {e}");
+                failed = Some(e);
+            }
+        }
+    }
     let text = if args.json {
-        let json =
-            serde_json::to_string_pretty(&info).map_err(|e| raycast::Error::msg(e.to_string()))?;
-        format!("{json}\n")
+        let json = match &infos[..] {
+            [one] if args.scenes.len() == 1 => serde_json::to_string_pretty(one),
+            all => serde_json::to_string_pretty(all),
+        };
+        format!(
+            "{}\n",
+            json.map_err(|e| raycast::Error::msg(e.to_string()))?
+        )
     } else {
-        info.to_string()
+        infos
+            .iter()
+            .map(ToString::to_string)
+            .collect::<Vec<_>>()
+            .join("\n")
     };
-    print_stdout(&text)
+    print_stdout(&text)?;
+    match failed {
+        Some(_) => Err(raycast::Error::msg(
+            "some files could not be read (see above)",
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Reads a USD scene in a child process first (see [`raycast::check::usd::probe`]), unless
+/// this process is that child; other formats pass.
+fn probe_usd(path: &Path, timeout: f64, child_args: &[std::ffi::OsString]) -> raycast::Result<()> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    let usd = matches!(extension.as_deref(), Some("usda" | "usdc" | "usd" | "usdz"));
+    if !usd || std::env::var_os(raycast::check::usd::PROBE_CHILD).is_some() {
+        return Ok(());
+    }
+    let Ok(exe) = std::env::current_exe() else {
+        return Ok(());
+    };
+    raycast::check::usd::probe(&exe, path, child_args, Duration::from_secs_f64(timeout))
+        .map_err(raycast::Error::msg)
 }
 
 /// Writes `text` to standard output; a closed pipe (`raycast info x | head`) is not an error.
@@ -189,9 +316,12 @@ fn print_stdout(text: &str) -> raycast::Result<()> {
 fn render(args: RenderArgs) -> raycast::Result<()> {
     if let Some(threads) = args.threads {
         rayon::ThreadPoolBuilder::new()
-            .num_threads(threads.max(1))
+            .num_threads(threads as usize)
             .build_global()
             .map_err(|e| raycast::Error::msg(format!("cannot start {threads} threads: {e}")))?;
+    }
+    if let Some(scene) = &args.scene {
+        probe_usd(scene, args.usd_timeout, &args.paths.child_args())?;
     }
     let look_at = args
         .eye
@@ -214,6 +344,9 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         formats: args.format,
         octree: OctreeParams::default(),
         accel: args.accel,
+        max_memory: args.max_memory,
+        strict_rays: args.strict_rays,
+        depth_range: args.depth_range,
     };
     let bar = Progress::new(args.quiet);
     let sidecar = job::run(&job, |done, total| bar.update(done, total))?;

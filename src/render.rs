@@ -250,6 +250,9 @@ impl<'a> Tracer<'a> {
 
     /// The nearest hit of `ray` with `t > 0`.
     pub fn trace(&self, ray: &Ray) -> Option<Hit> {
+        if !ray.is_valid() {
+            return None;
+        }
         let local = ray.origin - self.scene.anchor;
         let prepared = prepare_ray(self.scene, local, ray.dir);
         match self.accel {

@@ -2,36 +2,7 @@
 
 mod common;
 use common::*;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn raycast(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raycast"))
-        .args(args)
-        .output()
-        .expect("the binary runs")
-}
-
-/// Runs raycast and asserts that it succeeded, showing its error output otherwise.
-fn raycast_ok(args: &[&str]) -> Output {
-    let result = raycast(args);
-    assert!(
-        result.status.success(),
-        "{}",
-        String::from_utf8_lossy(&result.stderr)
-    );
-    result
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("raycast-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
-
-fn arg(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use std::path::PathBuf;
 
 #[test]
 fn default_render_writes_exr_png_and_sidecar() {
@@ -209,7 +180,11 @@ fn bad_inputs_fail_cleanly_naming_the_file() {
         (fixture("does_not_exist.gltf"), vec![], "cannot read"),
         (fixture("README.md"), vec![], "unsupported file type"),
         (cube.clone(), vec!["--rays", "BAD_RAYS"], "shape"),
-        (cube.clone(), vec!["--rays", "NAN_RAYS"], "non-finite"),
+        (
+            cube.clone(),
+            vec!["--rays", "NAN_RAYS", "--strict-rays"],
+            "not finite",
+        ),
         (cube.clone(), vec!["--camera", "nope"], "no camera 'nope'"),
     ];
     let bad_rays = fixture("bad/bad_rays.npy");
@@ -367,7 +342,7 @@ fn a_buffer_outside_the_root_is_refused_by_render_info_and_check() {
     std::fs::create_dir_all(dir.join("elsewhere")).unwrap();
     std::fs::copy(fixture("gltf/cube.bin"), dir.join("elsewhere/cube.bin")).unwrap();
     let out = dir.join("out");
-    let runs = |extra: &[&str]| -> Vec<Output> {
+    let runs = |extra: &[&str]| -> Vec<std::process::Output> {
         let scene = arg(&scene);
         let render = [&[scene, "--out", arg(&out), "--quiet"][..], extra].concat();
         let info = [&["info", scene][..], extra].concat();

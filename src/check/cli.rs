@@ -141,7 +141,10 @@ fn run_inner(args: &CheckArgs) -> Result<bool, String> {
     } else if !args.quiet {
         text.push_str(&report::human(&reports, args.verbose));
     }
-    if args.github {
+    if args.github && args.json {
+        // stdout stays pure JSON Lines; the annotations go to stderr (GitHub reads both).
+        eprint!("{}", report::github(&reports));
+    } else if args.github {
         text.push_str(&report::github(&reports));
     }
     stdout

@@ -165,7 +165,8 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
         quadrics: scene.quadrics().len(),
         size,
     };
-    if scene.objects.is_empty() {
+    // An OBJ without faces still has its file's object: count primitives, not objects.
+    if stats.triangles == 0 && stats.quadrics == 0 {
         f.warn(
             "EMPTY_SCENE",
             "",

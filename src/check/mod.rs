@@ -314,6 +314,13 @@ pub fn discover(paths: &[PathBuf]) -> Result<Vec<Asset>, String> {
                     }
                 }
             }
+            if in_dir.is_empty() {
+                return Err(format!(
+                    "{}: no assets in this folder (searched for .gltf, .glb, .obj, .usd, .usda, \
+                     .usdc and .usdz files)",
+                    path.display()
+                ));
+            }
             in_dir.sort();
             found.extend(in_dir.into_iter().map(|p| Asset {
                 path: p,
@@ -474,7 +481,9 @@ fn check_into(
             return None;
         }
     };
-    for warning in &scene.warnings {
+    let mut warnings = scene.warnings.clone();
+    crate::import::sort_warnings(&mut warnings);
+    for warning in &warnings {
         importer_warning(format, warning, findings);
     }
     if let Some(golden) = &options.golden {

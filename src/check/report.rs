@@ -2,6 +2,7 @@
 //! annotations.
 
 use super::{AssetReport, Severity};
+use crate::info::count;
 use std::fmt::Write as _;
 
 /// Text for a person: one line per asset with problems and one per finding.
@@ -21,8 +22,11 @@ pub fn human(reports: &[AssetReport], verbose: bool) -> String {
         }
         let _ = writeln!(
             out,
-            "{}: {} ({} errors, {} warnings)",
-            r.path, r.status, r.errors, r.warnings
+            "{}: {} ({}, {})",
+            r.path,
+            r.status,
+            count(r.errors, "error"),
+            count(r.warnings, "warning")
         );
         for f in visible {
             let at = if f.location.is_empty() {
@@ -49,8 +53,8 @@ pub fn summary(reports: &[AssetReport], seconds: f64) -> String {
     let warnings = reports.iter().filter(|r| r.status == "warning").count();
     let ok = reports.len() - errors - warnings;
     format!(
-        "checked {} assets in {seconds:.2}s: {ok} ok, {warnings} with warnings, {errors} with errors",
-        reports.len()
+        "checked {} in {seconds:.2}s: {ok} ok, {warnings} with warnings, {errors} with errors",
+        count(reports.len(), "asset")
     )
 }
 

@@ -91,7 +91,8 @@ impl WatertightRay {
         let sz = self.shear.z;
         let t_scaled = u * sz * a.z + v * sz * b.z + w * sz * c.z;
         let t = t_scaled / det;
-        (t > 0.0 && t <= t_max).then_some(t)
+        // A direction with subnormal components overflows the shear to ±inf: no finite hit.
+        (t > 0.0 && t <= t_max && t.is_finite()).then_some(t)
     }
 }
 
@@ -137,19 +138,31 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
         polygon.clip(axis, cell.min[axis], 1.0);
         polygon.clip(axis, cell.max[axis], -1.0);
     }
-    let bounds = Aabb::from_points(polygon.vertices().iter().copied());
-    (!bounds.is_empty()).then_some(bounds)
+    let bounds = if polygon.overflowed {
+        Aabb::from_points(tri.iter().map(|v| v.as_dvec3())).common(*cell)
+    } else {
+        Some(Aabb::from_points(polygon.vertices().iter().copied()))
+    };
+    bounds.filter(|b| !b.is_empty())
 }
 
-/// A convex polygon of at most nine vertices: a triangle clipped by six planes.
+/// A convex polygon of at most nine vertices: a triangle clipped by six planes. Rounding can
+/// make a sliver's clipped polygon slightly non-convex, so that a plane adds more than one
+/// vertex; a polygon that would outgrow the nine slots is marked `overflowed` instead, and
+/// the caller falls back to the triangle's box within the cell.
 #[derive(Default)]
 struct Polygon {
     vertices: [DVec3; 9],
     len: usize,
+    overflowed: bool,
 }
 
 impl Polygon {
     fn push(&mut self, v: DVec3) {
+        if self.len == self.vertices.len() {
+            self.overflowed = true;
+            return;
+        }
         self.vertices[self.len] = v;
         self.len += 1;
     }
@@ -162,7 +175,7 @@ impl Polygon {
     /// plane.
     fn clip(&mut self, axis: usize, plane: f64, side: f64) {
         let inside = |p: DVec3| side * (p[axis] - plane) >= 0.0;
-        if self.vertices().iter().all(|&p| inside(p)) {
+        if self.overflowed || self.vertices().iter().all(|&p| inside(p)) {
             return;
         }
         let mut out = Polygon::default();
@@ -259,6 +272,26 @@ mod tests {
         assert_eq!(behind.intersect(&TRI, f64::INFINITY), None);
         let beside = WatertightRay::new(DVec3::new(3.0, 0.0, 5.0), -DVec3::Z);
         assert_eq!(beside.intersect(&TRI, f64::INFINITY), None);
+    }
+
+    #[test]
+    fn subnormal_directions_give_no_infinite_hit() {
+        // Along +z at 1e-310 per unit t, the plane z = 0 lies at t = 5e310 (analysis): beyond
+        // f64, so no hit, rather than t = +inf.
+        let ray = WatertightRay::new(DVec3::new(0.0, 0.0, -5.0), DVec3::new(0.0, 0.0, 1e-310));
+        assert_eq!(ray.intersect(&TRI, f64::INFINITY), None);
+    }
+
+    #[test]
+    fn clipping_a_polygon_past_nine_vertices_does_not_panic() {
+        // Rounding can make a sliver's clipped polygon zigzag across a plane; nine vertices
+        // alternating across x = 0.5 would need thirteen slots.
+        let mut polygon = Polygon::default();
+        for i in 0..9 {
+            polygon.push(DVec3::new((i % 2) as f64, i as f64, 0.0));
+        }
+        polygon.clip(0, 0.5, 1.0);
+        assert!(polygon.overflowed);
     }
 
     #[test]

@@ -3,6 +3,7 @@
 pub mod gltf;
 pub mod obj;
 pub mod paths;
+mod sniff;
 pub mod usd;
 
 use crate::error::{Error, Result};
@@ -21,13 +22,15 @@ pub struct LoadOptions {
     pub allow_outside: bool,
 }
 
-/// Loads a `.gltf`, `.glb` or `.obj` file, choosing the importer by extension.
+/// Loads a `.gltf`, `.glb`, `.obj`, `.usda`, `.usdc`, `.usd` or `.usdz` file, choosing the
+/// importer by extension after checking that the content is that format.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    match extension.as_deref() {
+    sniff::check_content(path, extension.as_deref().unwrap_or_default())?;
+    let mut scene = match extension.as_deref() {
         Some("gltf") | Some("glb") => gltf::load(path, options),
         Some("obj") => obj::load(path),
         Some("usda") | Some("usdc") | Some("usd") | Some("usdz") => usd::load(path, options),
@@ -35,7 +38,16 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
             path,
             "unsupported file type (expected .gltf, .glb, .obj, .usda, .usdc, .usd or .usdz)",
         )),
-    }
+    }?;
+    sort_warnings(&mut scene.warnings);
+    Ok(scene)
+}
+
+/// Sorts warnings and drops repeats, so that every run lists them the same way whatever
+/// order a reader produced them in.
+pub fn sort_warnings(warnings: &mut Vec<String>) {
+    warnings.sort();
+    warnings.dedup();
 }
 
 /// Local triangles placed in the world by `world`. A mirroring transform flips the winding back

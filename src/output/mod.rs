@@ -1,10 +1,13 @@
 //! Writing results: AOV buffers as EXR, PNG and NPY, and the JSON sidecar. Every file is
 //! written under a temporary name and renamed into place only when all files are written, so
-//! a failed run leaves no half-written output.
+//! a failed run leaves no half-written output. A run owns the files an earlier run listed in
+//! the folder's `raycast.json`: those it does not write again are removed; other files in the
+//! folder are never touched.
 
 pub mod exr;
 pub mod npy;
 pub mod png;
+pub mod request;
 pub mod sidecar;
 
 use crate::error::{Error, Result};
@@ -13,6 +16,60 @@ use glam::DVec3;
 use npy::NpyData;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
+use std::sync::Mutex;
+
+/// Temporary files of every uncommitted [`Staging`] in this process, for
+/// [`remove_partial_files`].
+static PARTIAL_FILES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Removes the temporary files of every uncommitted staging and exits with `code`; for an
+/// interrupt handler (Ctrl-C). The list stays locked until the process ends, so no new
+/// temporary file can appear in between (see [`Staging::file`]).
+pub fn remove_partial_files_and_exit(code: i32) -> ! {
+    let files = PARTIAL_FILES.lock().unwrap_or_else(|p| p.into_inner());
+    for file in files.iter() {
+        let _ = std::fs::remove_file(file);
+    }
+    std::process::exit(code)
+}
+
+/// Adds (`true`: and creates it empty, under the lock) or removes a temporary file from
+/// [`PARTIAL_FILES`].
+fn track_partial(path: &Path, add: bool) {
+    let mut files = PARTIAL_FILES.lock().unwrap_or_else(|p| p.into_inner());
+    if add {
+        let _ = std::fs::File::create(path);
+        files.push(path.to_path_buf());
+    } else {
+        files.retain(|f| f != path);
+    }
+}
+
+/// Whether `name` is a file name raycast writes into an output folder.
+fn is_output_name(name: &str) -> bool {
+    name == "raycast.json"
+        || name
+            .split_once('.')
+            .is_some_and(|(aov, ext)| aov.parse::<Aov>().is_ok() && ext.parse::<Format>().is_ok())
+}
+
+/// The output files an earlier run listed in `dir/raycast.json` (only names raycast writes).
+fn earlier_outputs(dir: &Path) -> Vec<String> {
+    let Ok(text) = std::fs::read(dir.join("raycast.json")) else {
+        return Vec::new();
+    };
+    let Ok(json) = serde_json::from_slice::<serde_json::Value>(&text) else {
+        return Vec::new();
+    };
+    json["files"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|f| f.as_str())
+        .filter(|f| is_output_name(f))
+        .map(str::to_string)
+        .collect()
+}
 
 /// A file format for buffers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -84,6 +141,7 @@ impl Staging {
         let temp = self
             .dir
             .join(format!(".{name}.partial-{}", std::process::id()));
+        track_partial(&temp, true);
         self.files.push((temp.clone(), name.to_string()));
         temp
     }
@@ -93,9 +151,12 @@ impl Staging {
         self.files.iter().map(|(_, name)| name.clone()).collect()
     }
 
-    /// Renames every staged file to its final name; refuses, before renaming anything, when a
-    /// final name is one of the protected inputs.
+    /// Renames every staged file to its final name (`raycast.json`, staged last, last of all),
+    /// then removes the files an earlier run listed in the folder's `raycast.json` that this
+    /// run did not write. Refuses, before renaming anything, when a final name is one of the
+    /// protected inputs.
     pub fn commit(mut self) -> Result<()> {
+        let earlier = earlier_outputs(&self.dir);
         for (_, name) in &self.files {
             let target = self.dir.join(name);
             if target
@@ -108,10 +169,20 @@ impl Staging {
                 ));
             }
         }
+        let written = self.names();
         for (temp, name) in std::mem::take(&mut self.files) {
             let target = self.dir.join(&name);
-            std::fs::rename(&temp, &target)
-                .map_err(|e| Error::in_file(&target, format!("cannot move into place: {e}")))?;
+            track_partial(&temp, false);
+            if let Err(e) = std::fs::rename(&temp, &target) {
+                let _ = std::fs::remove_file(&temp);
+                return Err(Error::in_file(
+                    &target,
+                    format!("cannot move into place: {e}"),
+                ));
+            }
+        }
+        for stale in earlier.iter().filter(|name| !written.contains(name)) {
+            let _ = std::fs::remove_file(self.dir.join(stale));
         }
         Ok(())
     }
@@ -120,21 +191,25 @@ impl Staging {
 impl Drop for Staging {
     fn drop(&mut self) {
         for (temp, _) in &self.files {
+            track_partial(temp, false);
             let _ = std::fs::remove_file(temp);
         }
     }
 }
 
 /// Writes every buffer of `buffers` in every format of `formats` (EXR and PNG only for
-/// images). Returns the depth range mapped into `depth.png`, if one was written.
+/// images). The distance previews map `depth_range` (default: the 1st to 99th percentile of the
+/// finite values, see [`png::percentile_range`]). Returns the depth range mapped into
+/// `depth.png`, if one was written.
 pub fn write_buffers(
     staging: &mut Staging,
     buffers: &Buffers,
     layout: Layout,
     formats: &[Format],
+    depth_range: Option<[f64; 2]>,
 ) -> Result<Option<[f64; 2]>> {
-    let mut depth_range = None;
-    for format in formats {
+    let mut written_range = None;
+    for format in request::merge_formats(formats) {
         for aov in Aov::ALL {
             match (format, layout) {
                 (Format::Npy, _) => write_npy(staging, buffers, aov, layout)?,
@@ -142,15 +217,15 @@ pub fn write_buffers(
                     write_exr(staging, buffers, aov, width, height)?
                 }
                 (Format::Png, Layout::Image { width, .. }) => {
-                    if let Some(range) = write_png(staging, buffers, aov, width)? {
-                        depth_range = depth_range.or(Some(range));
+                    if let Some(range) = write_png(staging, buffers, aov, width, depth_range)? {
+                        written_range = written_range.or(Some(range));
                     }
                 }
-                _ => {}
+                (Format::Exr | Format::Png, Layout::Rays(_)) => {}
             }
         }
     }
-    Ok(depth_range)
+    Ok(written_range)
 }
 
 fn shape(layout: Layout, components: usize) -> Vec<usize> {
@@ -245,9 +320,12 @@ fn write_png(
     b: &Buffers,
     aov: Aov,
     width: usize,
+    depth_range: Option<[f64; 2]>,
 ) -> Result<Option<[f64; 2]>> {
     let distance = |v: &Vec<f64>| {
-        let range = png::finite_range(v).unwrap_or([0.0, 1.0]);
+        let range = depth_range
+            .or_else(|| png::percentile_range(v))
+            .unwrap_or([0.0, 1.0]);
         (png::distance_image(v, width, range), Some(range))
     };
     let image = match aov {

@@ -41,12 +41,57 @@ pub fn write(path: &Path, shape: &[usize], data: NpyData) -> Result<()> {
         .map_err(|e| Error::in_file(path, format!("cannot write: {e}")))
 }
 
-/// Reads an (N, 6) float32 or float64 array of ray origins and directions. Every ray must
-/// have finite numbers and a non-zero direction.
-pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
+/// The rays of a ray file in file order, and those that cannot be traced.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RayFile {
+    /// Every ray, in file order (untraceable ones included: they count as misses).
+    pub rays: Vec<Ray>,
+    /// The rays with a non-finite origin or direction, or a zero direction.
+    pub untraceable: Vec<Untraceable>,
+}
+
+/// A ray that cannot be traced, and why.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Untraceable {
+    /// Its row in the file.
+    pub index: usize,
+    /// `origin` or `direction`.
+    pub field: &'static str,
+    /// `is not finite` or `is zero`.
+    pub problem: &'static str,
+}
+
+impl std::fmt::Display for Untraceable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "ray {}: the {} {}", self.index, self.field, self.problem)
+    }
+}
+
+/// Reads an (N, 6) float32 or float64 array (C or Fortran order) of ray origins and
+/// directions. Rays with a non-finite origin or direction or a zero direction are kept and
+/// listed in [`RayFile::untraceable`]; the tracer counts them as misses.
+pub fn read_rays(path: &Path) -> Result<RayFile> {
     let bytes =
         std::fs::read(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
     parse_rays(&bytes).map_err(|m| Error::in_file(path, m))
+}
+
+/// Why `ray` cannot be traced, if it cannot.
+fn untraceable(index: usize, ray: &Ray) -> Option<Untraceable> {
+    let (field, problem) = if !ray.origin.is_finite() {
+        ("origin", "is not finite")
+    } else if !ray.dir.is_finite() {
+        ("direction", "is not finite")
+    } else if ray.dir == DVec3::ZERO {
+        ("direction", "is zero")
+    } else {
+        return None;
+    };
+    Some(Untraceable {
+        index,
+        field,
+        problem,
+    })
 }
 
 /// Reads a float64 (`<f8`) or uint32 (`<u4`) array as written by [`write`]: its shape and its
@@ -59,6 +104,9 @@ pub fn read(path: &Path) -> Result<(Vec<usize>, Vec<f64>)> {
 
 fn parse_array(bytes: &[u8]) -> std::result::Result<(Vec<usize>, Vec<f64>), String> {
     let header = parse_header(bytes)?;
+    if header.fortran && header.shape.len() > 1 {
+        return Err("Fortran-ordered arrays are not supported here".into());
+    }
     let data = &bytes[header.data_offset..];
     let count: usize = header.shape.iter().product();
     let values: Vec<f64> = match header.descr.as_str() {
@@ -81,7 +129,7 @@ fn parse_array(bytes: &[u8]) -> std::result::Result<(Vec<usize>, Vec<f64>), Stri
     Ok((header.shape, values))
 }
 
-fn parse_rays(bytes: &[u8]) -> std::result::Result<Vec<Ray>, String> {
+fn parse_rays(bytes: &[u8]) -> std::result::Result<RayFile, String> {
     let header = parse_header(bytes)?;
     let rows = match header.shape[..] {
         [rows, 6] => rows,
@@ -111,24 +159,29 @@ fn parse_rays(bytes: &[u8]) -> std::result::Result<Vec<Ray>, String> {
             _ => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
         }
     };
-    (0..rows)
+    // Element (r, c): C order stores rows one after another, Fortran order columns.
+    let at = |r: usize, c: usize| match header.fortran {
+        false => value(r * 6 + c),
+        true => value(c * rows + r),
+    };
+    let rays: Vec<Ray> = (0..rows)
         .map(|r| {
-            let v = |c: usize| value(r * 6 + c);
-            let ray = Ray::new(DVec3::new(v(0), v(1), v(2)), DVec3::new(v(3), v(4), v(5)));
-            if ray.is_valid() {
-                Ok(ray)
-            } else {
-                Err(format!(
-                    "ray {r} has a non-finite value or a zero direction"
-                ))
-            }
+            let v = |c: usize| at(r, c);
+            Ray::new(DVec3::new(v(0), v(1), v(2)), DVec3::new(v(3), v(4), v(5)))
         })
-        .collect()
+        .collect();
+    let untraceable = rays
+        .iter()
+        .enumerate()
+        .filter_map(|(i, ray)| untraceable(i, ray))
+        .collect();
+    Ok(RayFile { rays, untraceable })
 }
 
 /// What the header of an `.npy` file says.
 struct Header {
     descr: String,
+    fortran: bool,
     shape: Vec<usize>,
     data_offset: usize,
 }
@@ -151,9 +204,7 @@ fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> {
         .ok_or("truncated .npy header")?;
     let text =
         std::str::from_utf8(&bytes[start..end]).map_err(|_| "the .npy header is not text")?;
-    if dict_value(text, "fortran_order").is_some_and(|v| v.starts_with("True")) {
-        return Err("Fortran-ordered arrays are not supported".into());
-    }
+    let fortran = dict_value(text, "fortran_order").is_some_and(|v| v.starts_with("True"));
     let descr = dict_value(text, "descr")
         .and_then(|v| v.split('\'').nth(1))
         .ok_or("the .npy header has no 'descr'")?
@@ -173,6 +224,7 @@ fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> {
         .collect::<std::result::Result<Vec<_>, _>>()?;
     Ok(Header {
         descr,
+        fortran,
         shape,
         data_offset: end,
     })
@@ -190,8 +242,13 @@ mod tests {
     use super::*;
 
     fn npy(descr: &str, shape: &str, data: &[u8]) -> Vec<u8> {
+        npy_ordered(descr, false, shape, data)
+    }
+
+    fn npy_ordered(descr: &str, fortran: bool, shape: &str, data: &[u8]) -> Vec<u8> {
+        let order = if fortran { "True" } else { "False" };
         let header =
-            format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}\n");
+            format!("{{'descr': '{descr}', 'fortran_order': {order}, 'shape': {shape}, }}\n");
         let mut out = b"\x93NUMPY\x01\x00".to_vec();
         out.extend_from_slice(&(header.len() as u16).to_le_bytes());
         out.extend_from_slice(header.as_bytes());
@@ -208,17 +265,58 @@ mod tests {
             .flat_map(|v| (*v as f32).to_le_bytes())
             .collect();
         for bytes in [npy("<f8", "(1, 6)", &f8), npy("<f4", "(1, 6)", &f4)] {
-            let rays = parse_rays(&bytes).unwrap();
+            let rays = parse_rays(&bytes).unwrap().rays;
             assert_eq!(rays, vec![Ray::new(DVec3::new(0.0, 0.0, 5.0), -DVec3::Z)]);
         }
     }
 
     #[test]
+    fn reads_fortran_ordered_rays() {
+        // numpy's `.T` of a C-order (6, 2) array: the (2, 6) array stored column by column
+        // (the .npy format stores a Fortran-ordered array's columns one after another).
+        let rows = [
+            [1.0f64, 2.0, 3.0, 0.0, 0.0, -1.0],
+            [4.0, 5.0, 6.0, 1.0, 0.0, 0.0],
+        ];
+        let columns: Vec<u8> = (0..6)
+            .flat_map(|c| rows.map(|r| r[c]))
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let file = parse_rays(&npy_ordered("<f8", true, "(2, 6)", &columns)).unwrap();
+        let expected =
+            rows.map(|r| Ray::new(DVec3::new(r[0], r[1], r[2]), DVec3::new(r[3], r[4], r[5])));
+        assert_eq!(file.rays, expected);
+    }
+
+    #[test]
+    fn untraceable_rays_are_listed_with_their_field() {
+        let values = [
+            [0.0, 0.0, 5.0, 0.0, 0.0, -1.0],
+            [f64::NAN, 0.0, 5.0, 0.0, 0.0, -1.0],
+            [0.0, 0.0, 5.0, 0.0, f64::INFINITY, -1.0],
+            [0.0, 0.0, 5.0, 0.0, 0.0, 0.0],
+        ];
+        let f8: Vec<u8> = values
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let file = parse_rays(&npy("<f8", "(4, 6)", &f8)).unwrap();
+        assert_eq!(file.rays.len(), 4);
+        let listed: Vec<String> = file.untraceable.iter().map(|u| u.to_string()).collect();
+        assert_eq!(
+            listed,
+            [
+                "ray 1: the origin is not finite",
+                "ray 2: the direction is not finite",
+                "ray 3: the direction is zero"
+            ]
+        );
+    }
+
+    #[test]
     fn rejects_bad_arrays() {
         let f8: Vec<u8> = [0.0f64; 6].iter().flat_map(|v| v.to_le_bytes()).collect();
-        assert!(parse_rays(&npy("<f8", "(1, 6)", &f8))
-            .unwrap_err()
-            .contains("zero direction"));
         assert!(parse_rays(&npy("<f8", "(2, 3)", &f8))
             .unwrap_err()
             .contains("shape"));

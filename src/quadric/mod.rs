@@ -7,6 +7,8 @@ mod eigen;
 mod interval;
 mod kind;
 mod polynomial;
+#[cfg(test)]
+mod regression_tests;
 mod spec;
 mod surface;
 #[cfg(test)]

@@ -61,7 +61,7 @@ impl Quadric {
         let to_local = linear.inverse();
         let local_anchor = match spec.bounds {
             Some([min, max]) => (min + max) * 0.5,
-            None => -0.5 * (spec.q.inverse() * spec.p),
+            None => ellipsoid_centre(spec.q, spec.p),
         };
         let gradient = 2.0 * (spec.q * local_anchor) + spec.p;
         let q_world = to_local.transpose() * spec.q * to_local;
@@ -82,7 +82,7 @@ impl Quadric {
         let clip_world = quadric
             .clip
             .map(|b| quadric.world_box_of_local_box(b, linear));
-        quadric.bounds = quadric.clipped_bounds(clip_world, is_definite(spec.q));
+        quadric.bounds = quadric.clipped_bounds(clip_world, is_definite(spec.q).then_some(linear));
         let length = clip_world.map_or(0.0, |[min, max]| 0.5 * (max - min).length());
         quadric.kind = classify(quadric.world.q, quadric.world.p, quadric.world.r, length);
         Ok(quadric)
@@ -148,12 +148,18 @@ impl Quadric {
 
     /// Unit world normal at `origin + t·dir`: the normalised world gradient
     /// `A⁻ᵀ(2Qx + P)` (equal to `2Q'u + P'`), pointing to `f > 0`. Where the gradient vanishes
-    /// or cannot be normalised (cone apex, the crossing line of a plane pair, a point quadric)
-    /// it is `−dir` normalised, and `+Z` if even that fails.
+    /// to within the rounding of the hit point (cone apex, the crossing line of a plane pair, a
+    /// point quadric), so that its direction would be noise, it is `−dir` normalised, and `+Z`
+    /// if even that fails.
     pub fn normal(&self, origin: DVec3, dir: DVec3, t: f64) -> DVec3 {
-        let x = self.to_local * (origin - self.anchor) + t * (self.to_local * dir);
-        let gradient = self.to_local.transpose() * self.local.gradient(x);
-        unit_or_none(gradient)
+        let (x0, v) = (self.to_local * (origin - self.anchor), self.to_local * dir);
+        let x = x0 + t * v;
+        let local_gradient = self.local.gradient(x);
+        let rounding = self.local.gradient_rounding(x0.abs() + (t * v).abs());
+        let gradient = self.to_local.transpose() * local_gradient;
+        (local_gradient.abs().max_element() > rounding)
+            .then(|| unit_or_none(gradient))
+            .flatten()
             .or_else(|| unit_or_none(-dir))
             .unwrap_or(DVec3::Z)
     }
@@ -194,9 +200,14 @@ impl Quadric {
     }
 
     /// The world bounds: the clip box's world AABB, intersected with the ellipsoid's tight box
-    /// when `Q` is `definite` (always so when there is no clip box).
-    fn clipped_bounds(&self, clip_world: Option<[DVec3; 2]>, definite: bool) -> [DVec3; 2] {
-        let ellipsoid = definite.then(|| self.ellipsoid_box());
+    /// when `Q` is definite (always so when there is no clip box); `definite_linear` is then
+    /// the object→world linear map.
+    fn clipped_bounds(
+        &self,
+        clip_world: Option<[DVec3; 2]>,
+        definite_linear: Option<DMat3>,
+    ) -> [DVec3; 2] {
+        let ellipsoid = definite_linear.map(|linear| self.ellipsoid_box(linear));
         let [lo, hi] = match (clip_world, ellipsoid) {
             (Some([a, b]), Some([c, d])) => [a.max(c), b.min(d)],
             (Some(b), None) | (None, Some(b)) => b,
@@ -209,18 +220,22 @@ impl Quadric {
         }
     }
 
-    /// Tight world AABB of the ellipsoid `f = 0` for a definite `Q'`: centre
-    /// `e = −Q'⁻¹P'/2`, half-extent `sqrt(−f(e)·(Q'⁻¹)ᵢᵢ)` along axis `i`. An empty
-    /// surface gives the point box at its centre.
-    fn ellipsoid_box(&self) -> [DVec3; 2] {
-        let w = &self.world;
-        let inverse = w.q.inverse();
-        let centre = -0.5 * (inverse * w.p);
-        let level = -(w.r + 0.5 * w.p.dot(centre));
-        let diagonal = DVec3::new(inverse.x_axis.x, inverse.y_axis.y, inverse.z_axis.z);
+    /// Tight world AABB of the ellipsoid `f = 0` for a definite `Q`, from the local form and
+    /// the object→world map `A`: local centre `e = −Q⁻¹P/2`, world half-extent
+    /// `sqrt(−f(e)·(A·Q⁻¹·Aᵀ)ᵢᵢ)` along axis `i`. Inverting the local `Q` (diagonal for a
+    /// needle or a disc placed by its node) keeps the digits that inverting the world `Q'`
+    /// (condition number squared by the turn) loses. An empty surface gives the point box at
+    /// its centre.
+    fn ellipsoid_box(&self, linear: DMat3) -> [DVec3; 2] {
+        let l = &self.local;
+        let inverse = l.q.inverse();
+        let centre = -0.5 * (inverse * l.p);
+        let level = -(l.r + 0.5 * l.p.dot(centre));
+        let spread = linear * inverse * linear.transpose();
+        let diagonal = DVec3::new(spread.x_axis.x, spread.y_axis.y, spread.z_axis.z);
         let half = (diagonal * level).max(DVec3::ZERO);
         let half = DVec3::new(half.x.sqrt(), half.y.sqrt(), half.z.sqrt());
-        let world_centre = self.anchor + centre;
+        let world_centre = self.anchor + linear * centre;
         pad([world_centre - half, world_centre + half])
     }
 }
@@ -242,6 +257,14 @@ fn affine_linear_part(world: DMat4) -> Result<DMat3, String> {
         return Err("world matrix is singular".into());
     }
     Ok(linear)
+}
+
+/// The centre `−Q⁻¹P/2` of a definite quadric; `Q` and `P` are first divided by the largest
+/// entry of `Q`, so that the determinant of tiny (even subnormal) coefficients cannot
+/// underflow.
+fn ellipsoid_centre(q: DMat3, p: DVec3) -> DVec3 {
+    let largest = q.abs().to_cols_array().into_iter().fold(0.0, f64::max);
+    -0.5 * ((q / largest).inverse() * (p / largest))
 }
 
 /// The local clip box widened by [`CLIP_TOLERANCE`] times its largest side.

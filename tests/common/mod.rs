@@ -272,3 +272,53 @@ pub fn naive_first_hit(
     });
     naive.expect("the ray hits something")
 }
+
+/// The `raycast` binary under test: this build's, or the one `RAYCAST_BIN` names (to run the
+/// command-line tests against another build, such as the one before a fix).
+pub fn raycast_bin() -> PathBuf {
+    std::env::var_os("RAYCAST_BIN")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_raycast")))
+}
+
+/// Runs the `raycast` binary with `args`.
+pub fn raycast(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(raycast_bin())
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+/// Runs raycast and asserts that it succeeded, showing its error output otherwise.
+pub fn raycast_ok(args: &[&str]) -> std::process::Output {
+    let result = raycast(args);
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
+    result
+}
+
+/// A fresh (removed) temporary folder path for one test.
+pub fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("raycast-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// A path as a command-line argument.
+pub fn arg(p: &std::path::Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The sorted file names in `dir` (empty when it does not exist).
+pub fn file_names(dir: &std::path::Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    names
+}

@@ -39,6 +39,9 @@ use std::path::Path;
 use std::rc::Rc;
 use std::sync::Arc;
 
+/// What the USD reader says of a referenced layer whose format it cannot read.
+const UNREAD_LAYER: &str = "no file format registered";
+
 /// Deepest nesting of braces, parentheses and brackets accepted in a text layer: the USD
 /// reader parses recursively, so a hostile file could otherwise exhaust the stack.
 pub(crate) const MAX_TEXT_NESTING: usize = 256;
@@ -191,8 +194,22 @@ fn load_stage(
             .map_err(fail)?;
     }
     let mut builder = std::mem::take(&mut loader.builder);
-    for error in stage.composition_errors() {
+    let (unread, errors): (Vec<String>, Vec<String>) = stage
+        .composition_errors()
+        .into_iter()
+        .map(|e| e.to_string())
+        .partition(|e| e.contains(UNREAD_LAYER));
+    for error in errors {
         builder.warn(format!("composition: {error}"));
+    }
+    if let Some(first) = unread.iter().min() {
+        // MaterialX (.mtlx) material layers and the like: a ray caster needs none of them, so
+        // one note for all of them, not one warning per reference.
+        builder.warn(format!(
+            "composition: {} references to layers with {UNREAD_LAYER} (such as MaterialX \
+             .mtlx materials) skipped, not needed for ray casting; first: {first}",
+            unread.len()
+        ));
     }
     for warning in loader.warnings.drain(..) {
         builder.warn(warning);

@@ -1,0 +1,87 @@
+//! Checks that a scene file's content is the format its name says, from its first bytes, so
+//! that a GLB named `.obj` is reported as what it is instead of failing deep in a reader.
+
+use crate::error::{Error, Result};
+use std::io::Read;
+use std::path::Path;
+
+/// A format recognised by its leading bytes, with the extensions that may hold it.
+struct Magic {
+    prefix: &'static [u8],
+    what: &'static str,
+    extensions: &'static [&'static str],
+}
+
+/// Formats with an unambiguous signature. A `.gltf` may hold a GLB and a `.usd` either USD
+/// encoding, as their readers accept.
+const MAGICS: [Magic; 4] = [
+    Magic {
+        prefix: b"glTF",
+        what: "a binary glTF (GLB)",
+        extensions: &["glb", "gltf"],
+    },
+    Magic {
+        prefix: b"PXR-USDC",
+        what: "a binary USD layer (usdc)",
+        extensions: &["usdc", "usd"],
+    },
+    Magic {
+        prefix: b"#usda",
+        what: "a text USD layer (usda)",
+        extensions: &["usda", "usd"],
+    },
+    Magic {
+        prefix: b"PK\x03\x04",
+        what: "a zip archive (usdz)",
+        extensions: &["usdz"],
+    },
+];
+
+/// Refuses a folder given as a scene, and a file whose leading bytes show another format than
+/// its extension `extension` (lower case), naming what the content is.
+pub fn check_content(path: &Path, extension: &str) -> Result<()> {
+    if path.is_dir() {
+        return Err(Error::in_file(
+            path,
+            "is a folder, not a scene file (raycast check searches folders)",
+        ));
+    }
+    let mut head = [0u8; 8];
+    // A file that cannot be read is left to the importer, which says why.
+    let n = std::fs::File::open(path)
+        .and_then(|mut f| f.read(&mut head))
+        .unwrap_or(0);
+    let head = &head[..n];
+    match MAGICS.iter().find(|m| head.starts_with(m.prefix)) {
+        Some(m) if !m.extensions.contains(&extension) => Err(Error::in_file(
+            path,
+            format!(
+                "the content is {}, not what the .{extension} name says; rename it to .{}",
+                m.what, m.extensions[0]
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_glb_named_obj_is_named_for_what_it_is() {
+        let dir = std::env::temp_dir().join(format!("raycast-sniff-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("model.obj");
+        std::fs::write(&file, b"glTF\x02\x00\x00\x00rest").unwrap();
+        let e = check_content(&file, "obj").unwrap_err();
+        assert!(e.message.contains("binary glTF (GLB)"), "{e}");
+        assert!(e.message.contains("rename it to .glb"), "{e}");
+        assert!(check_content(&file, "glb").is_ok());
+        assert!(check_content(&dir, "obj")
+            .unwrap_err()
+            .message
+            .contains("is a folder"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,241 @@
+//! Checks made on a render request before any work is done: which files the requested formats
+//! can hold, whether the output folder can be written, and how much memory the buffers need.
+//! Each failure is a usage error ([`Error::usage`]).
+
+use super::{Format, Layout};
+use crate::error::{Error, Result};
+use crate::render::Aov;
+use std::path::{Path, PathBuf};
+
+/// Bytes per traced ray kept until the buffers are filled (`Option<Hit>`).
+const HIT_BYTES: u64 = 24;
+
+/// The formats in the order first given, without repeats (`png,png` is `png`).
+pub fn merge_formats(formats: &[Format]) -> Vec<Format> {
+    let mut merged = Vec::new();
+    for &format in formats {
+        if !merged.contains(&format) {
+            merged.push(format);
+        }
+    }
+    merged
+}
+
+impl Format {
+    /// The format's name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Exr => "exr",
+            Format::Png => "png",
+            Format::Npy => "npy",
+        }
+    }
+
+    /// Whether this format writes a file for `aov`: NPY always; EXR for images; PNG previews
+    /// for images, except positions (which have no meaningful preview).
+    pub fn holds(self, aov: Aov, rays_mode: bool) -> bool {
+        match self {
+            Format::Npy => true,
+            Format::Exr => !rays_mode,
+            Format::Png => !rays_mode && aov != Aov::Position,
+        }
+    }
+}
+
+/// Refuses a request in which a format writes no file, or an AOV gets no file: nothing must
+/// be skipped silently.
+pub fn check_files(aovs: &[Aov], formats: &[Format], rays_mode: bool) -> Result<()> {
+    for &format in formats {
+        if aovs.iter().all(|&aov| !format.holds(aov, rays_mode)) {
+            let reason = if rays_mode {
+                "holds images only; rays mode writes one value per ray, use --format npy"
+                    .to_string()
+            } else {
+                format!("has no preview of --aov {}", names(aovs))
+            };
+            return Err(Error::usage(format!(
+                "--format {} would write no file: {} {reason}",
+                format.name(),
+                format.name()
+            )));
+        }
+    }
+    for &aov in aovs {
+        if formats.iter().all(|f| !f.holds(aov, rays_mode)) {
+            return Err(Error::usage(format!(
+                "--aov {aov} would be written to no file: --format {} cannot hold it \
+                 (add exr or npy)",
+                formats
+                    .iter()
+                    .map(|f| f.name())
+                    .collect::<Vec<_>>()
+                    .join(",")
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The AOV names joined with commas.
+pub fn names(aovs: &[Aov]) -> String {
+    aovs.iter()
+        .map(Aov::to_string)
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// Creates the output folder if needed and proves it writable with a probe file, so that a
+/// read-only or mistyped `--out` is reported before the scene is loaded. Never touches files
+/// already there. Returns the outermost folder it created, for [`remove_created_folder`].
+pub fn prepare_folder(dir: &Path) -> Result<Option<PathBuf>> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::in_file(
+            dir,
+            "is a file, not a folder; --out names the output folder",
+        )
+        .as_usage());
+    }
+    let created = dir
+        .ancestors()
+        .take_while(|a| !a.as_os_str().is_empty() && !a.exists())
+        .last()
+        .map(Path::to_path_buf);
+    std::fs::create_dir_all(dir).map_err(|e| {
+        Error::in_file(dir, format!("cannot create the output folder: {e}")).as_usage()
+    })?;
+    let probe = dir.join(format!(".raycast-probe-{}", std::process::id()));
+    if let Err(e) = std::fs::write(&probe, b"") {
+        remove_created_folder(dir, created.as_deref());
+        return Err(
+            Error::in_file(dir, format!("cannot write to the output folder: {e}")).as_usage(),
+        );
+    }
+    let _ = std::fs::remove_file(&probe);
+    Ok(created)
+}
+
+/// Removes the empty folders from `dir` up to `created` (what [`prepare_folder`] created), so
+/// that a failed run leaves nothing behind.
+pub fn remove_created_folder(dir: &Path, created: Option<&Path>) {
+    let Some(created) = created else {
+        return;
+    };
+    for folder in dir.ancestors() {
+        if std::fs::remove_dir(folder).is_err() || folder == created {
+            break;
+        }
+    }
+}
+
+/// Bytes per element (pixel or ray) of each AOV's buffer.
+fn aov_bytes(aov: Aov) -> u64 {
+    match aov {
+        Aov::Depth | Aov::Z => 8,
+        Aov::Normal | Aov::Position => 24,
+        Aov::Id | Aov::Prim => 4,
+    }
+}
+
+/// Bytes per element of the largest file being encoded at one time (the encoder's copy).
+fn encoding_bytes(aov: Aov, format: Format) -> u64 {
+    match format {
+        Format::Npy => aov_bytes(aov),
+        Format::Exr => match aov {
+            Aov::Id | Aov::Prim => 4,
+            _ => aov_bytes(aov) / 2,
+        },
+        Format::Png => 4,
+    }
+}
+
+/// An estimate of the memory the buffers of a run take at their peak: the traced hits, every
+/// AOV buffer, and twice the largest file being encoded.
+pub fn buffer_bytes(aovs: &[Aov], formats: &[Format], layout: Layout) -> u64 {
+    let rays_mode = matches!(layout, Layout::Rays(_));
+    let count = match layout {
+        Layout::Image { width, height } => width as u64 * height as u64,
+        Layout::Rays(n) => n as u64,
+    };
+    let buffers: u64 = aovs.iter().map(|&a| aov_bytes(a)).sum();
+    let encoding = aovs
+        .iter()
+        .flat_map(|&a| formats.iter().map(move |&f| (a, f)))
+        .filter(|&(a, f)| f.holds(a, rays_mode))
+        .map(|(a, f)| encoding_bytes(a, f))
+        .max()
+        .unwrap_or(0);
+    count.saturating_mul(HIT_BYTES + buffers + 2 * encoding)
+}
+
+/// Refuses a run whose buffers need more than `limit` bytes (`--max-memory`, or by default
+/// the memory the system reports available).
+pub fn check_memory(need: u64, limit: Option<u64>, what: &str) -> Result<()> {
+    let (limit, source) = match limit {
+        Some(limit) => (limit, "--max-memory"),
+        None => match available_memory() {
+            Some(available) => (
+                available,
+                "the available memory; raise it with --max-memory",
+            ),
+            None => return Ok(()),
+        },
+    };
+    if need <= limit {
+        return Ok(());
+    }
+    Err(Error::usage(format!(
+        "{what} need about {} of memory, more than {} ({source}); render fewer pixels or AOVs",
+        human_bytes(need),
+        human_bytes(limit)
+    )))
+}
+
+/// The memory the system reports available (Linux `MemAvailable`), if it can be read.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// A byte count for people: `1.5 GiB`.
+pub fn human_bytes(bytes: u64) -> String {
+    let units = ["bytes", "KiB", "MiB", "GiB", "TiB"];
+    let mut value = bytes as f64;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < units.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{bytes} bytes")
+    } else {
+        format!("{value:.1} {}", units[unit])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn repeated_formats_merge_in_order() {
+        let merged = merge_formats(&[Format::Png, Format::Exr, Format::Png]);
+        assert_eq!(merged, [Format::Png, Format::Exr]);
+    }
+
+    #[test]
+    fn memory_estimate_counts_hits_buffers_and_encoding() {
+        // 10 pixels, depth (8) + normal (24), exr encodes normal as 12: 10 * (24 + 32 + 24).
+        let layout = Layout::Image {
+            width: 5,
+            height: 2,
+        };
+        let bytes = buffer_bytes(&[Aov::Depth, Aov::Normal], &[Format::Exr], layout);
+        assert_eq!(bytes, 800);
+        assert!(check_memory(800, Some(800), "buffers").is_ok());
+        let e = check_memory(801, Some(800), "buffers").unwrap_err();
+        assert!(e.message.contains("--max-memory"), "{e}");
+        assert_eq!(human_bytes(3 << 29), "1.5 GiB");
+    }
+}

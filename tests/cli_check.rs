@@ -1,0 +1,115 @@
+//! `raycast check` as a new user runs it: paths without assets, empty files, machine output,
+//! and USD layers a ray caster does not need.
+
+mod common;
+use common::*;
+
+/// The text of an output stream.
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+#[test]
+fn a_folder_without_assets_or_a_mistyped_path_exits_2() {
+    let empty = temp_dir("no-assets");
+    std::fs::create_dir_all(&empty).unwrap();
+    std::fs::write(empty.join("notes.txt"), "no assets here").unwrap();
+    let result = raycast(&["check", arg(&empty)]);
+    assert_eq!(result.status.code(), Some(2), "{}", text(&result.stderr));
+    assert!(
+        text(&result.stderr).contains("no assets in this folder"),
+        "{}",
+        text(&result.stderr)
+    );
+    let typo = empty.join("scene.gltf");
+    let result = raycast(&["check", arg(&typo)]);
+    assert_eq!(result.status.code(), Some(2), "{}", text(&result.stderr));
+}
+
+#[test]
+fn an_empty_obj_is_an_empty_scene_and_counts_read_well() {
+    let dir = temp_dir("empty-obj");
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = dir.join("empty.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\n").unwrap();
+    let result = raycast(&["check", arg(&obj)]);
+    let (stdout, stderr) = (text(&result.stdout), text(&result.stderr));
+    assert!(stdout.contains("EMPTY_SCENE"), "{stdout}");
+    assert!(stdout.contains("(0 errors, 1 warning)"), "{stdout}");
+    assert!(stderr.contains("checked 1 asset in"), "{stderr}");
+}
+
+#[test]
+fn json_with_github_keeps_stdout_pure_json_lines() {
+    let dir = temp_dir("json-github");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("empty.obj"), "").unwrap();
+    std::fs::copy(fixture("gltf/cube.gltf"), dir.join("cube.gltf")).unwrap();
+    std::fs::copy(fixture("gltf/cube.bin"), dir.join("cube.bin")).unwrap();
+    let result = raycast(&["check", "--json", "--github", arg(&dir)]);
+    let stdout = text(&result.stdout);
+    for line in stdout.lines() {
+        assert!(
+            serde_json::from_str::<serde_json::Value>(line).is_ok(),
+            "not JSON: {line}"
+        );
+    }
+    assert_eq!(stdout.lines().count(), 2, "{stdout}");
+    assert!(
+        text(&result.stderr).contains("::warning file="),
+        "{}",
+        text(&result.stderr)
+    );
+}
+
+/// A stage whose prims reference MaterialX material layers, which the USD reader cannot read.
+fn stage_with_materialx(dir: &std::path::Path) -> std::path::PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let mtlx = "<?xml version=\"1.0\"?>\n<materialx version=\"1.38\"></materialx>\n";
+    std::fs::write(dir.join("a.mtlx"), mtlx).unwrap();
+    std::fs::write(dir.join("b.mtlx"), mtlx).unwrap();
+    let mut stage = String::from("#usda 1.0\n\ndef Xform \"World\" {\n");
+    for (name, layer) in [("A", "a"), ("B", "b"), ("C", "a")] {
+        stage.push_str(&format!(
+            "    def Mesh \"{name}\" {{\n        \
+             point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n        \
+             int[] faceVertexCounts = [3]\n        int[] faceVertexIndices = [0, 1, 2]\n    }}\n    \
+             def Scope \"{name}Materials\" (\n        references = @./{layer}.mtlx@\n    ) {{\n    }}\n"
+        ));
+    }
+    stage.push_str("}\n");
+    let path = dir.join("stage.usda");
+    std::fs::write(&path, stage).unwrap();
+    path
+}
+
+#[test]
+fn materialx_layers_make_at_most_one_note() {
+    let dir = temp_dir("materialx");
+    let stage = stage_with_materialx(&dir);
+    let result = raycast(&["check", "--json", "--verbose", arg(&stage)]);
+    let report: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
+    let findings = report["findings"].as_array().unwrap();
+    let layers: Vec<_> = findings
+        .iter()
+        .filter(|f| f["message"].as_str().unwrap_or("").contains(".mtlx"))
+        .collect();
+    assert_eq!(layers.len(), 1, "{findings:?}");
+    assert_eq!(layers[0]["severity"], "info");
+    let out = dir.join("out");
+    raycast_ok(&[arg(&stage), "--width", "8", "--out", arg(&out), "--quiet"]);
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    let warnings: Vec<String> = sidecar["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap().to_string())
+        .collect();
+    let mtlx = warnings.iter().filter(|w| w.contains(".mtlx")).count();
+    assert_eq!(mtlx, 1, "{warnings:?}");
+    let mut sorted = warnings.clone();
+    sorted.sort();
+    sorted.dedup();
+    assert_eq!(warnings, sorted, "warnings are sorted, without repeats");
+}

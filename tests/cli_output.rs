@@ -1,0 +1,338 @@
+//! What a render writes, and what it refuses before doing any work: memory, formats, the
+//! output folder, interrupted and repeated runs.
+
+mod common;
+use common::*;
+
+/// The partial files (`.NAME.partial-PID`) left in `dir`.
+fn partial_files(dir: &std::path::Path) -> Vec<String> {
+    file_names(dir)
+        .into_iter()
+        .filter(|n| n.contains(".partial-"))
+        .collect()
+}
+
+#[test]
+fn buffers_beyond_max_memory_are_refused_before_allocating() {
+    let out = temp_dir("memory");
+    let cube = fixture("gltf/cube.gltf");
+    let result = raycast(&[
+        arg(&cube),
+        "--width",
+        "24000",
+        "--height",
+        "24000",
+        "--aov",
+        "depth,normal,position,id",
+        "--max-memory",
+        "1G",
+        "--out",
+        arg(&out),
+    ]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{stderr}");
+    // 576e6 pixels × (24 hit + 60 buffers + 2 × 12 for the normal's EXR) bytes = 57.9 GiB.
+    assert!(stderr.contains("need about 57.9 GiB"), "{stderr}");
+    assert!(stderr.contains("--max-memory"), "{stderr}");
+    assert!(file_names(&out).is_empty(), "{:?}", file_names(&out));
+}
+
+#[test]
+fn repeated_formats_merge_and_leave_no_partial_files() {
+    let out = temp_dir("png-png");
+    let cube = fixture("gltf/cube.gltf");
+    raycast_ok(&[
+        arg(&cube),
+        "--aov",
+        "depth,id",
+        "--format",
+        "png,png",
+        "--width",
+        "16",
+        "--out",
+        arg(&out),
+        "--quiet",
+    ]);
+    assert_eq!(file_names(&out), ["depth.png", "id.png", "raycast.json"]);
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    assert_eq!(
+        json["files"],
+        serde_json::json!(["depth.png", "id.png", "raycast.json"])
+    );
+}
+
+#[test]
+fn requests_that_write_no_file_are_usage_errors() {
+    let dir = temp_dir("no-file");
+    std::fs::create_dir_all(&dir).unwrap();
+    let rays = dir.join("rays.npy");
+    write_rays(&rays, &[[0.0, 0.0, 5.0, 0.0, 0.0, -1.0]]);
+    let cube = fixture("gltf/cube.gltf");
+    let out = dir.join("out");
+    let cases: [(Vec<&str>, &str); 3] = [
+        (vec!["--rays", arg(&rays), "--format", "png"], "png"),
+        (vec!["--aov", "position", "--format", "png"], "position"),
+        (vec!["--rays", arg(&rays), "--format", "npy,exr"], "exr"),
+    ];
+    for (extra, named) in cases {
+        let mut args = vec![arg(&cube), "--out", arg(&out)];
+        args.extend(extra.iter().copied());
+        let result = raycast(&args);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert!(stderr.contains(named), "{extra:?}: {stderr}");
+        assert!(!out.exists(), "{extra:?} created the output folder");
+    }
+}
+
+#[test]
+fn a_run_replaces_an_earlier_runs_files_and_nothing_else() {
+    let out = temp_dir("reuse");
+    let cube = fixture("gltf/cube.gltf");
+    raycast_ok(&[arg(&cube), "--width", "16", "--out", arg(&out), "--quiet"]);
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    std::fs::write(out.join("normal.exr"), "not listed by the earlier run").unwrap();
+    let rays = out.join("rays.npy");
+    write_rays(&rays, &[[0.0, 0.0, 5.0, 0.0, 0.0, -1.0]]);
+    raycast_ok(&[
+        arg(&cube),
+        "--rays",
+        arg(&rays),
+        "--out",
+        arg(&out),
+        "--quiet",
+    ]);
+    assert_eq!(
+        file_names(&out),
+        [
+            "depth.npy",
+            "normal.exr",
+            "notes.txt",
+            "raycast.json",
+            "rays.npy"
+        ]
+    );
+}
+
+#[test]
+fn output_folder_problems_are_found_before_loading() {
+    let dir = temp_dir("out-problems");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("a-file");
+    std::fs::write(&file, "x").unwrap();
+    // A truncated scene: had it been loaded first, the error would be about the GLB.
+    let broken = fixture("bad/truncated.glb");
+    let result = raycast(&[arg(&broken), "--out", arg(&file)]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("a-file: is a file, not a folder"),
+        "{stderr}"
+    );
+    let below = file.join("out");
+    let result = raycast(&[arg(&broken), "--out", arg(&below)]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("a-file/out: cannot create the output folder"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("partial"), "{stderr}");
+}
+
+#[test]
+fn invalid_option_values_exit_with_2() {
+    let cube = fixture("gltf/cube.gltf");
+    for bad in [
+        ["--width", "0"],
+        ["--height", "0"],
+        ["--width", "40000"],
+        ["--fov", "0"],
+        ["--fov", "180"],
+        ["--ortho", "0"],
+        ["--ortho", "inf"],
+        ["--threads", "0"],
+        ["--eye", "nan,0,0"],
+    ] {
+        let mut args = vec![arg(&cube)];
+        args.extend(bad);
+        if bad[0] == "--eye" {
+            args.extend(["--target", "0,0,0"]);
+        }
+        let result = raycast(&args);
+        assert_eq!(result.status.code(), Some(2), "{bad:?}");
+    }
+}
+
+#[test]
+fn ctrl_c_removes_partial_files() {
+    let out = temp_dir("interrupt");
+    let cube = fixture("gltf/cube.gltf");
+    let mut child = std::process::Command::new(raycast_bin())
+        .args([arg(&cube), "--width", "2000", "--height", "2000"])
+        .args(["--aov", "depth,normal,position", "--format", "exr,png,npy"])
+        .args(["--out", arg(&out), "--quiet"])
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    let mut interrupted = false;
+    while child.try_wait().unwrap().is_none() && started.elapsed().as_secs() < 120 {
+        if !partial_files(&out).is_empty() {
+            std::process::Command::new("kill")
+                .args(["-INT", &child.id().to_string()])
+                .status()
+                .unwrap();
+            interrupted = true;
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let status = child.wait().unwrap();
+    assert!(interrupted, "the render ended before writing: {status:?}");
+    assert_eq!(partial_files(&out), Vec::<String>::new());
+    assert_eq!(status.code(), Some(130));
+}
+
+#[test]
+fn untraceable_rays_are_misses_counted_in_the_warnings() {
+    let dir = temp_dir("nan-rays");
+    std::fs::create_dir_all(&dir).unwrap();
+    let rays = dir.join("rays.npy");
+    write_rays(
+        &rays,
+        &[
+            [0.0, 0.0, 5.0, 0.0, 0.0, -1.0],
+            [f64::NAN, 0.0, 5.0, 0.0, 0.0, -1.0],
+            [0.0, 0.0, 5.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 5.0, f64::INFINITY, 0.0, -1.0],
+        ],
+    );
+    let cube = fixture("gltf/cube.gltf");
+    let out = dir.join("out");
+    raycast_ok(&[
+        arg(&cube),
+        "--rays",
+        arg(&rays),
+        "--out",
+        arg(&out),
+        "--quiet",
+    ]);
+    let (_, depth) = read_f64(&out.join("depth.npy"));
+    assert_eq!(depth, [4.0, f64::INFINITY, f64::INFINITY, f64::INFINITY]);
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    let warnings = json["warnings"].to_string();
+    assert!(
+        warnings.contains("3 rays have a non-finite origin or direction or a zero direction"),
+        "{warnings}"
+    );
+    assert!(
+        warnings.contains("first: ray 1: the origin is not finite"),
+        "{warnings}"
+    );
+    let strict = dir.join("strict");
+    let result = raycast(&[
+        arg(&cube),
+        "--rays",
+        arg(&rays),
+        "--out",
+        arg(&strict),
+        "--strict-rays",
+    ]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("rays.npy: ray 1: the origin is not finite"),
+        "{stderr}"
+    );
+    assert!(!strict.exists());
+}
+
+#[test]
+fn fortran_ordered_ray_files_are_read() {
+    let dir = temp_dir("fortran-rays");
+    std::fs::create_dir_all(&dir).unwrap();
+    // What numpy writes for `rays.T` of a C-order (6, 2) array: a (2, 6) array with
+    // 'fortran_order': True whose data holds the columns one after another.
+    let rows = [
+        [0.0f64, 0.0, 5.0, 0.0, 0.0, -1.0],
+        [3.0, 0.0, 5.0, 0.0, 0.0, -1.0],
+    ];
+    let header = "{'descr': '<f8', 'fortran_order': True, 'shape': (2, 6), }";
+    let mut bytes = b"\x93NUMPY\x01\x00".to_vec();
+    let padded = format!("{header}{}\n", " ".repeat(63 - (10 + header.len()) % 64));
+    bytes.extend_from_slice(&(padded.len() as u16).to_le_bytes());
+    bytes.extend_from_slice(padded.as_bytes());
+    for c in 0..6 {
+        for row in &rows {
+            bytes.extend_from_slice(&row[c].to_le_bytes());
+        }
+    }
+    let rays = dir.join("rays.npy");
+    std::fs::write(&rays, bytes).unwrap();
+    let out = dir.join("out");
+    let cube = fixture("gltf/cube.gltf");
+    raycast_ok(&[
+        arg(&cube),
+        "--rays",
+        arg(&rays),
+        "--out",
+        arg(&out),
+        "--quiet",
+    ]);
+    let (_, depth) = read_f64(&out.join("depth.npy"));
+    assert_eq!(depth, [4.0, f64::INFINITY]);
+}
+
+/// Distinct grey levels of the depth preview inside the centre square (the near quad).
+fn quad_grey_levels(png: &std::path::Path) -> usize {
+    let image = image::open(png).unwrap().to_rgb8();
+    let mut levels: Vec<u8> = (40..88)
+        .flat_map(|y| (40..88).map(move |x| (x, y)))
+        .map(|(x, y)| image.get_pixel(x, y).0[0])
+        .collect();
+    levels.sort_unstable();
+    levels.dedup();
+    levels.len()
+}
+
+#[test]
+fn a_far_outlier_does_not_wash_out_the_depth_preview() {
+    let dir = temp_dir("depth-preview");
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("near-and-far.obj");
+    // A 2×2 quad 3 units away fills the centre; a small triangle 1000 units away sits in a
+    // corner of the view (a few pixels).
+    std::fs::write(
+        &scene,
+        "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nv 375 375 -1000\nv 410 375 -1000\nv 375 410 -1000\n\
+         f 1 2 3\nf 1 3 4\nf 5 6 7\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let view = [
+        "--eye", "0,0,3", "--target", "0,0,0", "--width", "128", "--height", "128",
+    ];
+    let mut args = vec![
+        arg(&scene),
+        "--format",
+        "png",
+        "--out",
+        arg(&out),
+        "--quiet",
+    ];
+    args.extend(view);
+    raycast_ok(&args);
+    // The hits' depths run from 3 to 3.32 (the quad) and 1003 (a few pixels): with the range
+    // from the 1st to 99th percentile the centre of the quad (3 to 3.05) shows some fifty grey
+    // levels; mapped from the full range it is one flat white.
+    let levels = quad_grey_levels(&out.join("depth.png"));
+    assert!(levels >= 40, "the quad shows {levels} grey levels");
+    args.extend(["--depth-range", "3,1003"]);
+    raycast_ok(&args);
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    assert_eq!(json["depth_png_range"], serde_json::json!([3.0, 1003.0]));
+    assert!(quad_grey_levels(&out.join("depth.png")) <= 2);
+}
