@@ -139,7 +139,7 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
         polygon.clip(axis, cell.max[axis], -1.0);
     }
     let bounds = if polygon.overflowed {
-        Aabb::from_points(tri.iter().map(|v| v.as_dvec3())).common(*cell)
+        Aabb::from_points(tri.iter().copied()).common(*cell)
     } else {
         Some(Aabb::from_points(polygon.vertices().iter().copied()))
     };
