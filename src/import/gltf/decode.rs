@@ -234,6 +234,12 @@ pub fn summary(doc: &Document) -> Vec<String> {
 }
 
 impl Document {
+    /// True when buffer view `view` holds bytes a meshopt decoder produced (its filters are
+    /// lossy: writers declare accessor bounds from the data before filtering).
+    pub fn is_decoded_view(&self, view: usize) -> bool {
+        self.decoded_views.contains_key(&view)
+    }
+
     /// Runs [`meshopt_view`] on every buffer view that carries the extension; failures are
     /// reported to `sink`.
     pub fn decode_views(&mut self, sink: &mut dyn Sink) {
