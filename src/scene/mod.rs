@@ -262,9 +262,25 @@ impl Scene {
         self.object_parts(object)
             .iter()
             .flat_map(|part| self.part_prims(part))
-            .map(|i| PrimitiveSet::bounds(self, i))
+            .map(|i| self.world_prim_bounds(i))
             .fold(Aabb::EMPTY, Aabb::union)
-            .translated(-self.anchor)
+    }
+
+    /// World bounds of top-level primitive `index`. An instance's are its mesh's vertices
+    /// placed one by one, exact where the octree's (the placed corners of the mesh's box) are
+    /// only conservative.
+    fn world_prim_bounds(&self, index: usize) -> Aabb {
+        match self.top(index) {
+            Top::Instance(k) => {
+                let instance = &self.instances[k];
+                let positions = self.meshes[instance.mesh as usize].set.mesh.positions();
+                Aabb::from_points(
+                    (0..positions.len() as u32)
+                        .map(|v| instance.to_world.transform_point3(positions.get(v))),
+                )
+            }
+            _ => PrimitiveSet::bounds(self, index).translated(-self.anchor),
+        }
     }
 
     fn part_of(&self, prim: u32) -> &Part {
