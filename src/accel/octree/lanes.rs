@@ -4,12 +4,13 @@
 //! A lane's slab parameter on an axis with direction component `d ≠ 0` is `t = (P - o) · r`
 //! with `r = 1/d`, computed as `P · r₃₂ + c` (one FMA, or a multiply and an add), where `P` is
 //! the f32 plane, `r₃₂` is `r` rounded to f32 and `c` is `-o · r` moved by `ε` (down for the
-//! near plane, up for the far plane) and rounded the same way. With `u = 2⁻²⁴`, `B` the largest
+//! near plane, up for the far plane), then rounded to f32. With `u = 2⁻²⁴`, `B` the largest
 //! coordinate magnitude of any plane and `s = (B + |o|) · |r|`, the roundings of `r₃₂`, of the
-//! product, of `c` and of the sum together move the result by less than `4u · s` (plus
-//! `2⁻¹⁴⁹` per rounding in the subnormal range), so with `ε = 8u · s + 2⁻¹²⁰` the computed near
-//! parameter is below the exact one and the computed far parameter above it. `ε` grows with
-//! `|o|`: a far origin gets the slack its own rounding needs.
+//! product and of the sum together move the result by less than `4u · s`, and rounding `c`
+//! (at most `s + ε` in magnitude) by less than `1.01u · s`, plus `2⁻¹⁴⁹` per rounding in the
+//! subnormal range; so with `ε = 10u · s + 2⁻¹²⁰` the computed near parameter is below the
+//! exact one and the computed far parameter above it. `ε` grows with `|o|`: a far origin gets
+//! the slack its own rounding needs.
 //!
 //! NaN cannot arise: planes are finite, `r₃₂` and `c` are finite when the axis culls, and an
 //! axis that cannot cull safely gets `r₃₂ = 0` and `c = ∓∞`, whose products are never `0 · ∞`.
@@ -65,12 +66,15 @@ const LIMIT: f64 = 1.2676506002282294e30; // 2^100
 /// The unit roundoff of f32, `2⁻²⁴`.
 const UNIT: f64 = 1.0 / 16777216.0;
 
+/// The absolute part of the rounding bound, `2⁻¹²⁰`: far above the subnormal spacing.
+const TINY: f64 = 1.0 / (1u128 << 120) as f64;
+
 /// A ray prepared for the node test.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Lanes {
-    /// Plane rows of the near and far plane per axis.
-    pub near: [usize; 3],
-    pub far: [usize; 3],
+    /// Per axis: true when the direction is negative there, so the near plane is the box's
+    /// upper one.
+    pub flip: [bool; 3],
     pub r: [f32; 3],
     pub c_near: [f32; 3],
     pub c_far: [f32; 3],
@@ -90,44 +94,46 @@ impl Lanes {
     /// Set-up for `origin + t · dir` in a tree whose planes are at most `scale` in magnitude
     /// (`scale` infinite: no axis culls). `dir` must have no -0.0 component.
     pub fn new(origin: DVec3, dir: DVec3, scale: f64) -> Lanes {
+        let r = dir.recip();
+        let s = (DVec3::splat(scale) + origin.abs()) * r.abs();
+        let eps = s * (10.0 * UNIT) + DVec3::splat(TINY);
+        let c = -origin * r;
+        // False for d = 0 (s is then infinite or NaN) and for NaN.
+        let culls = s.cmple(DVec3::splat(LIMIT)) & r.abs().cmpge(DVec3::splat(1.0 / LIMIT));
+        let octant = dir.cmplt(DVec3::ZERO).bitmask() as usize;
         let mut lanes = Lanes {
-            near: [0, 1, 2],
-            far: [3, 4, 5],
-            r: [0.0; 3],
-            c_near: [f32::NEG_INFINITY; 3],
-            c_far: [f32::INFINITY; 3],
+            flip: [0, 1, 2].map(|axis| octant >> axis & 1 != 0),
+            r: r.as_vec3().to_array(),
+            c_near: (c - eps).as_vec3().to_array(),
+            c_far: (c + eps).as_vec3().to_array(),
             o_lo: [f32::NEG_INFINITY; 3],
             o_hi: [f32::INFINITY; 3],
             parallel: false,
-            open: true,
-            octant: 0,
+            open: false,
+            octant,
         };
-        for axis in 0..3 {
-            let (o, d) = (origin[axis], dir[axis]);
-            if d < 0.0 {
-                lanes.octant |= 1 << axis;
-                lanes.near[axis] = axis + 3;
-                lanes.far[axis] = axis;
-            }
-            if d == 0.0 && o.is_finite() && scale.is_finite() {
-                lanes.o_lo[axis] = f32_below(o);
-                lanes.o_hi[axis] = f32_above(o);
-                lanes.parallel = true;
-                lanes.open = false;
-                continue;
-            }
-            let r = 1.0 / d;
-            let s = (scale + o.abs()) * r.abs();
-            if s <= LIMIT && r.abs() >= 1.0 / LIMIT {
-                let eps = 8.0 * UNIT * s + 2f64.powi(-120);
-                let c = -o * r;
-                lanes.r[axis] = r as f32;
-                lanes.c_near[axis] = f32_below(c - eps);
-                lanes.c_far[axis] = f32_above(c + eps);
-                lanes.open = false;
-            }
+        if !culls.all() {
+            lanes.without_culling(culls.bitmask(), origin, dir, scale);
         }
         lanes
+    }
+
+    /// Axes not in `culls` get `r = 0` and `c = ∓∞`; those with `d = 0` compare the planes
+    /// with the origin instead (when the origin and the planes are finite).
+    #[cold]
+    fn without_culling(&mut self, culls: u32, origin: DVec3, dir: DVec3, scale: f64) {
+        for axis in (0..3).filter(|a| culls & (1 << a) == 0) {
+            self.r[axis] = 0.0;
+            self.c_near[axis] = f32::NEG_INFINITY;
+            self.c_far[axis] = f32::INFINITY;
+            let o = origin[axis];
+            if dir[axis] == 0.0 && o.is_finite() && scale.is_finite() {
+                self.o_lo[axis] = f32_below(o);
+                self.o_hi[axis] = f32_above(o);
+                self.parallel = true;
+            }
+        }
+        self.open = culls == 0 && !self.parallel;
     }
 }
 
@@ -141,14 +147,24 @@ pub(super) struct Tested {
     pub hit: u32,
 }
 
+/// The plane rows `(near, far)` of `axis` for `ray`.
+#[inline(always)]
+fn rows(ray: &Lanes, axis: usize) -> (usize, usize) {
+    if ray.flip[axis] {
+        (axis + 3, axis)
+    } else {
+        (axis, axis + 3)
+    }
+}
+
 /// The portable kernel.
 #[inline(always)]
 pub(super) fn test_portable(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
     let mut enter = [0.0f32; 8];
     let mut exit = [t_best; 8];
     for axis in 0..3 {
-        let near = &node.planes[ray.near[axis]];
-        let far = &node.planes[ray.far[axis]];
+        let (near, far) = rows(ray, axis);
+        let (near, far) = (&node.planes[near], &node.planes[far]);
         let (r, c_near, c_far) = (ray.r[axis], ray.c_near[axis], ray.c_far[axis]);
         for lane in 0..8 {
             let n = near[lane] * r + c_near;
@@ -185,9 +201,10 @@ pub(super) unsafe fn test_avx2(node: &Wide, ray: &Lanes, t_best: f32) -> Tested 
     let mut enter = _mm256_setzero_ps();
     let mut exit = _mm256_set1_ps(t_best);
     for axis in 0..3 {
+        let (near, far) = rows(ray, axis);
         let r = _mm256_set1_ps(ray.r[axis]);
-        let n = _mm256_fmadd_ps(row(ray.near[axis]), r, _mm256_set1_ps(ray.c_near[axis]));
-        let f = _mm256_fmadd_ps(row(ray.far[axis]), r, _mm256_set1_ps(ray.c_far[axis]));
+        let n = _mm256_fmadd_ps(row(near), r, _mm256_set1_ps(ray.c_near[axis]));
+        let f = _mm256_fmadd_ps(row(far), r, _mm256_set1_ps(ray.c_far[axis]));
         enter = _mm256_max_ps(enter, n);
         exit = _mm256_min_ps(exit, f);
     }

@@ -47,7 +47,7 @@ mod lanes;
 mod traverse;
 mod wide;
 
-use super::{test_primitive, Hit, PreparedRay, PrimitiveSet};
+use super::{prepare_ray, test_primitive, Hit, PreparedRay, PrimitiveSet};
 use crate::geometry::Aabb;
 use build::{cube_around, Builder};
 use glam::DVec3;
@@ -190,6 +190,27 @@ impl Octree {
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         self.traverse(ray.local_origin, ray.dir, t_max, |refs, _, _| {
+            for &prim in refs {
+                test_primitive(set, prim, ray, t_max, &mut best);
+            }
+            best.map_or(t_max, |b| b.t)
+        });
+        best
+    }
+
+    /// [`Octree::intersect`] for the ray `local_origin + t · dir`, prepared for the primitive
+    /// tests ([`prepare_ray`]) only when it reaches a leaf: most camera rays reach none.
+    pub fn intersect_ray<P: PrimitiveSet>(
+        &self,
+        set: &P,
+        local_origin: DVec3,
+        dir: DVec3,
+        t_max: f64,
+    ) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        let mut prepared = None;
+        self.traverse(local_origin, dir, t_max, |refs, _, _| {
+            let ray = prepared.get_or_insert_with(|| prepare_ray(set, local_origin, dir));
             for &prim in refs {
                 test_primitive(set, prim, ray, t_max, &mut best);
             }

@@ -4,6 +4,7 @@ use super::lanes::{self, Kernel, Lanes};
 use super::wide::{Layout, Wide, LEAF};
 use super::DEPTH_CAP;
 use crate::accel::f32_above;
+use std::mem::MaybeUninit;
 
 /// `ORDER[octant][hit]`: `hit` (bit `i` for lane `i`) with bit `j` moved to where lane
 /// `j ^ octant` is, so that bit `j` of the result is the `j`-th child along the ray.
@@ -27,8 +28,9 @@ static ORDER: [[u8; 256]; 8] = {
     order
 };
 
-/// At most eight entries wait per level, and the top node adds one level.
-const STACK: usize = 8 * (DEPTH_CAP as usize + 2);
+/// At most eight entries wait per level, and the top node adds one level (a power of two, so
+/// that masking the index keeps it in bounds without a check).
+const STACK: usize = (8 * (DEPTH_CAP as usize + 2)).next_power_of_two();
 
 /// What a traversal reports besides leaves: used by the culling audit in tests.
 pub(super) trait Observer {
@@ -103,7 +105,8 @@ fn run_with<const AVX2: bool, F, O>(
     O: Observer,
 {
     let mut t_best = f32_above(limit);
-    let mut stack = [(0u32, 0.0f32, 0.0f32); STACK];
+    // Uninitialised: only entries below `top`, each written before, are read.
+    let mut stack = [MaybeUninit::<(u32, f32, f32)>::uninit(); STACK];
     let mut top = 0;
     let mut node = 0usize;
     loop {
@@ -126,12 +129,16 @@ fn run_with<const AVX2: bool, F, O>(
         };
         observer.tested(node, hit, t_best);
         // Far to near, so the nearest child is popped first.
-        let mut order = u32::from(ORDER[ray.octant][hit as usize]);
+        let mut order = u32::from(ORDER[ray.octant & 7][hit as usize & 0xFF]);
         while order != 0 {
             let j = 31 - order.leading_zeros() as usize;
             order &= !(1 << j);
-            let lane = j ^ ray.octant;
-            stack[top] = (wide.children[lane], tested.enter[lane], tested.exit[lane]);
+            let lane = (j ^ ray.octant) & 7;
+            stack[top & (STACK - 1)].write((
+                wide.children[lane],
+                tested.enter[lane],
+                tested.exit[lane],
+            ));
             top += 1;
         }
         loop {
@@ -139,7 +146,8 @@ fn run_with<const AVX2: bool, F, O>(
                 return;
             }
             top -= 1;
-            let (child, enter, exit) = stack[top];
+            // SAFETY: entry `top` was written by the push that raised `top` above it.
+            let (child, enter, exit) = unsafe { stack[top & (STACK - 1)].assume_init() };
             if enter > t_best {
                 continue;
             }
