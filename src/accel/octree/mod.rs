@@ -11,9 +11,11 @@
 //! references while others hold copies of some (the triangles around a shared vertex, say): no
 //! split can separate them there, and without this rule the cost model alone keeps splitting such
 //! cells to the depth cap. (When all references fall into one child and no other, the split goes
-//! ahead: it only shrinks the cell around them.) A primitive goes into every child it really overlaps (exact triangle/box test;
-//! see [`PrimitiveSet::overlaps`]), tested against the child cell grown by a tiny margin so that
-//! rounding in the traversal can never lose a primitive lying on a cell face.
+//! ahead: it only shrinks the cell around them.) A primitive goes into every child it really
+//! overlaps (exact triangle/box test; see [`PrimitiveSet::overlaps`]), tested against the child
+//! cell grown by a tiny margin, so that a primitive lying on a cell face belongs to the cells on
+//! both sides. (Rounding in the traversal is covered separately, by the rounding bound of the
+//! node test.)
 //!
 //! Large cells build their eight subtrees in parallel; the result does not depend on the thread
 //! count. Each interior cell records which children hold any primitive; empty children are not
