@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Where the trace instructions go (valgrind's callgrind; deterministic, unlike wall time on a
 # shared machine): for each scene and backend, instructions per ray of the whole trace, of
-# the primitive tests, and of the octree's traversal (set-up excluded); then the octree's per-ray counts
-# (benches/octree_counts.rs). Coherent 512x512 camera rays, depth only, one thread.
+# the primitive tests, and of the octree's traversal (per-ray set-up excluded); then the
+# octree's per-ray counts (benches/octree_counts.rs). Coherent 512x512 camera rays, depth only, one thread.
 # reports/octree_profile.md quotes its output.
 #
 #   tools/profile_trace.sh [SCENE...]    (default: the bunny and the helmet in fixtures/assets)

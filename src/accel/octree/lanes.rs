@@ -61,7 +61,7 @@ impl Kernel {
 
 /// Below this magnitude `|r|` loses relative precision in f32; above `2¹⁰⁰` for `s` the
 /// products come near the f32 range. Either way the axis does not cull.
-const LIMIT: f64 = 1.2676506002282294e30; // 2^100
+pub(super) const LIMIT: f64 = (1u128 << 100) as f64;
 
 /// The unit roundoff of f32, `2⁻²⁴`.
 const UNIT: f64 = 1.0 / 16777216.0;

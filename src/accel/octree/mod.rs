@@ -145,7 +145,11 @@ impl Octree {
             root,
             layout: Layout::new(&tree.nodes),
             refs: tree.refs,
-            scale: if scale <= 1e30 { scale } else { f64::INFINITY },
+            scale: if scale <= lanes::LIMIT {
+                scale
+            } else {
+                f64::INFINITY
+            },
             kernel: Kernel::detect(),
             params,
             stats: tree.stats,

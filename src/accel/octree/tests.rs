@@ -110,7 +110,7 @@ fn adversarial(rng: &mut Rng, root: &Aabb) -> (DVec3, DVec3) {
     let size = root.size().x;
     let mut dir = rng.point(-1.0, 1.0);
     for axis in 0..3 {
-        if rng.next() % 3 == 0 {
+        if rng.next().is_multiple_of(3) {
             dir[axis] = rng.pick(&tiny);
         }
     }
@@ -119,13 +119,13 @@ fn adversarial(rng: &mut Rng, root: &Aabb) -> (DVec3, DVec3) {
     }
     let mut origin = rng.point(-12.0, 12.0);
     for axis in 0..3 {
-        if rng.next() % 2 == 0 {
+        if rng.next().is_multiple_of(2) {
             // A cell face of depth up to 6.
             let k = rng.next() % 65;
             origin[axis] = root.min[axis] + size * k as f64 / 64.0;
         }
     }
-    if rng.next() % 4 == 0 {
+    if rng.next().is_multiple_of(4) {
         let distance = 10f64.powf(rng.uniform(3.0, 15.0));
         let target = origin;
         origin = target - dir.normalize_or(DVec3::X) * distance;
