@@ -254,10 +254,14 @@ impl<'a> Tracer<'a> {
             return None;
         }
         let local = ray.origin - self.scene.anchor;
-        let prepared = prepare_ray(self.scene, local, ray.dir);
         match self.accel {
-            Accel::Octree(octree) => octree.intersect(self.scene, &prepared, f64::INFINITY),
-            Accel::Bvh(bvh) => bvh.intersect(self.scene, &prepared, f64::INFINITY),
+            Accel::Octree(octree) => {
+                octree.intersect_ray(self.scene, local, ray.dir, f64::INFINITY)
+            }
+            Accel::Bvh(bvh) => {
+                let prepared = prepare_ray(self.scene, local, ray.dir);
+                bvh.intersect(self.scene, &prepared, f64::INFINITY)
+            }
         }
     }
 }

@@ -89,3 +89,71 @@ fn empty_scene_misses_everything() {
     let ray = prepare_ray(&scene, DVec3::ZERO, DVec3::X);
     assert_eq!(octree.intersect(&scene, &ray, f64::INFINITY), None);
 }
+
+/// Rays from far away (up to 1e15 scene sizes) aimed at triangle vertices, edge midpoints and
+/// cell planes: the traversal's rounding grows with the origin's distance, and the octree must
+/// still find exactly what brute force finds (issue 14: the margin ignored the origin).
+#[test]
+fn far_origins_match_brute_force() {
+    let mut rng = Rng(0x5eed_0003);
+    let scene = random_scene(&mut rng, 1200, 0, DVec3::ZERO);
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let triangles: Vec<_> = scene
+        .objects
+        .iter()
+        .flat_map(|o| scene.mesh_triangles(o))
+        .collect();
+    let mut hits = 0;
+    for k in 0..4000 {
+        let v = triangles[(rng.next_u64() % triangles.len() as u64) as usize];
+        let target = match k % 3 {
+            0 => v[0],
+            1 => (v[0] + v[1]) * 0.5,
+            _ => (v[0] + v[1] + v[2]) / 3.0,
+        };
+        let distance = 10f64.powf(rng.uniform(6.0, 15.0));
+        let dir = rng.direction();
+        let origin = target - dir * distance;
+        let local = origin - scene.anchor;
+        let ray = prepare_ray(&scene, local, dir);
+        let expected = brute_force(&scene, &ray);
+        hits += usize::from(expected.is_some());
+        let found = octree.intersect(&scene, &ray, f64::INFINITY);
+        assert_eq!(found, expected, "ray {origin:?} + t {dir:?}");
+    }
+    assert!(hits > 1000, "the test should exercise hits, got {hits}");
+}
+
+/// `traverse` is public: a direction with -0.0 components must visit the same leaves, with the
+/// same parameters, as the same direction with +0.0 (issue 14).
+#[test]
+fn traverse_treats_negative_zero_as_zero() {
+    let mut rng = Rng(0x5eed_0004);
+    let scene = random_scene(&mut rng, 800, 2, DVec3::ZERO);
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let visits = |origin: DVec3, dir: DVec3| {
+        let mut seen = Vec::new();
+        octree.traverse(origin, dir, f64::INFINITY, |refs, enter, exit| {
+            seen.push((refs.to_vec(), enter, exit));
+            f64::INFINITY
+        });
+        seen
+    };
+    let mut visited = 0;
+    for _ in 0..300 {
+        let origin = rng.point(-12.0, 12.0) - scene.anchor;
+        let mut dir = rng.axis_direction(&[]) + DVec3::ZERO;
+        let plus = visits(origin, dir);
+        for axis in 0..3 {
+            if dir[axis] == 0.0 {
+                dir[axis] = -0.0;
+            }
+        }
+        assert_eq!(visits(origin, dir), plus, "ray {origin:?} + t {dir:?}");
+        visited += plus.len();
+    }
+    assert!(
+        visited > 300,
+        "the rays should pass through leaves ({visited})"
+    );
+}

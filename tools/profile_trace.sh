@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Where the trace instructions go (valgrind's callgrind; deterministic, unlike wall time on a
 # shared machine): for each scene and backend, instructions per ray of the whole trace, of
-# the primitive tests, and of the octree's cell traversal; then the octree's per-ray counts
-# (benches/octree_counts.rs). Coherent 512x512 camera rays, depth only, one thread.
+# the primitive tests, and of the octree's traversal (per-ray set-up excluded); then the
+# octree's per-ray counts (benches/octree_counts.rs). Coherent 512x512 camera rays, depth only, one thread.
 # reports/octree_profile.md quotes its output.
 #
 #   tools/profile_trace.sh [SCENE...]    (default: the bunny and the helmet in fixtures/assets)
@@ -26,7 +26,7 @@ for scene in "${scenes[@]}"; do
     # Inclusive counts of the first (outermost) entry of each function.
     count() { grep -m1 "$1" "$work/cg.txt" | awk '{gsub(",", "", $1); print $1}'; }
     tests=$(count 'triangle::WatertightRay::intersect$\|triangle::WatertightRay::intersect \[')
-    cells=$(count 'octree::Octree::visit_cell \[' || true)
+    cells=$(count 'octree::traverse::run \[' || true)
     awk -v s="$(basename "$scene")" -v a="$accel" -v t="$total" -v p="${tests:-0}" -v c="${cells:-0}" -v n=$rays 'BEGIN {
       printf "%s %s: %.0f instructions/ray; triangle tests %.0f (%.1f%%)", s, a, t/n, p/n, 100*p/t
       if (c > 0) printf "; octree cells excluding tests %.0f (%.1f%%)", (c-p)/n, 100*(c-p)/t

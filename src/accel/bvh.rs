@@ -30,6 +30,7 @@
 //! The pad makes the boxes a little looser than tight f32 boxes: `1e-5` of the scene size,
 //! small against the primitives of any scene with fewer than about 10¹⁰ of them.
 
+use super::{f32_above as round_up, f32_below as round_down};
 use super::{test_primitive, Hit, PreparedRay, PrimitiveSet};
 use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb as Aabb32;
@@ -125,26 +126,6 @@ pub struct Bvh {
 
 /// Direction components are at least this large in magnitude in the f32 ray.
 const MIN_DIR: f32 = 1e-15;
-
-/// Largest f32 not above `x`.
-fn round_down(x: f64) -> f32 {
-    let f = x as f32;
-    if f as f64 > x {
-        f.next_down()
-    } else {
-        f
-    }
-}
-
-/// Smallest f32 not below `x`.
-fn round_up(x: f64) -> f32 {
-    let f = x as f32;
-    if (f as f64) < x {
-        f.next_up()
-    } else {
-        f
-    }
-}
 
 impl Bvh {
     /// Builds a hierarchy of `kind` over every primitive of `set` with obvhs's `medium_build`.

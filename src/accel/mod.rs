@@ -83,6 +83,26 @@ pub trait PrimitiveSet: Sync {
     fn intersect(&self, index: usize, ray: &PreparedRay<Self::RayData>, t_max: f64) -> Option<f64>;
 }
 
+/// The largest f32 not above `x` (-inf below the f32 range; NaN stays NaN).
+pub(crate) fn f32_below(x: f64) -> f32 {
+    let f = x as f32;
+    if f as f64 > x {
+        f.next_down()
+    } else {
+        f
+    }
+}
+
+/// The smallest f32 not below `x` (+inf above the f32 range; NaN stays NaN).
+pub(crate) fn f32_above(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
 /// [`PrimitiveSet::child_mask`] computed with eight [`PrimitiveSet::overlaps`] tests.
 pub fn octants_by_overlap<P: PrimitiveSet + ?Sized>(
     set: &P,

@@ -777,7 +777,7 @@ def gap_section(entries):
         "ray at a time) running raycast's exact f64 primitive tests; the second compares "
         "that BVH with the octree on the same tests. Where the instructions go inside "
         "raycast (cell traversal, primitive tests, ray set-up) is measured with callgrind "
-        "in reports/octree_profile.md: primitive tests are about 14-18% of either "
+        "in reports/octree_profile.md: primitive tests are about 15-24% of either "
         "backend's trace instructions, so faster triangle tests alone cannot close the "
         "gap; traversal is the larger share.",
         "",

@@ -1,13 +1,40 @@
 //! Building the octree: the split rule, the exact distribution of primitives over children,
 //! and parallel construction of large subtrees.
 
-use super::{Node, Occupied, OctreeParams, OctreeStats, INTERIOR};
-use crate::accel::PrimitiveSet;
+use super::{OctreeParams, OctreeStats};
+use crate::accel::{f32_above, f32_below, PrimitiveSet};
 use crate::geometry::Aabb;
 use glam::DVec3;
 
 /// Cells with more references than this build their children in parallel.
 const PARALLEL_REFS: usize = 8192;
+
+/// Set in [`Node::count`] for interior cells; the low eight bits then flag non-empty children.
+pub(super) const INTERIOR: u32 = 1 << 31;
+
+/// A cell as built: interior cells point at their non-empty children (stored contiguously, in
+/// octant order), leaves at a run of references. `bounds` is the box its primitives occupy
+/// inside it, grown by the margin and rounded outward to f32: `[lo x, lo y, lo z, hi x, hi y,
+/// hi z]`. [`super::wide`] turns these cells into the eight-wide nodes that are traversed.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Node {
+    pub first: u32,
+    pub count: u32,
+    pub bounds: [f32; 6],
+}
+
+/// `occupied` rounded outward to f32 planes.
+fn outward(occupied: &Aabb) -> [f32; 6] {
+    let (lo, hi) = (occupied.min, occupied.max);
+    [
+        f32_below(lo.x),
+        f32_below(lo.y),
+        f32_below(lo.z),
+        f32_above(hi.x),
+        f32_above(hi.y),
+        f32_above(hi.z),
+    ]
+}
 
 /// A subtree in its own arrays: node 0 is its root; interior nodes point at their non-empty
 /// children, stored contiguously, by index into `nodes`, leaves at a run of `refs`.
@@ -43,7 +70,7 @@ impl<P: PrimitiveSet> Builder<'_, P> {
         } else {
             children.into_iter().enumerate().map(build).collect()
         };
-        join(&cell, parts)
+        join(parts)
     }
 
     /// A leaf subtree; its occupied box bounds the parts of its primitives inside the (grown)
@@ -59,7 +86,7 @@ impl<P: PrimitiveSet> Builder<'_, P> {
             nodes: vec![Node {
                 first: 0,
                 count: refs.len() as u32,
-                occupied: Occupied::around(&occupied, cell),
+                bounds: outward(&occupied),
             }],
             stats: OctreeStats {
                 nodes: 1,
@@ -120,10 +147,10 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     }
 }
 
-/// Joins the eight child subtrees of `cell` under a new root: root, then the roots of the
+/// Joins the eight child subtrees of a cell under a new root: root, then the roots of the
 /// non-empty children, then the rest of each of their nodes in order. Empty children are not
 /// stored; the root's child mask says which octants the stored children are.
-fn join(cell: &Aabb, parts: Vec<Subtree>) -> Subtree {
+fn join(parts: Vec<Subtree>) -> Subtree {
     let mut mask = 0u32;
     let mut stats = OctreeStats::default();
     let mut kept = Vec::with_capacity(8);
@@ -144,7 +171,7 @@ fn join(cell: &Aabb, parts: Vec<Subtree>) -> Subtree {
     nodes.push(Node {
         first: 1,
         count: INTERIOR | mask,
-        occupied: Occupied::around(&occupied, cell),
+        bounds: outward(&occupied),
     });
     let mut refs = Vec::with_capacity(kept.iter().map(|p| p.refs.len()).sum());
     stats.nodes = total + 1;

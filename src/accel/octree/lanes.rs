@@ -1,0 +1,227 @@
+//! The per-ray set-up and the eight-wide node test, in f32 and conservative.
+//!
+//! # Why an f32 test cannot lose a hit
+//! A lane's slab parameter on an axis with direction component `d ≠ 0` is `t = (P - o) · r`
+//! with `r = 1/d`, computed as `P · r₃₂ + c` (one FMA, or a multiply and an add), where `P` is
+//! the f32 plane, `r₃₂` is `r` rounded to f32 and `c` is `-o · r` moved by `ε` (down for the
+//! near plane, up for the far plane), then rounded to f32. With `u = 2⁻²⁴`, `B` the largest
+//! coordinate magnitude of any plane and `s = (B + |o|) · |r|`, the roundings of `r₃₂`, of the
+//! product and of the sum together move the result by less than `4u · s`, and rounding `c`
+//! (at most `s + ε` in magnitude) by less than `1.01u · s`, plus `2⁻¹⁴⁹` per rounding in the
+//! subnormal range; so with `ε = 10u · s + 2⁻¹²⁰` the computed near parameter is below the
+//! exact one and the computed far parameter above it. `ε` grows with `|o|`: a far origin gets
+//! the slack its own rounding needs.
+//!
+//! NaN cannot arise: planes are finite, `r₃₂` and `c` are finite when the axis culls, and an
+//! axis that cannot cull safely gets `r₃₂ = 0` and `c = ∓∞`, whose products are never `0 · ∞`.
+//! That happens when `d = 0` (the axis is then tested by comparing the planes with the origin
+//! rounded outward) and when `s > 2¹⁰⁰` or `|r| < 2⁻¹⁰⁰` (the axis then does not cull at all).
+//! A lane is hit when `max(near₀, near₁, near₂, 0) <= min(far₀, far₁, far₂, t_best)` with
+//! `t_best` the best hit rounded up to f32: equal parameters still reach the primitive tests.
+
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
+
+use super::wide::Wide;
+use crate::accel::{f32_above, f32_below};
+use glam::DVec3;
+
+/// Which implementation of the node test runs. Every kernel is conservative in the same
+/// sense, so the octree's answers are the same, bit for bit, whichever runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kernel {
+    /// AVX2 with FMA (x86-64, chosen at run time when the CPU has both).
+    Avx2,
+    /// Plain Rust over `[f32; 8]` (a multiply and an add per plane), which the compiler
+    /// vectorises for the target's baseline (SSE2, NEON).
+    Portable,
+}
+
+impl Kernel {
+    /// The fastest kernel this CPU runs.
+    pub fn detect() -> Kernel {
+        if Kernel::Avx2.available() {
+            Kernel::Avx2
+        } else {
+            Kernel::Portable
+        }
+    }
+
+    /// True when this CPU can run the kernel.
+    pub fn available(self) -> bool {
+        match self {
+            Kernel::Portable => true,
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx2 => is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"),
+            #[cfg(not(target_arch = "x86_64"))]
+            Kernel::Avx2 => false,
+        }
+    }
+}
+
+/// Below this magnitude `|r|` loses relative precision in f32; above `2¹⁰⁰` for `s` the
+/// products come near the f32 range. Either way the axis does not cull.
+pub(super) const LIMIT: f64 = (1u128 << 100) as f64;
+
+/// The unit roundoff of f32, `2⁻²⁴`.
+const UNIT: f64 = 1.0 / 16777216.0;
+
+/// The absolute part of the rounding bound, `2⁻¹²⁰`: far above the subnormal spacing.
+const TINY: f64 = 1.0 / (1u128 << 120) as f64;
+
+/// A ray prepared for the node test.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Lanes {
+    /// Per axis: true when the direction is negative there, so the near plane is the box's
+    /// upper one.
+    pub flip: [bool; 3],
+    pub r: [f32; 3],
+    pub c_near: [f32; 3],
+    pub c_far: [f32; 3],
+    /// On axes with `d = 0`, the origin rounded down and up; elsewhere -∞ and +∞.
+    pub o_lo: [f32; 3],
+    pub o_hi: [f32; 3],
+    /// Some axis has `d = 0`: compare the planes with `o_lo`/`o_hi`.
+    pub parallel: bool,
+    /// No axis culls (a degenerate ray or tree): every occupied lane is entered.
+    pub open: bool,
+    /// Bit `a` set when the direction is negative on axis `a`: children in the order
+    /// `j ^ octant` (`j = 0..8`) are front to back.
+    pub octant: usize,
+}
+
+impl Lanes {
+    /// Set-up for `origin + t · dir` in a tree whose planes are at most `scale` in magnitude
+    /// (`scale` infinite: no axis culls). `dir` must have no -0.0 component.
+    pub fn new(origin: DVec3, dir: DVec3, scale: f64) -> Lanes {
+        let r = dir.recip();
+        let s = (DVec3::splat(scale) + origin.abs()) * r.abs();
+        let eps = s * (10.0 * UNIT) + DVec3::splat(TINY);
+        let c = -origin * r;
+        // False for d = 0 (s is then infinite or NaN) and for NaN.
+        let culls = s.cmple(DVec3::splat(LIMIT)) & r.abs().cmpge(DVec3::splat(1.0 / LIMIT));
+        let octant = dir.cmplt(DVec3::ZERO).bitmask() as usize;
+        let mut lanes = Lanes {
+            flip: [0, 1, 2].map(|axis| octant >> axis & 1 != 0),
+            r: r.as_vec3().to_array(),
+            c_near: (c - eps).as_vec3().to_array(),
+            c_far: (c + eps).as_vec3().to_array(),
+            o_lo: [f32::NEG_INFINITY; 3],
+            o_hi: [f32::INFINITY; 3],
+            parallel: false,
+            open: false,
+            octant,
+        };
+        if !culls.all() {
+            lanes.without_culling(culls.bitmask(), origin, dir, scale);
+        }
+        lanes
+    }
+
+    /// Axes not in `culls` get `r = 0` and `c = ∓∞`; those with `d = 0` compare the planes
+    /// with the origin instead (when the origin and the planes are finite).
+    #[cold]
+    fn without_culling(&mut self, culls: u32, origin: DVec3, dir: DVec3, scale: f64) {
+        for axis in (0..3).filter(|a| culls & (1 << a) == 0) {
+            self.r[axis] = 0.0;
+            self.c_near[axis] = f32::NEG_INFINITY;
+            self.c_far[axis] = f32::INFINITY;
+            let o = origin[axis];
+            if dir[axis] == 0.0 && o.is_finite() && scale.is_finite() {
+                self.o_lo[axis] = f32_below(o);
+                self.o_hi[axis] = f32_above(o);
+                self.parallel = true;
+            }
+        }
+        self.open = culls == 0 && !self.parallel;
+    }
+}
+
+/// The result of one node test: bit `i` of `hit` for lane `i`, and per lane the entry and
+/// exit parameters (meaningful for hit lanes only).
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(32))]
+pub(super) struct Tested {
+    pub enter: [f32; 8],
+    pub exit: [f32; 8],
+    pub hit: u32,
+}
+
+/// The plane rows `(near, far)` of `axis` for `ray`.
+#[inline(always)]
+fn rows(ray: &Lanes, axis: usize) -> (usize, usize) {
+    if ray.flip[axis] {
+        (axis + 3, axis)
+    } else {
+        (axis, axis + 3)
+    }
+}
+
+/// The portable kernel.
+#[inline(always)]
+pub(super) fn test_portable(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
+    let mut enter = [0.0f32; 8];
+    let mut exit = [t_best; 8];
+    for axis in 0..3 {
+        let (near, far) = rows(ray, axis);
+        let (near, far) = (&node.planes[near], &node.planes[far]);
+        let (r, c_near, c_far) = (ray.r[axis], ray.c_near[axis], ray.c_far[axis]);
+        for lane in 0..8 {
+            let n = near[lane] * r + c_near;
+            let f = far[lane] * r + c_far;
+            enter[lane] = if n > enter[lane] { n } else { enter[lane] };
+            exit[lane] = if f < exit[lane] { f } else { exit[lane] };
+        }
+    }
+    let mut hit = 0;
+    for lane in 0..8 {
+        hit |= u32::from(enter[lane] <= exit[lane]) << lane;
+    }
+    if ray.parallel {
+        for axis in 0..3 {
+            let (lo, hi) = (&node.planes[axis], &node.planes[axis + 3]);
+            for lane in 0..8 {
+                let inside = lo[lane] <= ray.o_hi[axis] && hi[lane] >= ray.o_lo[axis];
+                hit &= !(u32::from(!inside) << lane);
+            }
+        }
+    }
+    Tested { enter, exit, hit }
+}
+
+/// The AVX2 kernel: one FMA per plane row.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+pub(super) unsafe fn test_avx2(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
+    let row = |i: usize| _mm256_load_ps(node.planes[i].as_ptr());
+    let mut enter = _mm256_setzero_ps();
+    let mut exit = _mm256_set1_ps(t_best);
+    for axis in 0..3 {
+        let (near, far) = rows(ray, axis);
+        let r = _mm256_set1_ps(ray.r[axis]);
+        let n = _mm256_fmadd_ps(row(near), r, _mm256_set1_ps(ray.c_near[axis]));
+        let f = _mm256_fmadd_ps(row(far), r, _mm256_set1_ps(ray.c_far[axis]));
+        enter = _mm256_max_ps(enter, n);
+        exit = _mm256_min_ps(exit, f);
+    }
+    let mut hit = _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit);
+    if ray.parallel {
+        for axis in 0..3 {
+            let lo = _mm256_cmp_ps::<_CMP_LE_OQ>(row(axis), _mm256_set1_ps(ray.o_hi[axis]));
+            let hi = _mm256_cmp_ps::<_CMP_GE_OQ>(row(axis + 3), _mm256_set1_ps(ray.o_lo[axis]));
+            hit = _mm256_and_ps(hit, _mm256_and_ps(lo, hi));
+        }
+    }
+    let mut out = Tested {
+        enter: [0.0; 8],
+        exit: [0.0; 8],
+        hit: _mm256_movemask_ps(hit) as u32,
+    };
+    _mm256_store_ps(out.enter.as_mut_ptr(), enter);
+    _mm256_store_ps(out.exit.as_mut_ptr(), exit);
+    out
+}

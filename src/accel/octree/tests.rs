@@ -1,0 +1,224 @@
+//! Unit tests of the node test: the culling audit for every kernel, and rays lying in planes.
+
+use super::lanes::{Kernel, Lanes};
+use super::traverse::{self, Observer};
+use super::wide::{Layout, Wide};
+use super::*;
+use crate::accel::{brute_force, prepare_ray};
+use crate::scene::{Scene, SceneBuilder};
+
+/// The kernels this CPU runs.
+fn kernels() -> Vec<Kernel> {
+    [Kernel::Avx2, Kernel::Portable]
+        .into_iter()
+        .filter(|k| k.available())
+        .collect()
+}
+
+/// A small deterministic generator (xorshift).
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn point(&mut self, lo: f64, hi: f64) -> DVec3 {
+        DVec3::new(
+            self.uniform(lo, hi),
+            self.uniform(lo, hi),
+            self.uniform(lo, hi),
+        )
+    }
+    fn pick<T: Copy>(&mut self, items: &[T]) -> T {
+        items[(self.next() % items.len() as u64) as usize]
+    }
+}
+
+/// Random small triangles in [-8, 8]³, with some lying in the root's midplanes.
+fn scene(rng: &mut Rng) -> Scene {
+    let mut tris = Vec::new();
+    for i in 0..1500 {
+        let c = rng.point(-8.0, 8.0);
+        let mut tri = [0; 3].map(|_| c + rng.point(-0.6, 0.6));
+        if i % 5 == 0 {
+            let axis = i % 3;
+            tri.iter_mut().for_each(|v| v[axis] = 0.0);
+        }
+        tris.push(tri);
+    }
+    let mut builder = SceneBuilder::new();
+    builder.add_mesh("t".into(), "test".into(), tris);
+    builder.finish("random".into())
+}
+
+/// Does the ray enter lane `lane`'s box with `0 <= t <= limit`, by the f64 slab test?
+fn enters(node: &Wide, lane: usize, origin: DVec3, dir: DVec3, limit: f64) -> bool {
+    let (mut enter, mut exit) = (0.0f64, limit);
+    for axis in 0..3 {
+        let lo = f64::from(node.planes[axis][lane]);
+        let hi = f64::from(node.planes[axis + 3][lane]);
+        let (o, d) = (origin[axis], dir[axis]);
+        if d == 0.0 {
+            if o < lo || o > hi {
+                return false;
+            }
+            continue;
+        }
+        let (a, b) = ((lo - o) / d, (hi - o) / d);
+        enter = enter.max(a.min(b));
+        exit = exit.min(a.max(b));
+    }
+    enter <= exit
+}
+
+/// Re-checks every lane the kernel culled with [`enters`].
+struct Audit<'a> {
+    layout: &'a Layout,
+    origin: DVec3,
+    dir: DVec3,
+    culled: usize,
+}
+
+impl Observer for Audit<'_> {
+    fn tested(&mut self, node: usize, hit: u32, t_best: f32) {
+        let wide = &self.layout.nodes[node];
+        for lane in 0..8 {
+            if wide.children[lane] == Wide::EMPTY || hit & (1 << lane) != 0 {
+                continue;
+            }
+            self.culled += 1;
+            assert!(
+                !enters(wide, lane, self.origin, self.dir, f64::from(t_best)),
+                "lane {lane} of node {node} culled: ray {:?} + t {:?}, limit {t_best}",
+                self.origin,
+                self.dir
+            );
+        }
+    }
+}
+
+/// Adversarial rays: axis-parallel, through cell faces and corners, from far away, with tiny
+/// direction components.
+fn adversarial(rng: &mut Rng, root: &Aabb) -> (DVec3, DVec3) {
+    let tiny = [0.0, -0.0, 1e-20, -1e-38, 1e-41, 5e-324, 1e-300];
+    let size = root.size().x;
+    let mut dir = rng.point(-1.0, 1.0);
+    for axis in 0..3 {
+        if rng.next().is_multiple_of(3) {
+            dir[axis] = rng.pick(&tiny);
+        }
+    }
+    if dir == DVec3::ZERO {
+        dir.x = 1.0;
+    }
+    let mut origin = rng.point(-12.0, 12.0);
+    for axis in 0..3 {
+        if rng.next().is_multiple_of(2) {
+            // A cell face of depth up to 6.
+            let k = rng.next() % 65;
+            origin[axis] = root.min[axis] + size * k as f64 / 64.0;
+        }
+    }
+    if rng.next().is_multiple_of(4) {
+        let distance = 10f64.powf(rng.uniform(3.0, 15.0));
+        let target = origin;
+        origin = target - dir.normalize_or(DVec3::X) * distance;
+    }
+    (origin, dir + DVec3::ZERO)
+}
+
+#[test]
+fn no_kernel_culls_a_lane_the_exact_slab_test_enters() {
+    let mut rng = Rng(0x0c7_1234_5678);
+    let scene = scene(&mut rng);
+    let octree = Octree::build(&scene, OctreeParams::default());
+    for kernel in kernels() {
+        let (mut culled, mut hits) = (0, 0);
+        for _ in 0..4000 {
+            let (origin, dir) = adversarial(&mut rng, &octree.root());
+            let ray = prepare_ray(&scene, origin, dir);
+            let mut audit = Audit {
+                layout: &octree.layout,
+                origin,
+                dir,
+                culled: 0,
+            };
+            let mut best = None;
+            let lanes = Lanes::new(origin, dir, octree.scale);
+            traverse::run(
+                &octree.layout,
+                &octree.refs,
+                kernel,
+                &lanes,
+                f64::INFINITY,
+                |refs, _, _| {
+                    for &prim in refs {
+                        test_primitive(&scene, prim, &ray, f64::INFINITY, &mut best);
+                    }
+                    best.map_or(f64::INFINITY, |b| b.t)
+                },
+                &mut audit,
+            );
+            assert_eq!(
+                best,
+                brute_force(&scene, &ray),
+                "{kernel:?}: {origin:?} + t {dir:?}"
+            );
+            culled += audit.culled;
+            hits += usize::from(best.is_some());
+        }
+        assert!(
+            culled > 10_000 && hits > 500,
+            "{kernel:?}: {culled} culled, {hits} hits"
+        );
+    }
+}
+
+/// A node whose lane 0 holds the box [0.2, 0.8]³.
+fn one_box() -> Wide {
+    let mut node = Wide::VACANT;
+    for axis in 0..3 {
+        node.planes[axis][0] = 0.2;
+        node.planes[axis + 3][0] = 0.8;
+    }
+    node.children[0] = 0;
+    node
+}
+
+#[test]
+fn a_ray_in_a_box_plane_keeps_the_other_bounds() {
+    let node = one_box();
+    let (lo, hi) = (f64::from(0.2f32), f64::from(0.8f32));
+    for kernel in kernels() {
+        // In the box's lower y plane, along +x from x = -5: enters at x = 0.2, leaves at 0.8.
+        let ray = Lanes::new(DVec3::new(-5.0, lo, 0.5), DVec3::X, 1.0);
+        let t = test(kernel, &node, &ray, f32::INFINITY);
+        assert_eq!(t.hit & 1, 1, "{kernel:?}");
+        let (enter, exit) = (f64::from(t.enter[0]), f64::from(t.exit[0]));
+        assert!(
+            (enter - (lo + 5.0)).abs() < 1e-5,
+            "{kernel:?}: enter {enter}"
+        );
+        assert!((exit - (hi + 5.0)).abs() < 1e-5, "{kernel:?}: exit {exit}");
+        // Just outside the plane, or ending before the box: culled.
+        let below = Lanes::new(DVec3::new(-5.0, lo - 1e-6, 0.5), DVec3::X, 1.0);
+        assert_eq!(test(kernel, &node, &below, f32::INFINITY).hit & 1, 0);
+        assert_eq!(test(kernel, &node, &ray, 5.1).hit & 1, 0);
+    }
+}
+
+/// The node test of `kernel`.
+fn test(kernel: Kernel, node: &Wide, ray: &Lanes, t_best: f32) -> super::lanes::Tested {
+    match kernel {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: only kernels the CPU runs are tested.
+        Kernel::Avx2 => unsafe { super::lanes::test_avx2(node, ray, t_best) },
+        _ => super::lanes::test_portable(node, ray, t_best),
+    }
+}
