@@ -181,7 +181,7 @@ impl Walker<'_, '_> {
                                         .sqrt()
                                         - 1.0)
                                         .abs()
-                                        > 5e-4
+                                        > super::UNIT_QUATERNION_TOLERANCE
                             });
                             if bad {
                                 self.f.error(

@@ -310,7 +310,7 @@ impl Walker<'_, '_> {
         for (e, v) in values.chunks_exact(comps).enumerate() {
             let problem = if name == "NORMAL" || name == "TANGENT" {
                 let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-                if (len - 1.0).abs() > 5e-4 {
+                if (len - 1.0).abs() > super::UNIT_VECTOR_TOLERANCE {
                     Some((
                         "ACCESSOR_VECTOR3_NON_UNIT",
                         format!("element {e} has length {len}"),

@@ -28,6 +28,15 @@ use crate::scene::Scene;
 use serde_json::{Map, Value};
 use std::collections::HashMap;
 use std::path::Path;
+
+/// How far from 1 the length of a unit vector (normal, tangent) may be: the Khronos
+/// glTF-Validator's tolerance, so that check flags what the validator flags and no more
+/// (quantized normals are routinely a few parts in a thousand off).
+const UNIT_VECTOR_TOLERANCE: f64 = 0.00674;
+
+/// How far from 1 the length of a rotation quaternion (node or animation key) may be: the
+/// Khronos glTF-Validator's tolerance.
+const UNIT_QUATERNION_TOLERANCE: f64 = 0.00769;
 use std::rc::Rc;
 
 /// Deepest node hierarchy walked.

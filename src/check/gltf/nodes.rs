@@ -285,7 +285,7 @@ impl Walker<'_, '_> {
             }
         } else if let Some(q) = numbers(node, "rotation").filter(|q| q.len() == 4) {
             let length = q.iter().map(|c| c * c).sum::<f64>().sqrt();
-            if (length - 1.0).abs() > 5e-6 {
+            if (length - 1.0).abs() > super::UNIT_QUATERNION_TOLERANCE {
                 self.f.error(
                     "ROTATION_NON_UNIT",
                     format!("{at}/rotation"),
