@@ -72,6 +72,26 @@ impl Aabb {
         )
     }
 
+    /// Does `origin + t·dir` meet the closed box for some `0 <= t <= t_max`? The f64 slab
+    /// test; an axis with `dir = 0` (either sign) only asks whether the origin lies in the slab.
+    pub fn ray_enters(&self, origin: DVec3, dir: DVec3, t_max: f64) -> bool {
+        let (mut near, mut far) = (0.0f64, t_max);
+        for axis in 0..3 {
+            let (lo, hi) = (self.min[axis], self.max[axis]);
+            let (o, d) = (origin[axis], dir[axis]);
+            if d == 0.0 {
+                if o < lo || o > hi {
+                    return false;
+                }
+                continue;
+            }
+            let (a, b) = ((lo - o) / d, (hi - o) / d);
+            near = near.max(a.min(b));
+            far = far.min(a.max(b));
+        }
+        near <= far
+    }
+
     /// The same box moved by `-offset`.
     pub fn translated(&self, offset: DVec3) -> Self {
         Aabb::new(self.min - offset, self.max - offset)

@@ -1,5 +1,6 @@
 //! A quadric placed in world space: intersection, normals, bounds and classification.
 
+use crate::geometry::Aabb;
 use glam::{DMat3, DMat4, DVec3, DVec4};
 
 use super::eigen::is_definite;
@@ -119,21 +120,9 @@ impl Quadric {
         let [min, max] = self.bounds;
         let centre = (min + max) * 0.5;
         let margin = 1e-9 * ((max - min).max_element() + (origin - centre).abs().max_element());
-        let (mut near, mut far) = (0.0f64, t_max);
-        for axis in 0..3 {
-            let (lo, hi) = (min[axis] - margin, max[axis] + margin);
-            let (o, d) = (origin[axis], dir[axis]);
-            if d == 0.0 {
-                if o < lo || o > hi {
-                    return false;
-                }
-                continue;
-            }
-            let (a, b) = ((lo - o) / d, (hi - o) / d);
-            near = near.max(a.min(b));
-            far = far.min(a.max(b));
-        }
-        near <= far
+        Aabb::new(min, max)
+            .expanded(margin)
+            .ray_enters(origin, dir, t_max)
     }
 
     /// [`Quadric::intersect`] without the bounds pre-test.

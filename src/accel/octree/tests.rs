@@ -59,22 +59,12 @@ fn scene(rng: &mut Rng) -> Scene {
 
 /// Does the ray enter lane `lane`'s box with `0 <= t <= limit`, by the f64 slab test?
 fn enters(node: &Wide, lane: usize, origin: DVec3, dir: DVec3, limit: f64) -> bool {
-    let (mut enter, mut exit) = (0.0f64, limit);
-    for axis in 0..3 {
-        let lo = f64::from(node.planes[axis][lane]);
-        let hi = f64::from(node.planes[axis + 3][lane]);
-        let (o, d) = (origin[axis], dir[axis]);
-        if d == 0.0 {
-            if o < lo || o > hi {
-                return false;
-            }
-            continue;
-        }
-        let (a, b) = ((lo - o) / d, (hi - o) / d);
-        enter = enter.max(a.min(b));
-        exit = exit.min(a.max(b));
-    }
-    enter <= exit
+    let plane = |row: usize| f64::from(node.planes[row][lane]);
+    let lane_box = Aabb::new(
+        DVec3::new(plane(0), plane(1), plane(2)),
+        DVec3::new(plane(3), plane(4), plane(5)),
+    );
+    lane_box.ray_enters(origin, dir, limit)
 }
 
 /// Re-checks every lane the kernel culled with [`enters`].
