@@ -385,6 +385,44 @@ fn cube_obj(flip: bool, drop: usize) -> String {
     text
 }
 
+/// An OBJ cube of side `n` whose faces are divided into unit quads on the integer grid (so
+/// shared corners weld exactly), wound outward; `drop_one` leaves out one quad.
+fn fine_cube_obj(n: usize, drop_one: bool) -> String {
+    let mut ids: std::collections::HashMap<[usize; 3], usize> = Default::default();
+    let (mut vertices, mut faces) = (String::new(), String::new());
+    let mut id = |p: [usize; 3]| {
+        let next = ids.len() + 1;
+        *ids.entry(p).or_insert_with(|| {
+            vertices += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+            next
+        })
+    };
+    for axis in 0..3 {
+        for side in [0, n] {
+            for a in 0..n {
+                for b in 0..n {
+                    if drop_one && axis == 0 && side == n && a == 3 && b == 4 {
+                        continue;
+                    }
+                    let at = |da: usize, db: usize| {
+                        let mut p = [0; 3];
+                        p[axis] = side;
+                        p[(axis + 1) % 3] = a + da;
+                        p[(axis + 2) % 3] = b + db;
+                        p
+                    };
+                    let mut quad = [at(0, 0), at(1, 0), at(1, 1), at(0, 1)].map(&mut id);
+                    if side == 0 {
+                        quad.reverse();
+                    }
+                    faces += &format!("f {} {} {} {}\n", quad[0], quad[1], quad[2], quad[3]);
+                }
+            }
+        }
+    }
+    vertices + &faces
+}
+
 #[test]
 fn geometric_checks() {
     let dir = Scratch::new("geometry");
@@ -394,13 +432,23 @@ fn geometric_checks() {
     assert!((good.scene.as_ref().map_or(0.0, |s| s.size) - 3f64.sqrt()).abs() < 1e-12);
     let inverted = run("inverted.obj", cube_obj(true, 0));
     assert!(codes(&inverted, &[Severity::Warning]).contains("INVERTED_NORMALS"));
-    let holed = run("holed.obj", cube_obj(false, 1));
+    // A cube without one face is an open box, open on purpose: no MESH_HOLES (issue 14).
+    let lidless = run("lidless.obj", cube_obj(false, 1));
+    assert!(
+        !codes(&lidless, &[Severity::Warning]).contains("MESH_HOLES"),
+        "{:?}",
+        lidless.findings
+    );
+    // A finely divided cube missing one small quad is meant closed: the hole is reported.
+    let holed = run("holed.obj", fine_cube_obj(8, true));
     let hole = holed.findings.iter().find(|f| f.code == "MESH_HOLES");
     assert!(
-        hole.is_some_and(|f| f.message.contains("escape")),
+        hole.is_some_and(|f| f.message.contains("4 boundary edges")),
         "{:?}",
         holed.findings
     );
+    let whole = run("whole.obj", fine_cube_obj(8, false));
+    assert!(whole.findings.is_empty(), "{:?}", whole.findings);
     // Scale: a 1.7-unit cube checked as metres against 1..10 passes, against 100..1000 fails.
     let path = dir.write("scale.obj", cube_obj(false, 0).as_bytes());
     let with = |min: f64, max: f64| {
