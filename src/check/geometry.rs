@@ -96,18 +96,15 @@ pub fn topology(triangles: &[[DVec3; 3]]) -> Topology {
         }
     }
     topo.edges = edges.len();
-    // Boundary edges in the direction their triangle runs them, start -> end.
-    let mut next: HashMap<u32, Option<u32>> = HashMap::new();
+    // Boundary edges in the direction their triangle runs them: start -> ends.
+    let mut outgoing: HashMap<u32, Vec<u32>> = HashMap::new();
     for (&(p, q), &(f, b)) in &edges {
         if f + b == 1 {
             let (from, to) = if f == 1 { (p, q) } else { (q, p) };
-            // A vertex that starts two boundary edges makes the loops ambiguous.
-            next.entry(from)
-                .and_modify(|n| *n = None)
-                .or_insert(Some(to));
+            outgoing.entry(from).or_default().push(to);
         }
     }
-    topo.hole_area = hole_area(&next, &points);
+    topo.hole_area = hole_area(outgoing, &points);
     for &(f, b) in edges.values() {
         match f + b {
             1 => topo.boundary += 1,
@@ -119,35 +116,34 @@ pub fn topology(triangles: &[[DVec3; 3]]) -> Topology {
     topo
 }
 
-/// Sum over the boundary loops of the length of each loop's vector area; infinite when the
-/// boundary edges do not form simple loops.
-fn hole_area(next: &HashMap<u32, Option<u32>>, points: &[DVec3]) -> f64 {
-    let mut seen: HashMap<u32, ()> = HashMap::with_capacity(next.len());
-    let mut total = 0.0;
-    let mut starts: Vec<u32> = next.keys().copied().collect();
+/// Sum over the boundary loops of the length of each loop's vector area (the area of a flat
+/// cap; a lower bound for a curved one).
+///
+/// The boundary edges are walked into chains, each edge once, in sorted vertex order so the
+/// sum is deterministic. Where a vertex starts several boundary edges (two holes touching at a
+/// corner) any pairing is taken; a chain that cannot return to its start (triangles wound
+/// inconsistently) is closed by the straight segment back to it.
+fn hole_area(mut outgoing: HashMap<u32, Vec<u32>>, points: &[DVec3]) -> f64 {
+    let mut starts: Vec<u32> = outgoing.keys().copied().collect();
     starts.sort_unstable();
+    for ends in outgoing.values_mut() {
+        ends.sort_unstable_by(|a, b| b.cmp(a));
+    }
+    let mut total = 0.0;
     for start in starts {
-        if seen.contains_key(&start) {
-            continue;
-        }
-        let mut vector = DVec3::ZERO;
-        let mut at = start;
-        loop {
-            seen.insert(at, ());
-            let Some(Some(to)) = next.get(&at).copied() else {
-                return f64::INFINITY;
-            };
-            let origin = points[start as usize];
-            vector += (points[at as usize] - origin).cross(points[to as usize] - origin);
-            at = to;
-            if at == start {
-                break;
+        let origin = points[start as usize];
+        while outgoing.get(&start).is_some_and(|ends| !ends.is_empty()) {
+            let mut vector = DVec3::ZERO;
+            let mut at = start;
+            while let Some(to) = outgoing.get_mut(&at).and_then(Vec::pop) {
+                vector += (points[at as usize] - origin).cross(points[to as usize] - origin);
+                at = to;
+                if at == start {
+                    break;
+                }
             }
-            if seen.contains_key(&at) {
-                return f64::INFINITY;
-            }
+            total += 0.5 * vector.length();
         }
-        total += 0.5 * vector.length();
     }
     total
 }
@@ -408,10 +404,9 @@ mod tests {
         assert!(!t.meant_closed());
     }
 
-    #[test]
-    fn a_fine_mesh_missing_one_triangle_is_meant_closed() {
-        // The cube's faces split into 16 x 16 quads each (dyadic, so shared corners weld
-        // exactly); one triangle removed.
+    /// The cube's faces split into 16 x 16 quads each (dyadic, so shared corners weld
+    /// exactly), two triangles per quad.
+    fn fine_cube() -> Vec<[DVec3; 3]> {
         let mut fine = Vec::new();
         for [a, b, c] in cube().into_iter().step_by(2) {
             let (u, v) = ((b - a) / 16.0, (c - b) / 16.0);
@@ -423,8 +418,29 @@ mod tests {
                 }
             }
         }
+        fine
+    }
+
+    #[test]
+    fn a_fine_mesh_missing_one_triangle_is_meant_closed() {
+        let mut fine = fine_cube();
         fine.pop();
         let t = topology(&fine);
         assert!(t.boundary > 0 && t.meant_closed(), "{t:?}");
+    }
+
+    #[test]
+    fn holes_touching_at_a_corner_are_measured() {
+        // Remove the first triangle of quads (3, 3) and (4, 4) of the first face: they share
+        // only the corner p + u + v, which then starts two boundary edges.
+        let mut fine = fine_cube();
+        let first = |i: usize, j: usize| 2 * (16 * i + j);
+        fine.remove(first(4, 4));
+        fine.remove(first(3, 3));
+        let t = topology(&fine);
+        assert_eq!(t.boundary, 6);
+        // Two triangles of area (1/16)^2 / 2 each.
+        assert!((t.hole_area - 2.0 / 512.0).abs() < 1e-15, "{t:?}");
+        assert!(t.meant_closed(), "{t:?}");
     }
 }
