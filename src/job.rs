@@ -12,6 +12,7 @@ use crate::output::{self, Format, Layout, Staging};
 use crate::render::{self, AccelKind, AccelStructure, Aov, CameraView, RaySource, Tracer};
 use crate::scene::Scene;
 use glam::DVec3;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -204,8 +205,10 @@ fn run_checked(
         warnings,
     };
     let json = serde_json::to_string_pretty(&sidecar).map_err(|e| Error::msg(e.to_string()))?;
-    let path = staging.file("raycast.json");
-    std::fs::write(&path, json).map_err(|e| Error::in_file(&path, format!("cannot write: {e}")))?;
+    staging.write("raycast.json", |out| {
+        out.write_all(json.as_bytes())
+            .map_err(|e| format!("cannot write: {e}"))
+    })?;
     staging.commit()?;
     Ok(sidecar)
 }

@@ -85,18 +85,16 @@ fn store(dir: &Path, index: usize, buffers: &Buffers) -> Result<(), Failure> {
     let fail = |e: crate::Error| ("IO_ERROR", format!("cannot write golden buffers: {e}"));
     let mut staging = Staging::new(dir).map_err(fail)?;
     let shape = [SIZE, SIZE];
-    npy::write(
-        &staging.file(&format!("view{index}.depth.npy")),
-        &shape,
-        NpyData::F64(depth(buffers)),
-    )
-    .map_err(fail)?;
-    npy::write(
-        &staging.file(&format!("view{index}.id.npy")),
-        &shape,
-        NpyData::U32(ids(buffers)),
-    )
-    .map_err(fail)?;
+    staging
+        .write(&format!("view{index}.depth.npy"), |out| {
+            npy::write(out, &shape, NpyData::F64(depth(buffers)))
+        })
+        .map_err(fail)?;
+    staging
+        .write(&format!("view{index}.id.npy"), |out| {
+            npy::write(out, &shape, NpyData::U32(ids(buffers)))
+        })
+        .map_err(fail)?;
     staging.commit().map_err(fail)
 }
 
@@ -163,6 +161,6 @@ fn write_difference(path: &Path, depth: &[f64], differs: &[bool]) -> crate::Resu
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    png::write(&staging.file(&name), &image)?;
+    staging.write(&name, |out| png::write(out, &image))?;
     staging.commit()
 }

@@ -1,9 +1,8 @@
 //! OpenEXR files through the `exr` crate: float channels for distances and vectors, UINT
 //! channels for ids, and the buffer conventions written into the header.
 
-use crate::error::{Error, Result};
 use exr::prelude::*;
-use std::path::Path;
+use std::io::{Seek, Write};
 
 /// One channel of an image to write.
 pub enum ExrChannel {
@@ -13,14 +12,14 @@ pub enum ExrChannel {
     Uint(&'static str, Vec<u32>),
 }
 
-/// Writes one layer holding `channels` and the text attributes `notes` (name, value).
+/// Writes one layer holding `channels` and the text attributes `notes` (name, value) to `out`.
 pub fn write(
-    path: &Path,
+    out: &mut (impl Write + Seek),
     width: usize,
     height: usize,
     channels: Vec<ExrChannel>,
     notes: &[(&str, String)],
-) -> Result<()> {
+) -> std::result::Result<(), String> {
     let list: Vec<AnyChannel<FlatSamples>> = channels
         .into_iter()
         .map(|c| match c {
@@ -43,6 +42,6 @@ pub fn write(
     );
     Image::from_layer(layer)
         .write()
-        .to_file(path)
-        .map_err(|e| Error::in_file(path, format!("cannot write EXR: {e}")))
+        .to_buffered(out)
+        .map_err(|e| format!("cannot write EXR: {e}"))
 }

@@ -14,6 +14,8 @@ use crate::error::{Error, Result};
 use crate::render::{Aov, Buffers};
 use glam::DVec3;
 use npy::NpyData;
+use std::fs::File;
+use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::sync::Mutex;
@@ -23,8 +25,10 @@ use std::sync::Mutex;
 static PARTIAL_FILES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
 /// Removes the temporary files of every uncommitted staging and exits with `code`; for an
-/// interrupt handler (Ctrl-C). The list stays locked until the process ends, so no new
-/// temporary file can appear in between (see [`Staging::file`]).
+/// interrupt handler (Ctrl-C). The list stays locked until the process ends, and temporary
+/// files are only created under that lock and then written through their open handle (see
+/// [`Staging::write`]), so none can reappear in between: a writer still running writes into an
+/// unlinked file.
 pub fn remove_partial_files_and_exit(code: i32) -> ! {
     let files = PARTIAL_FILES.lock().unwrap_or_else(|p| p.into_inner());
     for file in files.iter() {
@@ -33,16 +37,18 @@ pub fn remove_partial_files_and_exit(code: i32) -> ! {
     std::process::exit(code)
 }
 
-/// Adds (`true`: and creates it empty, under the lock) or removes a temporary file from
-/// [`PARTIAL_FILES`].
-fn track_partial(path: &Path, add: bool) {
+/// Creates a temporary file under the lock of [`PARTIAL_FILES`] and adds it there.
+fn create_partial(path: &Path) -> std::io::Result<File> {
     let mut files = PARTIAL_FILES.lock().unwrap_or_else(|p| p.into_inner());
-    if add {
-        let _ = std::fs::File::create(path);
-        files.push(path.to_path_buf());
-    } else {
-        files.retain(|f| f != path);
-    }
+    let file = File::create(path)?;
+    files.push(path.to_path_buf());
+    Ok(file)
+}
+
+/// Removes a temporary file from [`PARTIAL_FILES`] (not from the disk).
+fn untrack_partial(path: &Path) {
+    let mut files = PARTIAL_FILES.lock().unwrap_or_else(|p| p.into_inner());
+    files.retain(|f| f != path);
 }
 
 /// Whether `name` is a file name raycast writes into an output folder.
@@ -136,14 +142,24 @@ impl Staging {
         }
     }
 
-    /// Temporary path to write the file `name` to.
-    pub fn file(&mut self, name: &str) -> PathBuf {
+    /// Writes the file `name` under a temporary name: `body` gets the open file, and its
+    /// error message is reported with the file's final path.
+    pub fn write(
+        &mut self,
+        name: &str,
+        body: impl FnOnce(&mut BufWriter<File>) -> std::result::Result<(), String>,
+    ) -> Result<()> {
+        let target = self.dir.join(name);
         let temp = self
             .dir
             .join(format!(".{name}.partial-{}", std::process::id()));
-        track_partial(&temp, true);
-        self.files.push((temp.clone(), name.to_string()));
-        temp
+        let file = create_partial(&temp)
+            .map_err(|e| Error::in_file(&target, format!("cannot write: {e}")))?;
+        self.files.push((temp, name.to_string()));
+        let mut out = BufWriter::new(file);
+        body(&mut out)
+            .and_then(|()| out.flush().map_err(|e| format!("cannot write: {e}")))
+            .map_err(|message| Error::in_file(&target, message))
     }
 
     /// Final names of the files staged so far.
@@ -172,7 +188,7 @@ impl Staging {
         let written = self.names();
         for (temp, name) in std::mem::take(&mut self.files) {
             let target = self.dir.join(&name);
-            track_partial(&temp, false);
+            untrack_partial(&temp);
             if let Err(e) = std::fs::rename(&temp, &target) {
                 let _ = std::fs::remove_file(&temp);
                 return Err(Error::in_file(
@@ -191,7 +207,7 @@ impl Staging {
 impl Drop for Staging {
     fn drop(&mut self) {
         for (temp, _) in &self.files {
-            track_partial(temp, false);
+            untrack_partial(temp);
             let _ = std::fs::remove_file(temp);
         }
     }
@@ -255,17 +271,12 @@ fn write_npy(staging: &mut Staging, b: &Buffers, aov: Aov, layout: Layout) -> Re
         Aov::Id => (None, b.id.as_ref()),
         Aov::Prim => (None, b.prim.as_ref()),
     };
-    if let Some((data, components)) = floats {
-        npy::write(
-            &staging.file(&name),
-            &shape(layout, components),
-            NpyData::F64(&data),
-        )?;
-    }
-    if let Some(data) = ints {
-        npy::write(&staging.file(&name), &shape(layout, 1), NpyData::U32(data))?;
-    }
-    Ok(())
+    let (shape, data) = match (&floats, ints) {
+        (Some((data, components)), _) => (shape(layout, *components), NpyData::F64(data)),
+        (None, Some(data)) => (shape(layout, 1), NpyData::U32(data)),
+        (None, None) => return Ok(()),
+    };
+    staging.write(&name, |out| npy::write(out, &shape, data))
 }
 
 /// The convention written into each EXR header.
@@ -305,14 +316,10 @@ fn write_exr(
     let Some(channels) = channels else {
         return Ok(());
     };
-    let path = staging.file(&format!("{aov}.exr"));
-    exr::write(
-        &path,
-        width,
-        height,
-        channels,
-        &[("raycast/convention", exr_note(aov).to_string())],
-    )
+    let note = [("raycast/convention", exr_note(aov).to_string())];
+    staging.write(&format!("{aov}.exr"), |out| {
+        exr::write(out, width, height, channels, &note)
+    })
 }
 
 fn write_png(
@@ -345,6 +352,6 @@ fn write_png(
     let Some((image, range)) = image else {
         return Ok(None);
     };
-    png::write(&staging.file(&format!("{aov}.png")), &image)?;
+    staging.write(&format!("{aov}.png"), |out| png::write(out, &image))?;
     Ok(range)
 }

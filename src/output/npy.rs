@@ -15,11 +15,15 @@ pub enum NpyData<'a> {
     U32(&'a [u32]),
 }
 
-/// Writes a C-order array of the given shape.
-pub fn write(path: &Path, shape: &[usize], data: NpyData) -> Result<()> {
-    let (descr, bytes): (&str, Vec<u8>) = match data {
-        NpyData::F64(v) => ("<f8", v.iter().flat_map(|x| x.to_le_bytes()).collect()),
-        NpyData::U32(v) => ("<u4", v.iter().flat_map(|x| x.to_le_bytes()).collect()),
+/// Writes a C-order array of the given shape to `out`.
+pub fn write(
+    out: &mut impl Write,
+    shape: &[usize],
+    data: NpyData,
+) -> std::result::Result<(), String> {
+    let descr = match data {
+        NpyData::F64(_) => "<f8",
+        NpyData::U32(_) => "<u4",
     };
     let dims: Vec<String> = shape.iter().map(usize::to_string).collect();
     let shape_text = match dims.len() {
@@ -31,14 +35,17 @@ pub fn write(path: &Path, shape: &[usize], data: NpyData) -> Result<()> {
     let unpadded = 10 + header.len() + 1;
     header.push_str(&" ".repeat((64 - unpadded % 64) % 64));
     header.push('\n');
-    let mut out = Vec::with_capacity(10 + header.len() + bytes.len());
-    out.extend_from_slice(b"\x93NUMPY\x01\x00");
-    out.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    out.extend_from_slice(header.as_bytes());
-    out.extend_from_slice(&bytes);
-    std::fs::File::create(path)
-        .and_then(|mut f| f.write_all(&out))
-        .map_err(|e| Error::in_file(path, format!("cannot write: {e}")))
+    let mut write_all = |bytes: &[u8]| {
+        out.write_all(bytes)
+            .map_err(|e| format!("cannot write: {e}"))
+    };
+    write_all(b"\x93NUMPY\x01\x00")?;
+    write_all(&(header.len() as u16).to_le_bytes())?;
+    write_all(header.as_bytes())?;
+    match data {
+        NpyData::F64(v) => v.iter().try_for_each(|x| write_all(&x.to_le_bytes())),
+        NpyData::U32(v) => v.iter().try_for_each(|x| write_all(&x.to_le_bytes())),
+    }
 }
 
 /// The rays of a ray file in file order, and those that cannot be traced.

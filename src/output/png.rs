@@ -1,10 +1,9 @@
 //! PNG previews a person can read: depth as grey (near light, far dark), normals as colours,
 //! ids as distinct colours; misses are black.
 
-use crate::error::{Error, Result};
 use glam::DVec3;
 use image::{ImageFormat, RgbImage};
-use std::path::Path;
+use std::io::{Seek, Write};
 
 /// Finite range of the values, or `None` when every value is infinite.
 pub fn finite_range(values: &[f64]) -> Option<[f64; 2]> {
@@ -113,11 +112,11 @@ fn image_from<T>(values: &[T], width: usize, colour: impl Fn(&T) -> [u8; 3]) -> 
     })
 }
 
-/// Writes a preview as PNG.
-pub fn write(path: &Path, image: &RgbImage) -> Result<()> {
+/// Writes a preview as PNG to `out`.
+pub fn write(out: &mut (impl Write + Seek), image: &RgbImage) -> Result<(), String> {
     image
-        .save_with_format(path, ImageFormat::Png)
-        .map_err(|e| Error::in_file(path, format!("cannot write PNG: {e}")))
+        .write_to(out, ImageFormat::Png)
+        .map_err(|e| format!("cannot write PNG: {e}"))
 }
 
 #[cfg(test)]
