@@ -14,6 +14,7 @@ use crate::scene::Scene;
 use glam::DVec3;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// How to choose the camera.
@@ -81,11 +82,30 @@ impl RenderJob {
     }
 }
 
-/// Runs a render job; `progress(done, total)` is called as rays complete.
+/// How far a render has come, for a progress display.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Progress {
+    /// `done` of `total` rays traced.
+    Tracing {
+        /// Rays traced so far.
+        done: usize,
+        /// Rays in all.
+        total: usize,
+    },
+    /// `done` of `total` files written.
+    Writing {
+        /// Files complete so far.
+        done: usize,
+        /// Files in all.
+        total: usize,
+    },
+}
+
+/// Runs a render job; `progress` is told as rays are traced and as files are written.
 ///
 /// The request is checked before the scene is loaded: every format and AOV must give a file,
 /// and the output folder must be writable. The buffers' memory is estimated before tracing.
-pub fn run(job: &RenderJob, progress: impl FnMut(usize, usize)) -> Result<Sidecar> {
+pub fn run(job: &RenderJob, progress: impl FnMut(Progress) + Send) -> Result<Sidecar> {
     let formats = check_request(job)?;
     let out = job.out_dir();
     let created = request::prepare_folder(&out)?;
@@ -100,7 +120,7 @@ pub fn run(job: &RenderJob, progress: impl FnMut(usize, usize)) -> Result<Sideca
 fn run_checked(
     job: &RenderJob,
     formats: &[Format],
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(Progress) + Send,
 ) -> Result<Sidecar> {
     let started = Instant::now();
     let scene = import::load(&job.scene, &job.load)?;
@@ -147,7 +167,12 @@ fn run_checked(
     };
     let total = source.len();
     let started = Instant::now();
-    let buffers = render::render(&tracer, source, &job.aovs, |done| progress(done, total));
+    // Files are written in parallel; their reports take turns.
+    let progress = Mutex::new(progress);
+    let report = |event| (progress.lock().unwrap_or_else(|p| p.into_inner()))(event);
+    let buffers = render::render(&tracer, source, &job.aovs, |done| {
+        report(Progress::Tracing { done, total })
+    });
     let trace = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
@@ -156,8 +181,14 @@ fn run_checked(
     if let Some(rays) = &job.rays {
         staging.protect(rays);
     }
-    let depth_png_range =
-        output::write_buffers(&mut staging, &buffers, layout, formats, job.depth_range)?;
+    let depth_png_range = output::write_buffers(
+        &mut staging,
+        &buffers,
+        layout,
+        formats,
+        job.depth_range,
+        |done, files| report(Progress::Writing { done, total: files }),
+    )?;
     let write = started.elapsed().as_secs_f64();
     let mut files = staging.names();
     files.push("raycast.json".into());

@@ -349,7 +349,7 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         depth_range: args.depth_range,
     };
     let bar = Progress::new(args.quiet);
-    let sidecar = job::run(&job, |done, total| bar.update(done, total))?;
+    let sidecar = job::run(&job, |event| bar.update(event))?;
     bar.finish();
     if !args.quiet {
         for warning in &sidecar.warnings {
@@ -380,6 +380,12 @@ fn dedup(aovs: Vec<Aov>) -> Vec<Aov> {
     seen
 }
 
+/// The progress bar's look, counting `what`.
+fn style(what: &str) -> ProgressStyle {
+    ProgressStyle::with_template(&format!("{{bar:40}} {{pos}}/{{len}} {what} {{eta}}"))
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+}
+
 /// A progress bar on stderr that appears only on a terminal and only once a render has taken
 /// more than a second.
 struct Progress {
@@ -391,9 +397,7 @@ impl Progress {
     fn new(quiet: bool) -> Progress {
         let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
             let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::hidden());
-            if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} rays {eta}") {
-                bar.set_style(style);
-            }
+            bar.set_style(style("rays"));
             bar
         });
         Progress {
@@ -402,8 +406,17 @@ impl Progress {
         }
     }
 
-    fn update(&self, done: usize, total: usize) {
+    fn update(&self, event: job::Progress) {
         if let Some(bar) = &self.bar {
+            let (done, total) = match event {
+                job::Progress::Tracing { done, total } => (done, total),
+                job::Progress::Writing { done, total } => {
+                    if done == 0 {
+                        bar.set_style(style("files written"));
+                    }
+                    (done, total)
+                }
+            };
             bar.set_length(total as u64);
             bar.set_position(done as u64);
             if bar.is_hidden() && self.started.elapsed() > Duration::from_secs(1) {

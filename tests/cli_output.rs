@@ -336,3 +336,53 @@ fn a_far_outlier_does_not_wash_out_the_depth_preview() {
     assert_eq!(json["depth_png_range"], serde_json::json!([3.0, 1003.0]));
     assert!(quad_grey_levels(&out.join("depth.png")) <= 2);
 }
+
+/// The library's render reports tracing, then writing, file by file, to its end.
+#[test]
+fn progress_covers_tracing_and_writing() {
+    use raycast::job::{self, Progress, RenderJob};
+    let out = temp_dir("progress");
+    let job = RenderJob {
+        scene: fixture("gltf/cube.gltf"),
+        load: Default::default(),
+        aovs: vec![raycast::render::Aov::Depth, raycast::render::Aov::Normal],
+        camera: Default::default(),
+        width: Some(64),
+        height: Some(32),
+        rays: None,
+        out: Some(out.clone()),
+        formats: None,
+        octree: Default::default(),
+        accel: Default::default(),
+        strict_rays: false,
+        depth_range: None,
+        max_memory: None,
+    };
+    let mut events = Vec::new();
+    let sidecar = job::run(&job, |event| events.push(event)).unwrap();
+    let split = events
+        .iter()
+        .position(|e| matches!(e, Progress::Writing { .. }))
+        .expect("no writing reported");
+    assert!(events[..split]
+        .iter()
+        .all(|e| matches!(e, Progress::Tracing { total: 2048, .. })));
+    assert_eq!(
+        events[split - 1],
+        Progress::Tracing {
+            done: 2048,
+            total: 2048
+        }
+    );
+    // depth.exr, depth.png, normal.exr, normal.png; the sidecar is written after them.
+    let writing: Vec<_> = events[split..].to_vec();
+    let done: Vec<usize> = writing
+        .iter()
+        .map(|e| match e {
+            Progress::Writing { done, total: 4 } => *done,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(done, [0, 1, 2, 3, 4]);
+    assert_eq!(sidecar.files.len(), 5);
+}

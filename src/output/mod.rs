@@ -14,10 +14,12 @@ use crate::error::{Error, Result};
 use crate::render::{Aov, Buffers};
 use glam::DVec3;
 use npy::NpyData;
+use rayon::prelude::*;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 /// Temporary files of every uncommitted [`Staging`] in this process, for
@@ -114,6 +116,29 @@ pub enum Layout {
     Rays(usize),
 }
 
+/// Encodes one file into its open temporary file; the error is a one-line message.
+type Encoder<'a> =
+    Box<dyn FnOnce(&mut BufWriter<File>) -> std::result::Result<(), String> + Send + 'a>;
+
+/// One file for [`Staging::write_all`]: its final name and how to encode it.
+pub struct FileJob<'a> {
+    name: String,
+    body: Encoder<'a>,
+}
+
+impl<'a> FileJob<'a> {
+    /// A file named `name` whose content `body` writes.
+    pub fn new(
+        name: impl Into<String>,
+        body: impl FnOnce(&mut BufWriter<File>) -> std::result::Result<(), String> + Send + 'a,
+    ) -> FileJob<'a> {
+        FileJob {
+            name: name.into(),
+            body: Box::new(body),
+        }
+    }
+}
+
 /// Files being written into one folder; nothing appears under its final name before
 /// [`Staging::commit`], and dropping an uncommitted staging removes its temporary files.
 #[derive(Debug)]
@@ -147,8 +172,38 @@ impl Staging {
     pub fn write(
         &mut self,
         name: &str,
-        body: impl FnOnce(&mut BufWriter<File>) -> std::result::Result<(), String>,
+        body: impl FnOnce(&mut BufWriter<File>) -> std::result::Result<(), String> + Send,
     ) -> Result<()> {
+        self.write_all(vec![FileJob::new(name, body)], |_| {})
+    }
+
+    /// Writes the files of `jobs` in parallel, each under a temporary name; `written(n)` is
+    /// called each time a file is complete, with the number complete so far. The temporary
+    /// files are all created (in order) before any is written.
+    pub fn write_all(
+        &mut self,
+        jobs: Vec<FileJob<'_>>,
+        written: impl Fn(usize) + Sync,
+    ) -> Result<()> {
+        let mut files = Vec::with_capacity(jobs.len());
+        for job in &jobs {
+            files.push(self.create(&job.name)?);
+        }
+        let complete = AtomicUsize::new(0);
+        jobs.into_par_iter()
+            .zip(files)
+            .try_for_each(|(job, (file, target))| {
+                let mut out = BufWriter::new(file);
+                (job.body)(&mut out)
+                    .and_then(|()| out.flush().map_err(|e| format!("cannot write: {e}")))
+                    .map_err(|message| Error::in_file(&target, message))?;
+                written(complete.fetch_add(1, Ordering::Relaxed) + 1);
+                Ok(())
+            })
+    }
+
+    /// Creates the temporary file for `name`; returns it and the file's final path.
+    fn create(&mut self, name: &str) -> Result<(File, PathBuf)> {
         let target = self.dir.join(name);
         let temp = self
             .dir
@@ -156,10 +211,7 @@ impl Staging {
         let file = create_partial(&temp)
             .map_err(|e| Error::in_file(&target, format!("cannot write: {e}")))?;
         self.files.push((temp, name.to_string()));
-        let mut out = BufWriter::new(file);
-        body(&mut out)
-            .and_then(|()| out.flush().map_err(|e| format!("cannot write: {e}")))
-            .map_err(|message| Error::in_file(&target, message))
+        Ok((file, target))
     }
 
     /// Final names of the files staged so far.
@@ -214,33 +266,43 @@ impl Drop for Staging {
 }
 
 /// Writes every buffer of `buffers` in every format of `formats` (EXR and PNG only for
-/// images). The distance previews map `depth_range` (default: the 1st to 99th percentile of the
-/// finite values, see [`png::percentile_range`]). Returns the depth range mapped into
-/// `depth.png`, if one was written.
+/// images), encoding the files in parallel; `written(done, total)` is called as files complete.
+/// The distance previews map `depth_range` (default: the 1st to 99th percentile of the finite
+/// values, see [`png::percentile_range`]). Returns the depth range mapped into `depth.png`, if
+/// one was written.
 pub fn write_buffers(
     staging: &mut Staging,
     buffers: &Buffers,
     layout: Layout,
     formats: &[Format],
     depth_range: Option<[f64; 2]>,
+    written: impl Fn(usize, usize) + Sync,
 ) -> Result<Option<[f64; 2]>> {
     let mut written_range = None;
+    let mut jobs = Vec::new();
     for format in request::merge_formats(formats) {
         for aov in Aov::ALL {
-            match (format, layout) {
-                (Format::Npy, _) => write_npy(staging, buffers, aov, layout)?,
+            let Some(values) = values(buffers, aov) else {
+                continue;
+            };
+            let job = match (format, layout) {
+                (Format::Npy, _) => Some(npy_job(values, aov, layout)),
                 (Format::Exr, Layout::Image { width, height }) => {
-                    write_exr(staging, buffers, aov, width, height)?
+                    Some(exr_job(values, aov, width, height))
                 }
                 (Format::Png, Layout::Image { width, .. }) => {
-                    if let Some(range) = write_png(staging, buffers, aov, width, depth_range)? {
-                        written_range = written_range.or(Some(range));
-                    }
+                    let (job, range) = png_job(values, aov, width, depth_range);
+                    written_range = written_range.or(range);
+                    job
                 }
-                (Format::Exr | Format::Png, Layout::Rays(_)) => {}
-            }
+                (Format::Exr | Format::Png, Layout::Rays(_)) => None,
+            };
+            jobs.extend(job);
         }
     }
+    let total = jobs.len();
+    written(0, total);
+    staging.write_all(jobs, |done| written(done, total))?;
     Ok(written_range)
 }
 
@@ -259,24 +321,42 @@ fn flatten(v: &[DVec3]) -> Vec<f64> {
     v.iter().flat_map(|p| p.to_array()).collect()
 }
 
-fn write_npy(staging: &mut Staging, b: &Buffers, aov: Aov, layout: Layout) -> Result<()> {
-    let name = format!("{aov}.npy");
-    let scalar = |v: &Option<Vec<f64>>| v.as_ref().map(|v| (v.clone(), 1));
-    let vector = |v: &Option<Vec<DVec3>>| v.as_ref().map(|v| (flatten(v), 3));
-    let (floats, ints) = match aov {
-        Aov::Depth => (scalar(&b.depth), None),
-        Aov::Z => (scalar(&b.z), None),
-        Aov::Normal => (vector(&b.normal), None),
-        Aov::Position => (vector(&b.position), None),
-        Aov::Id => (None, b.id.as_ref()),
-        Aov::Prim => (None, b.prim.as_ref()),
+/// The values of one computed AOV.
+#[derive(Debug, Clone, Copy)]
+enum Values<'a> {
+    /// Distances (depth, z).
+    Distances(&'a [f64]),
+    /// Vectors (normal, position).
+    Vectors(&'a [DVec3]),
+    /// Labels (id, prim).
+    Labels(&'a [u32]),
+}
+
+/// The values of `aov`, if it was computed.
+fn values(b: &Buffers, aov: Aov) -> Option<Values<'_>> {
+    match aov {
+        Aov::Depth => b.depth.as_deref().map(Values::Distances),
+        Aov::Z => b.z.as_deref().map(Values::Distances),
+        Aov::Normal => b.normal.as_deref().map(Values::Vectors),
+        Aov::Position => b.position.as_deref().map(Values::Vectors),
+        Aov::Id => b.id.as_deref().map(Values::Labels),
+        Aov::Prim => b.prim.as_deref().map(Values::Labels),
+    }
+}
+
+/// The `.npy` file of `aov`: float64 or uint32, one row per pixel or ray.
+fn npy_job(values: Values<'_>, aov: Aov, layout: Layout) -> FileJob<'_> {
+    let components = if matches!(values, Values::Vectors(_)) {
+        3
+    } else {
+        1
     };
-    let (shape, data) = match (&floats, ints) {
-        (Some((data, components)), _) => (shape(layout, *components), NpyData::F64(data)),
-        (None, Some(data)) => (shape(layout, 1), NpyData::U32(data)),
-        (None, None) => return Ok(()),
-    };
-    staging.write(&name, |out| npy::write(out, &shape, data))
+    let shape = shape(layout, components);
+    FileJob::new(format!("{aov}.npy"), move |out| match values {
+        Values::Distances(v) => npy::write(out, &shape, NpyData::F64(v)),
+        Values::Vectors(v) => npy::write(out, &shape, NpyData::F64(&flatten(v))),
+        Values::Labels(v) => npy::write(out, &shape, NpyData::U32(v)),
+    })
 }
 
 /// The convention written into each EXR header.
@@ -291,67 +371,61 @@ fn exr_note(aov: Aov) -> &'static str {
     }
 }
 
-fn write_exr(
-    staging: &mut Staging,
-    b: &Buffers,
-    aov: Aov,
-    width: usize,
-    height: usize,
-) -> Result<()> {
+/// The `.exr` file of `aov`: f32 channels for distances and vectors (narrowed while
+/// encoding), UINT channels for labels.
+fn exr_job(values: Values<'_>, aov: Aov, width: usize, height: usize) -> FileJob<'_> {
     use exr::ExrChannel::{Float, Uint};
-    let narrow = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
-    let split = |v: &[DVec3], names: [&'static str; 3]| {
-        (0..3)
-            .map(|c| Float(names[c], v.iter().map(|p| p[c] as f32).collect()))
-            .collect::<Vec<_>>()
-    };
-    let channels = match aov {
-        Aov::Depth => b.depth.as_ref().map(|v| vec![Float("Z", narrow(v))]),
-        Aov::Z => b.z.as_ref().map(|v| vec![Float("Z", narrow(v))]),
-        Aov::Normal => b.normal.as_ref().map(|v| split(v, ["N.X", "N.Y", "N.Z"])),
-        Aov::Position => b.position.as_ref().map(|v| split(v, ["P.X", "P.Y", "P.Z"])),
-        Aov::Id => b.id.as_ref().map(|v| vec![Uint("id", v.clone())]),
-        Aov::Prim => b.prim.as_ref().map(|v| vec![Uint("prim", v.clone())]),
-    };
-    let Some(channels) = channels else {
-        return Ok(());
-    };
-    let note = [("raycast/convention", exr_note(aov).to_string())];
-    staging.write(&format!("{aov}.exr"), |out| {
+    FileJob::new(format!("{aov}.exr"), move |out| {
+        let channels = match values {
+            Values::Distances(v) => vec![Float("Z", v.iter().map(|&x| x as f32).collect())],
+            Values::Vectors(v) => {
+                let names = if aov == Aov::Normal {
+                    ["N.X", "N.Y", "N.Z"]
+                } else {
+                    ["P.X", "P.Y", "P.Z"]
+                };
+                (0..3)
+                    .map(|c| Float(names[c], v.iter().map(|p| p[c] as f32).collect()))
+                    .collect()
+            }
+            Values::Labels(v) => vec![Uint(if aov == Aov::Id { "id" } else { "prim" }, v.to_vec())],
+        };
+        let note = [("raycast/convention", exr_note(aov).to_string())];
         exr::write(out, width, height, channels, &note)
     })
 }
 
-fn write_png(
-    staging: &mut Staging,
-    b: &Buffers,
+/// The `.png` preview of `aov` (position has none), and for depth the range it maps.
+fn png_job(
+    values: Values<'_>,
     aov: Aov,
     width: usize,
     depth_range: Option<[f64; 2]>,
-) -> Result<Option<[f64; 2]>> {
-    let distance = |v: &Vec<f64>| {
-        let range = depth_range
-            .or_else(|| png::percentile_range(v))
-            .unwrap_or([0.0, 1.0]);
-        (png::distance_image(v, width, range), Some(range))
-    };
-    let image = match aov {
-        Aov::Depth => b.depth.as_ref().map(distance),
-        Aov::Z => b.z.as_ref().map(|v| (distance(v).0, None)),
-        Aov::Normal => b
-            .normal
-            .as_ref()
-            .map(|v| (png::normal_image(v, width), None)),
-        Aov::Position => None,
-        Aov::Id => b.id.as_ref().map(|v| (png::label_image(v, width, 0), None)),
-        Aov::Prim => b
-            .prim
-            .as_ref()
-            .map(|v| (png::label_image(v, width, u32::MAX), None)),
-    };
-    let Some((image, range)) = image else {
-        return Ok(None);
-    };
-    staging.write(&format!("{aov}.png"), |out| png::write(out, &image))?;
-    Ok(range)
+) -> (Option<FileJob<'_>>, Option<[f64; 2]>) {
+    let name = format!("{aov}.png");
+    match values {
+        Values::Distances(v) => {
+            let range = depth_range
+                .or_else(|| png::percentile_range(v))
+                .unwrap_or([0.0, 1.0]);
+            let job = FileJob::new(name, move |out| {
+                png::write(out, &png::distance_image(v, width, range))
+            });
+            (Some(job), (aov == Aov::Depth).then_some(range))
+        }
+        Values::Vectors(_) if aov == Aov::Position => (None, None),
+        Values::Vectors(v) => {
+            let job = FileJob::new(name, move |out| {
+                png::write(out, &png::normal_image(v, width))
+            });
+            (Some(job), None)
+        }
+        Values::Labels(v) => {
+            let miss = if aov == Aov::Id { 0 } else { u32::MAX };
+            let job = FileJob::new(name, move |out| {
+                png::write(out, &png::label_image(v, width, miss))
+            });
+            (Some(job), None)
+        }
+    }
 }
