@@ -1,10 +1,12 @@
-"""Benchmark raycast's octree against its obvhs backends, Embree (embreex) and trimesh.
+"""Benchmark raycast's octree against its obvhs backends, Embree (embreex), Open3D and trimesh.
 
     .venv/bin/python -m raycast_tools bench [--quick] [--big] [--out reports/bench.md]
 
 Builds the Rust benchmark binary (benches/trace.rs), generates the scenes and ray sets in a
 temporary folder, runs every method on the same rays (one process per scene and side), and
-writes reports/bench.md plus the raw figures as reports/bench.json.
+writes reports/bench.md plus the raw figures as reports/bench.json. Open3D's RaycastingScene is
+an optional peer: install `open3d-cpu` (pip; it needs Debian's libusb-1.0-0) to include it, else
+it is skipped with a message.
 """
 
 import argparse
@@ -212,7 +214,8 @@ def peer_worker(spec):
             "rss_base_mib": base,
         }
     )
-    scene = None  # releases Embree's scene before trimesh builds its own
+    scene = None  # releases Embree's scene before the next peer builds its own
+    out["methods"].append(open3d_method(tris, sets, spec))
 
     mesh = trimesh.Trimesh(
         vertices=tris.reshape(-1, 3).astype(np.float64),
@@ -289,6 +292,49 @@ def peer_worker(spec):
             }
         )
     print(json.dumps(out))
+
+
+OPEN3D_MISSING = "open3d not installed (pip install open3d-cpu; it needs Debian's libusb-1.0-0)"
+
+
+def open3d_method(tris, sets, spec):
+    """Open3D's RaycastingScene on the same rays: build (at the first cast) and traces."""
+    try:
+        import open3d as o3d
+    except ImportError:
+        return {"backend": "open3d", "skipped": OPEN3D_MISSING}
+    vertices = o3d.core.Tensor(tris.reshape(-1, 3).astype(np.float32))
+    faces = o3d.core.Tensor(np.arange(len(tris) * 3, dtype=np.uint32).reshape(-1, 3))
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(vertices, faces)
+    probe = o3d.core.Tensor(sets[next(iter(sets))][:1].astype(np.float32))
+    t = time.perf_counter()
+    scene.cast_rays(probe)  # the scene is committed here
+    build = time.perf_counter() - t
+    traces = []
+    for name, rays in sets.items():
+        tensor = o3d.core.Tensor(np.ascontiguousarray(rays, dtype=np.float32))
+        hits = float(np.isfinite(scene.cast_rays(tensor)["t_hit"].numpy()).mean())
+        for threads in spec["threads"]:
+            m, times = median_time(lambda: scene.cast_rays(tensor, nthreads=threads), spec["runs"])
+            traces.append(
+                {
+                    "rays": name,
+                    "count": len(rays),
+                    "threads": threads,
+                    "median_s": m,
+                    "runs_s": times,
+                    "mrays_per_s": len(rays) / m / 1e6,
+                    "hit_ratio": hits,
+                }
+            )
+    return {
+        "backend": "open3d",
+        "version": o3d.__version__,
+        "build_s": build,
+        "traces": traces,
+        "peak_rss_mib": peak_mib(),
+    }
 
 
 # ----------------------------------------------------------------------------- driver
@@ -474,6 +520,7 @@ NAMES = {
     "bvh": "raycast + obvhs BVH2",
     "cwbvh": "raycast + obvhs CWBVH",
     "embreex": "Embree 4 (embreex)",
+    "open3d": "Open3D RaycastingScene",
     "trimesh-embree": "trimesh + embree",
     "trimesh-f64": "trimesh ray_triangle (f64)",
 }
@@ -495,7 +542,7 @@ def methods_of(entry):
         )
     if entry["peers"]:
         for m in entry["peers"].get("methods", []):
-            if "error" in m:
+            if "error" in m or "skipped" in m:
                 continue
             out.append(
                 {
@@ -521,6 +568,17 @@ def fmt(x, spec=".2f"):
     return "–" if x is None or (isinstance(x, float) and not np.isfinite(x)) else format(x, spec)
 
 
+def skipped_peers(r):
+    """One report line per optional peer that was not run, with the reason."""
+    reasons = {
+        m["skipped"]
+        for e in r["scenes"]
+        for m in (e["peers"] or {}).get("methods", [])
+        if "skipped" in m
+    }
+    return [line for reason in sorted(reasons) for line in (f"Not run: {reason}.", "")]
+
+
 def report(r):
     m = r["machine"]
     lines = [
@@ -536,6 +594,7 @@ def report(r):
         "differed by up to 30% in single ratios.",
         "",
         *([f"Skipped: {', '.join(r['missing'])}.", ""] if r.get("missing") else []),
+        *skipped_peers(r),
         "Method: one process per scene for the Rust backends (benches/trace.rs) and one for the "
         "Python peers, on the same float32 rays (`coherent` = pinhole camera, one ray per pixel; "
         "`incoherent` = origins uniform in the scene box, directions uniform). Warm-up run, then "
@@ -544,10 +603,13 @@ def report(r):
         "(f64 exact primitive tests in every raycast backend). Embree: one `run()` call for all "
         "rays (two Python threads over halves for 2 threads); its build is the `rtcCommitScene` "
         "of the first call and always uses all cores (embreex exposes no thread setting). "
+        "Open3D (optional): `RaycastingScene.cast_rays` with `nthreads`; its build is the first "
+        "cast. "
         "trimesh's f64 path runs on a ray subset and is scaled per ray. Bytes/prim: the "
         "acceleration structure only (octree nodes + references; obvhs nodes + indices), not "
-        "the primitives. Peak: the process's VmHWM (Rust: reset per backend; Python: one process "
-        "for all peers, so trimesh rows include Embree's peak), scene and rays included. "
+        "the primitives. Peak: the process's VmHWM (Rust: reset per backend; Python: one "
+        "process for all peers, so Open3D and trimesh rows include Embree's peak), scene and "
+        "rays included. "
         "Two-thread figures are only as good as the machine is idle: other jobs share its "
         "2 cores.",
         "",
