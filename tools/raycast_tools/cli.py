@@ -17,6 +17,10 @@ COMMANDS = {
     "validate": ("validate", "compare raycast with trimesh and the quadric reference, ray by ray"),
     "validate-usd": ("validate_usd", "compare raycast's USD import with usd-core + trimesh"),
     "bench": ("bench", "octree vs obvhs vs Embree vs trimesh (reports/bench.md)"),
+    "end-to-end": (
+        "end_to_end",
+        "1024² depth render from the file: raycast vs Open3D vs trimesh+Embree",
+    ),
     "error-vs-time": ("error_vs_time", "depth error against run time (reports/error_vs_time.md)"),
     "fixtures": ("make_fixtures", "write the glTF/OBJ fixtures under fixtures/"),
     "quadric-fixtures": ("make_quadric_fixtures", "write the RAYCAST_quadric fixtures"),

@@ -110,18 +110,28 @@ def quadric_rays(quadrics, n, seed=0, frac_aimed=1.0):
     return origins, d
 
 
-def pinhole_rays(lo, hi, side):
-    """A pinhole camera framing the box [lo, hi] from a diagonal, one ray per pixel centre of
-    a side x side image: float32 rows origin|unit direction (the bench's coherent rays)."""
+FOV_DEGREES = 40.0
+
+
+def framing(lo, hi):
+    """Eye and target of the bench's diagonal view that frames the box [lo, hi] with a
+    FOV_DEGREES vertical field of view."""
     centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo) / 2
-    fov = np.radians(40.0)
     forward = -np.array([0.45, 0.35, 0.82])
     forward /= np.linalg.norm(forward)
-    eye = centre - forward * radius / np.sin(fov / 2)
+    return centre - forward * radius / np.sin(np.radians(FOV_DEGREES) / 2), centre
+
+
+def look_at_rays(eye, target, fov_degrees, side):
+    """A pinhole camera at eye looking at target (+Y up, vertical field of view in degrees),
+    one ray per pixel centre of a side x side image, row 0 at the top (raycast's camera
+    convention): float32 rows origin|unit direction."""
+    forward = np.asarray(target, dtype=np.float64) - eye
+    forward /= np.linalg.norm(forward)
     right = np.cross(forward, [0.0, 1.0, 0.0])
     right /= np.linalg.norm(right)
     up = np.cross(right, forward)
-    s = np.tan(fov / 2)
+    s = np.tan(np.radians(fov_degrees) / 2)
     px = (np.arange(side) + 0.5) / side * 2 - 1
     xs, ys = np.meshgrid(px * s, -px * s)
     dirs = forward + xs[..., None] * right + ys[..., None] * up
@@ -129,6 +139,12 @@ def pinhole_rays(lo, hi, side):
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     origins = np.broadcast_to(eye, dirs.shape)
     return np.hstack([origins, dirs]).astype(np.float32)
+
+
+def pinhole_rays(lo, hi, side):
+    """The bench's coherent rays: look_at_rays from framing(lo, hi)."""
+    eye, target = framing(lo, hi)
+    return look_at_rays(eye, target, FOV_DEGREES, side)
 
 
 def random_rays(lo, hi, count, rng):
