@@ -215,10 +215,13 @@ impl Octree {
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut prepared = None;
+        let mut tested = Mailbox::default();
         self.traverse(local_origin, dir, t_max, |refs, _, _| {
             let ray = prepared.get_or_insert_with(|| prepare_ray(set, local_origin, dir));
             for &prim in refs {
-                test_primitive(set, prim, ray, t_max, &mut best);
+                if tested.check_in(prim) {
+                    test_primitive(set, prim, ray, t_max, &mut best);
+                }
             }
             best.map_or(t_max, |b| b.t)
         });
@@ -250,6 +253,40 @@ impl Octree {
             visit,
             &mut Unobserved,
         );
+    }
+}
+
+/// The primitives a ray tested last, so that one referenced by several leaves along the ray
+/// is tested once. Skipping a repeat cannot change the answer: its test gives the same result,
+/// already folded into the best hit (kept even beyond the leaf that found it).
+#[derive(Debug, Clone, Copy)]
+struct Mailbox {
+    slots: [u32; MAILBOX],
+    next: usize,
+}
+
+/// Primitives a [`Mailbox`] remembers.
+const MAILBOX: usize = 16;
+
+impl Default for Mailbox {
+    fn default() -> Mailbox {
+        Mailbox {
+            slots: [u32::MAX; MAILBOX],
+            next: 0,
+        }
+    }
+}
+
+impl Mailbox {
+    /// Whether `prim` is new to the ray (then it is remembered).
+    #[inline(always)]
+    fn check_in(&mut self, prim: u32) -> bool {
+        if self.slots.contains(&prim) {
+            return false;
+        }
+        self.slots[self.next % MAILBOX] = prim;
+        self.next += 1;
+        true
     }
 }
 
