@@ -156,6 +156,19 @@ def median_time(fn, runs):
     return float(np.median(times)), times
 
 
+def trace_record(rays, count, threads, median_s, runs_s, hit_ratio):
+    """One peer's figures for one ray set and thread count."""
+    return {
+        "rays": rays,
+        "count": count,
+        "threads": threads,
+        "median_s": median_s,
+        "runs_s": runs_s,
+        "mrays_per_s": count / median_s / 1e6,
+        "hit_ratio": hit_ratio,
+    }
+
+
 def peer_worker(spec):
     """Runs in its own process: Embree through embreex and trimesh on one scene."""
     import embreex.mesh_construction as mc
@@ -194,17 +207,7 @@ def peer_worker(spec):
                     w.join()
 
             m, times = median_time(run_all, spec["runs"])
-            traces.append(
-                {
-                    "rays": name,
-                    "count": len(rays),
-                    "threads": threads,
-                    "median_s": m,
-                    "runs_s": times,
-                    "mrays_per_s": len(rays) / m / 1e6,
-                    "hit_ratio": hits,
-                }
-            )
+            traces.append(trace_record(name, len(rays), threads, m, times, hits))
     out["methods"].append(
         {
             "backend": "embreex",
@@ -317,17 +320,7 @@ def open3d_method(tris, sets, spec):
         hits = float(np.isfinite(scene.cast_rays(tensor)["t_hit"].numpy()).mean())
         for threads in spec["threads"]:
             m, times = median_time(lambda: scene.cast_rays(tensor, nthreads=threads), spec["runs"])
-            traces.append(
-                {
-                    "rays": name,
-                    "count": len(rays),
-                    "threads": threads,
-                    "median_s": m,
-                    "runs_s": times,
-                    "mrays_per_s": len(rays) / m / 1e6,
-                    "hit_ratio": hits,
-                }
-            )
+            traces.append(trace_record(name, len(rays), threads, m, times, hits))
     return {
         "backend": "open3d",
         "version": o3d.__version__,
