@@ -12,12 +12,12 @@
 //! importer allocates them, external files resolve only inside the asset's folder unless
 //! [`CheckOptions::allow_outside`], and nothing is fetched from the network.
 
-pub mod cli;
 pub mod geometry;
 pub mod gltf;
 pub mod golden;
 pub mod obj;
 pub mod report;
+pub mod run;
 pub mod usd;
 
 use crate::import;
