@@ -36,7 +36,7 @@ enum Command {
     /// Print what the importer finds in a scene.
     Info(InfoArgs),
     /// Validate assets for CI (exit 0: no errors, 1: errors, 2: usage or I/O problem).
-    Check(cli::check::CheckArgs),
+    Check(Box<cli::check::CheckArgs>),
 }
 
 #[derive(Args)]

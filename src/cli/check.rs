@@ -14,18 +14,51 @@ use std::process::ExitCode;
 #[derive(Args, Debug, Clone)]
 pub struct CheckArgs {
     /// Asset files, or folders searched recursively for .gltf, .glb, .obj, .usd, .usda,
-    /// .usdc and .usdz files.
+    /// .usdc and .usdz files (with --merge: the shard files).
     #[arg(required = true)]
     pub paths: Vec<PathBuf>,
-    /// Print one JSON object per asset (JSON Lines) instead of the text report.
+    /// Print one JSON object per asset (JSON Lines) instead of the text report; with --shard,
+    /// a shard header line comes first (the input of --merge).
     #[arg(long)]
     pub json: bool,
     /// Also write a JUnit XML report (one testcase per asset) to this file.
     #[arg(long, value_name = "FILE")]
     pub junit: Option<PathBuf>,
-    /// Print GitHub workflow annotations (::error file=...::message).
+    /// Also write a Markdown summary (counts by status and code, worst and slowest assets) to
+    /// this file, e.g. for $GITHUB_STEP_SUMMARY.
+    #[arg(long, value_name = "FILE")]
+    pub summary: Option<PathBuf>,
+    /// Also write one report per asset in the Khronos glTF-Validator's JSON schema into this
+    /// folder (<relative path>.report.json).
+    #[arg(long, value_name = "DIR")]
+    pub validator_json: Option<PathBuf>,
+    /// Print GitHub workflow annotations (::error file=...::message), at most 10 of each type
+    /// (GitHub's cap per step), then a notice pointing to the summary.
     #[arg(long)]
     pub github: bool,
+    /// Warnings fail the run too (exit 1), like usdchecker -t.
+    #[arg(long)]
+    pub strict: bool,
+    /// Check only the K-th of N parts of the assets found (1-based; sorted relative paths
+    /// dealt round-robin), for N parallel CI jobs. Use with --json to merge them later.
+    #[arg(long, value_name = "K/N", conflicts_with = "merge")]
+    pub shard: Option<String>,
+    /// Merge the --shard K/N --json outputs named as PATHs into the report of the whole run
+    /// (findings, order and exit code as if unsharded).
+    #[arg(long, conflicts_with_all = ["exclude", "root_layers_only", "max_findings", "golden", "expect_size", "no_geometry", "root", "allow_outside"])]
+    pub merge: bool,
+    /// Leave out assets whose path relative to the folder named matches GLOB (a GLOB without
+    /// '/' matches any file or folder name on the way); repeatable.
+    #[arg(long, value_name = "GLOB")]
+    pub exclude: Vec<String>,
+    /// USD: leave out layers that another checked layer brings in as a sublayer, reference or
+    /// payload (a kit's components and materials), checking only the root layers.
+    #[arg(long)]
+    pub root_layers_only: bool,
+    /// List at most N findings per asset, the most severe first (the counts still include
+    /// every finding).
+    #[arg(long, value_name = "N")]
+    pub max_findings: Option<String>,
     /// Assets checked at once (default: all cores).
     #[arg(long, value_name = "N")]
     pub jobs: Option<usize>,
@@ -94,10 +127,32 @@ impl CheckArgs {
                 std::env::current_exe().ok()
             },
         };
+        let shard = self
+            .shard
+            .as_deref()
+            .map(|text| text.parse().map_err(|e| format!("--shard {e}")))
+            .transpose()?;
+        let max_findings = self
+            .max_findings
+            .as_deref()
+            .map(|text| {
+                text.trim()
+                    .parse::<usize>()
+                    .map_err(|_| format!("--max-findings '{text}': expected a whole number"))
+            })
+            .transpose()?;
         Ok(RunOptions {
             paths: self.paths.clone(),
+            merge: self.merge,
+            shard,
+            exclude: self.exclude.clone(),
+            root_layers_only: self.root_layers_only,
+            strict: self.strict,
+            max_findings,
             json: self.json,
             junit: self.junit.clone(),
+            summary: self.summary.clone(),
+            validator_json: self.validator_json.clone(),
             github: self.github,
             jobs: self.jobs.unwrap_or(0),
             root: self.isolated_root.clone().or_else(|| self.root.clone()),
