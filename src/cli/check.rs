@@ -41,7 +41,12 @@ pub struct CheckArgs {
     pub strict: bool,
     /// Check only the K-th of N parts of the assets found (1-based; sorted relative paths
     /// dealt round-robin), for N parallel CI jobs. Use with --json to merge them later.
-    #[arg(long, value_name = "K/N", conflicts_with = "merge")]
+    #[arg(
+        long,
+        value_name = "K/N",
+        conflicts_with = "merge",
+        allow_hyphen_values = true
+    )]
     pub shard: Option<String>,
     /// Merge the --shard K/N --json outputs named as PATHs into the report of the whole run
     /// (findings, order and exit code as if unsharded).
@@ -57,7 +62,7 @@ pub struct CheckArgs {
     pub root_layers_only: bool,
     /// List at most N findings per asset, the most severe first (the counts still include
     /// every finding).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub max_findings: Option<String>,
     /// Assets checked at once (default: all cores).
     #[arg(long, value_name = "N")]
