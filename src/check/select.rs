@@ -155,6 +155,9 @@ mod tests {
         assert!(ex.excludes("kit/a/x.obj"));
         assert!(!ex.excludes("kit/a/b/x.obj"));
         assert!(!ex.excludes("car/material.usda"));
+        let deep = Excludes::new(&["kit/**/x.obj".into()]).unwrap();
+        assert!(deep.excludes("kit/a/b/x.obj") && deep.excludes("kit/x.obj"));
+        assert!(!deep.excludes("other/kit/x.obj"));
         assert!(Excludes::new(&["[".into()]).is_err());
     }
 }
