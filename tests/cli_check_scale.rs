@@ -175,6 +175,18 @@ fn shards_that_do_not_fit_are_refused_naming_the_file() {
     let result = merge(&[s1, &foreign, s3]);
     assert_eq!(result.status.code(), Some(2), "{}", text(&result.stderr));
 
+    // The merged report may not replace one of the shards it reads.
+    let result = raycast(&[
+        "check",
+        "--merge",
+        arg(s1),
+        arg(s2),
+        arg(s3),
+        "--junit",
+        arg(s1),
+    ]);
+    usage_error(&result, &[&name(s1), "refusing to overwrite"]);
+
     let missing = out.join("nope.jsonl");
     usage_error(&merge(&[&missing]), &["nope.jsonl", "cannot read"]);
 }

@@ -75,49 +75,61 @@ impl RunOptions {
     }
 }
 
+/// What a run found: the reports and how to judge and time them.
+struct Outcome {
+    reports: Vec<AssetReport>,
+    /// The shard's header, for a `--shard` run.
+    header: Option<ShardHeader>,
+    /// Warnings fail (`--strict`, or shards run with it).
+    strict: bool,
+    /// The run's seconds (a merge: its shards' added up).
+    seconds: f64,
+}
+
 /// Runs `raycast check`, calling `progress(done, total)` after each asset. Returns whether
 /// the run passed (no asset has an error, nor a warning when strict); an `Err` is a usage or
 /// I/O problem (a path that does not exist, shards that do not fit, a report that cannot be
 /// written).
 pub fn run(options: &RunOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<bool> {
-    let started = Instant::now();
-    let (reports, header, strict) = if options.merge {
-        let merged = merge::merge(&options.paths)?;
-        let strict = options.strict || merged.settings["strict"] == true;
-        (merged.reports, None, (strict, merged.seconds))
+    let outcome = if options.merge {
+        merged(options)?
     } else {
-        let (reports, header) = check(options, progress, started)?;
-        (reports, header, (options.strict, 0.0))
+        checked(options, progress)?
     };
-    let (strict, merged_seconds) = strict;
-    let seconds = if options.merge {
-        merged_seconds
-    } else {
-        started.elapsed().as_secs_f64()
-    };
-    print(options, &reports, header.as_ref(), strict)?;
-    write_files(options, &reports, strict, seconds)?;
+    print(options, &outcome)?;
+    write_files(options, &outcome)?;
     if !options.quiet {
-        eprintln!("raycast check: {}", report::summary(&reports, seconds));
+        eprintln!(
+            "raycast check: {}",
+            report::summary(&outcome.reports, outcome.seconds)
+        );
     }
-    Ok(!reports.iter().any(|r| r.fails(strict)))
+    Ok(!outcome.reports.iter().any(|r| r.fails(outcome.strict)))
+}
+
+/// The shards named by `options.paths`, merged.
+fn merged(options: &RunOptions) -> Result<Outcome> {
+    refuse_overwriting_inputs(options, &options.paths)?;
+    let merged = merge::merge(&options.paths)?;
+    Ok(Outcome {
+        strict: options.strict || merged.settings["strict"] == true,
+        reports: merged.reports,
+        header: None,
+        seconds: merged.seconds,
+    })
 }
 
 /// Finds, selects and checks the assets; with `--shard`, also the shard's header.
-fn check(
-    options: &RunOptions,
-    progress: &(dyn Fn(usize, usize) + Sync),
-    started: Instant,
-) -> Result<(Vec<AssetReport>, Option<ShardHeader>)> {
+fn checked(options: &RunOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<Outcome> {
+    let started = Instant::now();
     let mut assets = discover(&options.paths).map_err(Error::usage)?;
     if let Some(root) = &options.root {
         for asset in &mut assets {
             asset.root = root.clone();
         }
     }
-    for out in [&options.junit, &options.summary].into_iter().flatten() {
-        refuse_overwriting_input(out, &assets)?;
-    }
+    let inputs: Vec<PathBuf> = assets.iter().map(|a| a.path.clone()).collect();
+    refuse_overwriting_inputs(options, &inputs)?;
     let mut assets = select::exclude(assets, &Excludes::new(&options.exclude)?)?;
     if options.root_layers_only {
         assets = layers::root_layers(assets, options.check.max_bytes);
@@ -138,33 +150,35 @@ fn check(
             report.limit_findings(max);
         }
     }
+    let seconds = started.elapsed().as_secs_f64();
     let header = options.shard.map(|shard| ShardHeader {
         index: shard.index,
         count: shard.count,
         assets: reports.len(),
         total,
-        seconds: started.elapsed().as_secs_f64(),
+        seconds,
         settings: options.settings(),
     });
-    Ok((reports, header))
+    Ok(Outcome {
+        reports,
+        header,
+        strict: options.strict,
+        seconds,
+    })
 }
 
 /// Prints the report on stdout (and the annotations, on stderr beside JSON).
-fn print(
-    options: &RunOptions,
-    reports: &[AssetReport],
-    header: Option<&ShardHeader>,
-    strict: bool,
-) -> Result<()> {
+fn print(options: &RunOptions, outcome: &Outcome) -> Result<()> {
+    let reports = &outcome.reports;
     let mut text = String::new();
     if options.json {
-        if let Some(header) = header {
+        if let Some(header) = &outcome.header {
             text.push_str(&header.line());
         }
         text.push_str(&report::json_lines(reports));
     } else if !options.quiet {
         text.push_str(&report::human(reports, options.verbose));
-        if strict && reports.iter().any(|r| r.warnings > 0) {
+        if outcome.strict && reports.iter().any(|r| r.warnings > 0) {
             text.push_str("(--strict: warnings fail this run)\n");
         }
     }
@@ -191,12 +205,14 @@ fn print(
 
 /// Writes the report files: each under a temporary name first (removed on Ctrl-C or
 /// failure), all renamed into place at the end.
-fn write_files(
-    options: &RunOptions,
-    reports: &[AssetReport],
-    strict: bool,
-    seconds: f64,
-) -> Result<()> {
+fn write_files(options: &RunOptions, outcome: &Outcome) -> Result<()> {
+    let Outcome {
+        reports,
+        strict,
+        seconds,
+        ..
+    } = outcome;
+    let (strict, seconds) = (*strict, *seconds);
     let mut files = Files::default();
     if let Some(junit) = &options.junit {
         files.add(junit, report::junit(reports, seconds, strict).as_bytes())?;
@@ -264,22 +280,25 @@ impl Files {
     }
 }
 
-/// Refuses a report path that is one of the assets being checked.
-fn refuse_overwriting_input(out: &Path, assets: &[super::Asset]) -> Result<()> {
-    if out.is_dir() {
-        return Err(Error::usage(format!("{} is a folder", out.display())));
-    }
-    let Ok(target) = out.canonicalize() else {
-        return Ok(());
-    };
-    if assets
-        .iter()
-        .any(|a| a.path.canonicalize().is_ok_and(|a| a == target))
-    {
-        return Err(Error::usage(format!(
-            "{} is one of the assets being checked: refusing to overwrite it",
-            out.display()
-        )));
+/// Refuses a `--junit` or `--summary` path that is a folder or one of the run's inputs (an
+/// asset, or a shard file of a merge).
+fn refuse_overwriting_inputs(options: &RunOptions, inputs: &[PathBuf]) -> Result<()> {
+    for out in [&options.junit, &options.summary].into_iter().flatten() {
+        if out.is_dir() {
+            return Err(Error::usage(format!("{} is a folder", out.display())));
+        }
+        let Ok(target) = out.canonicalize() else {
+            continue;
+        };
+        if inputs
+            .iter()
+            .any(|a| a.canonicalize().is_ok_and(|a| a == target))
+        {
+            return Err(Error::usage(format!(
+                "{} is one of the inputs of this run: refusing to overwrite it",
+                out.display()
+            )));
+        }
     }
     Ok(())
 }
