@@ -35,7 +35,8 @@ struct Cli {
 enum Command {
     /// Print what the importer finds in a scene.
     Info(InfoArgs),
-    /// Validate assets for CI (exit 0: no errors, 1: errors, 2: usage or I/O problem).
+    /// Validate assets for CI (exit 0: no errors, 1: errors, or warnings with --strict, 2: usage
+    /// or I/O problem).
     Check(Box<cli::check::CheckArgs>),
 }
 
