@@ -267,9 +267,12 @@ impl Files {
                 e.insert(Staging::among_others(&dir).map_err(Error::as_usage)?)
             }
         };
-        let temp = staging.file(&name);
-        std::fs::write(&temp, bytes)
-            .map_err(|e| Error::in_file(path, format!("cannot write: {e}")).as_usage())
+        staging
+            .write(&name, |out| {
+                out.write_all(bytes)
+                    .map_err(|e| format!("cannot write: {e}"))
+            })
+            .map_err(Error::as_usage)
     }
 
     fn commit(self) -> Result<()> {
