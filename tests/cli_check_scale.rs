@@ -109,6 +109,32 @@ fn shards_cover_everything_once_and_merge_to_the_unsharded_run() {
         assert_eq!(merged.status.code(), Some(1), "{}", text(&merged.stderr));
         assert_eq!(untimed(lines(&merged.stdout)), untimed(full.clone()));
     }
+    // Validator-format reports from a merge are those of the unsharded run, file for file.
+    let (a, b) = (dir.with_extension("va"), dir.with_extension("vb"));
+    raycast(&["check", arg(&dir), "-q", "--validator-json", arg(&a)]);
+    let out = dir.with_extension("outv");
+    let files: Vec<PathBuf> = (1..=3).map(|k| shard(&dir, &out, k, 3, &[])).collect();
+    let mut args = vec!["check", "--merge", "-q", "--validator-json", arg(&b)];
+    args.extend(files.iter().map(|f| arg(f)));
+    raycast(&args);
+    let listing = |root: &Path| {
+        let found = std::process::Command::new("find")
+            .args([arg(root), "-type", "f"])
+            .output()
+            .unwrap();
+        let mut names: Vec<String> = text(&found.stdout)
+            .lines()
+            .map(|l| l.strip_prefix(arg(root)).unwrap().to_string())
+            .collect();
+        names.sort();
+        names
+    };
+    assert_eq!(listing(&a).len(), 8);
+    assert_eq!(listing(&a), listing(&b));
+    for name in listing(&a) {
+        let read = |root: &Path| std::fs::read(format!("{}{name}", arg(root))).unwrap();
+        assert_eq!(read(&a), read(&b), "{name}");
+    }
 }
 
 #[test]
