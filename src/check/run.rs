@@ -206,13 +206,7 @@ fn print(options: &RunOptions, outcome: &Outcome) -> Result<()> {
 /// Writes the report files: each under a temporary name first (removed on Ctrl-C or
 /// failure), all renamed into place at the end.
 fn write_files(options: &RunOptions, outcome: &Outcome) -> Result<()> {
-    let Outcome {
-        reports,
-        strict,
-        seconds,
-        ..
-    } = outcome;
-    let (strict, seconds) = (*strict, *seconds);
+    let (reports, strict, seconds) = (&outcome.reports, outcome.strict, outcome.seconds);
     let mut files = Files::default();
     if let Some(junit) = &options.junit {
         files.add(junit, report::junit(reports, seconds, strict).as_bytes())?;
