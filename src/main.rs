@@ -1,5 +1,7 @@
 //! The `raycast` command line: a thin layer over the library.
 
+mod cli;
+
 use clap::{Args, Parser, Subcommand};
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -33,8 +35,9 @@ struct Cli {
 enum Command {
     /// Print what the importer finds in a scene.
     Info(InfoArgs),
-    /// Validate assets for CI (exit 0: no errors, 1: errors, 2: usage or I/O problem).
-    Check(raycast::check::cli::CheckArgs),
+    /// Validate assets for CI (exit 0: no errors, 1: errors, or warnings with --strict, 2: usage
+    /// or I/O problem).
+    Check(Box<cli::check::CheckArgs>),
 }
 
 #[derive(Args)]
@@ -224,7 +227,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Info(args)) => info(args),
-        Some(Command::Check(args)) => return raycast::check::cli::run(&args),
+        Some(Command::Check(args)) => return cli::check::run(&args),
         None => render(cli.render),
     };
     match result {

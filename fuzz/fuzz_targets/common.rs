@@ -43,7 +43,7 @@ pub fn run_with(data: &[u8], name: &str, upstream_ok: bool) {
         max_bytes: 64 << 20,
         ..CheckOptions::default()
     };
-    let report = check_asset(&Asset { path, root: dir }, &options);
+    let report = check_asset(&Asset::found_in(path, &dir), &options);
     for finding in &report.findings {
         // Panics are caught per asset (and the USD importer turns openusd panics into
         // errors): both are still bugs for the fuzzer.

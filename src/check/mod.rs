@@ -12,13 +12,18 @@
 //! importer allocates them, external files resolve only inside the asset's folder unless
 //! [`CheckOptions::allow_outside`], and nothing is fetched from the network.
 
-pub mod cli;
 pub mod geometry;
 pub mod gltf;
 pub mod golden;
+pub mod layers;
+pub mod merge;
 pub mod obj;
 pub mod report;
+pub mod run;
+pub mod select;
+pub mod summary;
 pub mod usd;
+pub mod validator;
 
 use crate::import;
 pub use crate::import::paths::resolve_inside;
@@ -194,15 +199,41 @@ pub struct SceneStats {
     pub size: f64,
 }
 
+/// An asset's verdict: the worst severity among its findings (infos do not count).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Status {
+    /// No errors or warnings.
+    Ok,
+    /// Warnings but no errors.
+    Warning,
+    /// At least one error.
+    Error,
+}
+
+impl Status {
+    /// Lower-case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::Warning => "warning",
+            Status::Error => "error",
+        }
+    }
+}
+
 /// The verdict on one asset.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AssetReport {
     /// The asset's path as found.
     pub path: String,
+    /// The asset's path relative to the folder named on the command line (the file name for
+    /// a file named directly), with `/` separators: the key assets are sorted and sharded by.
+    pub relpath: String,
     /// `gltf`, `glb`, `obj` or `usd`.
     pub format: String,
     /// `ok`, `warning` or `error`: the worst severity among the findings (infos are `ok`).
-    pub status: &'static str,
+    pub status: Status,
     /// Number of errors.
     pub errors: usize,
     /// Number of warnings.
@@ -212,14 +243,21 @@ pub struct AssetReport {
     /// Seconds spent on the asset.
     pub seconds: f64,
     /// Figures of the loaded scene, when it loaded.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scene: Option<SceneStats>,
-    /// Everything found.
+    /// Everything found (the most severe `--max-findings` of it, when that is given).
     pub findings: Vec<Finding>,
+    /// Findings left out of `findings` by `--max-findings` (still counted above).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub omitted: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 impl AssetReport {
-    fn new(path: &Path, findings: Vec<Finding>, scene: Option<SceneStats>, seconds: f64) -> Self {
+    fn new(asset: &Asset, findings: Vec<Finding>, scene: Option<SceneStats>, seconds: f64) -> Self {
         let count = |s: Severity| findings.iter().filter(|f| f.severity == s).count();
         let (errors, warnings, infos) = (
             count(Severity::Error),
@@ -227,14 +265,15 @@ impl AssetReport {
             count(Severity::Info),
         );
         AssetReport {
-            path: path.display().to_string(),
-            format: format_of(path).unwrap_or("unknown").to_string(),
+            path: asset.path.display().to_string(),
+            relpath: asset.relpath.clone(),
+            format: format_of(&asset.path).unwrap_or("unknown").to_string(),
             status: if errors > 0 {
-                "error"
+                Status::Error
             } else if warnings > 0 {
-                "warning"
+                Status::Warning
             } else {
-                "ok"
+                Status::Ok
             },
             errors,
             warnings,
@@ -242,6 +281,7 @@ impl AssetReport {
             seconds,
             scene,
             findings,
+            omitted: 0,
         }
     }
 
@@ -249,6 +289,41 @@ impl AssetReport {
     pub fn has_errors(&self) -> bool {
         self.errors > 0
     }
+
+    /// True when the asset fails the run: it has an error, or (`strict`) a warning.
+    pub fn fails(&self, strict: bool) -> bool {
+        self.errors > 0 || (strict && self.warnings > 0)
+    }
+
+    /// Keeps the `max` most severe findings (errors first; the order among those kept is
+    /// unchanged) and counts the rest in [`AssetReport::omitted`]; the counts and the status
+    /// still describe every finding.
+    pub fn limit_findings(&mut self, max: usize) {
+        if self.findings.len() <= max {
+            return;
+        }
+        let mut order: Vec<usize> = (0..self.findings.len()).collect();
+        order.sort_by_key(|&i| (self.findings[i].severity, i));
+        let mut keep = vec![false; self.findings.len()];
+        for &i in &order[..max] {
+            keep[i] = true;
+        }
+        let mut index = 0;
+        self.findings.retain(|_| {
+            index += 1;
+            keep[index - 1]
+        });
+        self.omitted += order.len() - max;
+    }
+}
+
+/// The order assets are reported and sharded in: by [`AssetReport::relpath`], compared folder
+/// by folder (so `a/b` comes before `a-c`), then by the path as found.
+pub fn report_order(a: (&str, &str), b: (&str, &str)) -> std::cmp::Ordering {
+    let parts = |s: &str| s.split('/').map(str::to_string).collect::<Vec<_>>();
+    parts(a.0)
+        .cmp(&parts(b.0))
+        .then_with(|| Path::new(a.1).cmp(Path::new(b.1)))
 }
 
 /// The format of a file by its extension, if `check` handles it.
@@ -271,6 +346,9 @@ pub struct Asset {
     /// The folder named on the command line that it was found in, or the file's own folder
     /// when the file was named directly.
     pub root: PathBuf,
+    /// The path relative to the folder it was found in (the file name for a file named
+    /// directly), `/`-separated; see [`AssetReport::relpath`].
+    pub relpath: String,
 }
 
 impl Asset {
@@ -278,7 +356,30 @@ impl Asset {
     pub fn file(path: impl Into<PathBuf>) -> Asset {
         let path = path.into();
         let root = parent_of(&path);
-        Asset { path, root }
+        let relpath = path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        Asset {
+            path,
+            root,
+            relpath,
+        }
+    }
+
+    /// An asset found below the folder `root` named on the command line.
+    pub fn found_in(path: PathBuf, root: &Path) -> Asset {
+        let relpath = path
+            .strip_prefix(root)
+            .unwrap_or(&path)
+            .components()
+            .map(|c| c.as_os_str().to_string_lossy())
+            .collect::<Vec<_>>()
+            .join("/");
+        Asset {
+            path,
+            root: root.to_path_buf(),
+            relpath,
+        }
     }
 }
 
@@ -290,7 +391,8 @@ fn parent_of(path: &Path) -> PathBuf {
 }
 
 /// The assets named by `paths`: files as given (whatever their extension), folders searched
-/// recursively (symbolic links not followed) for the extensions `check` handles, sorted.
+/// recursively (symbolic links not followed) for the extensions `check` handles, in
+/// [`report_order`].
 /// A path that does not exist is an error (exit code 2).
 pub fn discover(paths: &[PathBuf]) -> Result<Vec<Asset>, String> {
     let mut found = Vec::new();
@@ -321,17 +423,19 @@ pub fn discover(paths: &[PathBuf]) -> Result<Vec<Asset>, String> {
                     path.display()
                 ));
             }
-            in_dir.sort();
-            found.extend(in_dir.into_iter().map(|p| Asset {
-                path: p,
-                root: path.clone(),
-            }));
+            found.extend(in_dir.into_iter().map(|p| Asset::found_in(p, path)));
         } else {
             found.push(Asset::file(path.clone()));
         }
     }
     let mut seen = std::collections::HashSet::new();
     found.retain(|a| seen.insert(a.path.clone()));
+    found.sort_by(|a, b| {
+        report_order(
+            (&a.relpath, &a.path.to_string_lossy()),
+            (&b.relpath, &b.path.to_string_lossy()),
+        )
+    });
     Ok(found)
 }
 
@@ -388,7 +492,7 @@ pub fn check_asset(asset: &Asset, options: &CheckOptions) -> AssetReport {
         }
     };
     let findings = findings.finish();
-    AssetReport::new(path, findings, scene, started.elapsed().as_secs_f64())
+    AssetReport::new(asset, findings, scene, started.elapsed().as_secs_f64())
 }
 
 fn check_into(

@@ -1,7 +1,7 @@
 //! The outputs of `raycast check`: a human summary, JSON Lines, JUnit XML and GitHub
 //! annotations.
 
-use super::{AssetReport, Severity};
+use super::{AssetReport, Severity, Status};
 use crate::info::count;
 use std::fmt::Write as _;
 
@@ -24,7 +24,7 @@ pub fn human(reports: &[AssetReport], verbose: bool) -> String {
             out,
             "{}: {} ({}, {})",
             r.path,
-            r.status,
+            r.status.name(),
             count(r.errors, "error"),
             count(r.warnings, "warning")
         );
@@ -43,14 +43,24 @@ pub fn human(reports: &[AssetReport], verbose: bool) -> String {
                 f.message
             );
         }
+        if r.omitted > 0 {
+            let _ = writeln!(
+                out,
+                "  ({} not listed: --max-findings)",
+                count(r.omitted, "more finding")
+            );
+        }
     }
     out
 }
 
 /// The last line: counts of assets by verdict.
 pub fn summary(reports: &[AssetReport], seconds: f64) -> String {
-    let errors = reports.iter().filter(|r| r.status == "error").count();
-    let warnings = reports.iter().filter(|r| r.status == "warning").count();
+    let errors = reports.iter().filter(|r| r.status == Status::Error).count();
+    let warnings = reports
+        .iter()
+        .filter(|r| r.status == Status::Warning)
+        .count();
     let ok = reports.len() - errors - warnings;
     format!(
         "checked {} in {seconds:.2}s: {ok} ok, {warnings} with warnings, {errors} with errors",
@@ -97,10 +107,13 @@ fn xml(text: &str) -> String {
     out
 }
 
-/// JUnit XML: one testsuite, one testcase per asset; errors are failures, warnings go to
-/// the testcase's system-out.
-pub fn junit(reports: &[AssetReport], seconds: f64) -> String {
-    let failures = reports.iter().filter(|r| r.has_errors()).count();
+/// JUnit XML: one testsuite, one testcase per asset; errors are failures (warnings too when
+/// `strict`), the other findings go to the testcase's system-out.
+pub fn junit(reports: &[AssetReport], seconds: f64, strict: bool) -> String {
+    let failing = |severity: Severity| {
+        severity == Severity::Error || (strict && severity == Severity::Warning)
+    };
+    let failures = reports.iter().filter(|r| r.fails(strict)).count();
     let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
     let _ = writeln!(
         out,
@@ -120,7 +133,7 @@ pub fn junit(reports: &[AssetReport], seconds: f64) -> String {
             xml(&r.path),
             r.seconds
         );
-        if r.findings.is_empty() {
+        if r.findings.is_empty() && r.omitted == 0 {
             out.push_str("/>\n");
             continue;
         }
@@ -134,31 +147,31 @@ pub fn junit(reports: &[AssetReport], seconds: f64) -> String {
                 f.message
             )
         };
-        if r.has_errors() {
+        if r.fails(strict) {
             let first = r
                 .findings
                 .iter()
-                .find(|f| f.severity == Severity::Error)
+                .find(|f| failing(f.severity))
                 .map(|f| format!("{}: {}", f.code, f.message))
                 .unwrap_or_default();
             let body: Vec<String> = r
                 .findings
                 .iter()
-                .filter(|f| f.severity == Severity::Error)
+                .filter(|f| failing(f.severity))
                 .map(line)
                 .collect();
             let _ = writeln!(
                 out,
                 "      <failure message=\"{}\" type=\"{}\">{}</failure>",
                 xml(&first),
-                r.errors,
+                r.errors + if strict { r.warnings } else { 0 },
                 xml(&body.join("\n"))
             );
         }
         let rest: Vec<String> = r
             .findings
             .iter()
-            .filter(|f| f.severity != Severity::Error)
+            .filter(|f| !failing(f.severity))
             .map(line)
             .collect();
         if !rest.is_empty() {
@@ -184,17 +197,27 @@ fn gh_property(text: &str) -> String {
     gh_data(text).replace(':', "%3A").replace(',', "%2C")
 }
 
+/// Annotations of one type GitHub shows per step (it shows at most 50 per job).
+pub const GITHUB_PER_TYPE: usize = 10;
+
 /// GitHub workflow commands: `::error file=F,line=L,title=CODE::message` for errors and
-/// warnings (infos are left out).
-pub fn github(reports: &[AssetReport]) -> String {
+/// warnings (infos are left out), at most [`GITHUB_PER_TYPE`] of each type: GitHub drops the
+/// rest. When some are left out, a `::notice` says how many and points to `see` (the summary
+/// or the JUnit report).
+pub fn github(reports: &[AssetReport], see: &str) -> String {
     let mut out = String::new();
+    let (mut errors, mut warnings) = (0, 0);
     for r in reports {
         for f in &r.findings {
-            let kind = match f.severity {
-                Severity::Error => "error",
-                Severity::Warning => "warning",
+            let (kind, shown) = match f.severity {
+                Severity::Error => ("error", &mut errors),
+                Severity::Warning => ("warning", &mut warnings),
                 Severity::Info => continue,
             };
+            *shown += 1;
+            if *shown > GITHUB_PER_TYPE {
+                continue;
+            }
             let line = f
                 .location
                 .strip_prefix("line ")
@@ -215,6 +238,23 @@ pub fn github(reports: &[AssetReport]) -> String {
             );
         }
     }
+    let hidden =
+        |n: usize, what: &str| (n > GITHUB_PER_TYPE).then(|| count(n - GITHUB_PER_TYPE, what));
+    let hidden: Vec<String> = [
+        hidden(errors, "more error"),
+        hidden(warnings, "more warning"),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    if !hidden.is_empty() {
+        let _ = writeln!(
+            out,
+            "::notice title=raycast check::{} not annotated (GitHub shows {GITHUB_PER_TYPE} of each type per step): see {}",
+            hidden.join(" and "),
+            gh_data(see)
+        );
+    }
     out
 }
 
@@ -226,8 +266,9 @@ mod tests {
     fn report() -> AssetReport {
         AssetReport {
             path: "a,b:c.obj".into(),
+            relpath: "a,b:c.obj".into(),
             format: "obj".into(),
-            status: "error",
+            status: Status::Error,
             errors: 1,
             warnings: 0,
             infos: 0,
@@ -239,12 +280,13 @@ mod tests {
                 location: "line 7".into(),
                 message: "50% <bad>\nnext".into(),
             }],
+            omitted: 0,
         }
     }
 
     #[test]
     fn annotations_are_escaped() {
-        let text = github(&[report()]);
+        let text = github(&[report()], "the summary");
         assert_eq!(
             text,
             "::error file=a%2Cb%3Ac.obj,line=7,title=INDEX_OOB::50%25 <bad>%0Anext\n"
@@ -253,7 +295,7 @@ mod tests {
 
     #[test]
     fn junit_is_escaped() {
-        let text = junit(&[report()], 1.0);
+        let text = junit(&[report()], 1.0, false);
         assert!(text.contains("&lt;bad&gt;"));
         assert!(text.contains("failures=\"1\""));
     }

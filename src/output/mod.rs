@@ -146,6 +146,9 @@ pub struct Staging {
     dir: PathBuf,
     files: Vec<(PathBuf, String)>,
     protected: Vec<PathBuf>,
+    /// Whether the folder is a render's output folder, whose `raycast.json` lists files
+    /// this run replaces.
+    owns_listed: bool,
 }
 
 impl Staging {
@@ -157,7 +160,17 @@ impl Staging {
             dir: dir.to_path_buf(),
             files: Vec::new(),
             protected: Vec::new(),
+            owns_listed: true,
         })
+    }
+
+    /// Prepares `dir` (created if missing) for files written among others: committing
+    /// replaces only the staged names and never removes what a `raycast.json` there lists
+    /// (reports of `raycast check`).
+    pub fn among_others(dir: &Path) -> Result<Staging> {
+        let mut staging = Staging::new(dir)?;
+        staging.owns_listed = false;
+        Ok(staging)
     }
 
     /// Marks an input file that must never be replaced by an output.
@@ -224,7 +237,11 @@ impl Staging {
     /// run did not write. Refuses, before renaming anything, when a final name is one of the
     /// protected inputs.
     pub fn commit(mut self) -> Result<()> {
-        let earlier = earlier_outputs(&self.dir);
+        let earlier = if self.owns_listed {
+            earlier_outputs(&self.dir)
+        } else {
+            Vec::new()
+        };
         for (_, name) in &self.files {
             let target = self.dir.join(name);
             if target

@@ -35,6 +35,10 @@ COMMANDS = {
     "random-quadrics": ("random_quadric_scenes", "write random quadric scenes for validation"),
     "usd-counts": ("usd_counts", "count what a USD stage draws, with usd-core"),
     "thread-scaling": ("thread_scaling", "octree and BVH2 trace time from 1 to 16 threads"),
+    "check-scale": (
+        "check_scale",
+        "raycast check shards, merge, throughput and the Khronos validator (check_scale.md)",
+    ),
     "instancing-bench": (
         "instancing_bench",
         "memory and build time of instanced scenes, two binaries (reports/instancing.md)",
