@@ -22,8 +22,9 @@ cargo test --release --locked
 
 echo "== python package (pip install ./python: maturin builds the extension into .venv)"
 start=$SECONDS
-.venv/bin/python -m pip install --quiet --disable-pip-version-check --no-input \
-    --no-deps --no-build-isolation --force-reinstall ./python
+# maturin's build backend runs the `maturin` program of the environment: put it on PATH.
+PATH="$PWD/.venv/bin:$PATH" .venv/bin/python -m pip install --quiet --disable-pip-version-check \
+    --no-input --no-deps --no-build-isolation --force-reinstall ./python
 echo "python package installed in $((SECONDS - start)) s"
 
 echo "== python tests"

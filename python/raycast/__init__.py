@@ -204,12 +204,12 @@ class Scene:
             Arrays that do not hold real numbers.
         """
         names = _names(aovs)
-        return self._scene.cast(*_rays(origins, directions, tmin, tmax), names)
+        return self._scene.cast(_rays(origins, directions, tmin, tmax), names)
 
     def occluded(self, origins, directions, tmin=0.0, tmax=np.inf) -> np.ndarray:
         """Whether each ray hits anything with ``tmin < t <= tmax``: a (N,) bool array.
         Arguments and errors as for :meth:`cast`."""
-        return self._scene.occluded(*_rays(origins, directions, tmin, tmax))
+        return self._scene.occluded(_rays(origins, directions, tmin, tmax))
 
     def list_intersections(self, origins, directions, tmin=0.0, tmax=np.inf) -> dict:
         """Every surface crossing of each ray with ``tmin < t <= tmax``, nearest first.
@@ -224,7 +224,7 @@ class Scene:
             ``ray_splits[i]:ray_splits[i + 1]``; ``t`` float64; ``id`` uint32; ``prim``
             uint32; ``ray_ids`` uint32 (the ray of each hit).
         """
-        splits, t, ids, prims = self._scene.crossings(*_rays(origins, directions, tmin, tmax))
+        splits, t, ids, prims = self._scene.crossings(_rays(origins, directions, tmin, tmax))
         ray_ids = np.repeat(
             np.arange(len(splits) - 1, dtype=np.uint32), np.diff(splits).astype(np.int64)
         )
@@ -233,7 +233,7 @@ class Scene:
     def count_intersections(self, origins, directions, tmin=0.0, tmax=np.inf) -> np.ndarray:
         """The number of surface crossings of each ray, as :meth:`list_intersections`
         counts them: a (N,) uint32 array."""
-        splits = self._scene.crossings(*_rays(origins, directions, tmin, tmax))[0]
+        splits = self._scene.crossings(_rays(origins, directions, tmin, tmax))[0]
         return np.diff(splits).astype(np.uint32)
 
     def contains(self, points) -> np.ndarray:

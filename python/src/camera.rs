@@ -139,16 +139,7 @@ pub fn pinhole(
             "K must be invertible and cam_to_world a finite invertible affine matrix (last row 0 0 0 1)",
         ));
     }
-    if width == 0
-        || height == 0
-        || width > raycast::job::MAX_SIDE
-        || height > raycast::job::MAX_SIDE
-    {
-        return Err(PyValueError::new_err(format!(
-            "image size {width}x{height} is out of range (1 to {} per side)",
-            raycast::job::MAX_SIDE
-        )));
-    }
+    check_size(width, height)?;
     Ok(PyCamera {
         kind: Kind::Pinhole {
             k_inverse,
@@ -157,6 +148,17 @@ pub fn pinhole(
             height,
         },
     })
+}
+
+/// Refuses an image side of 0 or more than the command line's largest.
+fn check_size(width: usize, height: usize) -> PyResult<()> {
+    let max = raycast::job::MAX_SIDE;
+    if width == 0 || height == 0 || width > max || height > max {
+        return Err(PyValueError::new_err(format!(
+            "image size {width}x{height} is out of range (1 to {max} per side)"
+        )));
+    }
+    Ok(())
 }
 
 /// The pixels of a pinhole camera as rays, row-major from the top row.
@@ -201,16 +203,7 @@ pub enum View {
 
 impl View {
     pub fn new(camera: &PyCamera, width: usize, height: usize) -> PyResult<View> {
-        if width == 0
-            || height == 0
-            || width > raycast::job::MAX_SIDE
-            || height > raycast::job::MAX_SIDE
-        {
-            return Err(PyValueError::new_err(format!(
-                "image size {width}x{height} is out of range (1 to {} per side)",
-                raycast::job::MAX_SIDE
-            )));
-        }
+        check_size(width, height)?;
         Ok(match &camera.kind {
             Kind::Scene(c) => View::Scene(CameraView::new(c.clone(), width, height)),
             Kind::Pinhole {

@@ -71,30 +71,13 @@ fn column(
     output: Output,
 ) -> Column {
     let scene = query.scene;
-    let each = |f: &(dyn Fn(usize, &Crossing) -> f64 + Sync), miss: f64| {
-        let values = (0..hits.len()).into_par_iter();
-        Column::Float(
-            values
-                .map(|i| hits[i].as_ref().map_or(miss, |h| f(i, h)))
-                .collect(),
-        )
+    let each =
+        |f: &(dyn Fn(usize, &Crossing) -> f64 + Sync), miss| Column::Float(per_ray(hits, f, miss));
+    let each3 = |f: &(dyn Fn(usize, &Crossing) -> DVec3 + Sync), miss| {
+        Column::Vector(per_ray(hits, f, miss))
     };
-    let each3 = |f: &(dyn Fn(usize, &Crossing) -> DVec3 + Sync), miss: DVec3| {
-        let values = (0..hits.len()).into_par_iter();
-        Column::Vector(
-            values
-                .map(|i| hits[i].as_ref().map_or(miss, |h| f(i, h)))
-                .collect(),
-        )
-    };
-    let each_u32 = |f: &(dyn Fn(usize, &Crossing) -> u32 + Sync), miss: u32| {
-        let values = (0..hits.len()).into_par_iter();
-        Column::Index(
-            values
-                .map(|i| hits[i].as_ref().map_or(miss, |h| f(i, h)))
-                .collect(),
-        )
-    };
+    let each_u32 =
+        |f: &(dyn Fn(usize, &Crossing) -> u32 + Sync), miss| Column::Index(per_ray(hits, f, miss));
     let locate = |i: usize, h: &Crossing| {
         let ray = source.ray(i);
         scene.locate_crossing(h, ray.origin, ray.dir)
@@ -122,6 +105,18 @@ fn column(
             DVec3::ZERO,
         ),
     }
+}
+
+/// `f(i, hit)` for every ray `i` that hit, `miss` for the others, in parallel.
+fn per_ray<T: Copy + Send + Sync>(
+    hits: &[Option<Crossing>],
+    f: &(dyn Fn(usize, &Crossing) -> T + Sync),
+    miss: T,
+) -> Vec<T> {
+    (0..hits.len())
+        .into_par_iter()
+        .map(|i| hits[i].as_ref().map_or(miss, |h| f(i, h)))
+        .collect()
 }
 
 /// Fills `outputs` (with their names) into a new dict of arrays of shape `shape` (+ `(3,)`

@@ -67,6 +67,8 @@ impl PyScene {
 #[pyfunction]
 #[pyo3(signature = (path, scene = None))]
 pub fn load_path(py: Python<'_>, path: PathBuf, scene: Option<String>) -> PyResult<PyScene> {
+    // Absolute, so that a pickled scene loads in a worker with another working folder.
+    let path = std::path::absolute(&path).unwrap_or(path);
     PyScene::build(py, Source::Path(path), scene)
 }
 
@@ -82,14 +84,18 @@ pub fn load_bytes(
     PyScene::build(py, Source::Bytes { data, name }, scene)
 }
 
+/// The rays as the Python layer hands them over: float64 (N, 3) origins and directions, and
+/// `tmin`, `tmax` of length N or 1.
+type RayArgs<'py> = (
+    PyReadonlyArray2<'py, f64>,
+    PyReadonlyArray2<'py, f64>,
+    PyReadonlyArray1<'py, f64>,
+    PyReadonlyArray1<'py, f64>,
+);
+
 /// Borrows the rays (no copy) and refuses the first one that cannot be traced.
-fn rays<'a>(
-    py: Python<'_>,
-    origins: &'a PyReadonlyArray2<'_, f64>,
-    directions: &'a PyReadonlyArray2<'_, f64>,
-    tmin: &'a PyReadonlyArray1<'_, f64>,
-    tmax: &'a PyReadonlyArray1<'_, f64>,
-) -> PyResult<RayArrays<'a>> {
+fn rays<'a>(py: Python<'_>, args: &'a RayArgs<'_>) -> PyResult<RayArrays<'a>> {
+    let (origins, directions, tmin, tmax) = args;
     let rays = RayArrays {
         origins: origins.as_array(),
         directions: directions.as_array(),
@@ -119,29 +125,19 @@ impl PyScene {
     fn cast<'py>(
         &self,
         py: Python<'py>,
-        origins: PyReadonlyArray2<'py, f64>,
-        directions: PyReadonlyArray2<'py, f64>,
-        tmin: PyReadonlyArray1<'py, f64>,
-        tmax: PyReadonlyArray1<'py, f64>,
+        rays: RayArgs<'py>,
         outputs: Vec<String>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let outputs = parse_outputs(&outputs, false)?;
-        let rays = rays(py, &origins, &directions, &tmin, &tmax)?;
+        let rays = self::rays(py, &rays)?;
         let query = self.query();
         let hits = py.detach(|| nearest_all(&query, &rays));
         fill_dict(py, &query, &rays, &hits, &outputs, &[rays.len()])
     }
 
     /// Whether each ray hits anything in `(tmin, tmax]`.
-    fn occluded<'py>(
-        &self,
-        py: Python<'py>,
-        origins: PyReadonlyArray2<'py, f64>,
-        directions: PyReadonlyArray2<'py, f64>,
-        tmin: PyReadonlyArray1<'py, f64>,
-        tmax: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<Bound<'py, PyAny>> {
-        let rays = rays(py, &origins, &directions, &tmin, &tmax)?;
+    fn occluded<'py>(&self, py: Python<'py>, rays: RayArgs<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let rays = self::rays(py, &rays)?;
         let query = self.query();
         let hit: Vec<bool> = py.detach(|| {
             nearest_all(&query, &rays)
@@ -154,15 +150,8 @@ impl PyScene {
 
     /// Every surface crossing of each ray in `(tmin, tmax]`, in CSR form:
     /// (ray_splits uint64 (N+1,), t float64, id uint32, prim uint32).
-    fn crossings<'py>(
-        &self,
-        py: Python<'py>,
-        origins: PyReadonlyArray2<'py, f64>,
-        directions: PyReadonlyArray2<'py, f64>,
-        tmin: PyReadonlyArray1<'py, f64>,
-        tmax: PyReadonlyArray1<'py, f64>,
-    ) -> PyResult<Bound<'py, PyTuple>> {
-        let rays = rays(py, &origins, &directions, &tmin, &tmax)?;
+    fn crossings<'py>(&self, py: Python<'py>, rays: RayArgs<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        let rays = self::rays(py, &rays)?;
         let query = self.query();
         let (splits, t, id, prim) = py.detach(|| {
             let per_ray: Vec<Vec<(f64, u32, u32)>> = (0..rays.len())
