@@ -110,7 +110,7 @@ def measure(n, runs, binary, seed=1):
     lo, hi = scene.bounds
     sets = ray_sets(lo, hi, n, seed)
     results = {"rays": {k: len(v[0]) for k, v in sets.items()}, "engines": {}, "cli": {}}
-    subset = max(1, len(sets["coherent"][0]) // 20)
+    subset = max(1, len(sets["coherent"][0]) // 200)
     for name, (setup, cast, limit) in engines(BUNNY, subset).items():
         setup_s, state = timed(setup, runs)
         entry = {"setup_s": setup_s}
