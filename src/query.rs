@@ -20,15 +20,15 @@ pub struct Query<'a> {
 }
 
 impl<'a> Query<'a> {
-    /// The nearest crossing with `t_min < t <= t_max` (and `t > 0`); `None` for a miss or an
-    /// untraceable ray (see [`Ray::is_valid`]). Ties go to the smaller primitive index, as in
-    /// [`Hit::beats`].
+    /// The nearest crossing with `t_min < t <= t_max` (and `t > 0`); `None` for a miss, an
+    /// untraceable ray (see [`Ray::is_valid`]), a NaN or negative `t_min` or a NaN `t_max`.
+    /// Ties go to the smaller primitive index, as in [`Hit::beats`].
     pub fn nearest(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Crossing> {
-        if !ray.is_valid() || t_min.is_nan() || t_max.is_nan() {
+        if !valid(ray, t_min, t_max) {
             return None;
         }
         let local = ray.origin - self.scene.anchor;
-        if t_min <= 0.0 {
+        if t_min == 0.0 {
             let hit = self
                 .octree
                 .intersect_ray(self.scene, local, ray.dir, t_max)?;
@@ -69,12 +69,12 @@ impl<'a> Query<'a> {
     }
 
     /// Every surface crossing with `t_min < t <= t_max` (and `t > 0`), nearest first (ties by
-    /// primitive). A ray through an edge or vertex shared by triangles of a consistently wound
+    /// primitive); none for the rays [`Query::nearest`] refuses. A ray through an edge or vertex shared by triangles of a consistently wound
     /// mesh crosses it once (see [`crate::geometry::triangle::WatertightRay::crossing`]); a
     /// ray tangent to a quadric touches it once.
     pub fn crossings(&self, ray: &Ray, t_min: f64, t_max: f64) -> Vec<Crossing> {
         let mut found = Vec::new();
-        if !ray.is_valid() || t_min.is_nan() || t_max.is_nan() {
+        if !valid(ray, t_min, t_max) {
             return found;
         }
         let local = ray.origin - self.scene.anchor;
@@ -120,6 +120,11 @@ impl<'a> Query<'a> {
             .count();
         odd >= 2
     }
+}
+
+/// A traceable ray with `t_min >= 0` and `t_max` not NaN.
+fn valid(ray: &Ray, t_min: f64, t_max: f64) -> bool {
+    ray.is_valid() && t_min >= 0.0 && !t_max.is_nan()
 }
 
 /// Directions of the parity rays of [`Query::contains`]: no axis, diagonal or simple ratio,

@@ -2,33 +2,115 @@
 
 use glam::DVec3;
 use numpy::ndarray::{ArrayView1, ArrayView2};
+use pyo3::exceptions::PyValueError;
+use pyo3::PyResult;
 use raycast::geometry::Ray;
 use raycast::render::RaySource;
 use rayon::prelude::*;
 
+/// The rows of an (N, 3) array: a flat slice when it is C-contiguous (read without index
+/// arithmetic), else the strided view.
+enum Rows<'a> {
+    Flat(&'a [f64]),
+    Strided(ArrayView2<'a, f64>),
+}
+
+impl<'a> Rows<'a> {
+    fn new(view: ArrayView2<'a, f64>) -> Rows<'a> {
+        match view.to_slice() {
+            Some(flat) => Rows::Flat(flat),
+            None => Rows::Strided(view),
+        }
+    }
+
+    #[inline]
+    fn get(&self, i: usize) -> DVec3 {
+        match self {
+            Rows::Flat(v) => DVec3::from_slice(&v[3 * i..3 * i + 3]),
+            Rows::Strided(v) => DVec3::new(v[[i, 0]], v[[i, 1]], v[[i, 2]]),
+        }
+    }
+}
+
+/// A per-ray value given once for all rays or per ray.
+enum PerRay<'a> {
+    All(f64),
+    Each(ArrayView1<'a, f64>),
+}
+
+impl<'a> PerRay<'a> {
+    fn new(view: ArrayView1<'a, f64>) -> PerRay<'a> {
+        match view.len() {
+            1 => PerRay::All(view[0]),
+            _ => PerRay::Each(view),
+        }
+    }
+
+    #[inline]
+    fn get(&self, i: usize) -> f64 {
+        match self {
+            PerRay::All(v) => *v,
+            PerRay::Each(v) => v[i],
+        }
+    }
+}
+
 /// `N` rays: (N, 3) origins and directions, and per-ray `tmin`, `tmax` of length N or 1
 /// (broadcast). Views of the caller's arrays: any strides, no copy.
 pub struct RayArrays<'a> {
-    pub origins: ArrayView2<'a, f64>,
-    pub directions: ArrayView2<'a, f64>,
-    pub tmin: ArrayView1<'a, f64>,
-    pub tmax: ArrayView1<'a, f64>,
+    len: usize,
+    origins: Rows<'a>,
+    directions: Rows<'a>,
+    tmin: PerRay<'a>,
+    tmax: PerRay<'a>,
 }
 
-impl RayArrays<'_> {
-    /// The parameter range `(tmin, tmax]` of ray `i`.
-    pub fn range(&self, i: usize) -> (f64, f64) {
-        let at = |a: &ArrayView1<f64>| a[if a.len() == 1 { 0 } else { i }];
-        (at(&self.tmin), at(&self.tmax))
+impl<'a> RayArrays<'a> {
+    /// The rays of the arrays, after checking their shapes.
+    pub fn new(
+        origins: ArrayView2<'a, f64>,
+        directions: ArrayView2<'a, f64>,
+        tmin: ArrayView1<'a, f64>,
+        tmax: ArrayView1<'a, f64>,
+    ) -> PyResult<RayArrays<'a>> {
+        let len = origins.nrows();
+        let per_ray = |a: &ArrayView1<f64>| a.len() == len || a.len() == 1;
+        if origins.ncols() != 3
+            || directions.shape() != origins.shape()
+            || !per_ray(&tmin)
+            || !per_ray(&tmax)
+        {
+            return Err(PyValueError::new_err(
+                "origins and directions must be (N, 3), tmin and tmax (N,) or (1,)",
+            ));
+        }
+        Ok(RayArrays {
+            len,
+            origins: Rows::new(origins),
+            directions: Rows::new(directions),
+            tmin: PerRay::new(tmin),
+            tmax: PerRay::new(tmax),
+        })
     }
 
-    /// The first ray that cannot be traced, described: a non-finite origin or direction, a
-    /// zero direction, a NaN or negative `tmin`, a NaN `tmax`.
-    pub fn first_invalid(&self) -> Option<String> {
-        (0..self.len())
+    /// The parameter range `(tmin, tmax]` of ray `i`.
+    #[inline]
+    pub fn range(&self, i: usize) -> (f64, f64) {
+        (self.tmin.get(i), self.tmax.get(i))
+    }
+
+    /// Refuses the first ray that cannot be traced, among the rays `suspect` picks: a
+    /// non-finite origin or direction, a zero direction, a NaN or negative `tmin`, a NaN
+    /// `tmax`. (Such a ray has no hit, so callers pass the rays without one: the check costs
+    /// nothing when every ray hits.)
+    pub fn check(&self, suspect: impl Fn(usize) -> bool + Sync) -> PyResult<()> {
+        let first = (0..self.len)
             .into_par_iter()
-            .find_first(|&i| self.problem(i).is_some())
-            .and_then(|i| self.problem(i).map(|p| format!("ray {i}: {p}")))
+            .find_first(|&i| suspect(i) && self.problem(i).is_some());
+        match first.and_then(|i| self.problem(i).map(|p| format!("ray {i}: {p}"))) {
+            Some(message) => Err(PyValueError::new_err(message)),
+            None => Ok(()),
+        }
     }
 
     fn problem(&self, i: usize) -> Option<String> {
@@ -56,15 +138,11 @@ fn show(v: DVec3) -> String {
 
 impl RaySource for RayArrays<'_> {
     fn len(&self) -> usize {
-        self.origins.nrows()
+        self.len
     }
 
+    #[inline]
     fn ray(&self, i: usize) -> Ray {
-        let o = &self.origins;
-        let d = &self.directions;
-        Ray::new(
-            DVec3::new(o[[i, 0]], o[[i, 1]], o[[i, 2]]),
-            DVec3::new(d[[i, 0]], d[[i, 1]], d[[i, 2]]),
-        )
+        Ray::new(self.origins.get(i), self.directions.get(i))
     }
 }

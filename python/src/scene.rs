@@ -93,30 +93,15 @@ type RayArgs<'py> = (
     PyReadonlyArray1<'py, f64>,
 );
 
-/// Borrows the rays (no copy) and refuses the first one that cannot be traced.
-fn rays<'a>(py: Python<'_>, args: &'a RayArgs<'_>) -> PyResult<RayArrays<'a>> {
+/// Borrows the rays (no copy).
+fn rays<'a>(args: &'a RayArgs<'_>) -> PyResult<RayArrays<'a>> {
     let (origins, directions, tmin, tmax) = args;
-    let rays = RayArrays {
-        origins: origins.as_array(),
-        directions: directions.as_array(),
-        tmin: tmin.as_array(),
-        tmax: tmax.as_array(),
-    };
-    let n = rays.len();
-    let ok = |a: &numpy::ndarray::ArrayView1<f64>| a.len() == n || a.len() == 1;
-    if rays.origins.ncols() != 3
-        || rays.directions.shape() != rays.origins.shape()
-        || !ok(&rays.tmin)
-        || !ok(&rays.tmax)
-    {
-        return Err(PyValueError::new_err(
-            "origins and directions must be (N, 3), tmin and tmax (N,) or scalars",
-        ));
-    }
-    match py.detach(|| rays.first_invalid()) {
-        Some(problem) => Err(PyValueError::new_err(problem)),
-        None => Ok(rays),
-    }
+    RayArrays::new(
+        origins.as_array(),
+        directions.as_array(),
+        tmin.as_array(),
+        tmax.as_array(),
+    )
 }
 
 #[pymethods]
@@ -129,15 +114,16 @@ impl PyScene {
         outputs: Vec<String>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let outputs = parse_outputs(&outputs, false)?;
-        let rays = self::rays(py, &rays)?;
+        let rays = self::rays(&rays)?;
         let query = self.query();
         let hits = py.detach(|| nearest_all(&query, &rays));
+        py.detach(|| rays.check(|i| hits[i].is_none()))?;
         fill_dict(py, &query, &rays, &hits, &outputs, &[rays.len()])
     }
 
     /// Whether each ray hits anything in `(tmin, tmax]`.
     fn occluded<'py>(&self, py: Python<'py>, rays: RayArgs<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let rays = self::rays(py, &rays)?;
+        let rays = self::rays(&rays)?;
         let query = self.query();
         let hit: Vec<bool> = py.detach(|| {
             nearest_all(&query, &rays)
@@ -145,13 +131,14 @@ impl PyScene {
                 .map(Option::is_some)
                 .collect()
         });
+        py.detach(|| rays.check(|i| !hit[i]))?;
         array(py, &[hit.len()], hit)
     }
 
     /// Every surface crossing of each ray in `(tmin, tmax]`, in CSR form:
     /// (ray_splits uint64 (N+1,), t float64, id uint32, prim uint32).
     fn crossings<'py>(&self, py: Python<'py>, rays: RayArgs<'py>) -> PyResult<Bound<'py, PyTuple>> {
-        let rays = self::rays(py, &rays)?;
+        let rays = self::rays(&rays)?;
         let query = self.query();
         let (splits, t, id, prim) = py.detach(|| {
             let per_ray: Vec<Vec<(f64, u32, u32)>> = (0..rays.len())
@@ -169,6 +156,7 @@ impl PyScene {
                         .collect()
                 })
                 .collect();
+            rays.check(|i| per_ray[i].is_empty())?;
             let mut splits = Vec::with_capacity(per_ray.len() + 1);
             splits.push(0u64);
             for hits in &per_ray {
@@ -178,8 +166,8 @@ impl PyScene {
             let t: Vec<f64> = flat.iter().map(|h| h.0).collect();
             let id: Vec<u32> = flat.iter().map(|h| h.1).collect();
             let prim: Vec<u32> = flat.iter().map(|h| h.2).collect();
-            (splits, t, id, prim)
-        });
+            PyResult::Ok((splits, t, id, prim))
+        })?;
         let n = t.len();
         PyTuple::new(
             py,
