@@ -15,14 +15,18 @@ pub struct Error {
     pub kind: ErrorKind,
 }
 
-/// What kind of failure an [`Error`] is.
+/// What kind of failure an [`Error`] is, for callers that act on it: the command line's exit
+/// code, the Python package's exception class.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum ErrorKind {
     /// The input or the run failed.
     Failure,
     /// The request cannot be carried out as asked: an invalid option value or combination, an
     /// output folder that cannot be written.
     Usage,
+    /// The scene file does not exist (a failure like [`ErrorKind::Failure`] otherwise).
+    NotFound,
 }
 
 /// Result type used throughout the crate.
@@ -57,10 +61,12 @@ impl Error {
 
     /// This error marked as a usage error.
     pub fn as_usage(self) -> Self {
-        Error {
-            kind: ErrorKind::Usage,
-            ..self
-        }
+        self.with_kind(ErrorKind::Usage)
+    }
+
+    /// This error with kind `kind`.
+    pub fn with_kind(self, kind: ErrorKind) -> Self {
+        Error { kind, ..self }
     }
 
     /// Attaches `path` unless the error already names a file.

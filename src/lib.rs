@@ -19,4 +19,5 @@ pub use error::{Error, Result};
 pub mod info;
 pub mod job;
 pub mod output;
+pub mod query;
 pub mod render;

@@ -236,7 +236,7 @@ fn main() -> ExitCode {
             eprintln!("raycast: error: {e}");
             ExitCode::from(match e.kind {
                 raycast::error::ErrorKind::Usage => 2,
-                raycast::error::ErrorKind::Failure => 1,
+                _ => 1,
             })
         }
     }

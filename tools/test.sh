@@ -12,13 +12,20 @@ echo "== ruff check / ruff format --check (ruff.toml)"
 .venv/bin/ruff check
 .venv/bin/ruff format --check
 
-echo "== cargo fmt / clippy"
+echo "== cargo fmt / clippy (the library, the binary and the Python extension python/)"
 cargo fmt --all -- --check
-cargo clippy --release --all-targets --locked -- -D warnings
+cargo clippy --release --workspace --all-targets --locked -- -D warnings
 
 echo "== cargo test"
 cargo build --release --locked
 cargo test --release --locked
+
+echo "== python package (pip install ./python: maturin builds the extension into .venv)"
+start=$SECONDS
+# maturin's build backend runs the `maturin` program of the environment: put it on PATH.
+PATH="$PWD/.venv/bin:$PATH" .venv/bin/python -m pip install --quiet --disable-pip-version-check \
+    --no-input --no-deps --no-build-isolation --force-reinstall ./python
+echo "python package installed in $((SECONDS - start)) s"
 
 echo "== python tests"
 .venv/bin/python -m pytest tests/python -q

@@ -46,20 +46,60 @@ impl WatertightRay {
     /// sharing it, because the edge functions of a shared edge are exact negatives of each
     /// other and a zero counts as inside.
     pub fn intersect(&self, tri: &[DVec3; 3], t_max: f64) -> Option<f64> {
-        // One instance per axis permutation, so the permuted components are fixed fields.
+        self.dispatch::<false>(tri, t_max)
+    }
+
+    /// Like [`WatertightRay::intersect`], but a ray through a shared edge or vertex crosses
+    /// exactly one of the triangles sharing it, so that counting hits counts surface crossings.
+    ///
+    /// A zero edge function counts as inside only when its edge *owns* the ray: the edge's
+    /// vector in the sheared plane, turned by the sign of the determinant (so that both
+    /// triangles of a consistently wound surface see it the same way round), points up, or
+    /// right when level — a top-left rule. The neighbour computes the same edge vector negated,
+    /// exactly, so exactly one of the two owns it; around a vertex the ray passes through, the
+    /// edges' directions wrap once around the circle, so exactly one triangle of the fan owns
+    /// both of its edges there. Where the surface folds back (a silhouette the ray grazes) the
+    /// two sides see opposite determinants, and the ray crosses both or neither: the parity of
+    /// the count is still right.
+    pub fn crossing(&self, tri: &[DVec3; 3], t_max: f64) -> Option<f64> {
+        self.dispatch::<true>(tri, t_max)
+    }
+
+    /// The barycentric weights of `tri`'s vertices at the point where the ray's line meets
+    /// its plane, from the same edge functions as the hit test (so they are exactly those a
+    /// hit was decided on); `None` when the line is parallel to the plane.
+    pub fn barycentric(&self, tri: &[DVec3; 3]) -> Option<[f64; 3]> {
+        let [kx, ky, kz] = self.axes;
+        let sheared = |v: DVec3| {
+            let p = v - self.origin;
+            DVec3::new(
+                p[kx] - self.shear.x * p[kz],
+                p[ky] - self.shear.y * p[kz],
+                0.0,
+            )
+        };
+        let weights = edge_functions(sheared(tri[0]), sheared(tri[1]), sheared(tri[2]));
+        let det: f64 = weights.iter().sum();
+        (det != 0.0).then(|| weights.map(|f| f / det))
+    }
+
+    /// One instance per axis permutation, so the permuted components are fixed fields.
+    #[inline(always)]
+    fn dispatch<const ONCE: bool>(&self, tri: &[DVec3; 3], t_max: f64) -> Option<f64> {
         match self.axes {
-            [1, 2, 0] => self.intersect_in::<1, 2, 0>(tri, t_max),
-            [2, 1, 0] => self.intersect_in::<2, 1, 0>(tri, t_max),
-            [2, 0, 1] => self.intersect_in::<2, 0, 1>(tri, t_max),
-            [0, 2, 1] => self.intersect_in::<0, 2, 1>(tri, t_max),
-            [0, 1, 2] => self.intersect_in::<0, 1, 2>(tri, t_max),
-            _ => self.intersect_in::<1, 0, 2>(tri, t_max),
+            [1, 2, 0] => self.intersect_in::<1, 2, 0, ONCE>(tri, t_max),
+            [2, 1, 0] => self.intersect_in::<2, 1, 0, ONCE>(tri, t_max),
+            [2, 0, 1] => self.intersect_in::<2, 0, 1, ONCE>(tri, t_max),
+            [0, 2, 1] => self.intersect_in::<0, 2, 1, ONCE>(tri, t_max),
+            [0, 1, 2] => self.intersect_in::<0, 1, 2, ONCE>(tri, t_max),
+            _ => self.intersect_in::<1, 0, 2, ONCE>(tri, t_max),
         }
     }
 
-    /// [`WatertightRay::intersect`] for the axis permutation `[KX, KY, KZ]`.
+    /// [`WatertightRay::intersect`] for the axis permutation `[KX, KY, KZ]`; with `ONCE`, the
+    /// edge ownership rule of [`WatertightRay::crossing`].
     #[inline(always)]
-    fn intersect_in<const KX: usize, const KY: usize, const KZ: usize>(
+    fn intersect_in<const KX: usize, const KY: usize, const KZ: usize, const ONCE: bool>(
         &self,
         tri: &[DVec3; 3],
         t_max: f64,
@@ -76,9 +116,7 @@ impl WatertightRay {
         let a = sheared(tri[0]);
         let b = sheared(tri[1]);
         let c = sheared(tri[2]);
-        let u = c.x * b.y - c.y * b.x;
-        let v = a.x * c.y - a.y * c.x;
-        let w = b.x * a.y - b.y * a.x;
+        let [u, v, w] = edge_functions(a, b, c);
         let negative = u < 0.0 || v < 0.0 || w < 0.0;
         let positive = u > 0.0 || v > 0.0 || w > 0.0;
         if negative && positive {
@@ -88,12 +126,44 @@ impl WatertightRay {
         if det == 0.0 {
             return None;
         }
+        if ONCE && !owns_zero_edges([(u, b, c), (v, c, a), (w, a, b)], det) {
+            return None;
+        }
         let sz = self.shear.z;
         let t_scaled = u * sz * a.z + v * sz * b.z + w * sz * c.z;
         let t = t_scaled / det;
         // A direction with subnormal components overflows the shear to ±inf: no finite hit.
         (t > 0.0 && t <= t_max && t.is_finite()).then_some(t)
     }
+}
+
+/// The edge functions of the sheared triangle `a b c`: twice the signed areas that the ray's
+/// point makes with the edges opposite `a`, `b` and `c`.
+#[inline(always)]
+fn edge_functions(a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
+    [
+        c.x * b.y - c.y * b.x,
+        a.x * c.y - a.y * c.x,
+        b.x * a.y - b.y * a.x,
+    ]
+}
+
+/// True when every edge whose edge function is zero owns the ray (see
+/// [`WatertightRay::crossing`]); each entry is an edge function with the edge's start and end
+/// in the sheared frame.
+#[inline(always)]
+fn owns_zero_edges(edges: [(f64, DVec3, DVec3); 3], det: f64) -> bool {
+    edges.iter().all(|&(f, from, to)| {
+        if f != 0.0 {
+            return true;
+        }
+        let (x, y) = if det > 0.0 {
+            (to.x - from.x, to.y - from.y)
+        } else {
+            (from.x - to.x, from.y - to.y)
+        };
+        y > 0.0 || (y == 0.0 && x > 0.0)
+    })
 }
 
 /// Unit geometric normal of a triangle from its winding (counter-clockwise = front), or

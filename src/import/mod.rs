@@ -6,7 +6,7 @@ pub mod paths;
 mod sniff;
 pub mod usd;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, ErrorKind, Result};
 use crate::scene::Scene;
 use glam::{DMat4, DVec3, DVec4};
 use std::path::Path;
@@ -25,22 +25,62 @@ pub struct LoadOptions {
 /// Loads a `.gltf`, `.glb`, `.obj`, `.usda`, `.usdc`, `.usd` or `.usdz` file, choosing the
 /// importer by extension after checking that the content is that format.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    sniff::check_content(path, extension.as_deref().unwrap_or_default())?;
-    let mut scene = match extension.as_deref() {
-        Some("gltf") | Some("glb") => gltf::load(path, options),
-        Some("obj") => obj::load(path),
-        Some("usda") | Some("usdc") | Some("usd") | Some("usdz") => usd::load(path, options),
-        _ => Err(Error::in_file(
-            path,
-            "unsupported file type (expected .gltf, .glb, .obj, .usda, .usdc, .usd or .usdz)",
-        )),
+    let extension = extension_of(path);
+    sniff::check_content(path, &extension)?;
+    let mut scene = match extension.as_str() {
+        "gltf" | "glb" => gltf::load(path, options),
+        "obj" => obj::load(path),
+        "usda" | "usdc" | "usd" | "usdz" => usd::load(path, options),
+        _ => Err(unsupported(path)),
     }?;
     sort_warnings(&mut scene.warnings);
     Ok(scene)
+}
+
+/// Loads a scene from `bytes` in memory, as if they had been read from the file `name`: its
+/// extension chooses the importer, it names the scene in messages, and its folder is where a
+/// glTF's external files resolve (under the same rule as [`load`]'s). glTF, GLB and OBJ only:
+/// the USD reader reads files.
+pub fn load_bytes(bytes: Vec<u8>, name: &Path, options: &LoadOptions) -> Result<Scene> {
+    let extension = extension_of(name);
+    sniff::check_head(name, &bytes, &extension)?;
+    let mut scene = match extension.as_str() {
+        "gltf" | "glb" => gltf::load_bytes(bytes, name, options),
+        "obj" => obj::load_reader(&mut bytes.as_slice(), name),
+        "usda" | "usdc" | "usd" | "usdz" => Err(Error::in_file(
+            name,
+            "USD scenes load from a file, not from bytes (the USD reader resolves layers by path)",
+        )
+        .as_usage()),
+        _ => Err(unsupported(name)),
+    }?;
+    sort_warnings(&mut scene.warnings);
+    Ok(scene)
+}
+
+/// A path's extension in lower case (empty when it has none).
+fn extension_of(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default()
+}
+
+fn unsupported(path: &Path) -> Error {
+    Error::in_file(
+        path,
+        "unsupported file type (expected .gltf, .glb, .obj, .usda, .usdc, .usd or .usdz)",
+    )
+}
+
+/// The error for a scene file that cannot be read: [`ErrorKind::NotFound`] when it does not
+/// exist.
+pub(crate) fn read_error(path: &Path, e: std::io::Error) -> Error {
+    let error = Error::in_file(path, format!("cannot read: {e}"));
+    match e.kind() {
+        std::io::ErrorKind::NotFound => error.with_kind(ErrorKind::NotFound),
+        _ => error,
+    }
 }
 
 /// Sorts warnings and drops repeats, so that every run lists them the same way whatever

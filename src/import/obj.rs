@@ -10,19 +10,21 @@ use std::sync::Arc;
 
 /// Loads an OBJ file. Materials are not read.
 pub fn load(path: &Path) -> Result<Scene> {
+    let file = std::fs::File::open(path).map_err(|e| super::read_error(path, e))?;
+    load_reader(&mut std::io::BufReader::new(file), path)
+}
+
+/// Loads OBJ text from `reader`; `path` names it in messages and in the scene.
+pub fn load_reader(reader: &mut impl std::io::BufRead, path: &Path) -> Result<Scene> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
     };
-    let file =
-        std::fs::File::open(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
-    let mut reader = std::io::BufReader::new(file);
-    let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    })
-    .map_err(|e| Error::in_file(path, format!("not a valid OBJ file: {e}")))?;
+    let (models, _materials) =
+        tobj::load_obj_buf(reader, &options, |_| Err(tobj::LoadError::OpenFileFailed))
+            .map_err(|e| Error::in_file(path, format!("not a valid OBJ file: {e}")))?;
     let mut builder = SceneBuilder::new();
     for (index, model) in models.iter().enumerate() {
         let mesh = model_mesh(&model.mesh)

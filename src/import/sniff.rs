@@ -51,7 +51,12 @@ pub fn check_content(path: &Path, extension: &str) -> Result<()> {
     let n = std::fs::File::open(path)
         .and_then(|mut f| f.read(&mut head))
         .unwrap_or(0);
-    let head = &head[..n];
+    check_head(path, &head[..n], extension)
+}
+
+/// Refuses content whose leading bytes `head` show another format than the extension
+/// `extension` (lower case) of `path`, naming what the content is.
+pub fn check_head(path: &Path, head: &[u8], extension: &str) -> Result<()> {
     match MAGICS.iter().find(|m| head.starts_with(m.prefix)) {
         Some(m) if !m.extensions.contains(&extension) => Err(Error::in_file(
             path,

@@ -125,6 +125,26 @@ impl Quadric {
             .ray_enters(origin, dir, t_max)
     }
 
+    /// Every `t` with `t_min < t <= t_max` where `origin + t·dir` lies on the surface inside
+    /// the clip box, nearest first: the roots [`Quadric::intersect`] chooses from, all of them.
+    /// A tangent ray's double root counts once.
+    pub fn crossings(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Vec<f64> {
+        if !self.may_reach_bounds(origin, dir, t_max) {
+            return Vec::new();
+        }
+        let x0 = self.to_local * (origin - self.anchor);
+        let v = self.to_local * dir;
+        let Some(roots) = self.local.ray_roots(x0, v) else {
+            return Vec::new();
+        };
+        let mut hits: Vec<f64> = roots
+            .into_iter()
+            .filter(|&t| t > t_min.max(0.0) && t <= t_max && self.inside_clip(x0 + t * v))
+            .collect();
+        hits.dedup();
+        hits
+    }
+
     /// [`Quadric::intersect`] without the bounds pre-test.
     pub(super) fn intersect_exact(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<f64> {
         let x0 = self.to_local * (origin - self.anchor);

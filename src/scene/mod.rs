@@ -21,10 +21,12 @@
 //! the `prim` buffer reports.
 
 mod builder;
+mod hits;
 pub mod instance;
 pub mod mesh;
 
 pub use builder::SceneBuilder;
+pub use hits::{Crossing, EdgeRule};
 pub use instance::{Instance, StoredMesh};
 pub use mesh::{Mesh, MeshSet, Positions};
 

@@ -21,6 +21,10 @@ COMMANDS = {
         "end_to_end",
         "1024² depth render from the file: raycast vs Open3D vs trimesh+Embree",
     ),
+    "python-bench": (
+        "python_bench",
+        "raycast.load + cast vs trimesh and Open3D on the bunny (reports/python_bench.md)",
+    ),
     "error-vs-time": ("error_vs_time", "depth error against run time (reports/error_vs_time.md)"),
     "fixtures": ("make_fixtures", "write the glTF/OBJ fixtures under fixtures/"),
     "quadric-fixtures": ("make_quadric_fixtures", "write the RAYCAST_quadric fixtures"),

@@ -88,8 +88,14 @@ pub fn check_required_extensions(doc: &Document, sink: &mut dyn Sink) {
 /// Loads a glTF or GLB file, fail-fast. External files resolve under the path rule of
 /// `options` (the asset's folder unless widened or lifted).
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
-    let bytes =
-        std::fs::read(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| super::read_error(path, e))?;
+    load_bytes(bytes, path, options)
+}
+
+/// Loads glTF or GLB `bytes` as if they had been read from `path` (which names them in
+/// messages, says by its extension whether they are a GLB, and is where external files
+/// resolve).
+pub fn load_bytes(bytes: Vec<u8>, path: &Path, options: &LoadOptions) -> Result<Scene> {
     let fail = |d: Diagnostic| Error::in_file(path, d.to_string());
     let mut sink = FailFast::default();
     let parsed = Document::parse(bytes, is_glb_path(path), &mut sink);

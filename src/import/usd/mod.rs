@@ -127,7 +127,7 @@ fn load_with(
     options: &LoadOptions,
     confine: Option<confine::Confined>,
 ) -> Result<Scene> {
-    std::fs::metadata(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
+    std::fs::metadata(path).map_err(|e| super::read_error(path, e))?;
     let is_text = {
         use std::io::Read;
         let mut head = [0u8; 5];

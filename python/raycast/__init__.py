@@ -1,0 +1,273 @@
+"""raycast: exact ray queries on glTF, USD and OBJ scenes, for numpy users.
+
+>>> import numpy as np, raycast
+>>> scene = raycast.load("fixtures/gltf/cube.gltf")            # doctest: +SKIP
+>>> hits = scene.cast(np.array([[0.0, 0.0, 5.0]]), np.array([[0.0, 0.0, -1.0]]))  # doctest: +SKIP
+>>> hits["distance"]                                             # doctest: +SKIP
+
+Every query takes float arrays of shape (N, 3) (any float dtype; float64 C- or Fortran-ordered
+arrays and strided views are read in place, without a copy), releases the GIL while it
+traces, and traces on all cores. Hits need ``tmin < t <= tmax`` where ``t`` is the ray
+parameter in units of ``|direction|``. See docs/python.md.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Iterable
+
+import numpy as np
+
+from . import _raycast, camera, errors
+from .errors import RaycastError, SceneError, SceneNotFoundError, UsageError
+
+__all__ = [
+    "CAST_OUTPUTS",
+    "RENDER_OUTPUTS",
+    "RaycastError",
+    "Scene",
+    "SceneError",
+    "SceneNotFoundError",
+    "UsageError",
+    "camera",
+    "errors",
+    "load",
+    "load_bytes",
+]
+
+#: Outputs :meth:`Scene.cast` can return.
+CAST_OUTPUTS = ("t", "distance", "normal", "position", "id", "prim", "bary")
+#: Outputs :meth:`Scene.render` can return (``depth`` is ``distance``, as on the command line).
+RENDER_OUTPUTS = ("t", "distance", "depth", "z", "normal", "position", "id", "prim", "bary")
+#: The ``prim`` value of a miss.
+INVALID_PRIM = 2**32 - 1
+
+
+def load(path: str | os.PathLike, scene: str | int | None = None) -> Scene:
+    """Loads a scene file and builds its octree.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.gltf``, ``.glb``, ``.obj``, ``.usda``, ``.usdc``, ``.usd`` or ``.usdz`` file.
+    scene : str or int, optional
+        glTF: the scene by index or name (default: the file's default scene); USD: a prim path
+        whose subtree is drawn.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    raycast.SceneNotFoundError
+        The file does not exist (also a ``FileNotFoundError``).
+    raycast.SceneError
+        The file cannot be read or is not a valid scene; the message names the file.
+    """
+    choice = None if scene is None else str(scene)
+    return Scene(_raycast.load_path(os.fspath(path), choice))
+
+
+def load_bytes(data: bytes, name: str = "scene.glb", scene: str | int | None = None) -> Scene:
+    """Loads a scene held in memory, as if it had been read from the file ``name``.
+
+    Parameters
+    ----------
+    data : bytes
+        The file's content: glTF, GLB or OBJ (USD is read from files only).
+    name : str
+        A file name: its extension gives the format, it names the scene in messages, and its
+        folder is where a glTF's external buffers are read from.
+    scene : str or int, optional
+        As for :func:`load`.
+
+    Returns
+    -------
+    Scene
+    """
+    choice = None if scene is None else str(scene)
+    return Scene(_raycast.load_bytes(bytes(data), os.fspath(name), choice))
+
+
+def _floats(value, name: str, shape: tuple) -> np.ndarray:
+    """``value`` as a float64 array of ``shape`` (-1: any length), read in place when it is
+    one already."""
+    array = np.asarray(value)
+    if array.dtype.kind not in "fiu":
+        raise TypeError(f"{name} must hold real numbers, got dtype {array.dtype}")
+    if array.ndim != len(shape) or any(s not in (-1, n) for s, n in zip(shape, array.shape)):
+        want = (
+            "("
+            + ", ".join("N" if s == -1 else str(s) for s in shape)
+            + ("," if len(shape) == 1 else "")
+            + ")"
+        )
+        raise ValueError(f"{name} must have shape {want}, got {array.shape}")
+    return array.astype(np.float64, copy=False)
+
+
+def _rays(origins, directions, tmin, tmax):
+    o = _floats(origins, "origins", (-1, 3))
+    d = _floats(directions, "directions", (-1, 3))
+    if o.shape != d.shape:
+        raise ValueError(
+            f"origins and directions must have the same shape, got {o.shape} and {d.shape}"
+        )
+    lo = _floats(np.atleast_1d(tmin), "tmin", (-1,))
+    hi = _floats(np.atleast_1d(tmax), "tmax", (-1,))
+    for name, t in (("tmin", lo), ("tmax", hi)):
+        if len(t) not in (1, len(o)):
+            raise ValueError(f"{name} must be a number or have shape ({len(o)},), got {t.shape}")
+    return o, d, lo, hi
+
+
+def _names(outputs: Iterable[str] | str) -> list[str]:
+    if isinstance(outputs, str):
+        return [outputs]
+    return list(dict.fromkeys(outputs))
+
+
+class Scene:
+    """A loaded scene with its octree, ready for queries. Made by :func:`load` or
+    :func:`load_bytes`; pickles as its path (or its bytes) and loads again on unpickling."""
+
+    def __init__(self, compiled: _raycast._Scene):
+        self._scene = compiled
+
+    def __reduce__(self):
+        data, name, choice = self._scene.source()
+        if name is None:
+            return (load, (data, choice))
+        return (load_bytes, (data, name, choice))
+
+    @property
+    def objects(self) -> list[dict]:
+        """The object table: one dict per object with ``id`` (1-based, as in the ``id``
+        output), ``name``, ``kind`` (``mesh`` or ``quadric``), ``source``, ``triangles`` and
+        ``bounds`` ([min, max])."""
+        return self._scene.objects()
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """World bounds, a (2, 3) array ``[min, max]``."""
+        return np.array(self._scene.bounds())
+
+    @property
+    def cameras(self) -> list[camera.Camera]:
+        """The cameras the file defines, in file order."""
+        return self._scene.cameras()
+
+    def info(self) -> dict:
+        """What ``raycast info --json`` prints for this scene, as a dict."""
+        import json
+
+        return json.loads(self._scene.info_json())
+
+    def cast(
+        self,
+        origins,
+        directions,
+        tmin=0.0,
+        tmax=np.inf,
+        aovs=("t", "distance", "normal", "id", "prim"),
+    ) -> dict:
+        """The nearest hit of each ray ``origin + t * direction`` with ``tmin < t <= tmax``.
+
+        Parameters
+        ----------
+        origins, directions : array_like, shape (N, 3)
+            Ray origins and directions (any non-zero length; not normalised).
+        tmin, tmax : float or array_like, shape (N,)
+            The parameter range, per ray or for all; ``t`` is in units of ``|direction|``.
+            ``tmin >= 0``.
+        aovs : sequence of str
+            Outputs to compute, from :data:`CAST_OUTPUTS`.
+
+        Returns
+        -------
+        dict of numpy.ndarray
+            ``t`` (N,) float64, +inf on a miss; ``distance`` (N,) float64,
+            ``|hit - origin|``, +inf on a miss; ``normal`` (N, 3) float64, the unit geometric
+            normal (counter-clockwise winding is the front; not flipped toward the ray), zeros
+            on a miss; ``position`` (N, 3) float64, +inf on a miss; ``id`` (N,) uint32, the
+            1-based object id, 0 on a miss; ``prim`` (N,) uint32, the triangle index in the
+            object, ``INVALID_PRIM`` on a miss; ``bary`` (N, 3) float64, the barycentric
+            weights of the triangle's vertices, zeros on a miss or a quadric.
+
+        Raises
+        ------
+        ValueError
+            Wrong shapes, an unknown output, or a ray with a non-finite origin or direction, a
+            zero direction, or a NaN range (the message names the first such ray).
+        TypeError
+            Arrays that do not hold real numbers.
+        """
+        names = _names(aovs)
+        return self._scene.cast(_rays(origins, directions, tmin, tmax), names)
+
+    def occluded(self, origins, directions, tmin=0.0, tmax=np.inf) -> np.ndarray:
+        """Whether each ray hits anything with ``tmin < t <= tmax``: a (N,) bool array.
+        Arguments and errors as for :meth:`cast`."""
+        return self._scene.occluded(_rays(origins, directions, tmin, tmax))
+
+    def list_intersections(self, origins, directions, tmin=0.0, tmax=np.inf) -> dict:
+        """Every surface crossing of each ray with ``tmin < t <= tmax``, nearest first.
+
+        A ray through an edge or a vertex shared by triangles of a consistently wound mesh
+        crosses it once: the triangles decide by an exact ownership rule, not by a tolerance.
+
+        Returns
+        -------
+        dict of numpy.ndarray
+            In CSR form: ``ray_splits`` (N + 1,) uint64, the hits of ray ``i`` are
+            ``ray_splits[i]:ray_splits[i + 1]``; ``t`` float64; ``id`` uint32; ``prim``
+            uint32; ``ray_ids`` uint32 (the ray of each hit).
+        """
+        splits, t, ids, prims = self._scene.crossings(_rays(origins, directions, tmin, tmax))
+        ray_ids = np.repeat(
+            np.arange(len(splits) - 1, dtype=np.uint32), np.diff(splits).astype(np.int64)
+        )
+        return {"ray_splits": splits, "t": t, "id": ids, "prim": prims, "ray_ids": ray_ids}
+
+    def count_intersections(self, origins, directions, tmin=0.0, tmax=np.inf) -> np.ndarray:
+        """The number of surface crossings of each ray, as :meth:`list_intersections`
+        counts them: a (N,) uint32 array."""
+        splits = self._scene.crossings(_rays(origins, directions, tmin, tmax))[0]
+        return np.diff(splits).astype(np.uint32)
+
+    def contains(self, points) -> np.ndarray:
+        """Whether each point lies inside the scene's closed surfaces: a (N,) bool array.
+
+        The parity of the crossings of three rays from the point in fixed directions, by
+        majority, so that a ray that grazes an edge cannot decide alone. Meaningful for
+        closed, consistently wound surfaces; a point on a surface may count either way.
+        """
+        return self._scene.contains(_floats(points, "points", (-1, 3)))
+
+    def render(self, camera: camera.Camera, width: int, height: int, aovs=("depth",)) -> dict:
+        """An image seen by ``camera``: one ray per pixel through its centre, row 0 at the top.
+
+        Parameters
+        ----------
+        camera : raycast.camera.Camera
+            From :attr:`cameras`, :func:`raycast.camera.look_at` or
+            :func:`raycast.camera.pinhole` (then ``width`` and ``height`` must be the ones it
+            was made for).
+        width, height : int
+            Image size in pixels.
+        aovs : sequence of str
+            From :data:`RENDER_OUTPUTS`; ``z`` is the depth along the camera's view axis.
+
+        Returns
+        -------
+        dict of numpy.ndarray
+            Arrays of shape (height, width) or (height, width, 3), with the values and misses
+            of :meth:`cast`; bit-identical to the command line's buffers for the same camera.
+        """
+        return self._scene.render(camera, int(width), int(height), _names(aovs))
+
+    def __repr__(self) -> str:
+        data, name, _ = self._scene.source()
+        where = data if name is None else f"{name} (bytes)"
+        return f"<raycast.Scene {where!s}: {len(self.objects)} objects>"

@@ -1,0 +1,21 @@
+"""Exceptions raised by raycast.
+
+The compiled library reports a typed error kind; each kind is one class here, so callers
+catch what they can act on instead of matching message text.
+"""
+
+
+class RaycastError(Exception):
+    """Base class of every error raycast raises about a scene or a request."""
+
+
+class SceneError(RaycastError):
+    """The scene file could not be read or is not valid (the message names the file)."""
+
+
+class SceneNotFoundError(SceneError, FileNotFoundError):
+    """The scene file does not exist."""
+
+
+class UsageError(RaycastError, ValueError):
+    """The request cannot be carried out as asked (an invalid option or combination)."""

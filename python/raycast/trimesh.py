@@ -1,0 +1,143 @@
+"""A drop-in for trimesh's ray interface, answered by raycast's exact ray caster.
+
+>>> import trimesh, raycast.trimesh                                   # doctest: +SKIP
+>>> mesh = trimesh.creation.icosphere()                               # doctest: +SKIP
+>>> mesh.ray = raycast.trimesh.RayMeshIntersector(mesh)               # doctest: +SKIP
+
+Triangle indices are indices into ``mesh.faces``; hits need ``t > 0`` along the ray. A ray
+through an edge shared by two faces reports one of them, never both and never neither; with
+``multiple_hits`` each surface crossing is listed once. The mesh is passed to raycast as an
+in-memory OBJ file with its vertices written in full float64 precision; it is rebuilt when the
+mesh changes (by its hash, as trimesh's own intersectors do).
+"""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+from . import load_bytes
+
+__all__ = ["RayMeshIntersector"]
+
+
+def _obj_bytes(vertices: np.ndarray, faces: np.ndarray) -> bytes:
+    """An OBJ file holding one object with ``vertices`` (repr precision, so they read back
+    exactly) and triangle ``faces`` (0-based, written 1-based)."""
+    out = io.StringIO()
+    out.write("o mesh\n")
+    for x, y, z in vertices.tolist():
+        out.write(f"v {x!r} {y!r} {z!r}\n")
+    for a, b, c in (faces + 1).tolist():
+        out.write(f"f {a} {b} {c}\n")
+    return out.getvalue().encode()
+
+
+class RayMeshIntersector:
+    """trimesh's ``RayMeshIntersector`` interface over raycast.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        The mesh to intersect; its faces are triangles.
+    """
+
+    def __init__(self, mesh):
+        self.mesh = mesh
+        self._key = None
+        self._scene = None
+
+    @property
+    def scene(self):
+        """The raycast scene of the mesh as it is now (rebuilt when the mesh changed)."""
+        key = self.mesh.__hash__()
+        if self._scene is None or key != self._key:
+            vertices = np.asarray(self.mesh.vertices, dtype=np.float64)
+            faces = np.asarray(self.mesh.faces, dtype=np.int64)
+            self._scene = load_bytes(_obj_bytes(vertices, faces), "mesh.obj")
+            self._key = key
+        return self._scene
+
+    def intersects_first(self, ray_origins, ray_directions, **kwargs) -> np.ndarray:
+        """The index of the first face each ray hits, -1 for a miss: (N,) int64."""
+        hits = self.scene.cast(ray_origins, ray_directions, aovs=("id", "prim"))
+        return np.where(hits["id"] == 0, -1, hits["prim"].astype(np.int64))
+
+    def intersects_any(self, ray_origins, ray_directions, **kwargs) -> np.ndarray:
+        """Whether each ray hits the mesh: (N,) bool."""
+        return self.scene.occluded(ray_origins, ray_directions)
+
+    def intersects_id(
+        self,
+        ray_origins,
+        ray_directions,
+        multiple_hits=True,
+        max_hits=None,
+        return_locations=False,
+        **kwargs,
+    ):
+        """Faces the rays hit.
+
+        Parameters
+        ----------
+        ray_origins, ray_directions : (N, 3) float
+        multiple_hits : bool
+            Every crossing of each ray (nearest first), or only the first hit.
+        max_hits : int, optional
+            With ``multiple_hits``, keep at most this many hits per ray.
+        return_locations : bool
+            Also return the hit points.
+
+        Returns
+        -------
+        index_tri : (M,) int64
+            Face index of each hit.
+        index_ray : (M,) int64
+            Ray index of each hit.
+        locations : (M, 3) float64
+            Hit points, when ``return_locations``.
+        """
+        origins = np.asarray(ray_origins, dtype=np.float64)
+        directions = np.asarray(ray_directions, dtype=np.float64)
+        if multiple_hits:
+            found = self.scene.list_intersections(origins, directions)
+            index_ray = found["ray_ids"].astype(np.int64)
+            index_tri = found["prim"].astype(np.int64)
+            t = found["t"]
+            if max_hits is not None:
+                rank = np.arange(len(t)) - found["ray_splits"][:-1].astype(np.int64)[index_ray]
+                keep = rank < max_hits
+                index_ray, index_tri, t = index_ray[keep], index_tri[keep], t[keep]
+        else:
+            hits = self.scene.cast(origins, directions, aovs=("t", "id", "prim"))
+            index_ray = np.nonzero(hits["id"])[0].astype(np.int64)
+            index_tri = hits["prim"][index_ray].astype(np.int64)
+            t = hits["t"][index_ray]
+        if not return_locations:
+            return index_tri, index_ray
+        o = origins.reshape(-1, 3)[index_ray]
+        d = directions.reshape(-1, 3)[index_ray]
+        return index_tri, index_ray, o + d * t[:, None]
+
+    def intersects_location(self, ray_origins, ray_directions, multiple_hits=True, **kwargs):
+        """Hit points of the rays.
+
+        Returns
+        -------
+        locations : (M, 3) float64
+        index_ray : (M,) int64
+        index_tri : (M,) int64
+        """
+        index_tri, index_ray, locations = self.intersects_id(
+            ray_origins,
+            ray_directions,
+            multiple_hits=multiple_hits,
+            return_locations=True,
+            **kwargs,
+        )
+        return locations, index_ray, index_tri
+
+    def contains_points(self, points) -> np.ndarray:
+        """Whether each point lies inside the (closed) mesh: (N,) bool."""
+        return self.scene.contains(points)

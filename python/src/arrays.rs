@@ -1,0 +1,148 @@
+//! Rays borrowed from numpy arrays without a copy, and the checks that need a pass over them.
+
+use glam::DVec3;
+use numpy::ndarray::{ArrayView1, ArrayView2};
+use pyo3::exceptions::PyValueError;
+use pyo3::PyResult;
+use raycast::geometry::Ray;
+use raycast::render::RaySource;
+use rayon::prelude::*;
+
+/// The rows of an (N, 3) array: a flat slice when it is C-contiguous (read without index
+/// arithmetic), else the strided view.
+enum Rows<'a> {
+    Flat(&'a [f64]),
+    Strided(ArrayView2<'a, f64>),
+}
+
+impl<'a> Rows<'a> {
+    fn new(view: ArrayView2<'a, f64>) -> Rows<'a> {
+        match view.to_slice() {
+            Some(flat) => Rows::Flat(flat),
+            None => Rows::Strided(view),
+        }
+    }
+
+    #[inline]
+    fn get(&self, i: usize) -> DVec3 {
+        match self {
+            Rows::Flat(v) => DVec3::from_slice(&v[3 * i..3 * i + 3]),
+            Rows::Strided(v) => DVec3::new(v[[i, 0]], v[[i, 1]], v[[i, 2]]),
+        }
+    }
+}
+
+/// A per-ray value given once for all rays or per ray.
+enum PerRay<'a> {
+    All(f64),
+    Each(ArrayView1<'a, f64>),
+}
+
+impl<'a> PerRay<'a> {
+    fn new(view: ArrayView1<'a, f64>) -> PerRay<'a> {
+        match view.len() {
+            1 => PerRay::All(view[0]),
+            _ => PerRay::Each(view),
+        }
+    }
+
+    #[inline]
+    fn get(&self, i: usize) -> f64 {
+        match self {
+            PerRay::All(v) => *v,
+            PerRay::Each(v) => v[i],
+        }
+    }
+}
+
+/// `N` rays: (N, 3) origins and directions, and per-ray `tmin`, `tmax` of length N or 1
+/// (broadcast). Views of the caller's arrays: any strides, no copy.
+pub struct RayArrays<'a> {
+    len: usize,
+    origins: Rows<'a>,
+    directions: Rows<'a>,
+    tmin: PerRay<'a>,
+    tmax: PerRay<'a>,
+}
+
+impl<'a> RayArrays<'a> {
+    /// The rays of the arrays, after checking their shapes.
+    pub fn new(
+        origins: ArrayView2<'a, f64>,
+        directions: ArrayView2<'a, f64>,
+        tmin: ArrayView1<'a, f64>,
+        tmax: ArrayView1<'a, f64>,
+    ) -> PyResult<RayArrays<'a>> {
+        let len = origins.nrows();
+        let per_ray = |a: &ArrayView1<f64>| a.len() == len || a.len() == 1;
+        if origins.ncols() != 3
+            || directions.shape() != origins.shape()
+            || !per_ray(&tmin)
+            || !per_ray(&tmax)
+        {
+            return Err(PyValueError::new_err(
+                "origins and directions must be (N, 3), tmin and tmax (N,) or (1,)",
+            ));
+        }
+        Ok(RayArrays {
+            len,
+            origins: Rows::new(origins),
+            directions: Rows::new(directions),
+            tmin: PerRay::new(tmin),
+            tmax: PerRay::new(tmax),
+        })
+    }
+
+    /// The parameter range `(tmin, tmax]` of ray `i`.
+    #[inline]
+    pub fn range(&self, i: usize) -> (f64, f64) {
+        (self.tmin.get(i), self.tmax.get(i))
+    }
+
+    /// Refuses the first ray that cannot be traced, among the rays `suspect` picks: a
+    /// non-finite origin or direction, a zero direction, a NaN or negative `tmin`, a NaN
+    /// `tmax`. (Such a ray has no hit, so callers pass the rays without one: the check costs
+    /// nothing when every ray hits.)
+    pub fn check(&self, suspect: impl Fn(usize) -> bool + Sync) -> PyResult<()> {
+        let first = (0..self.len)
+            .into_par_iter()
+            .find_first(|&i| suspect(i) && self.problem(i).is_some());
+        match first.and_then(|i| self.problem(i).map(|p| format!("ray {i}: {p}"))) {
+            Some(message) => Err(PyValueError::new_err(message)),
+            None => Ok(()),
+        }
+    }
+
+    fn problem(&self, i: usize) -> Option<String> {
+        let ray = self.ray(i);
+        let (tmin, tmax) = self.range(i);
+        if !ray.origin.is_finite() {
+            Some(format!("origin {} is not finite", show(ray.origin)))
+        } else if !ray.dir.is_finite() {
+            Some(format!("direction {} is not finite", show(ray.dir)))
+        } else if ray.dir == DVec3::ZERO {
+            Some("direction is zero".into())
+        } else if tmin.is_nan() || tmin < 0.0 {
+            Some(format!("tmin {tmin} is not a number >= 0"))
+        } else if tmax.is_nan() {
+            Some("tmax is NaN".into())
+        } else {
+            None
+        }
+    }
+}
+
+fn show(v: DVec3) -> String {
+    format!("({}, {}, {})", v.x, v.y, v.z)
+}
+
+impl RaySource for RayArrays<'_> {
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    #[inline]
+    fn ray(&self, i: usize) -> Ray {
+        Ray::new(self.origins.get(i), self.directions.get(i))
+    }
+}

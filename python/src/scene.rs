@@ -1,0 +1,298 @@
+//! `Scene`: a loaded scene with its octree, and the queries on it.
+
+use crate::arrays::RayArrays;
+use crate::camera::{Kind, PyCamera, View};
+use crate::fill::{array, fill_dict, Output};
+use glam::DVec3;
+use numpy::{PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict, PyTuple};
+use raycast::accel::{Octree, OctreeParams};
+use raycast::import::{self, LoadOptions};
+use raycast::query::Query;
+use raycast::render::RaySource;
+use raycast::scene::{Crossing, Scene};
+use rayon::prelude::*;
+use std::path::PathBuf;
+
+/// Where a scene came from, so that it can be loaded again (pickling).
+#[derive(Debug, Clone)]
+enum Source {
+    Path(PathBuf),
+    Bytes { data: Vec<u8>, name: PathBuf },
+}
+
+/// A loaded scene and its octree (the compiled half of `raycast.Scene`).
+#[pyclass(name = "_Scene", module = "raycast._raycast", frozen)]
+pub struct PyScene {
+    scene: Scene,
+    octree: Octree,
+    source: Source,
+    choice: Option<String>,
+}
+
+impl PyScene {
+    fn build(py: Python<'_>, source: Source, choice: Option<String>) -> PyResult<PyScene> {
+        let options = LoadOptions {
+            scene: choice.clone(),
+            ..LoadOptions::default()
+        };
+        let loaded = py.detach(|| {
+            let scene = match &source {
+                Source::Path(path) => import::load(path, &options),
+                Source::Bytes { data, name } => import::load_bytes(data.clone(), name, &options),
+            }?;
+            let octree = Octree::build(&scene, OctreeParams::default());
+            Ok((scene, octree))
+        });
+        let (scene, octree) = loaded.map_err(|e| crate::to_pyerr(py, e))?;
+        Ok(PyScene {
+            scene,
+            octree,
+            source,
+            choice,
+        })
+    }
+
+    fn query(&self) -> Query<'_> {
+        Query {
+            scene: &self.scene,
+            octree: &self.octree,
+        }
+    }
+}
+
+/// Loads the scene file `path` (`scene`: a glTF scene by index or name, a USD prim path).
+#[pyfunction]
+#[pyo3(signature = (path, scene = None))]
+pub fn load_path(py: Python<'_>, path: PathBuf, scene: Option<String>) -> PyResult<PyScene> {
+    // Absolute, so that a pickled scene loads in a worker with another working folder.
+    let path = std::path::absolute(&path).unwrap_or(path);
+    PyScene::build(py, Source::Path(path), scene)
+}
+
+/// Loads a scene from bytes, as if read from the file `name` (its extension is the format).
+#[pyfunction]
+#[pyo3(signature = (data, name, scene = None))]
+pub fn load_bytes(
+    py: Python<'_>,
+    data: Vec<u8>,
+    name: PathBuf,
+    scene: Option<String>,
+) -> PyResult<PyScene> {
+    PyScene::build(py, Source::Bytes { data, name }, scene)
+}
+
+/// The rays as the Python layer hands them over: float64 (N, 3) origins and directions, and
+/// `tmin`, `tmax` of length N or 1.
+type RayArgs<'py> = (
+    PyReadonlyArray2<'py, f64>,
+    PyReadonlyArray2<'py, f64>,
+    PyReadonlyArray1<'py, f64>,
+    PyReadonlyArray1<'py, f64>,
+);
+
+/// Borrows the rays (no copy).
+fn rays<'a>(args: &'a RayArgs<'_>) -> PyResult<RayArrays<'a>> {
+    let (origins, directions, tmin, tmax) = args;
+    RayArrays::new(
+        origins.as_array(),
+        directions.as_array(),
+        tmin.as_array(),
+        tmax.as_array(),
+    )
+}
+
+#[pymethods]
+impl PyScene {
+    /// The nearest hit of each ray in `(tmin, tmax]`, as a dict of the requested outputs.
+    fn cast<'py>(
+        &self,
+        py: Python<'py>,
+        rays: RayArgs<'py>,
+        outputs: Vec<String>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let outputs = parse_outputs(&outputs, false)?;
+        let rays = self::rays(&rays)?;
+        let query = self.query();
+        let hits = py.detach(|| nearest_all(&query, &rays));
+        py.detach(|| rays.check(|i| hits[i].is_none()))?;
+        fill_dict(py, &query, &rays, &hits, &outputs, &[rays.len()])
+    }
+
+    /// Whether each ray hits anything in `(tmin, tmax]`.
+    fn occluded<'py>(&self, py: Python<'py>, rays: RayArgs<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let rays = self::rays(&rays)?;
+        let query = self.query();
+        let hit: Vec<bool> = py.detach(|| {
+            nearest_all(&query, &rays)
+                .iter()
+                .map(Option::is_some)
+                .collect()
+        });
+        py.detach(|| rays.check(|i| !hit[i]))?;
+        array(py, &[hit.len()], hit)
+    }
+
+    /// Every surface crossing of each ray in `(tmin, tmax]`, in CSR form:
+    /// (ray_splits uint64 (N+1,), t float64, id uint32, prim uint32).
+    fn crossings<'py>(&self, py: Python<'py>, rays: RayArgs<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        let rays = self::rays(&rays)?;
+        let query = self.query();
+        let (splits, t, id, prim) = py.detach(|| {
+            let per_ray: Vec<Vec<(f64, u32, u32)>> = (0..rays.len())
+                .into_par_iter()
+                .map(|i| {
+                    let ray = rays.ray(i);
+                    let (t0, t1) = rays.range(i);
+                    let found = query.crossings(&ray, t0, t1);
+                    found
+                        .iter()
+                        .map(|c| {
+                            let located = query.scene.locate_crossing(c, ray.origin, ray.dir);
+                            (c.t, located.object.id, located.prim)
+                        })
+                        .collect()
+                })
+                .collect();
+            rays.check(|i| per_ray[i].is_empty())?;
+            let mut splits = Vec::with_capacity(per_ray.len() + 1);
+            splits.push(0u64);
+            for hits in &per_ray {
+                splits.push(splits.last().copied().unwrap_or(0) + hits.len() as u64);
+            }
+            let flat: Vec<(f64, u32, u32)> = per_ray.into_iter().flatten().collect();
+            let t: Vec<f64> = flat.iter().map(|h| h.0).collect();
+            let id: Vec<u32> = flat.iter().map(|h| h.1).collect();
+            let prim: Vec<u32> = flat.iter().map(|h| h.2).collect();
+            PyResult::Ok((splits, t, id, prim))
+        })?;
+        let n = t.len();
+        PyTuple::new(
+            py,
+            [
+                array(py, &[splits.len()], splits)?,
+                array(py, &[n], t)?,
+                array(py, &[n], id)?,
+                array(py, &[n], prim)?,
+            ],
+        )
+    }
+
+    /// Whether each (N, 3) point lies inside the scene's closed surfaces (crossing parity).
+    fn contains<'py>(
+        &self,
+        py: Python<'py>,
+        points: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let points = points.as_array();
+        if points.ncols() != 3 {
+            return Err(PyValueError::new_err("points must be (N, 3)"));
+        }
+        let query = self.query();
+        let inside: Vec<bool> = py.detach(|| {
+            (0..points.nrows())
+                .into_par_iter()
+                .map(|i| query.contains(DVec3::new(points[[i, 0]], points[[i, 1]], points[[i, 2]])))
+                .collect()
+        });
+        array(py, &[inside.len()], inside)
+    }
+
+    /// An image of `width`×`height` pixels seen by `camera`: a dict of (H, W[, 3]) arrays.
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        camera: &PyCamera,
+        width: usize,
+        height: usize,
+        outputs: Vec<String>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let outputs = parse_outputs(&outputs, true)?;
+        let view = View::new(camera, width, height)?;
+        let source = view.source();
+        let query = self.query();
+        let hits: Vec<Option<Crossing>> = py.detach(|| {
+            (0..source.len())
+                .into_par_iter()
+                .map(|i| query.nearest(&source.ray(i), 0.0, f64::INFINITY))
+                .collect()
+        });
+        fill_dict(py, &query, source, &hits, &outputs, &[height, width])
+    }
+
+    /// The object table: a list of dicts (id, name, kind, source, triangles, bounds).
+    fn objects<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        self.scene
+            .objects
+            .iter()
+            .map(|o| {
+                let d = PyDict::new(py);
+                d.set_item("id", o.id)?;
+                d.set_item("name", &o.name)?;
+                let kind = match o.kind {
+                    raycast::scene::ObjectKind::Mesh => "mesh",
+                    raycast::scene::ObjectKind::Quadric => "quadric",
+                };
+                d.set_item("kind", kind)?;
+                d.set_item("source", &o.source)?;
+                d.set_item("triangles", o.triangles)?;
+                let b = self.scene.object_bounds(o);
+                d.set_item("bounds", [b.min.to_array(), b.max.to_array()])?;
+                Ok(d)
+            })
+            .collect()
+    }
+
+    /// World bounds [[xmin, ymin, zmin], [xmax, ymax, zmax]].
+    fn bounds(&self) -> [[f64; 3]; 2] {
+        let b = self.scene.world_bounds();
+        [b.min.to_array(), b.max.to_array()]
+    }
+
+    /// The file's cameras.
+    fn cameras(&self) -> Vec<PyCamera> {
+        let cameras = self.scene.cameras.iter().cloned();
+        cameras
+            .map(|c| PyCamera {
+                kind: Kind::Scene(c),
+            })
+            .collect()
+    }
+
+    /// What `raycast info --json` prints, as a JSON string.
+    fn info_json(&self) -> PyResult<String> {
+        let info = raycast::info::SceneInfo::new(&self.scene);
+        serde_json::to_string(&info).map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
+    /// What loads this scene again: (path, None, scene) or (bytes, name, scene).
+    fn source<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        match &self.source {
+            Source::Path(path) => (path.clone(), py.None(), self.choice.clone()).into_pyobject(py),
+            Source::Bytes { data, name } => {
+                (PyBytes::new(py, data), name.clone(), self.choice.clone()).into_pyobject(py)
+            }
+        }
+    }
+}
+
+/// The nearest crossing of every ray in its range, in parallel.
+fn nearest_all(query: &Query, rays: &RayArrays) -> Vec<Option<Crossing>> {
+    (0..rays.len())
+        .into_par_iter()
+        .map(|i| {
+            let (t0, t1) = rays.range(i);
+            query.nearest(&rays.ray(i), t0, t1)
+        })
+        .collect()
+}
+
+fn parse_outputs(names: &[String], camera: bool) -> PyResult<Vec<(String, Output)>> {
+    names
+        .iter()
+        .map(|n| Output::parse(n, camera).map(|o| (n.clone(), o)))
+        .collect::<Result<_, _>>()
+        .map_err(PyValueError::new_err)
+}

@@ -1,0 +1,137 @@
+//! Ray queries beyond the nearest hit from `t > 0`: a parameter range `(t_min, t_max]`, every
+//! surface crossing along a ray, and point containment by crossing parity. They run on the
+//! octree of [`crate::render::Tracer`] and are what the Python package calls.
+//!
+//! With `t_min = 0` the nearest hit is exactly [`crate::render::Tracer::trace`]'s (the same
+//! search), so buffers filled from it are bit-identical to the command line's rays mode.
+
+use crate::accel::{Hit, Octree, PrimitiveSet};
+use crate::geometry::Ray;
+use crate::scene::{Crossing, EdgeRule, Scene};
+use glam::DVec3;
+
+/// A scene with its octree, ready for queries.
+#[derive(Debug, Clone, Copy)]
+pub struct Query<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The octree built over it.
+    pub octree: &'a Octree,
+}
+
+impl<'a> Query<'a> {
+    /// The nearest crossing with `t_min < t <= t_max` (and `t > 0`); `None` for a miss, an
+    /// untraceable ray (see [`Ray::is_valid`]), a NaN or negative `t_min` or a NaN `t_max`.
+    /// Ties go to the smaller primitive index, as in [`Hit::beats`].
+    pub fn nearest(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Crossing> {
+        if !valid(ray, t_min, t_max) {
+            return None;
+        }
+        let local = ray.origin - self.scene.anchor;
+        if t_min == 0.0 {
+            let hit = self
+                .octree
+                .intersect_ray(self.scene, local, ray.dir, t_max)?;
+            return Some(Crossing {
+                t: hit.t,
+                top: hit.prim,
+                inner: None,
+            });
+        }
+        let prepared = crate::accel::prepare_ray(self.scene, local, ray.dir);
+        let mut best: Option<Crossing> = None;
+        let mut found = Vec::new();
+        self.octree.traverse(local, ray.dir, t_max, |refs, _, _| {
+            let limit = best.map_or(t_max, |b| b.t);
+            for &prim in refs {
+                found.clear();
+                let range = (t_min, limit);
+                let rule = EdgeRule::Inclusive;
+                self.scene
+                    .crossings_of(prim as usize, &prepared, range, rule, &mut found);
+                for c in &found {
+                    let hit = Hit {
+                        t: c.t,
+                        prim: c.top,
+                    };
+                    let current = best.map(|b| Hit {
+                        t: b.t,
+                        prim: b.top,
+                    });
+                    if hit.beats(&current) {
+                        best = Some(*c);
+                    }
+                }
+            }
+            best.map_or(t_max, |b| b.t)
+        });
+        best
+    }
+
+    /// Every surface crossing with `t_min < t <= t_max` (and `t > 0`), nearest first (ties by
+    /// primitive); none for the rays [`Query::nearest`] refuses. A ray through an edge or vertex shared by triangles of a consistently wound
+    /// mesh crosses it once (see [`crate::geometry::triangle::WatertightRay::crossing`]); a
+    /// ray tangent to a quadric touches it once.
+    pub fn crossings(&self, ray: &Ray, t_min: f64, t_max: f64) -> Vec<Crossing> {
+        let mut found = Vec::new();
+        if !valid(ray, t_min, t_max) {
+            return found;
+        }
+        let local = ray.origin - self.scene.anchor;
+        let prepared = crate::accel::prepare_ray(self.scene, local, ray.dir);
+        self.octree.traverse(local, ray.dir, t_max, |refs, _, _| {
+            for &prim in refs {
+                let range = (t_min, t_max);
+                self.scene.crossings_of(
+                    prim as usize,
+                    &prepared,
+                    range,
+                    EdgeRule::Once,
+                    &mut found,
+                );
+            }
+            t_max
+        });
+        // A primitive in several leaves is found once per leaf.
+        found.sort_by(|a, b| {
+            a.t.total_cmp(&b.t)
+                .then(a.top.cmp(&b.top))
+                .then(a.inner.cmp(&b.inner))
+        });
+        found.dedup();
+        found
+    }
+
+    /// Whether `point` lies inside the scene's closed surfaces: the parity of the crossings
+    /// of three rays from it in fixed, unrelated directions, by majority. A single ray can
+    /// only be wrong where it passes exactly through a silhouette edge or a vertex where the
+    /// surface is not crossed but touched; three rays are wrong only when two of them do. A
+    /// point on the surface may count either way.
+    pub fn contains(&self, point: DVec3) -> bool {
+        if !point.is_finite() || self.scene.is_empty() {
+            return false;
+        }
+        let odd = PARITY_DIRECTIONS
+            .iter()
+            .filter(|d| {
+                let ray = Ray::new(point, DVec3::from_array(**d));
+                self.crossings(&ray, 0.0, f64::INFINITY).len() % 2 == 1
+            })
+            .count();
+        odd >= 2
+    }
+}
+
+/// A traceable ray with `t_min >= 0` and `t_max` not NaN.
+fn valid(ray: &Ray, t_min: f64, t_max: f64) -> bool {
+    ray.is_valid() && t_min >= 0.0 && !t_max.is_nan()
+}
+
+/// Directions of the parity rays of [`Query::contains`]: no axis, diagonal or simple ratio,
+/// so that rays from points on a grid do not run along the faces or edges of axis-aligned or
+/// regularly tessellated models.
+const PARITY_DIRECTIONS: [[f64; 3]; 3] = [
+    [0.419, 0.753, 0.511],
+    [-0.83, 0.269, -0.487],
+    [0.233, -0.911, 0.341],
+];

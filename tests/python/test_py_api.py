@@ -1,0 +1,204 @@
+"""The Python package `raycast` (python/): loading, cast, errors, pickling, render.
+
+Expected values come from the fixtures' known geometry (analysis) or from trimesh, never
+from raycast itself. Run: .venv/bin/python -m pytest tests/python/test_py_api.py
+"""
+
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import raycast
+
+ROOT = Path(__file__).resolve().parents[2]
+CUBE = ROOT / "fixtures" / "gltf" / "cube.gltf"
+SPHERE = ROOT / "fixtures" / "quadrics" / "sphere_coefficients.gltf"
+
+
+@pytest.fixture(scope="module")
+def cube():
+    return raycast.load(CUBE)
+
+
+def test_cube_fixture_is_the_unit_cube(cube):
+    # fixtures/README.md: cube.gltf is the cube [-1, 1]^3 at the origin.
+    assert np.array_equal(cube.bounds, [[-1, -1, -1], [1, 1, 1]])
+    assert len(cube.objects) == 1 and cube.objects[0]["id"] == 1
+    assert cube.info()["triangles"] == 12
+
+
+def test_cast_hits_the_faces_it_must(cube):
+    origins = np.array([[0.25, 0.5, 5.0], [5.0, 0.1, -0.2], [0.0, 0.0, 0.0], [3.0, 3.0, 3.0]])
+    directions = np.array([[0.0, 0.0, -2.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
+    hits = raycast.Scene.cast(cube, origins, directions, aovs=raycast.CAST_OUTPUTS)
+    # Analysis: the +z face at t = 4/2, the +x face at 4, the -y face from inside at 1, a miss.
+    assert hits["t"].tolist() == [2.0, 4.0, 1.0, np.inf]
+    assert hits["distance"].tolist() == [4.0, 4.0, 1.0, np.inf]
+    assert hits["normal"].tolist() == [[0, 0, 1], [1, 0, 0], [0, -1, 0], [0, 0, 0]]
+    assert hits["position"][:3].tolist() == [[0.25, 0.5, 1.0], [1.0, 0.1, -0.2], [0.0, -1.0, 0.0]]
+    assert np.isinf(hits["position"][3]).all()
+    assert hits["id"].tolist() == [1, 1, 1, 0]
+    assert hits["prim"][:2].tolist() == [1, 4] and hits["prim"][2] in (10, 11)
+    assert hits["id"].dtype == np.uint32 and hits["prim"].dtype == np.uint32
+    assert hits["prim"][3] == raycast.INVALID_PRIM
+    # Barycentric weights reproduce the hit point from the triangle's corners.
+    bary = hits["bary"][:3]
+    assert np.allclose(bary.sum(axis=1), 1.0) and (bary >= 0).all()
+    assert (hits["bary"][3] == 0).all()
+
+
+def test_tmin_tmax_select_the_range(cube):
+    o = np.array([[0.2, 0.3, 5.0]] * 4)
+    d = np.array([[0.0, 0.0, -1.0]] * 4)
+    # The +z face is at t = 4, the -z face at t = 6.
+    hits = cube.cast(
+        o, d, tmin=[0.0, 4.0, 4.5, 0.0], tmax=[np.inf, np.inf, 5.9, 3.9], aovs=["t", "normal"]
+    )
+    assert hits["t"].tolist() == [4.0, 6.0, np.inf, np.inf]
+    assert hits["normal"][1].tolist() == [0, 0, -1]
+
+
+def test_quadric_sphere_exact():
+    # fixtures/quadrics/README.md: the sphere of radius 2 about the origin.
+    scene = raycast.load(SPHERE)
+    radius = 2.0
+    o = np.array([[0.0, 0.0, 3 * radius]])
+    hits = scene.cast(o, np.array([[0.0, 0.0, -1.0]]), aovs=["distance", "normal", "bary"])
+    assert hits["distance"][0] == pytest.approx(2 * radius, rel=1e-14)
+    assert hits["normal"][0] == pytest.approx([0, 0, 1], abs=1e-14)
+    assert (hits["bary"][0] == 0).all()
+    # Both crossings of the sphere, nearest first.
+    found = scene.list_intersections(o, np.array([[0.0, 0.0, -1.0]]))
+    assert found["ray_splits"].tolist() == [0, 2]
+    assert found["t"] == pytest.approx([2 * radius, 4 * radius], rel=1e-14)
+
+
+def test_inputs_are_read_in_place_or_converted(cube):
+    o = np.asfortranarray(np.array([[0.25, 0.5, 5.0], [0.5, 0.25, 5.0]]))
+    d = np.array([[0.0, 0.0, -1.0, 9.0], [0.0, 0.0, -1.0, 9.0]])[:, :3]  # a strided view
+    f32 = cube.cast(o.astype(np.float32), d.astype(np.float32), aovs=["t"])
+    f64 = cube.cast(o, d, aovs=["t"])
+    ints = cube.cast(np.array([[0, 0, 5]]), np.array([[0, 0, -1]]), aovs=["t"])
+    assert f32["t"].tolist() == f64["t"].tolist() == [4.0, 4.0]
+    assert ints["t"].tolist() == [4.0]
+    empty = cube.cast(np.zeros((0, 3)), np.zeros((0, 3)), aovs=["t", "normal"])
+    assert empty["t"].shape == (0,) and empty["normal"].shape == (0, 3)
+
+
+@pytest.mark.parametrize(
+    "origins, directions, error, text",
+    [
+        (
+            np.zeros((2, 2)),
+            np.zeros((2, 2)),
+            ValueError,
+            "origins must have shape (N, 3), got (2, 2)",
+        ),
+        (np.zeros(3), np.ones(3), ValueError, "origins must have shape (N, 3), got (3,)"),
+        (np.zeros((2, 3)), np.ones((3, 3)), ValueError, "same shape"),
+        (np.array([["a", "b", "c"]]), np.ones((1, 3)), TypeError, "origins must hold real numbers"),
+        (
+            np.zeros((2, 3)),
+            np.array([[0, 0, 1], [np.nan, 0, 1]]),
+            ValueError,
+            "ray 1: direction (NaN, 0, 1) is not finite",
+        ),
+        (
+            np.array([[0, 0, np.inf]]),
+            np.ones((1, 3)),
+            ValueError,
+            "ray 0: origin (0, 0, inf) is not finite",
+        ),
+        (np.zeros((1, 3)), np.zeros((1, 3)), ValueError, "ray 0: direction is zero"),
+    ],
+)
+def test_bad_rays_raise_clear_errors(cube, origins, directions, error, text):
+    with pytest.raises(error) as raised:
+        cube.cast(origins, directions)
+    assert text in str(raised.value)
+
+
+def test_bad_options_raise_clear_errors(cube):
+    o, d = np.zeros((1, 3)), np.ones((1, 3))
+    with pytest.raises(ValueError, match="unknown output 'depthh'"):
+        cube.cast(o, d, aovs=["depthh"])
+    with pytest.raises(ValueError, match="z output needs a camera"):
+        cube.cast(o, d, aovs=["z"])
+    with pytest.raises(ValueError, match="ray 0: tmin -1 is not a number >= 0"):
+        cube.cast(o, d, tmin=-1.0)
+    with pytest.raises(ValueError, match=r"tmax must be a number or have shape \(1,\)"):
+        cube.cast(o, d, tmax=[1.0, 2.0])
+    with pytest.raises(ValueError, match="points must have shape"):
+        cube.contains(np.zeros((4, 2)))
+
+
+def test_load_errors_are_typed(tmp_path):
+    missing = tmp_path / "missing.glb"
+    with pytest.raises(raycast.SceneNotFoundError) as raised:
+        raycast.load(missing)
+    assert isinstance(raised.value, FileNotFoundError)
+    assert str(missing) in str(raised.value)
+    broken = tmp_path / "broken.gltf"
+    broken.write_text("{ not json")
+    with pytest.raises(raycast.SceneError) as raised:
+        raycast.load(broken)
+    assert not isinstance(raised.value, FileNotFoundError)
+    assert str(broken) in str(raised.value)
+    with pytest.raises(raycast.SceneError, match="unsupported file type"):
+        raycast.load_bytes(b"solid x", "x.stl")
+    with pytest.raises(raycast.UsageError, match="USD scenes load from a file"):
+        raycast.load_bytes(b"#usda 1.0\n", "x.usda")
+    with pytest.raises(raycast.SceneError, match="no scene 'nope'|scene 'nope'"):
+        raycast.load(CUBE, scene="nope")
+
+
+def test_load_bytes_matches_load(cube):
+    glb = (ROOT / "fixtures" / "gltf" / "cube.glb").read_bytes()
+    from_bytes = raycast.load_bytes(glb, "cube.glb")
+    obj = raycast.load_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "tri.obj")
+    o, d = np.array([[0.2, 0.3, 5.0]]), np.array([[0.0, 0.0, -1.0]])
+    assert (
+        from_bytes.cast(o, d, aovs=["t"])["t"].tolist() == cube.cast(o, d, aovs=["t"])["t"].tolist()
+    )
+    assert obj.cast(np.array([[0.2, 0.2, 1.0]]), d, aovs=["t"])["t"].tolist() == [1.0]
+
+
+def test_scene_pickles_by_path_and_by_bytes(cube):
+    o, d = np.array([[0.2, 0.3, 5.0]]), np.array([[0.0, 0.0, -1.0]])
+    again = pickle.loads(pickle.dumps(cube))
+    assert again.cast(o, d, aovs=["t"])["t"].tolist() == [4.0]
+    memory = raycast.load_bytes((ROOT / "fixtures" / "gltf" / "cube.glb").read_bytes(), "cube.glb")
+    blob = pickle.dumps(memory)
+    assert b"glTF" in blob  # the bytes travel, not a path
+    assert pickle.loads(blob).cast(o, d, aovs=["t"])["t"].tolist() == [4.0]
+
+
+def test_render_look_at_and_pinhole_agree(cube):
+    # A pinhole K with the principal point at the image centre and fy = fx is the same camera
+    # as a look-at camera with that vertical field of view (the look-at camera looks down -Z
+    # with +Y up, the pinhole down +Z with +Y down: the cam-to-world matrix flips Y and Z).
+    w, h, yfov = 16, 12, 40.0
+    look = raycast.camera.look_at([0.5, 0.7, 6.0], [0.5, 0.7, 0.0], yfov_deg=yfov)
+    f = (h / 2) / np.tan(np.radians(yfov) / 2)
+    K = [[f, 0, w / 2], [0, f, h / 2], [0, 0, 1]]
+    cam_to_world = np.array(look.cam_to_world) @ np.diag([1.0, -1.0, -1.0, 1.0])
+    pin = raycast.camera.pinhole(K, cam_to_world, w, h)
+    a = cube.render(look, w, h, aovs=["depth", "z", "id"])
+    b = cube.render(pin, w, h, aovs=["depth", "z", "id"])
+    assert a["depth"].shape == (h, w) and a["id"].dtype == np.uint32
+    assert np.allclose(a["depth"], b["depth"], rtol=1e-12) and (a["id"] == b["id"]).all()
+    # Analysis: the centre pixels see the +z face, at z = 6 - 1 = 5 along the view axis.
+    assert a["z"][h // 2, w // 2] == pytest.approx(5.0, rel=1e-12)
+    with pytest.raises(ValueError, match="made for 16x12 pixels"):
+        cube.render(pin, 8, 8)
+    with pytest.raises(raycast.UsageError, match="eye and target coincide"):
+        raycast.camera.look_at([0, 0, 0], [0, 0, 0])
+
+
+def test_file_cameras_render():
+    scene = raycast.load(ROOT / "fixtures" / "gltf" / "cameras.gltf")
+    assert len(scene.cameras) >= 1
+    image = scene.render(scene.cameras[0], 8, 8, aovs=["depth", "normal"])
+    assert image["normal"].shape == (8, 8, 3)

@@ -1,0 +1,174 @@
+"""raycast.Scene's multiple-hit queries, containment, the GIL release, and agreement with the
+command line's rays mode.
+
+Run: .venv/bin/python -m pytest tests/python/test_py_queries.py
+"""
+
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import raycast
+from raycast_tools.paths import find_raycast
+
+ROOT = Path(__file__).resolve().parents[2]
+CUBE = ROOT / "fixtures" / "gltf" / "cube.gltf"
+
+
+@pytest.fixture(scope="module")
+def cube():
+    return raycast.load(CUBE)
+
+
+def test_rays_through_shared_edges_and_vertices_cross_twice(cube):
+    # Every line through the interior of the closed cube [-1, 1]^3 crosses its surface twice:
+    # through the faces' diagonal edges (x = y on +-Z), through the cube's edges' midpoints
+    # and through opposite corners.
+    s = np.linspace(-0.75, 0.75, 7)
+    origins = np.concatenate(
+        [
+            np.column_stack([s, s, np.full(7, 5.0)]),  # on the diagonal of the +Z and -Z faces
+            np.column_stack([s, -s, np.full(7, 5.0)]),
+            [[-2.0, -2.0, -2.0], [3.0, 3.0, -3.0], [0.0, -3.0, -3.0]],  # corners, edge midpoints
+        ]
+    )
+    directions = np.concatenate(
+        [np.tile([0.0, 0.0, -1.0], (14, 1)), [[1, 1, 1], [-1, -1, 1], [0, 1, 1]]]
+    )
+    counts = cube.count_intersections(origins, directions)
+    assert counts.tolist() == [2] * len(origins)
+    found = cube.list_intersections(origins[:1], directions[:1])
+    assert found["t"].tolist() == [4.0, 6.0] and found["id"].tolist() == [1, 1]
+    # The near crossing is on the +Z face (prims 0, 1), the far one on -Z (prims 2, 3).
+    assert found["prim"][0] in (0, 1) and found["prim"][1] in (2, 3)
+
+
+def test_crossings_match_trimesh_counts_on_a_sphere():
+    # Random lines through an icosphere: 2 crossings when trimesh's intersector finds hits
+    # (it reports entry and exit), 0 otherwise; tmin/tmax cut the list.
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    scene = raycast.load_bytes(sphere.export(file_type="glb"), "sphere.glb")
+    rng = np.random.default_rng(5)
+    origins = rng.normal(size=(400, 3)) * 0 + [0.0, 0.0, -4.0]
+    directions = np.column_stack([rng.uniform(-0.3, 0.3, (400, 2)), np.ones(400)])
+    reference = trimesh.ray.ray_triangle.RayMeshIntersector(sphere)
+    _, index_ray = reference.intersects_id(origins, directions, multiple_hits=True)
+    ref_counts = np.bincount(index_ray, minlength=400)
+    counts = scene.count_intersections(origins, directions)
+    assert set(counts.tolist()) <= {0, 2}
+    clear = ref_counts != 1  # trimesh may drop one of two hits at an edge
+    assert (counts[clear] == ref_counts[clear]).all()
+    found = scene.list_intersections(origins, directions)
+    first = scene.cast(origins, directions, aovs=["t"])["t"]
+    hit = counts > 0
+    assert (found["t"][found["ray_splits"][:-1][hit]] == first[hit]).all()
+    cut = scene.count_intersections(origins, directions, tmax=first + 1e-9)
+    assert (cut[hit] == 1).all()
+
+
+def test_contains_on_a_grid(cube):
+    # Analysis: inside the cube [-1, 1]^3 iff every |coordinate| < 1.
+    g = np.linspace(-1.5, 1.5, 13)
+    points = np.stack(np.meshgrid(g, g, g), -1).reshape(-1, 3)
+    expected = (np.abs(points) < 1).all(axis=1)
+    away = (np.abs(np.abs(points) - 1) > 1e-9).all(axis=1)
+    assert (cube.contains(points)[away] == expected[away]).all()
+    assert cube.occluded(points[:1], [[1.0, 0.0, 0.0]]).tolist() == [False]
+
+
+def test_cast_releases_the_gil(cube):
+    # While one thread is inside cast(), another runs Python code: the main thread records
+    # the times of its loop iterations, and some fall inside the middle of the cast call.
+    n = 1_500_000
+    rng = np.random.default_rng(6)
+    origins = np.tile([0.0, 0.0, 5.0], (n, 1))
+    directions = np.column_stack([rng.uniform(-0.3, 0.3, (n, 2)), -np.ones(n)])
+    span = {}
+    started = threading.Event()
+
+    def work():
+        started.set()
+        span["start"] = time.perf_counter()
+        cube.cast(origins, directions, aovs=["t", "normal", "id"])
+        span["end"] = time.perf_counter()
+
+    thread = threading.Thread(target=work)
+    ticks = []
+    thread.start()
+    started.wait()
+    while thread.is_alive():
+        ticks.append(time.perf_counter())
+    thread.join()
+    start, end = span["start"], span["end"]
+    assert end - start > 0.02, "the cast is too short for the test to mean anything"
+    middle = [t for t in ticks if start + (end - start) / 3 < t < end - (end - start) / 3]
+    assert len(middle) > 10
+
+
+def test_cast_is_bit_identical_to_the_cli_rays_mode(tmp_path):
+    # The same rays through `raycast SCENE --rays` and through cast(): equal bits in every
+    # buffer, misses included.
+    binary = find_raycast()
+    if not binary.exists():
+        pytest.fail(f"raycast binary not found at {binary}: build it with cargo build --release")
+    rng = np.random.default_rng(7)
+    scene_path = ROOT / "fixtures" / "gltf" / "instances.gltf"
+    scene = raycast.load(scene_path)
+    lo, hi = scene.bounds
+    origins = rng.uniform(lo - 1, hi + 1, (3000, 3))
+    directions = rng.uniform(lo, hi, (3000, 3)) - origins
+    rays = np.concatenate([origins, directions], axis=1)
+    np.save(tmp_path / "rays.npy", rays)
+    out = tmp_path / "out"
+    aovs = ["depth", "normal", "position", "id", "prim"]
+    subprocess.run(
+        [
+            binary,
+            scene_path,
+            "--rays",
+            tmp_path / "rays.npy",
+            "--aov",
+            ",".join(aovs),
+            "--out",
+            out,
+            "--quiet",
+        ],
+        check=True,
+    )
+    ours = scene.cast(origins, directions, aovs=aovs)
+    for aov in aovs:
+        cli = np.load(out / f"{aov}.npy")
+        assert cli.dtype == ours[aov].dtype and cli.shape == ours[aov].shape
+        assert cli.tobytes() == ours[aov].tobytes(), aov
+    assert (ours["id"] > 0).sum() > 100
+
+
+def test_render_is_bit_identical_to_the_cli(tmp_path, cube):
+    binary = find_raycast()
+    out = tmp_path / "out"
+    subprocess.run(
+        [
+            binary,
+            CUBE,
+            "--aov",
+            "depth,normal,id",
+            "--format",
+            "npy",
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--out",
+            out,
+            "--quiet",
+        ],
+        check=True,
+    )
+    ours = cube.render(cube.cameras[0], 24, 16, aovs=["depth", "normal", "id"])
+    for aov in ("depth", "normal", "id"):
+        assert np.load(out / f"{aov}.npy").tobytes() == ours[aov].tobytes(), aov
