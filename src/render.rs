@@ -193,11 +193,16 @@ pub enum AccelStructure {
 
 impl AccelStructure {
     /// Builds the structure of `kind` over `scene` (`params` apply to the octree only).
+    /// The octrees of instanced meshes are built alongside ([`Scene::build_instances`]).
     pub fn build(scene: &Scene, kind: AccelKind, params: OctreeParams) -> AccelStructure {
-        match kind {
-            AccelKind::Octree => AccelStructure::Octree(Octree::build(scene, params)),
-            AccelKind::Bvh(kind) => AccelStructure::Bvh(Bvh::build(scene, kind)),
-        }
+        let (_, accel) = rayon::join(
+            || scene.build_instances(),
+            || match kind {
+                AccelKind::Octree => AccelStructure::Octree(Octree::build(scene, params)),
+                AccelKind::Bvh(kind) => AccelStructure::Bvh(Bvh::build(scene, kind)),
+            },
+        );
+        accel
     }
 
     /// A borrowed view for a [`Tracer`].

@@ -183,6 +183,16 @@ impl Scene {
         self.world.mesh.len() + self.meshes.iter().map(|m| m.set.mesh.len()).sum::<usize>()
     }
 
+    /// Builds the octree of every instanced mesh that has none yet, in parallel. Tracing
+    /// builds a missing one on first use anyway; a render calls this with its build step so
+    /// that the work is parallel and timed as building.
+    pub fn build_instances(&self) {
+        use rayon::prelude::*;
+        self.meshes.par_iter().for_each(|mesh| {
+            mesh.octree();
+        });
+    }
+
     /// The instances.
     pub fn instances(&self) -> &[Instance] {
         &self.instances
