@@ -166,7 +166,7 @@ fn op_matrix(prim: &Prim, name: &str, warnings: &mut Vec<String>) -> Result<Opti
                     prim.path()
                 ));
             }
-            DMat4::from_quat(DQuat::normalize(q))
+            DMat4::from_quat(orient_rotation(q))
         }
         "transform" => value_matrix4(&raw).ok_or_else(|| bad("a matrix4d"))?,
         _ => {
@@ -178,4 +178,20 @@ fn op_matrix(prim: &Prim, name: &str, warnings: &mut Vec<String>) -> Result<Opti
         }
     };
     Ok(Some(matrix))
+}
+
+/// The rotation usd-core makes of an `orient` quaternion (`GfRotation`): the real part, clamped
+/// to [-1, 1], is the cosine of half the angle and the imaginary part gives only the axis. A
+/// quaternion that is not exactly unit (any `quatf` such as `(0.8, 0.2, 0.4, 0.4)` rounded to
+/// f32) is therefore not normalised as a whole: doing so turned that one by 3.4e-8.
+fn orient_rotation(q: DQuat) -> DQuat {
+    let axis = glam::DVec3::new(q.x, q.y, q.z);
+    let length = axis.length();
+    // GfRotation's GF_MIN_VECTOR_LENGTH: a shorter axis is no rotation.
+    if length <= 1e-10 {
+        return DQuat::IDENTITY;
+    }
+    let cos = q.w.clamp(-1.0, 1.0);
+    let v = axis * ((1.0 - cos * cos).sqrt() / length);
+    DQuat::from_xyzw(v.x, v.y, v.z, cos).normalize()
 }
