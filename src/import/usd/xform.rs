@@ -195,3 +195,28 @@ fn orient_rotation(q: DQuat) -> DQuat {
     let v = axis * ((1.0 - cos * cos).sqrt() / length);
     DQuat::from_xyzw(v.x, v.y, v.z, cos).normalize()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// usd-core 25.x: `Gf.Matrix4d(Gf.Rotation(Gf.Quatd(Gf.Quatf(0.8, 0.2, 0.4, 0.4))),
+    /// Gf.Vec3d(0))`, rows (USD's row vectors: row r is where axis r goes).
+    const USD_ROWS: [[f64; 3]; 3] = [
+        [0.3600000339084203, 0.7999999841054275, -0.4800000010596377],
+        [-0.4800000010596377, 0.6000000211927627, 0.6399999793370561],
+        [0.7999999841054275, -1.3245476437884207e-08, 0.6000000211927627],
+    ];
+
+    #[test]
+    fn orient_of_a_not_quite_unit_quatf_is_usd_cores_rotation() {
+        let [w, x, y, z] = [0.8f32, 0.2, 0.4, 0.4].map(f64::from);
+        let m = DMat4::from_quat(orient_rotation(DQuat::from_xyzw(x, y, z, w)));
+        for (r, row) in USD_ROWS.iter().enumerate() {
+            for (c, &expected) in row.iter().enumerate() {
+                let got = m.col(r)[c];
+                assert!((got - expected).abs() <= 4e-16, "[{r}][{c}] {got} vs {expected}");
+            }
+        }
+    }
+}
