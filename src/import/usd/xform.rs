@@ -205,7 +205,11 @@ mod tests {
     const USD_ROWS: [[f64; 3]; 3] = [
         [0.3600000339084203, 0.7999999841054275, -0.4800000010596377],
         [-0.4800000010596377, 0.6000000211927627, 0.6399999793370561],
-        [0.7999999841054275, -1.3245476437884207e-08, 0.6000000211927627],
+        [
+            0.7999999841054275,
+            -1.3245476437884207e-08,
+            0.6000000211927627,
+        ],
     ];
 
     #[test]
@@ -215,7 +219,10 @@ mod tests {
         for (r, row) in USD_ROWS.iter().enumerate() {
             for (c, &expected) in row.iter().enumerate() {
                 let got = m.col(r)[c];
-                assert!((got - expected).abs() <= 4e-16, "[{r}][{c}] {got} vs {expected}");
+                assert!(
+                    (got - expected).abs() <= 4e-16,
+                    "[{r}][{c}] {got} vs {expected}"
+                );
             }
         }
     }
