@@ -122,9 +122,7 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     fn distribute(&self, cell: &Aabb, refs: &[u32]) -> Vec<Vec<u32>> {
         let mid = cell.center();
         let margin = DVec3::splat(self.margin);
-        // A surface puts about half of a cell's references in each child it crosses.
-        let mut children: Vec<Vec<u32>> =
-            (0..8).map(|_| Vec::with_capacity(refs.len() / 2)).collect();
+        let mut children: Vec<Vec<u32>> = vec![Vec::new(); 8];
         for &prim in refs {
             let b = &self.bounds[prim as usize];
             let low = b.min.cmplt(mid + margin).bitmask();
