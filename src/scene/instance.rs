@@ -13,8 +13,8 @@ use std::sync::OnceLock;
 
 /// A mesh stored once, with the octree over its triangles in its own frame. The octree is
 /// built on first use ([`StoredMesh::octree`]), so that reading a scene (`raycast info`,
-/// `check`) does not pay for it; a render builds all of them, in parallel, with the
-/// top-level structure (`Scene::build_instances`).
+/// `check`) does not pay for it; a render builds all of them, in parallel, just before
+/// the top-level structure (`Scene::build_instances`).
 #[derive(Debug, Clone)]
 pub struct StoredMesh {
     /// The mesh and the anchor of its octree's coordinates.

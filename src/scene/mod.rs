@@ -399,7 +399,7 @@ impl PrimitiveSet for Scene {
 
     /// Always inlined (with [`crate::accel::test_primitive`]): left to the compiler, whether
     /// these two calls per primitive test were inlined changed with unrelated edits, and the
-    /// calls cost 8 % of a trace's instructions (callgrind, 256² bunny 1266 -> 1162, helmet
+    /// calls cost 8 % of a trace's instructions (callgrind, 512² bunny 1266 -> 1162, helmet
     /// 1190 -> 1094 per ray).
     #[inline(always)]
     fn intersect(&self, index: usize, ray: &PreparedRay<SceneRay>, t_max: f64) -> Option<f64> {
