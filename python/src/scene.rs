@@ -43,6 +43,7 @@ impl PyScene {
                 Source::Path(path) => import::load(path, &options),
                 Source::Bytes { data, name } => import::load_bytes(data.clone(), name, &options),
             }?;
+            scene.build_instances();
             let octree = Octree::build(&scene, OctreeParams::default());
             Ok((scene, octree))
         });

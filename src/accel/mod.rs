@@ -141,6 +141,7 @@ pub fn brute_force<P: PrimitiveSet>(set: &P, ray: &PreparedRay<P::RayData>) -> O
 /// Tests primitive `prim` for a hit with `0 < t <= t_max` and keeps it in `best` when it beats
 /// the hit there (see [`Hit::beats`]); returns whether it did. Every backend goes through here,
 /// so all of them pick the same primitive.
+#[inline(always)]
 pub fn test_primitive<P: PrimitiveSet>(
     set: &P,
     prim: u32,

@@ -200,6 +200,11 @@ pub fn overlaps_box(tri: &[DVec3; 3], aabb: &Aabb) -> bool {
 /// six faces), or `None` when clipping leaves nothing. The clipped vertices carry rounding of
 /// a few ulps of the coordinates; callers grow the box by their margin.
 pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
+    let bounds = Aabb::from_points(tri.iter().copied());
+    if bounds.min.cmpge(cell.min).all() && bounds.max.cmple(cell.max).all() {
+        // No plane cuts it: clipping would keep the triangle as it is.
+        return Some(bounds);
+    }
     let mut polygon = Polygon::default();
     for v in tri {
         polygon.push(*v);
@@ -209,7 +214,7 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
         polygon.clip(axis, cell.max[axis], -1.0);
     }
     let bounds = if polygon.overflowed {
-        Aabb::from_points(tri.iter().copied()).common(*cell)
+        bounds.common(*cell)
     } else {
         Some(Aabb::from_points(polygon.vertices().iter().copied()))
     };
@@ -285,11 +290,12 @@ pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64) -> u8 {
         }
     }
     let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
-    let axes = std::iter::once(edges[0].cross(edges[1])).chain(
-        edges
-            .iter()
-            .flat_map(|e| DVec3::AXES.map(|axis| e.cross(axis))),
-    );
+    let mut axes = [edges[0].cross(edges[1]); 10];
+    for (k, e) in edges.iter().enumerate() {
+        for (j, axis) in DVec3::AXES.into_iter().enumerate() {
+            axes[1 + 3 * k + j] = e.cross(axis);
+        }
+    }
     for axis in axes {
         if mask == 0 {
             break;
@@ -297,14 +303,16 @@ pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64) -> u8 {
         let p = [axis.dot(v[0]), axis.dot(v[1]), axis.dot(v[2])];
         let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
         let radius = half.dot(axis.abs());
+        // The octant centres projected on the axis, `octant_offset(i, quarter).dot(axis)`
+        // term by term (negating a product is exact), for all eight octants at once.
+        let q = quarter * axis;
+        let (x, y, z) = ([-q.x, q.x], [-q.y, q.y], [-q.z, q.z]);
+        let mut separated = 0u8;
         for i in 0..8 {
-            if mask & (1 << i) != 0 {
-                let c = octant_offset(i, quarter).dot(axis);
-                if lo - c > radius || hi - c < -radius {
-                    mask &= !(1 << i);
-                }
-            }
+            let c = x[i & 1] + y[(i >> 1) & 1] + z[i >> 2];
+            separated |= u8::from(lo - c > radius || hi - c < -radius) << i;
         }
+        mask &= !separated;
     }
     mask
 }

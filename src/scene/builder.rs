@@ -8,7 +8,6 @@ use crate::camera::Camera;
 use crate::geometry::Aabb;
 use crate::quadric::Quadric;
 use glam::{DMat4, DVec3};
-use rayon::prelude::*;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -228,8 +227,8 @@ fn instanced(mesh: &Mesh, world: &DMat4, uses: usize) -> bool {
     uses >= 2 && mesh.len() >= MIN_INSTANCED_TRIANGLES && world.row(3) == glam::DVec4::W
 }
 
-/// Builds each mesh drawn as an instance once (in parallel), with its octree; returns them and
-/// the index of each by the mesh's address.
+/// Stores each mesh drawn as an instance once (its octree is built later, see
+/// [`StoredMesh::octree`]); returns them and the index of each by the mesh's address.
 fn store_instanced(items: &[(u32, u32, Item)]) -> (Vec<StoredMesh>, HashMap<usize, u32>) {
     let mut uses: HashMap<usize, usize> = HashMap::new();
     for (_, _, item) in items {
@@ -249,7 +248,7 @@ fn store_instanced(items: &[(u32, u32, Item)]) -> (Vec<StoredMesh>, HashMap<usiz
         }
     }
     let meshes = unique
-        .par_iter()
+        .iter()
         .map(|mesh| {
             let set = MeshSet {
                 anchor: frame_anchor(&mesh.bounds()),

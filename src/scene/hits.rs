@@ -72,7 +72,7 @@ impl Scene {
                 let d = instance.to_local.transform_vector3(ray.dir) + DVec3::ZERO;
                 let local = WatertightRay::new(o, d);
                 stored
-                    .octree
+                    .octree()
                     .traverse(o - stored.set.anchor, d, t_max, |refs, _, _| {
                         for &prim in refs {
                             let tri = stored.set.mesh.triangle(prim as usize);

@@ -9,26 +9,39 @@ use crate::accel::{Hit, Octree, OctreeParams, PreparedRay};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Aabb;
 use glam::{DAffine3, DMat4, DVec3};
+use std::sync::OnceLock;
 
-/// A mesh stored once, with the octree over its triangles in its own frame.
+/// A mesh stored once, with the octree over its triangles in its own frame. The octree is
+/// built on first use ([`StoredMesh::octree`]), so that reading a scene (`raycast info`,
+/// `check`) does not pay for it; a render builds all of them, in parallel, just before
+/// the top-level structure (`Scene::build_instances`).
 #[derive(Debug, Clone)]
 pub struct StoredMesh {
     /// The mesh and the anchor of its octree's coordinates.
     pub set: MeshSet,
-    /// The octree over `set`.
-    pub octree: Octree,
+    params: OctreeParams,
+    octree: OnceLock<Octree>,
 }
 
 impl StoredMesh {
-    /// Stores `set` and builds its octree.
+    /// Stores `set`; its octree will be built with `params`.
     pub fn new(set: MeshSet, params: OctreeParams) -> StoredMesh {
-        let octree = Octree::build(&set, params);
-        StoredMesh { set, octree }
+        StoredMesh {
+            set,
+            params,
+            octree: OnceLock::new(),
+        }
     }
 
-    /// Bytes of vertices, indices and octree.
+    /// The octree over `set`, built now if it was not yet.
+    pub fn octree(&self) -> &Octree {
+        self.octree
+            .get_or_init(|| Octree::build(&self.set, self.params))
+    }
+
+    /// Bytes of vertices, indices and (once built) octree.
     pub fn bytes(&self) -> usize {
-        self.set.mesh.bytes() + self.octree.bytes()
+        self.set.mesh.bytes() + self.octree.get().map_or(0, Octree::bytes)
     }
 }
 
@@ -92,6 +105,6 @@ impl Instance {
             dir: d,
             extra: WatertightRay::new(o, d),
         };
-        stored.octree.intersect(&stored.set, &ray, t_max)
+        stored.octree().intersect(&stored.set, &ray, t_max)
     }
 }

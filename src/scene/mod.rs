@@ -183,6 +183,16 @@ impl Scene {
         self.world.mesh.len() + self.meshes.iter().map(|m| m.set.mesh.len()).sum::<usize>()
     }
 
+    /// Builds the octree of every instanced mesh that has none yet, in parallel. Tracing
+    /// builds a missing one on first use anyway; a render calls this with its build step so
+    /// that the work is parallel and timed as building.
+    pub fn build_instances(&self) {
+        use rayon::prelude::*;
+        self.meshes.par_iter().for_each(|mesh| {
+            mesh.octree();
+        });
+    }
+
     /// The instances.
     pub fn instances(&self) -> &[Instance] {
         &self.instances
@@ -387,6 +397,11 @@ impl PrimitiveSet for Scene {
         }
     }
 
+    /// Always inlined (with [`crate::accel::test_primitive`]): left to the compiler, whether
+    /// these two calls per primitive test were inlined changed with unrelated edits, and the
+    /// calls cost 8 % of a trace's instructions (callgrind, 512² bunny 1266 -> 1162, helmet
+    /// 1190 -> 1094 per ray).
+    #[inline(always)]
     fn intersect(&self, index: usize, ray: &PreparedRay<SceneRay>, t_max: f64) -> Option<f64> {
         if index < self.world.mesh.len() {
             self.world

@@ -43,6 +43,10 @@ COMMANDS = {
         "check_scale",
         "raycast check shards, merge, throughput and the Khronos validator (check_scale.md)",
     ),
+    "exact-depth": (
+        "exact_depth",
+        "USD depth against usd-core placement + a float64 ray/triangle test (1e-12)",
+    ),
     "instancing-bench": (
         "instancing_bench",
         "memory and build time of instanced scenes, two binaries (reports/instancing.md)",

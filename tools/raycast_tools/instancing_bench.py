@@ -5,7 +5,9 @@
 Scenes: the bunny drawn by 1 and by 64 glTF nodes (one mesh), the 72-bunny bench scene
 (tools/bench.py's generator) and the OpenChessSet (../shared/assets; skipped with a message
 when missing). Each binary renders a 256x256 depth image; reported: the sidecar's load and
-build seconds (median of the runs) and the process's peak resident memory (GNU time's %M).
+build seconds, the whole process's wall-clock and CPU seconds (GNU time's %e and %U + %S;
+for USD this includes the child `raycast info` that reads the stage first), each the median
+of the runs, and the peak resident memory (GNU time's %M).
 """
 
 import argparse
@@ -23,11 +25,11 @@ from .cli import prog
 
 
 def run(binary, scene, out):
-    """(load s, build s, peak MiB) of one render."""
+    """(load s, build s, wall s, CPU s, peak MiB) of one render."""
     cmd = [
         "/usr/bin/time",
         "-f",
-        "%M",
+        "%M %e %U %S",
         str(binary),
         str(scene),
         "--width",
@@ -41,9 +43,10 @@ def run(binary, scene, out):
         str(out),
     ]
     done = subprocess.run(cmd, capture_output=True, text=True, check=True)
-    peak_kib = int(done.stderr.strip().splitlines()[-1])
+    peak_kib, wall, user, system = done.stderr.strip().splitlines()[-1].split()
     timings = json.loads((out / "raycast.json").read_text())["timings"]
-    return timings["load"], timings["build"], peak_kib / 1024
+    cpu = float(user) + float(system)
+    return timings["load"], timings["build"], float(wall), cpu, int(peak_kib) / 1024
 
 
 def main(argv=None):
@@ -76,14 +79,14 @@ def main(argv=None):
             f"instancing_bench: {a.chess} not found (../shared/assets missing): chess set skipped",
             file=sys.stderr,
         )
-    print("| scene | binary | load s | build s | load+build s | peak MiB |")
-    print("|---|---|---|---|---|---|")
+    print("| scene | binary | load s | build s | load+build s | wall s | CPU s | peak MiB |")
+    print("|---|---|---|---|---|---|---|---|")
     for title, path in scenes:
         for label, binary in (("before", a.before), ("after", a.after)):
             runs = [run(binary, path, tmp / f"out_{label}") for _ in range(a.runs)]
-            load, build, peak = (statistics.median(r[k] for r in runs) for k in range(3))
+            load, build, wall, cpu, peak = (statistics.median(r[k] for r in runs) for k in range(5))
             print(
                 f"| {title} | {label} | {load:.3f} | {build:.3f} | {load + build:.3f} "
-                f"| {peak:.0f} |",
+                f"| {wall:.2f} | {cpu:.2f} | {peak:.0f} |",
                 flush=True,
             )

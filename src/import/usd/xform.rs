@@ -166,7 +166,7 @@ fn op_matrix(prim: &Prim, name: &str, warnings: &mut Vec<String>) -> Result<Opti
                     prim.path()
                 ));
             }
-            DMat4::from_quat(DQuat::normalize(q))
+            DMat4::from_quat(orient_rotation(q))
         }
         "transform" => value_matrix4(&raw).ok_or_else(|| bad("a matrix4d"))?,
         _ => {
@@ -178,4 +178,52 @@ fn op_matrix(prim: &Prim, name: &str, warnings: &mut Vec<String>) -> Result<Opti
         }
     };
     Ok(Some(matrix))
+}
+
+/// The rotation usd-core makes of an `orient` quaternion (`GfRotation`): the real part, clamped
+/// to [-1, 1], is the cosine of half the angle and the imaginary part gives only the axis. A
+/// quaternion that is not exactly unit (any `quatf` such as `(0.8, 0.2, 0.4, 0.4)` rounded to
+/// f32) is therefore not normalised as a whole: doing so turned that one by 3.4e-8.
+fn orient_rotation(q: DQuat) -> DQuat {
+    let axis = glam::DVec3::new(q.x, q.y, q.z);
+    let length = axis.length();
+    // GfRotation's GF_MIN_VECTOR_LENGTH: a shorter axis is no rotation.
+    if length <= 1e-10 {
+        return DQuat::IDENTITY;
+    }
+    let cos = q.w.clamp(-1.0, 1.0);
+    let v = axis * ((1.0 - cos * cos).sqrt() / length);
+    DQuat::from_xyzw(v.x, v.y, v.z, cos).normalize()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// usd-core 25.x: `Gf.Matrix4d(Gf.Rotation(Gf.Quatd(Gf.Quatf(0.8, 0.2, 0.4, 0.4))),
+    /// Gf.Vec3d(0))`, rows (USD's row vectors: row r is where axis r goes).
+    const USD_ROWS: [[f64; 3]; 3] = [
+        [0.3600000339084203, 0.7999999841054275, -0.4800000010596377],
+        [-0.4800000010596377, 0.6000000211927627, 0.6399999793370561],
+        [
+            0.7999999841054275,
+            -1.3245476437884207e-08,
+            0.6000000211927627,
+        ],
+    ];
+
+    #[test]
+    fn orient_of_a_not_quite_unit_quatf_is_usd_cores_rotation() {
+        let [w, x, y, z] = [0.8f32, 0.2, 0.4, 0.4].map(f64::from);
+        let m = DMat4::from_quat(orient_rotation(DQuat::from_xyzw(x, y, z, w)));
+        for (r, row) in USD_ROWS.iter().enumerate() {
+            for (c, &expected) in row.iter().enumerate() {
+                let got = m.col(r)[c];
+                assert!(
+                    (got - expected).abs() <= 4e-16,
+                    "[{r}][{c}] {got} vs {expected}"
+                );
+            }
+        }
+    }
 }
