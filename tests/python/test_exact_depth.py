@@ -5,23 +5,16 @@ Run: .venv/bin/python -m pytest tests/python/test_exact_depth.py
 Skips when target/release/raycast (or $RAYCAST) does not exist, or without usd-core.
 """
 
-import os
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 pytest.importorskip("pxr")
 
+from binary import RAYCAST, ROOT, needs_binary
+
 from raycast_tools import exact_depth
 
-ROOT = Path(__file__).resolve().parents[2]
-RAYCAST = Path(os.environ.get("RAYCAST", ROOT / "target" / "release" / "raycast"))
 USD = ROOT / "fixtures" / "usd"
-needs_binary = pytest.mark.skipif(
-    not RAYCAST.exists(),
-    reason=f"raycast binary not built ({RAYCAST}); run cargo build --release first",
-)
 
 
 def test_moller_trumbore_against_a_hand_computed_hit():

@@ -12,23 +12,16 @@ import os
 import stat
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from binary import RAYCAST, ROOT, needs_binary
 
 from raycast_tools import quadric_reference as qr
 from raycast_tools import validate
 from raycast_tools.rays import camera_rays
 
-ROOT = Path(__file__).resolve().parents[2]
-
-RAYCAST = Path(os.environ.get("RAYCAST", ROOT / "target" / "release" / "raycast"))
 FIXTURES = ROOT / "fixtures"
-needs_binary = pytest.mark.skipif(
-    not RAYCAST.exists(),
-    reason=f"raycast binary not built ({RAYCAST}); run cargo build --release first",
-)
 
 
 # ------------------------------------------------------------------ helpers

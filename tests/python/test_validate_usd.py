@@ -6,26 +6,19 @@ Skips when target/release/raycast (or $RAYCAST) does not exist, or without usd-c
 """
 
 import json
-import os
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 pytest.importorskip("pxr")
 
+from binary import RAYCAST, ROOT, needs_binary
+
 from raycast_tools import validate_usd
 
-ROOT = Path(__file__).resolve().parents[2]
-
-RAYCAST = Path(os.environ.get("RAYCAST", ROOT / "target" / "release" / "raycast"))
 USD = ROOT / "fixtures" / "usd"
-needs_binary = pytest.mark.skipif(
-    not RAYCAST.exists(),
-    reason=f"raycast binary not built ({RAYCAST}); run cargo build --release first",
-)
 
 # 64 segments keeps the tessellated gprims small (about 30k triangles for gprims.usda);
 # the bound scales with the resolution, so the check is as strict relative to it.
