@@ -163,19 +163,29 @@ impl Slot<'_> {
 const BLOCK: usize = 1024;
 
 /// The rays of a query: their source, each ray's `(tmin, tmax]`, and which missing rays are
-/// refused (`suspect(i)` for a ray without a hit).
-pub struct Rays<'a> {
+/// refused (`refused(i)` for a ray without a hit). Generic, so that reading a ray and its range
+/// is inlined into the search loop.
+pub struct Rays<'a, S: ?Sized, R, F> {
     /// The rays.
-    pub source: &'a (dyn RaySource + Sync),
+    pub source: &'a S,
     /// Ray `i`'s parameter range.
-    pub range: &'a (dyn Fn(usize) -> (f64, f64) + Sync),
+    pub range: R,
     /// Whether ray `i`, which has no hit, is one that cannot be traced.
-    pub refused: &'a (dyn Fn(usize) -> bool + Sync),
+    pub refused: F,
 }
 
 /// Finds the nearest hit of every ray and computes `outputs` from it, in one parallel pass.
 /// Returns the columns, or the first refused ray.
-fn trace(query: &Query, rays: &Rays, outputs: &[Output]) -> Result<Vec<Column>, usize> {
+fn trace<S, R, F>(
+    query: &Query,
+    rays: &Rays<S, R, F>,
+    outputs: &[Output],
+) -> Result<Vec<Column>, usize>
+where
+    S: RaySource + Sync + ?Sized,
+    R: Fn(usize) -> (f64, f64) + Sync,
+    F: Fn(usize) -> bool + Sync,
+{
     let n = rays.source.len();
     let mut columns: Vec<Column> = outputs.iter().map(|&o| Column::new(o, n)).collect();
     let mut blocks: Vec<Vec<Slot>> = (0..n.div_ceil(BLOCK)).map(|_| Vec::new()).collect();
@@ -225,13 +235,18 @@ fn trace(query: &Query, rays: &Rays, outputs: &[Output]) -> Result<Vec<Column>, 
 
 /// Traces `rays` and returns a dict of `outputs` (with their names), arrays of shape `shape`
 /// (+ `(3,)` for vectors), or the first refused ray. The tracing runs with the GIL released.
-pub fn trace_dict<'py>(
+pub fn trace_dict<'py, S, R, F>(
     py: Python<'py>,
     query: &Query,
-    rays: &Rays,
+    rays: &Rays<S, R, F>,
     outputs: &[(String, Output)],
     shape: &[usize],
-) -> PyResult<Result<Bound<'py, PyDict>, usize>> {
+) -> PyResult<Result<Bound<'py, PyDict>, usize>>
+where
+    S: RaySource + Sync + ?Sized,
+    R: Fn(usize) -> (f64, f64) + Sync,
+    F: Fn(usize) -> bool + Sync,
+{
     let kinds: Vec<Output> = outputs.iter().map(|(_, o)| *o).collect();
     let columns = match py.detach(|| trace(query, rays, &kinds)) {
         Ok(columns) => columns,

@@ -118,8 +118,8 @@ impl PyScene {
         let rays = self::rays(&rays)?;
         let traced = Rays {
             source: &rays,
-            range: &|i| rays.range(i),
-            refused: &|i| rays.refused(i),
+            range: |i| rays.range(i),
+            refused: |i| rays.refused(i),
         };
         trace_dict(py, &self.query(), &traced, &outputs, &[rays.len()])?.map_err(|i| rays.error(i))
     }
@@ -217,8 +217,8 @@ impl PyScene {
         let source = view.source();
         let rays = Rays {
             source,
-            range: &|_| (0.0, f64::INFINITY),
-            refused: &|_| false,
+            range: |_| (0.0, f64::INFINITY),
+            refused: |_| false,
         };
         trace_dict(py, &self.query(), &rays, &outputs, &[height, width])?
             .map_err(|i| PyValueError::new_err(format!("camera ray {i} cannot be traced")))
