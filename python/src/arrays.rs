@@ -3,7 +3,7 @@
 use glam::DVec3;
 use numpy::ndarray::{ArrayView1, ArrayView2};
 use pyo3::exceptions::PyValueError;
-use pyo3::PyResult;
+use pyo3::{PyErr, PyResult};
 use raycast::geometry::Ray;
 use raycast::render::RaySource;
 use rayon::prelude::*;
@@ -107,10 +107,18 @@ impl<'a> RayArrays<'a> {
         let first = (0..self.len)
             .into_par_iter()
             .find_first(|&i| suspect(i) && self.problem(i).is_some());
-        match first.and_then(|i| self.problem(i).map(|p| format!("ray {i}: {p}"))) {
-            Some(message) => Err(PyValueError::new_err(message)),
-            None => Ok(()),
-        }
+        first.map_or(Ok(()), |i| Err(self.error(i)))
+    }
+
+    /// Whether ray `i` cannot be traced (see [`RayArrays::check`]).
+    pub fn refused(&self, i: usize) -> bool {
+        self.problem(i).is_some()
+    }
+
+    /// The error that refuses ray `i`.
+    pub fn error(&self, i: usize) -> PyErr {
+        let problem = self.problem(i).unwrap_or_else(|| "cannot be traced".into());
+        PyValueError::new_err(format!("ray {i}: {problem}"))
     }
 
     fn problem(&self, i: usize) -> Option<String> {

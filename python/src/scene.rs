@@ -2,7 +2,7 @@
 
 use crate::arrays::RayArrays;
 use crate::camera::{Kind, PyCamera, View};
-use crate::fill::{array, fill_dict, Output};
+use crate::fill::{array, trace_dict, Output, Rays};
 use glam::DVec3;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
@@ -116,10 +116,12 @@ impl PyScene {
     ) -> PyResult<Bound<'py, PyDict>> {
         let outputs = parse_outputs(&outputs, false)?;
         let rays = self::rays(&rays)?;
-        let query = self.query();
-        let hits = py.detach(|| nearest_all(&query, &rays));
-        py.detach(|| rays.check(|i| hits[i].is_none()))?;
-        fill_dict(py, &query, &rays, &hits, &outputs, &[rays.len()])
+        let traced = Rays {
+            source: &rays,
+            range: |i| rays.range(i),
+            refused: |i| rays.refused(i),
+        };
+        trace_dict(py, &self.query(), &traced, &outputs, &[rays.len()])?.map_err(|i| rays.error(i))
     }
 
     /// Whether each ray hits anything in `(tmin, tmax]`.
@@ -213,14 +215,13 @@ impl PyScene {
         let outputs = parse_outputs(&outputs, true)?;
         let view = View::new(camera, width, height)?;
         let source = view.source();
-        let query = self.query();
-        let hits: Vec<Option<Crossing>> = py.detach(|| {
-            (0..source.len())
-                .into_par_iter()
-                .map(|i| query.nearest(&source.ray(i), 0.0, f64::INFINITY))
-                .collect()
-        });
-        fill_dict(py, &query, source, &hits, &outputs, &[height, width])
+        let rays = Rays {
+            source,
+            range: |_| (0.0, f64::INFINITY),
+            refused: |_| false,
+        };
+        trace_dict(py, &self.query(), &rays, &outputs, &[height, width])?
+            .map_err(|i| PyValueError::new_err(format!("camera ray {i} cannot be traced")))
     }
 
     /// The object table: a list of dicts (id, name, kind, source, triangles, bounds).
