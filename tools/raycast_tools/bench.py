@@ -718,6 +718,10 @@ def sweep_section(r):
     return lines
 
 
+# The octree's bytes per triangle before issue 13's eight-wide nodes (reports/octree_profile.md).
+OCTREE_BYTES_BEFORE = {"bunny": 28.7, "helmet": 43.2}
+
+
 def targets_section(entries):
     lines = [
         "## The issue's targets (octree, ratios measured in this run)",
@@ -740,14 +744,13 @@ def targets_section(entries):
         tri = e["rust"]["quadrics"] == 0
         for th in (1, 2):
             t = rate(oc, "coherent", th)
-            for peer, label, goal in (("embreex", "embreex", 1.0), ("bvh", "obvhs BVH2", 1.5)):
-                if tri and peer in by and t:
-                    add(
-                        f"coherent ≥ {goal:.1f}× {label} ({th}t)",
-                        e["key"],
-                        t["mrays_per_s"] / rate(by[peer], "coherent", th)["mrays_per_s"],
-                        goal,
-                    )
+            if tri and "embreex" in by and t:
+                add(
+                    f"coherent ≥ 1.0× embreex ({th}t)",
+                    e["key"],
+                    t["mrays_per_s"] / rate(by["embreex"], "coherent", th)["mrays_per_s"],
+                    1.0,
+                )
         t = rate(oc, "incoherent", 1)
         if tri and "embreex" in by and t:
             add(
@@ -759,28 +762,35 @@ def targets_section(entries):
         if e["key"] == "quadrics" and "bvh" in by:
             for rays in ("coherent", "incoherent"):
                 add(
-                    f"10k quadrics ≥ 1.0× obvhs BVH2 ({rays}, 1t)",
+                    f"10k quadrics ≥ 1.2× obvhs BVH2 ({rays}, 1t)",
                     e["key"],
                     rate(oc, rays, 1)["mrays_per_s"] / rate(by["bvh"], rays, 1)["mrays_per_s"],
-                    1.0,
+                    1.2,
                 )
         if tri and "embreex" in by:
+            # No slower than Embree's commit; within 1.5× of it from 1M triangles up.
+            slack = 1.5 if e["rust"]["triangles"] >= 1_000_000 else 1.0
             ratio = by["embreex"]["build_s"] / oc["build_s"]
+            measured = f"{oc['build_s']:.3f} s vs {by['embreex']['build_s']:.3f} s ({ratio:.2f}×)"
+            if e["key"].startswith("gen"):
+                # The generated scenes draw one mesh from many nodes: its own octree is built
+                # once, outside the timed top-level build, so the two are not comparable.
+                ratio, measured = None, f"{measured}; instanced: mesh octree not timed"
             add(
-                "build no slower than embreex commit",
+                f"build ≤ {slack:.1f}× embreex commit",
                 e["key"],
-                ratio,
+                None if ratio is None else ratio * slack,
                 1.0,
-                f"{oc['build_s']:.3f} s vs {by['embreex']['build_s']:.3f} s ({ratio:.2f}×)",
+                measured,
             )
-        if tri and "bvh" in by:
-            allowed = by["bvh"]["bpp"] + 36.0
+        if e["key"] in OCTREE_BYTES_BEFORE:
+            before = OCTREE_BYTES_BEFORE[e["key"]]
             add(
-                "memory ≤ obvhs BVH2 + triangles (B/tri)",
+                "memory ≤ 1.3× bytes/tri before the eight-wide nodes",
                 e["key"],
-                allowed / oc["bpp"],
+                1.3 * before / oc["bpp"],
                 1.0,
-                f"{oc['bpp']:.1f} vs {by['bvh']['bpp']:.1f} + 36 = {allowed:.1f}",
+                f"{oc['bpp']:.1f} vs 1.3 × {before} = {1.3 * before:.1f}",
             )
         t1, t2 = rate(oc, "coherent", 1), rate(oc, "coherent", 2)
         if t1 and t2:
@@ -792,7 +802,6 @@ def targets_section(entries):
             )
     lines += [
         "",
-        "Triangles are counted at 36 bytes (three f32 vertices, as the scene stores them). "
         "Targets marked not met are gaps of the octree at the time of this run; see the "
         "ratios above for their size.",
         "",
