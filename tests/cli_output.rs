@@ -208,17 +208,8 @@ fn untraceable_rays_are_misses_counted_in_the_warnings() {
             [0.0, 0.0, 5.0, f64::INFINITY, 0.0, -1.0],
         ],
     );
-    let cube = fixture("gltf/cube.gltf");
     let out = dir.join("out");
-    raycast_ok(&[
-        arg(&cube),
-        "--rays",
-        arg(&rays),
-        "--out",
-        arg(&out),
-        "--quiet",
-    ]);
-    let (_, depth) = read_f64(&out.join("depth.npy"));
+    let depth = cube_depths(&rays, &out);
     assert_eq!(depth, [4.0, f64::INFINITY, f64::INFINITY, f64::INFINITY]);
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
@@ -232,6 +223,7 @@ fn untraceable_rays_are_misses_counted_in_the_warnings() {
         "{warnings}"
     );
     let strict = dir.join("strict");
+    let cube = fixture("gltf/cube.gltf");
     let result = raycast(&[
         arg(&cube),
         "--rays",
@@ -272,17 +264,21 @@ fn fortran_ordered_ray_files_are_read() {
     let rays = dir.join("rays.npy");
     std::fs::write(&rays, bytes).unwrap();
     let out = dir.join("out");
+    assert_eq!(cube_depths(&rays, &out), [4.0, f64::INFINITY]);
+}
+
+/// Traces the ray file `rays` against the cube fixture into `out`; the depths it wrote.
+fn cube_depths(rays: &std::path::Path, out: &std::path::Path) -> Vec<f64> {
     let cube = fixture("gltf/cube.gltf");
     raycast_ok(&[
         arg(&cube),
         "--rays",
-        arg(&rays),
+        arg(rays),
         "--out",
-        arg(&out),
+        arg(out),
         "--quiet",
     ]);
-    let (_, depth) = read_f64(&out.join("depth.npy"));
-    assert_eq!(depth, [4.0, f64::INFINITY]);
+    read_f64(&out.join("depth.npy")).1
 }
 
 /// Distinct grey levels of the depth preview inside the centre square (the near quad).

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .bench import BUNNY, CHESS, HELMET
+from .bench import BUNNY, CHESS, HELMET, OPEN3D_MISSING
 from .cli import prog
 from .machine import machine
 from .paths import raycast_or_exit
@@ -107,7 +107,7 @@ def run_peer(name, scene, eye, target, side, tmp, runs):
         try:
             import open3d  # noqa: F401
         except ImportError:
-            return {"skipped": "open3d not installed (pip install open3d-cpu; needs libusb-1.0-0)"}
+            return {"skipped": OPEN3D_MISSING}
     walls, phases = [], None
     out = tmp / f"{name}.npy"
     for _ in range(runs):
