@@ -1,6 +1,5 @@
 //! A quadric placed in world space: intersection, normals, bounds and classification.
 
-use crate::geometry::Aabb;
 use glam::{DMat3, DMat4, DVec3, DVec4};
 
 use super::eigen::is_definite;
@@ -106,30 +105,44 @@ impl Quadric {
     /// Rays that miss [`Quadric::bounds`] are rejected by a slab test before the exact test,
     /// with the same answer (see [`Quadric::may_reach_bounds`]).
     pub fn intersect(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<f64> {
-        if !self.may_reach_bounds(origin, dir, t_max) {
+        if !self.may_reach_bounds(origin, dir.recip(), t_max) {
             return None;
         }
         self.intersect_exact(origin, dir, t_max)
     }
 
     /// False only when `origin + t·dir` for `0 <= t <= t_max` stays outside the bounds grown by
-    /// `1e-9 · (box size + the origin's distance from the box centre)`. Every hit the exact test
-    /// can return lies inside the bounds, and the margin is some six orders of magnitude above
-    /// the rounding of the slab parameters, so no hit is ever rejected.
-    pub(super) fn may_reach_bounds(&self, origin: DVec3, dir: DVec3, t_max: f64) -> bool {
+    /// `1e-9 · (box size + the origin's distance from the box centre)`; `inv_dir` is
+    /// `dir.recip()`. Every hit the exact test can return lies inside the bounds, and the
+    /// margin is some six orders of magnitude above the rounding of the slab parameters, so no
+    /// hit is ever rejected. On an axis with `dir = 0` the parameters are infinite, of opposite
+    /// signs when the origin lies inside the slab and of the same sign when outside. `0 · ∞`,
+    /// NaN, arises only for an origin exactly on a grown face with `dir = 0` on that axis: the
+    /// ray then stays outside the bounds, so either answer is right.
+    #[inline]
+    pub(super) fn may_reach_bounds(&self, origin: DVec3, inv_dir: DVec3, t_max: f64) -> bool {
+        // Plain comparisons (`f64::max` spends instructions on NaN rules): a NaN candidate
+        // compares false and is passed over, as in `f64::max`; no other operand is NaN.
+        let larger = |a: f64, b: f64| if b > a { b } else { a };
+        let smaller = |a: f64, b: f64| if b < a { b } else { a };
         let [min, max] = self.bounds;
-        let centre = (min + max) * 0.5;
-        let margin = 1e-9 * ((max - min).max_element() + (origin - centre).abs().max_element());
-        Aabb::new(min, max)
-            .expanded(margin)
-            .ray_enters(origin, dir, t_max)
+        let (size, offset) = (max - min, (origin - (min + max) * 0.5).abs());
+        let margin = 1e-9
+            * (larger(larger(size.x, size.y), size.z)
+                + larger(larger(offset.x, offset.y), offset.z));
+        let a = (min - DVec3::splat(margin) - origin) * inv_dir;
+        let b = (max + DVec3::splat(margin) - origin) * inv_dir;
+        let (near, far) = (a.min(b), a.max(b));
+        let enter = larger(larger(larger(0.0, near.x), near.y), near.z);
+        let exit = smaller(smaller(smaller(t_max, far.x), far.y), far.z);
+        enter <= exit
     }
 
     /// Every `t` with `t_min < t <= t_max` where `origin + t·dir` lies on the surface inside
     /// the clip box, nearest first: the roots [`Quadric::intersect`] chooses from, all of them.
     /// A tangent ray's double root counts once.
     pub fn crossings(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Vec<f64> {
-        if !self.may_reach_bounds(origin, dir, t_max) {
+        if !self.may_reach_bounds(origin, dir.recip(), t_max) {
             return Vec::new();
         }
         let x0 = self.to_local * (origin - self.anchor);

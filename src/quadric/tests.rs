@@ -741,9 +741,43 @@ fn bounds_pre_test_never_changes_the_answer() {
                 };
                 let exact = quadric.intersect_exact(origin, dir, t_max);
                 assert_eq!(quadric.intersect(origin, dir, t_max), exact);
-                rejected += usize::from(!quadric.may_reach_bounds(origin, dir, t_max));
+                rejected += usize::from(!quadric.may_reach_bounds(origin, dir.recip(), t_max));
             }
         }
     }
     assert!(rejected > 1000, "only {rejected} rays rejected");
+}
+
+/// The bounds pre-test on rays parallel to two axes (two infinite reciprocals), from origins
+/// inside, outside and exactly on the bounds' planes: it never rejects a hit the exact test
+/// finds, and it rejects the rays that pass beside the box.
+#[test]
+fn bounds_pretest_on_axis_parallel_rays() {
+    let sphere = coefficients([1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0], None);
+    let quadric = Quadric::new(&sphere, DMat4::IDENTITY).unwrap();
+    let [min, max] = quadric.bounds();
+    let mut rejected = 0;
+    for axis in 0..3 {
+        for &(u, v) in &[
+            (0.0, 0.0),
+            (0.5, -0.25),
+            (min.x, 0.0),
+            (max.x, max.y),
+            (1.5, 0.0),
+        ] {
+            for sign in [1.0, -1.0] {
+                let mut dir = DVec3::ZERO;
+                dir[axis] = sign;
+                let mut origin = DVec3::ZERO;
+                origin[axis] = -3.0 * sign;
+                origin[(axis + 1) % 3] = u;
+                origin[(axis + 2) % 3] = v;
+                let exact = quadric.intersect_exact(origin, dir, f64::INFINITY);
+                assert_eq!(quadric.intersect(origin, dir, f64::INFINITY), exact);
+                rejected += usize::from(!quadric.may_reach_bounds(origin, dir.recip(), 10.0));
+            }
+        }
+    }
+    // The origins at u = 1.5 lie beside the unit sphere's box.
+    assert_eq!(rejected, 6);
 }
