@@ -47,6 +47,9 @@ pub struct Quadric {
     clip: Option<[DVec3; 2]>,
     /// Conservative world AABB of the clipped surface.
     bounds: [DVec3; 2],
+    /// The centre of `bounds` and its largest side, for the bounds pre-test's margin.
+    bounds_centre: DVec3,
+    bounds_extent: f64,
     /// Affine type, from the world-space coefficients.
     kind: QuadricKind,
 }
@@ -77,12 +80,17 @@ impl Quadric {
             local_anchor,
             clip: spec.bounds.map(widen_clip_box),
             bounds: [anchor, anchor],
+            bounds_centre: anchor,
+            bounds_extent: 0.0,
             kind: QuadricKind::Empty,
         };
         let clip_world = quadric
             .clip
             .map(|b| quadric.world_box_of_local_box(b, linear));
         quadric.bounds = quadric.clipped_bounds(clip_world, is_definite(spec.q).then_some(linear));
+        let [min, max] = quadric.bounds;
+        quadric.bounds_centre = (min + max) * 0.5;
+        quadric.bounds_extent = (max - min).max_element();
         let length = clip_world.map_or(0.0, |[min, max]| 0.5 * (max - min).length());
         quadric.kind = classify(quadric.world.q, quadric.world.p, quadric.world.r, length);
         Ok(quadric)
@@ -126,10 +134,8 @@ impl Quadric {
         let larger = |a: f64, b: f64| if b > a { b } else { a };
         let smaller = |a: f64, b: f64| if b < a { b } else { a };
         let [min, max] = self.bounds;
-        let (size, offset) = (max - min, (origin - (min + max) * 0.5).abs());
-        let margin = 1e-9
-            * (larger(larger(size.x, size.y), size.z)
-                + larger(larger(offset.x, offset.y), offset.z));
+        let offset = (origin - self.bounds_centre).abs();
+        let margin = 1e-9 * (self.bounds_extent + larger(larger(offset.x, offset.y), offset.z));
         let a = (min - DVec3::splat(margin) - origin) * inv_dir;
         let b = (max + DVec3::splat(margin) - origin) * inv_dir;
         let (near, far) = (a.min(b), a.max(b));
