@@ -27,6 +27,10 @@ COMMANDS = {
     ),
     "error-vs-time": ("error_vs_time", "depth error against run time (reports/error_vs_time.md)"),
     "fixtures": ("make_fixtures", "write the glTF/OBJ fixtures under fixtures/"),
+    "exact-fixtures": (
+        "make_exact_fixtures",
+        "write fixtures/exact/ (far OBJ, nested far glTF, PointInstancer)",
+    ),
     "quadric-fixtures": ("make_quadric_fixtures", "write the RAYCAST_quadric fixtures"),
     "usd-fixtures": ("export_usd_fixtures", "write the USD fixtures under fixtures/usd/"),
     "stiff-cases": ("stiff_cases", "write fixtures/stiff/cases.json (200-bit mpmath answers)"),
@@ -45,7 +49,7 @@ COMMANDS = {
     ),
     "exact-depth": (
         "exact_depth",
-        "USD depth against usd-core placement + a float64 ray/triangle test (1e-12)",
+        "USD/glTF/OBJ depth against an outside float64 reading + ray/triangle test (1e-12)",
     ),
     "instancing-bench": (
         "instancing_bench",
