@@ -67,6 +67,83 @@ fn far_obj_triangle_edges_are_decided_by_the_files_numbers() {
     }
 }
 
+/// Rays `margin` inside and outside the middle of each edge of the world triangle `tri`: the
+/// point, whether it is inside, and a ray origin 10 units off the plane (tilted, so the ray is
+/// not along the normal).
+fn edge_rays(tri: &[DVec3; 3], margin: f64) -> Vec<(DVec3, bool, DVec3)> {
+    let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+    let mut out = Vec::new();
+    for k in 0..3 {
+        let (a, b, c) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
+        let mid = (a + b) * 0.5;
+        let mut inward = n.cross(b - a).normalize();
+        if inward.dot(c - mid) < 0.0 {
+            inward = -inward;
+        }
+        for (sign, inside) in [(1.0, true), (-1.0, false)] {
+            let p = mid + inward * (sign * margin);
+            let origin = p + (n + (b - a).normalize() * 0.3) * 10.0;
+            out.push((p, inside, origin));
+        }
+    }
+    out
+}
+
+/// An f32 triangle (as a glTF accessor stores it) placed about 1e5 from the origin by a
+/// non-uniform, rotated, mirrored f64 transform: rays 1e-7 inside and outside every edge are
+/// decided by the exact placed triangle, whether the mesh is drawn once (placed in the world
+/// in f64) or twice (an instance: the ray moves into the mesh frame). The expected side comes
+/// from the world triangle computed here in f64 (its rounding, about 3e-11 at 2e5, is far
+/// below the 1e-7 margin).
+#[test]
+fn f32_mesh_under_a_far_f64_transform_decides_every_edge() {
+    let local = [
+        DVec3::new(0.1, -0.35, 0.2),
+        DVec3::new(1.3, 0.05, -0.4),
+        DVec3::new(-0.2, 0.9, 0.6),
+    ]
+    .map(|p| p.as_vec3().as_dvec3());
+    let world = DMat4::from_scale_rotation_translation(
+        DVec3::new(1.7, -0.6, 2.3),
+        DQuat::from_axis_angle(DVec3::new(0.3, -1.0, 0.5).normalize(), 1.1),
+        DVec3::new(100000.3, -200000.7, 150000.1),
+    );
+    let far_away = DMat4::from_translation(DVec3::new(0.0, 0.0, 500.0)) * world;
+    let tri = local.map(|p| world.transform_point3(p));
+    // 15 more triangles, 40+ units away in the mesh frame, so that two uses make an instance
+    let mut soup = vec![local];
+    soup.extend((1..16).map(|k| local.map(|p| p + DVec3::new(40.0 * k as f64, 0.0, 0.0))));
+    for copies in [1, 2] {
+        let mesh = Arc::new(Mesh::from_soup(&soup));
+        let mut builder = SceneBuilder::new();
+        for (i, w) in [world, far_away].iter().take(copies).enumerate() {
+            let id = builder.new_object(format!("copy{i}"), "test".into());
+            builder.place_mesh(id, Arc::clone(&mesh), *w);
+        }
+        let scene = builder.finish("far f32 mesh".into());
+        assert_eq!(scene.instances().len(), if copies == 1 { 0 } else { 2 });
+        let cases = edge_rays(&tri, 1e-7);
+        let rays: Vec<_> = cases
+            .iter()
+            .map(|(p, _, o)| ray(o.to_array(), (*p - *o).to_array()))
+            .collect();
+        for ((p, inside, origin), s) in cases.iter().zip(cast(&scene, &rays)) {
+            let hit = s.object.as_deref() == Some("copy0") && s.prim == 0;
+            assert_eq!(hit, *inside, "{copies} copies, point {p:?}: {s:?}");
+            if *inside {
+                let dir = (*p - *origin).normalize();
+                let expected = plane_depth(&tri, *origin, dir);
+                let error = (s.depth - expected).abs() / expected;
+                assert!(
+                    error <= 1e-10,
+                    "{copies} copies: depth {} vs {expected}",
+                    s.depth
+                );
+            }
+        }
+    }
+}
+
 /// A height field over `[lo, hi]²` with `cells²` quads, written with 17 significant digits.
 fn write_height_field(path: &std::path::Path, lo: f64, hi: f64, cells: usize, rng: &mut Rng) {
     let step = (hi - lo) / cells as f64;
