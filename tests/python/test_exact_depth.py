@@ -53,8 +53,9 @@ def test_fixture_depths_agree_to_1e_12(scene):
     [
         ("far_field.obj", 1),
         ("nested_far.gltf", 16),
-        # 24 instances, less invisibleIds 103 and 110, less the two of the invisible prototype
-        ("point_instancer.usda", 20),
+        # 24 instances, less invisibleIds 103 and 110, inactiveIds 107 and 115, and the two of
+        # the invisible prototype
+        ("point_instancer.usda", 18),
     ],
 )
 def test_far_scenes_agree_with_outside_readers_to_1e_12(scene, objects):
@@ -66,6 +67,22 @@ def test_far_scenes_agree_with_outside_readers_to_1e_12(scene, objects):
     assert r["objects_only_raycast"] == r["objects_only_reference"] == [], r
     assert r["failures"] == [], r
     assert r["depth_rel_p999"] <= 1e-12
+
+
+@needs_binary
+def test_inactive_ids_composed_over_layers_match_usd_core(tmp_path):
+    """A binary layer over the fixture appends two inactiveIds (an int64 list op over the text
+    layer's explicit one): raycast draws what usd-core's mask leaves."""
+    from pxr import Sdf, Usd, UsdGeom
+
+    layer = Sdf.Layer.CreateNew(str(tmp_path / "over.usdc"))
+    layer.subLayerPaths.append(str(EXACT / "point_instancer.usda"))
+    stage = Usd.Stage.Open(layer)
+    UsdGeom.PointInstancer(stage.GetPrimAtPath("/world/pi")).DeactivateIds([121, 104])
+    layer.Save()
+    r = exact_depth.check_scene(tmp_path / "over.usdc", RAYCAST, nrays=500, seed=2, limit=1e-12)
+    assert r["objects"] == 16, r
+    assert r["failures"] == [], r
 
 
 @pytest.mark.parametrize("scene", ["far_field.obj", "nested_far.gltf", "point_instancer.usda"])

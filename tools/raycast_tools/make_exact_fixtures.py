@@ -9,8 +9,8 @@ code with raycast (issue 12, "exact with respect to the file").
   non-uniform scales, rotations, some mirrored, as full-precision `matrix` and TRS nodes.
 - `point_instancer.usda`: a PointInstancer under a rotated parent 1e5 away, with half-precision
   orientations that are not unit length (some far from it), non-uniform and mirrored scales,
-  a prototype with its own transform, an invisible prototype, a guide mesh, and
-  `invisibleIds`.
+  a prototype with its own transform, an invisible prototype, a guide mesh, `invisibleIds`
+  and `inactiveIds`.
 
 Only numpy and the standard library; a seeded generator, so a rerun gives byte-identical files.
 fixtures/exact/README.md says what each holds.
@@ -222,7 +222,8 @@ def make_point_instancer() -> None:
         "    double3 xformOp:scale = (1500, 700, 1100)\n"
         '    uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:rotateXYZ", '
         '"xformOp:scale"]\n\n'
-        '    def PointInstancer "pi"\n    {\n'
+        # explicit list op: openusd 0.6 cannot parse `append inactiveIds` in a text layer
+        '    def PointInstancer "pi" (\n        inactiveIds = [107, 115]\n    )\n    {\n'
         "        rel prototypes = [</world/pi/protos/blob>, </world/pi/protos/tilted>, "
         "</world/pi/protos/hidden>]\n"
         f"        int[] protoIndices = {usda_list(proto, str)}\n"

@@ -719,15 +719,17 @@ impl Loader {
         if let Some(ids) = ids.as_ref().filter(|ids| ids.len() != n) {
             return skip(self, format!("has {} ids for {n} protoIndices", ids.len()));
         }
-        let invisible: HashSet<i64> = value::ints(prim, "invisibleIds")?
+        // usd-core's ComputeMaskAtTime: neither invisible nor deactivated ids are drawn
+        let hidden: HashSet<i64> = value::ints(prim, "invisibleIds")?
             .unwrap_or_default()
             .into_iter()
+            .chain(value::int64_list_metadata(prim, "inactiveIds")?.unwrap_or_default())
             .collect();
         let base_name = Self::object_name(prim, outer);
         let mut bad_index = 0usize;
         for i in 0..n {
             let id = ids.as_ref().map_or(i as i64, |ids| ids[i]);
-            if invisible.contains(&id) {
+            if hidden.contains(&id) {
                 continue;
             }
             let Some(target) = usize::try_from(indices[i])

@@ -233,3 +233,41 @@ pub fn vec2(prim: &Prim, name: &str) -> ValueResult<[f64; 2]> {
         _ => return Err(wrong_type(prim, name, "a 2-vector", &value)),
     }))
 }
+
+/// The composed `int64listop` metadata `name` of `prim` (a PointInstancer's `inactiveIds`):
+/// each layer's opinion on the prim stack applied over the weaker ones, as usd-core composes
+/// list ops. A text layer's explicit form (`inactiveIds = [3, 7]`) may come back from openusd
+/// as a plain integer array: that replaces the weaker opinions, as an explicit list op does.
+/// `Ok(None)` when no layer authors it.
+pub fn int64_list_metadata(prim: &Prim, name: &str) -> ValueResult<Vec<i64>> {
+    let stack = prim
+        .prim_stack()
+        .map_err(|e| format!("{}: cannot read its prim stack: {e:#}", prim.path()))?;
+    let mut composed: Option<Vec<i64>> = None;
+    for (layer, path) in stack.iter().rev() {
+        let Some(layer) = prim.stage().layer(layer) else {
+            continue;
+        };
+        let value = layer
+            .data()
+            .try_field(path, name)
+            .map_err(|e| format!("{}: metadata {name} cannot be read: {e}", prim.path()))?;
+        let Some(value) = value else {
+            continue;
+        };
+        let weaker = composed.take().unwrap_or_default();
+        composed = Some(match &*value {
+            Value::Int64ListOp(op) => op.compose_over(&weaker),
+            Value::IntVec(v) => v.iter().map(|&x| x as i64).collect(),
+            Value::Int64Vec(v) => v.clone(),
+            other => {
+                return Err(format!(
+                    "{}: metadata {name}: expected an int64 list op, found {}",
+                    prim.path(),
+                    value_kind(other)
+                ))
+            }
+        });
+    }
+    Ok(composed)
+}
