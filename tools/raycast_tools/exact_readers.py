@@ -136,8 +136,10 @@ class GltfFile:
         data = self.buffers[view["buffer"]]
         start = view.get("byteOffset", 0) + a.get("byteOffset", 0)
         stride = view.get("byteStride", dtype.itemsize * ncomp)
-        rows = [np.frombuffer(data, dtype, ncomp, start + k * stride) for k in range(count)]
-        out = np.array(rows, np.float64).reshape(count, ncomp)
+        rows = np.ndarray(
+            (count, ncomp), dtype, buffer=data, offset=start, strides=(stride, dtype.itemsize)
+        )
+        out = rows.astype(np.float64)
         if a.get("normalized"):
             out = NORMALIZE[a["componentType"]](out)
         return out
