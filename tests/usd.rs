@@ -520,10 +520,12 @@ fn stage_metadata_is_reported() {
     );
 }
 
-/// fixtures/exact/point_instancer.usda (fixtures/exact/README.md): of 24 instances with ids
-/// 100..123, `invisibleIds` hides 103 and 110, the `inactiveIds` metadata deactivates 107 and
-/// 115, and 122 and 123 use the invisible prototype: the other 18 are drawn, one object each,
-/// as usd-core's ComputeMaskAtTime says (tests/python/test_exact_depth.py compares with it).
+/// fixtures/exact/point_instancer.usda (fixtures/exact/README.md): of `/world/pi`'s 24
+/// instances with ids 100..123, `invisibleIds` hides 103 and 110, the `inactiveIds` metadata
+/// deactivates 107 and 115, and 122 and 123 use the invisible prototype: the other 18 are
+/// drawn, one object each, as usd-core's ComputeMaskAtTime says (tests/python/
+/// test_exact_depth.py compares with it). `/world/pi_shared`'s 6 instances are all drawn
+/// although their prototypes live in an invisible scope, which itself draws nothing.
 #[test]
 fn point_instancer_skips_invisible_and_inactive_ids() {
     let scene = load("exact/point_instancer.usda");
@@ -531,6 +533,7 @@ fn point_instancer_skips_invisible_and_inactive_ids() {
     let expected: Vec<String> = (0..24)
         .filter(|i| ![3, 10, 7, 15, 22, 23].contains(i))
         .map(|i| format!("/world/pi[{i}]"))
+        .chain((0..6).map(|i| format!("/world/pi_shared[{i}]")))
         .collect();
     assert_eq!(names, expected);
 }

@@ -10,7 +10,8 @@ code with raycast (issue 12, "exact with respect to the file").
 - `point_instancer.usda`: a PointInstancer under a rotated parent 1e5 away, with half-precision
   orientations that are not unit length (some far from it), non-uniform and mirrored scales,
   a prototype with its own transform, an invisible prototype, a guide mesh, `invisibleIds`
-  and `inactiveIds`.
+  and `inactiveIds`; and a second PointInstancer with float orientations whose prototypes
+  live in an invisible scope elsewhere.
 
 Only numpy and the standard library; a seeded generator, so a rerun gives byte-identical files.
 fixtures/exact/README.md says what each holds.
@@ -175,6 +176,13 @@ def half(x) -> str:
     return repr(float(np.float16(x)))
 
 
+def f32(values) -> np.ndarray:
+    """`values` rounded to f32, so that their text is an f32 value exactly. (A longer decimal
+    can round differently: usd-core parses float text through double, openusd directly, and
+    the two differ where the double falls on a midpoint between two floats.)"""
+    return np.asarray(values, np.float64).astype(np.float32)
+
+
 def make_point_instancer() -> None:
     rng = np.random.default_rng(5)
     v, f = blob(rng)
@@ -232,7 +240,19 @@ def make_point_instancer() -> None:
         f"        point3f[] positions = {usda_list(positions, vec)}\n"
         f"        quath[] orientations = {usda_list(quats, quath)}\n"
         f"        float3[] scales = {usda_list(scales, vec)}\n\n"
-        '        def Xform "protos"\n        {\n' + indent(protos, 3) + "        }\n    }\n}\n"
+        '        def Xform "protos"\n        {\n' + indent(protos, 3) + "        }\n    }\n\n"
+        # the usual idiom: prototypes kept in an invisible scope elsewhere (not drawn in place,
+        # drawn through the instancer); float orientations, the first two not unit
+        '    def PointInstancer "pi_shared"\n    {\n'
+        "        rel prototypes = [</world/library/blob>, </world/library/tilted>]\n"
+        "        int[] protoIndices = [0, 1, 1, 0, 1, 0]\n"
+        f"        point3f[] positions = {usda_list(f32(positions[:6] + [0, 0, 45]), vec)}\n"
+        f"        quatf[] orientationsf = {usda_list(f32(quats[-6:]), vec)}\n"
+        f"        float3[] scales = {usda_list(scales[-6:], vec)}\n"
+        "    }\n\n"
+        '    def Xform "library"\n    {\n        token visibility = "invisible"\n'
+        + indent(protos, 2)
+        + "    }\n}\n"
     )
     FILES.write_bytes(EXACT_DIR / "point_instancer.usda", text.encode())
 
