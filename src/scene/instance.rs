@@ -98,7 +98,11 @@ impl Instance {
         dir: DVec3,
         t_max: f64,
     ) -> Option<Hit> {
-        let o = self.to_local.transform_point3(origin);
+        // origin - translation first: near the instance that difference is exact or small, so
+        // the mesh-frame origin keeps the digits of the ray's offset from the instance rather
+        // than those of its distance from the world origin (same operation count as
+        // transform_point3)
+        let o = self.to_local.matrix3 * (origin - self.to_world.translation);
         let d = self.to_local.transform_vector3(dir) + DVec3::ZERO;
         let ray = PreparedRay {
             local_origin: o - stored.set.anchor,
