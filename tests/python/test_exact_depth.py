@@ -63,7 +63,8 @@ def test_far_scenes_agree_with_outside_readers_to_1e_12(scene, objects):
     assert r["objects"] == objects, r
     assert r["hits_both"] > 1200, r
     assert r["hitmiss_disagreements"] == 0, r
-    assert r["object_disagreements"] == 0, r
+    # trimesh reads an OBJ as one object: objects are not compared there
+    assert r["object_disagreements"] == (None if scene.endswith(".obj") else 0), r
     assert r["objects_only_raycast"] == r["objects_only_reference"] == [], r
     assert r["failures"] == [], r
     assert r["depth_rel_p999"] <= 1e-12
