@@ -141,7 +141,13 @@ def reference_objects(path):
         unmodelled.add(re.match(r"[^\[]*(\[\d+\])?", name).group(0))
         return []
 
-    return flatten(open_stage(path), gprim), "name", unmodelled
+    from pxr import Tf
+
+    try:
+        stage = open_stage(path)
+    except Tf.ErrorException as e:
+        raise RefuseError(f"usd-core cannot open it: {str(e).strip().splitlines()[-1]}") from e
+    return flatten(stage, gprim), "name", unmodelled
 
 
 def check_scene(path, raycast, nrays, seed, limit):
