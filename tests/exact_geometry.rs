@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{cast, fixture, load, ray, Rng};
+use common::{cast, cast_one, fixture, load, ray, Rng};
 use glam::{DMat4, DQuat, DVec3};
 use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams};
 use raycast::import::{self, LoadOptions};
@@ -451,4 +451,21 @@ fn point_instancer_orientations_are_not_normalised() {
         b.min,
         -half
     );
+}
+
+/// A ray that crosses the edge a sliver (area 3.4e-14, from a real asset) shares with an
+/// ordinary triangle: rounding lets the sliver take the hit (watertightness allows either),
+/// and the depth must still be the plane's, x = X exactly for both triangles. Computed from
+/// the sliver's edge functions, which are all rounding, it was 271.10 instead of 272.697.
+#[test]
+fn a_sliver_taking_a_hit_by_rounding_reports_the_planes_depth() {
+    let scene = load("obj/sliver.obj");
+    let x = 72.83469063193799;
+    let origin = [193.82045915301438, -63.1049293464078, 358.4737645293767];
+    let dir = [-0.3876974688498787, 0.258514894781906, -0.7392454277334576];
+    let s = cast_one(&scene, origin, dir);
+    let expected = (x - origin[0]) / dir[0] * DVec3::from_array(dir).length();
+    assert!(s.object.is_some(), "{s:?}");
+    let error = (s.depth - expected).abs() / expected;
+    assert!(error <= 1e-12, "depth {} vs {expected}: {s:?}", s.depth);
 }

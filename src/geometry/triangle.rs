@@ -129,13 +129,56 @@ impl WatertightRay {
         if ONCE && !owns_zero_edges([(u, b, c), (v, c, a), (w, a, b)], det) {
             return None;
         }
-        let sz = self.shear.z;
-        let t_scaled = u * sz * a.z + v * sz * b.z + w * sz * c.z;
-        let t = t_scaled / det;
+        let t = if det.abs() > self.sliver_bound(a, b, c) {
+            let sz = self.shear.z;
+            let t_scaled = u * sz * a.z + v * sz * b.z + w * sz * c.z;
+            t_scaled / det
+        } else {
+            self.plane_t::<KX, KY, KZ>(tri)
+        };
         // A direction with subnormal components overflows the shear to ±inf: no finite hit.
         (t > 0.0 && t <= t_max && t.is_finite()).then_some(t)
     }
+
+    /// Below this `|det|` a hit's edge functions are too close to their rounding for the `t`
+    /// made from them. A sheared coordinate `x' = p_x - shear.x · p_z` (`p` the vertex relative
+    /// to the origin) carries rounding of about `u · (|p_x| + |shear.x · p_z|)`, at most
+    /// `u · (|x'| + 2 |shear.x · p_z|)`; with `X` and `Y` those sizes summed over the vertices,
+    /// `det` carries about `10u · X · Y`, and at `2⁻⁴⁰ · X · Y` that is a thousandth of `det`.
+    /// Only slivers (three nearly collinear points) and triangles some million times smaller
+    /// than their distance from the ray's origin come below it. `a`, `b`, `c` are the sheared
+    /// vertices (z unscaled).
+    #[inline(always)]
+    fn sliver_bound(&self, a: DVec3, b: DVec3, c: DVec3) -> f64 {
+        let size = |v: DVec3| {
+            let z = 2.0 * v.z.abs();
+            (
+                v.x.abs() + z * self.shear.x.abs(),
+                v.y.abs() + z * self.shear.y.abs(),
+            )
+        };
+        let ((xa, ya), (xb, yb), (xc, yc)) = (size(a), size(b), size(c));
+        (xa + xb + xc) * (ya + yb + yc) * SLIVER
+    }
+
+    /// `t` where the ray meets the plane of `tri`, from the triangle's own edges (unsheared, so
+    /// that coordinates a sliver shares exactly, as on a flat CAD face, stay exact): for a hit
+    /// that [`WatertightRay::sliver_bound`] says the edge functions cannot place. The ray's
+    /// direction is `(shear.x, shear.y, 1) / shear.z` in the permuted axes.
+    #[cold]
+    #[inline(never)]
+    fn plane_t<const KX: usize, const KY: usize, const KZ: usize>(&self, tri: &[DVec3; 3]) -> f64 {
+        let permute = |v: DVec3| DVec3::new(v[KX], v[KY], v[KZ]);
+        let [a, b, c] = tri.map(permute);
+        let normal = (b - a).cross(c - a);
+        let along = normal.dot(DVec3::new(self.shear.x, self.shear.y, 1.0));
+        normal.dot(a - permute(self.origin)) / along * self.shear.z
+    }
 }
+
+/// The relative size below which `det` is too close to its rounding: see
+/// [`WatertightRay::sliver_bound`].
+const SLIVER: f64 = 1.0 / (1u64 << 40) as f64;
 
 /// The edge functions of the sheared triangle `a b c`: twice the signed areas that the ray's
 /// point makes with the edges opposite `a`, `b` and `c`.
