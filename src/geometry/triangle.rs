@@ -249,22 +249,26 @@ impl Polygon {
     /// Keeps the part with `side · (p[axis] - plane) >= 0`; crossing points sit exactly on the
     /// plane.
     fn clip(&mut self, axis: usize, plane: f64, side: f64) {
-        let inside = |p: DVec3| side * (p[axis] - plane) >= 0.0;
-        if self.overflowed || self.vertices().iter().all(|&p| inside(p)) {
+        let inside = |p: &DVec3| side * (p[axis] - plane) >= 0.0;
+        if self.overflowed || self.vertices().iter().all(inside) {
             return;
         }
         let mut out = Polygon::default();
-        for (i, &p) in self.vertices().iter().enumerate() {
-            let q = self.vertices[(i + 1) % self.len];
-            if inside(p) {
-                out.push(p);
-            }
-            if inside(p) != inside(q) {
+        let mut p = self.vertices[self.len - 1];
+        let mut p_inside = inside(&p);
+        for &q in self.vertices() {
+            // The edge from `p` to `q`, with `p` the previous vertex.
+            let q_inside = inside(&q);
+            if p_inside != q_inside {
                 let s = (plane - p[axis]) / (q[axis] - p[axis]);
                 let mut crossing = p + (q - p) * s;
                 crossing[axis] = plane;
                 out.push(crossing);
             }
+            if q_inside {
+                out.push(q);
+            }
+            (p, p_inside) = (q, q_inside);
         }
         *self = out;
     }
