@@ -375,10 +375,10 @@ impl PrimitiveSet for Scene {
         }
     }
 
-    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64) -> u8 {
+    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64, candidates: u8) -> u8 {
         match self.top(index) {
-            Top::Triangle(i) => self.world.child_mask(i, cell, margin),
-            _ => octants_by_overlap(self, index, cell, margin),
+            Top::Triangle(i) => self.world.child_mask(i, cell, margin, candidates),
+            _ => octants_by_overlap(self, index, cell, margin, candidates),
         }
     }
 

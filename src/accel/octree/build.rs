@@ -198,7 +198,8 @@ impl<P: PrimitiveSet> Builder<'_, P> {
         if reached.count_ones() == 1 {
             reached
         } else {
-            reached & self.set.child_mask(prim as usize, cell, self.margin)
+            self.set
+                .child_mask(prim as usize, cell, self.margin, reached)
         }
     }
 
