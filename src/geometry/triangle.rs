@@ -297,6 +297,8 @@ pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64, candidates: u8) -
     let v = tri.map(|p| p - centre);
     let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
     let mut mask = candidates & box_axes_mask(lo, hi, quarter, half);
+    // Octants still in question: those holding a vertex well inside touch the triangle.
+    let mut open = mask & !holding_a_vertex(&v, quarter, half, margin);
     let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
     let mut axes = [edges[0].cross(edges[1]); 10];
     for (k, e) in edges.iter().enumerate() {
@@ -305,12 +307,18 @@ pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64, candidates: u8) -
         }
     }
     for axis in axes {
-        if mask == 0 {
+        if open == 0 {
             break;
         }
         if axis == DVec3::ZERO {
             continue;
         }
+        // On an axis this small, rounding is not relative any more: test every octant.
+        let open_here = if axis.abs().max_element() < TINY_AXIS {
+            mask
+        } else {
+            open
+        };
         let p = [axis.dot(v[0]), axis.dot(v[1]), axis.dot(v[2])];
         let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
         let radius = half.dot(axis.abs());
@@ -318,18 +326,44 @@ pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64, candidates: u8) -
         // (negating a product is exact).
         let q = quarter * axis;
         let (x, y, z) = ([-q.x, q.x], [-q.y, q.y], [-q.z, q.z]);
-        let mut bits = mask;
+        let mut bits = open_here;
         while bits != 0 {
             let i = bits.trailing_zeros() as usize;
             let c = x[i & 1] + y[(i >> 1) & 1] + z[i >> 2];
             if lo - c > radius || hi - c < -radius {
                 mask &= !(1 << i);
+                open &= !(1 << i);
             }
             bits &= bits - 1;
         }
     }
     mask
 }
+
+/// Axes with no component above this in magnitude are tested in full by [`octant_mask`].
+const TINY_AXIS: f64 = 1e-200;
+
+/// The octants (spanning `±quarter ± half` about the cell centre on each axis) holding one
+/// of the vertices `v` (relative to the centre) at least `margin / 2` inside. The
+/// separating-axis test of [`octant_mask`] cannot separate such an octant: on an axis `a`
+/// the vertex lies `margin / 2 · |a|₁` inside the octant's projection, while the test's
+/// rounding is a few ulps of `|a|₁` times the largest coordinate, kept below 2⁻⁴⁰ of it here
+/// (and axes below [`TINY_AXIS`], where products may underflow, are tested in full).
+fn holding_a_vertex(v: &[DVec3; 3], quarter: DVec3, half: DVec3, margin: f64) -> u8 {
+    let slack = 0.5 * margin;
+    let scale = v
+        .iter()
+        .fold(half.max_element(), |m, p| m.max(p.abs().max_element()));
+    if !(slack >= scale * TWO_TO_MINUS_40) {
+        return 0;
+    }
+    let inner = half - DVec3::splat(slack);
+    v.iter()
+        .fold(0, |m, &p| m | box_axes_mask(p, p, quarter, inner))
+}
+
+/// 2⁻⁴⁰.
+const TWO_TO_MINUS_40: f64 = 1.0 / (1u64 << 40) as f64;
 
 /// The octants that the box `[lo, hi]` (relative to the cell centre) touches: octant `i`
 /// spans `[c - half, c + half]` with `c = ±quarter` on each axis, so each
