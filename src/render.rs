@@ -193,14 +193,17 @@ pub enum AccelStructure {
 
 impl AccelStructure {
     /// Builds the structure of `kind` over `scene` (`params` apply to the octree only).
-    /// The octrees of instanced meshes are built first ([`Scene::build_instances`]; building
-    /// them alongside with `rayon::join` measured 3.6 MB more peak memory on a plain mesh).
+    /// The octrees of instanced meshes ([`Scene::build_instances`]) are built alongside, in
+    /// parallel with it (a scene without instances has none to build).
     pub fn build(scene: &Scene, kind: AccelKind, params: OctreeParams) -> AccelStructure {
-        scene.build_instances();
-        match kind {
-            AccelKind::Octree => AccelStructure::Octree(Octree::build(scene, params)),
-            AccelKind::Bvh(kind) => AccelStructure::Bvh(Bvh::build(scene, kind)),
-        }
+        let ((), accel) = rayon::join(
+            || scene.build_instances(),
+            || match kind {
+                AccelKind::Octree => AccelStructure::Octree(Octree::build(scene, params)),
+                AccelKind::Bvh(kind) => AccelStructure::Bvh(Bvh::build(scene, kind)),
+            },
+        );
+        accel
     }
 
     /// A borrowed view for a [`Tracer`].

@@ -193,6 +193,12 @@ impl Scene {
         });
     }
 
+    /// Drops the instanced meshes' octrees, so that the next build builds them again
+    /// (benchmarks time whole builds this way).
+    pub fn forget_instance_octrees(&mut self) {
+        self.meshes.iter_mut().for_each(StoredMesh::forget_octree);
+    }
+
     /// The instances.
     pub fn instances(&self) -> &[Instance] {
         &self.instances
