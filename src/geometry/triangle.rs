@@ -258,7 +258,9 @@ impl Polygon {
     /// exactly on the plane) and returns true, or returns false when that part is the whole
     /// polygon (or it overflowed), leaving `out` as it is.
     fn clip_into(&self, axis: usize, plane: f64, side: f64, out: &mut Polygon) -> bool {
-        let inside = |p: &DVec3| side * (p[axis] - plane) >= 0.0;
+        // Coordinates by array index (indexing a `DVec3` branches on the axis).
+        let coord = |p: &DVec3| p.as_ref()[axis];
+        let inside = |p: &DVec3| side * (coord(p) - plane) >= 0.0;
         if self.overflowed || self.vertices().iter().all(inside) {
             return false;
         }
@@ -270,10 +272,10 @@ impl Polygon {
             // The edge from `p` to `q`, with `p` the previous vertex.
             let q_inside = inside(&q);
             if p_inside != q_inside {
-                let s = (plane - p[axis]) / (q[axis] - p[axis]);
-                let mut crossing = p + (q - p) * s;
+                let s = (plane - coord(&p)) / (coord(&q) - coord(&p));
+                let mut crossing = (p + (q - p) * s).to_array();
                 crossing[axis] = plane;
-                out.push(crossing);
+                out.push(DVec3::from_array(crossing));
             }
             if q_inside {
                 out.push(q);
