@@ -49,7 +49,11 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
         self.finish(stats, occupied)
     }
 
-    fn finish(self, stats: OctreeStats, occupied: Aabb) -> Subtree {
+    /// The subtree built, its arrays trimmed to their length (they grew by doubling, and
+    /// wait for [`super::build`]'s join or the layout).
+    fn finish(mut self, stats: OctreeStats, occupied: Aabb) -> Subtree {
+        self.nodes.shrink_to_fit();
+        self.refs.shrink_to_fit();
         Subtree {
             nodes: self.nodes,
             refs: self.refs,

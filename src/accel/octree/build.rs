@@ -112,6 +112,20 @@ impl Children {
     }
 }
 
+/// The references of each of the eight children, by the octant masks of `refs`; `counts` are
+/// the masks' bit counts per octant.
+fn split(refs: &[u32], masks: &[u8], counts: &[usize; 8]) -> Vec<Vec<u32>> {
+    let mut children: Vec<Vec<u32>> = counts.iter().map(|&n| Vec::with_capacity(n)).collect();
+    for (&prim, &mask) in refs.iter().zip(masks) {
+        let mut bits = mask;
+        while bits != 0 {
+            children[bits.trailing_zeros() as usize].push(prim);
+            bits &= bits - 1;
+        }
+    }
+    children
+}
+
 /// How many masks have bit `i` set, for each octant `i`.
 pub(super) fn octant_counts(masks: &[u8]) -> [usize; 8] {
     let mut counts = [0usize; 8];
@@ -133,10 +147,11 @@ pub(super) struct Builder<'a, P> {
 }
 
 impl<P: PrimitiveSet> Builder<'_, P> {
-    /// The subtree for `cell` holding `refs`, at `depth`.
-    pub fn subtree(&self, cell: &Aabb, refs: &[u32], depth: u32) -> Subtree {
+    /// The subtree for `cell` holding `refs`, at `depth`. Each list is dropped as soon as it
+    /// is distributed, as the children's lists are built.
+    pub fn subtree(&self, cell: &Aabb, refs: Vec<u32>, depth: u32) -> Subtree {
         if refs.len() <= PARALLEL_REFS || !self.may_split(refs.len(), depth) {
-            return Arena::new(self).subtree(cell, refs, depth);
+            return Arena::new(self).subtree(cell, &refs, depth);
         }
         let mid = cell.center();
         let masks: Vec<u8> = refs
@@ -145,14 +160,14 @@ impl<P: PrimitiveSet> Builder<'_, P> {
             .collect();
         let counts = octant_counts(&masks);
         if !self.pays(refs.len(), &counts) {
-            return Arena::new(self).leaf_subtree(cell, refs, depth);
+            return Arena::new(self).leaf_subtree(cell, &refs, depth);
         }
-        let mut children = Children::default();
-        children.fill(refs, &masks, &counts);
-        drop(masks);
-        let parts: Vec<Subtree> = (0..8)
+        let children = split(&refs, &masks, &counts);
+        drop((refs, masks));
+        let parts: Vec<Subtree> = children
             .into_par_iter()
-            .map(|i| self.subtree(&cell.octant(i), children.of(i), depth + 1))
+            .enumerate()
+            .map(|(i, child)| self.subtree(&cell.octant(i), child, depth + 1))
             .collect();
         join(parts)
     }
