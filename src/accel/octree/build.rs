@@ -207,9 +207,12 @@ impl<P: PrimitiveSet> Builder<'_, P> {
         let high = b.max.cmpgt(mid - margin).bitmask();
         // Children whose (grown) cell the bounds reach: child i spans the upper half on
         // axis a when bit a of i is set.
-        let reached = (0..8u32)
-            .filter(|&i| (high & i) == i && (low & !i & 0b111) == (!i & 0b111))
-            .fold(0u8, |m, i| m | (1 << i));
+        const UPPER: [u8; 3] = [0b1010_1010, 0b1100_1100, 0b1111_0000];
+        let reached = UPPER.iter().enumerate().fold(0xff, |m, (a, &upper)| {
+            let lower = if low >> a & 1 != 0 { !upper } else { 0 };
+            let higher = if high >> a & 1 != 0 { upper } else { 0 };
+            m & (lower | higher)
+        });
         if reached.count_ones() == 1 {
             reached
         } else {
