@@ -356,7 +356,7 @@ fn holding_a_vertex(v: &[DVec3; 3], quarter: DVec3, half: DVec3, margin: f64) ->
     let scale = v
         .iter()
         .fold(half.max_element(), |m, p| m.max(p.abs().max_element()));
-    if !(slack >= scale * TWO_TO_MINUS_40) {
+    if slack <= 0.0 || slack < scale * TWO_TO_MINUS_40 {
         return 0;
     }
     let inner = half - DVec3::splat(slack);

@@ -181,7 +181,7 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     /// rule in the module docs.
     pub fn pays(&self, n: usize, counts: &[usize; 8]) -> bool {
         let child_refs: usize = counts.iter().sum();
-        if child_refs > n && counts.iter().any(|&c| c == n) {
+        if child_refs > n && counts.contains(&n) {
             return false;
         }
         let p = &self.params;
