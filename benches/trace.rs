@@ -5,13 +5,14 @@
 //!     [--threads 1,2] [--runs 3] [--build-runs 3 (0: one build, no warm-up)] [--aov-compare NAME]
 //! ```
 //!
-//! For each backend: one warm-up build and `--build-runs` timed builds (median), then for each
+//! For each backend: one warm-up build and `--build-runs` timed builds (median; each the whole
+//! build a render does, the instanced meshes' own octrees included), then for each
 //! ray set and thread count one warm-up trace and `--runs` timed traces (median) through the
 //! same `render` path the CLI uses with `--aov depth`. Prints one JSON object on stdout.
 //! Peak memory is the process's VmHWM from /proc/self/status, reset (when the kernel allows it)
 //! before each backend, so it covers the scene, the rays, that backend and its buffers.
 
-use raycast::accel::{Bvh, BvhKind, Octree, OctreeParams, PrimitiveSet};
+use raycast::accel::{BvhKind, OctreeParams, PrimitiveSet};
 use raycast::geometry::Ray;
 use raycast::import::{self, LoadOptions};
 use raycast::output::npy;
@@ -112,11 +113,11 @@ fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
     (value, start.elapsed().as_secs_f64())
 }
 
-fn build(scene: &Scene, kind: AccelKind) -> AccelStructure {
-    match kind {
-        AccelKind::Octree => AccelStructure::Octree(Octree::build(scene, OctreeParams::default())),
-        AccelKind::Bvh(k) => AccelStructure::Bvh(Bvh::build(scene, k)),
-    }
+/// The whole build, as a render does it: the instanced meshes' own octrees (dropped first, so
+/// that every timed build builds them again) and the top-level structure.
+fn build(scene: &mut Scene, kind: AccelKind) -> AccelStructure {
+    scene.forget_instance_octrees();
+    AccelStructure::build(scene, kind, OctreeParams::default())
 }
 
 fn accel_stats(accel: &AccelStructure, prims: usize) -> Value {
@@ -156,7 +157,7 @@ fn main() {
         }
     };
     let (scene, load_s) = timed(|| import::load(&args.scene, &LoadOptions::default()));
-    let scene = scene.unwrap_or_else(|e| {
+    let mut scene = scene.unwrap_or_else(|e| {
         eprintln!("trace: {e}");
         std::process::exit(1)
     });
@@ -192,14 +193,14 @@ fn main() {
         let rss_before = status_mib("VmRSS:");
         // Warm-up build, then timed builds; the last one is kept. `--build-runs 0`: one timed
         // build without warm-up (large scenes).
-        let (mut accel, first) = timed(|| build(&scene, kind));
+        let (mut accel, first) = timed(|| build(&mut scene, kind));
         let mut build_times = Vec::new();
         if args.build_runs == 0 {
             build_times.push(first);
         }
         for _ in 0..args.build_runs {
             drop(accel);
-            let (a, s) = timed(|| build(&scene, kind));
+            let (a, s) = timed(|| build(&mut scene, kind));
             accel = a;
             build_times.push(s);
         }

@@ -64,10 +64,11 @@ pub trait PrimitiveSet: Sync {
     /// Conservative test: may primitive `index` touch the closed box `cell`?
     fn overlaps(&self, index: usize, cell: &Aabb) -> bool;
 
-    /// Which octants of `cell`, each grown by `margin`, primitive `index` may touch: bit `i`
-    /// for [`Aabb::octant`] `i`. The default asks [`PrimitiveSet::overlaps`] eight times.
-    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64) -> u8 {
-        octants_by_overlap(self, index, cell, margin)
+    /// Which of the octants in `candidates` of `cell`, each grown by `margin`, primitive
+    /// `index` may touch: bit `i` for [`Aabb::octant`] `i`, a subset of `candidates`. The
+    /// default asks [`PrimitiveSet::overlaps`] once per candidate.
+    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64, candidates: u8) -> u8 {
+        octants_by_overlap(self, index, cell, margin, candidates)
     }
 
     /// Bounds of the part of primitive `index` inside `cell`, or `None` when nothing of it is
@@ -103,14 +104,17 @@ pub(crate) fn f32_above(x: f64) -> f32 {
     }
 }
 
-/// [`PrimitiveSet::child_mask`] computed with eight [`PrimitiveSet::overlaps`] tests.
+/// [`PrimitiveSet::child_mask`] computed with one [`PrimitiveSet::overlaps`] test per
+/// candidate octant.
 pub fn octants_by_overlap<P: PrimitiveSet + ?Sized>(
     set: &P,
     index: usize,
     cell: &Aabb,
     margin: f64,
+    candidates: u8,
 ) -> u8 {
     (0..8)
+        .filter(|&i| candidates & (1 << i) != 0)
         .filter(|&i| set.overlaps(index, &cell.octant(i).expanded(margin)))
         .fold(0, |mask, i| mask | (1 << i))
 }

@@ -248,14 +248,22 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
         // No plane cuts it: clipping would keep the triangle as it is.
         return Some(bounds);
     }
-    let mut polygon = Polygon::default();
+    // Two polygons, clipped alternately one into the other.
+    let mut pair = [Polygon::default(), Polygon::default()];
+    let mut current = 0;
     for v in tri {
-        polygon.push(*v);
+        pair[0].push(*v);
     }
     for axis in 0..3 {
-        polygon.clip(axis, cell.min[axis], 1.0);
-        polygon.clip(axis, cell.max[axis], -1.0);
+        for (plane, side) in [(cell.min[axis], 1.0), (cell.max[axis], -1.0)] {
+            let [a, b] = &mut pair;
+            let (from, to) = if current == 0 { (a, b) } else { (b, a) };
+            if from.clip_into(axis, plane, side, to) {
+                current ^= 1;
+            }
+        }
     }
+    let polygon = &pair[current];
     let bounds = if polygon.overflowed {
         bounds.common(*cell)
     } else {
@@ -289,49 +297,53 @@ impl Polygon {
         &self.vertices[..self.len]
     }
 
-    /// Keeps the part with `side · (p[axis] - plane) >= 0`; crossing points sit exactly on the
-    /// plane.
-    fn clip(&mut self, axis: usize, plane: f64, side: f64) {
-        let inside = |p: DVec3| side * (p[axis] - plane) >= 0.0;
-        if self.overflowed || self.vertices().iter().all(|&p| inside(p)) {
-            return;
+    /// Writes into `out` the part with `side · (p[axis] - plane) >= 0` (crossing points sit
+    /// exactly on the plane) and returns true, or returns false when that part is the whole
+    /// polygon (or it overflowed), leaving `out` as it is.
+    fn clip_into(&self, axis: usize, plane: f64, side: f64, out: &mut Polygon) -> bool {
+        // Coordinates by array index (indexing a `DVec3` branches on the axis).
+        let coord = |p: &DVec3| p.as_ref()[axis];
+        let inside = |p: &DVec3| side * (coord(p) - plane) >= 0.0;
+        if self.overflowed || self.vertices().iter().all(inside) {
+            return false;
         }
-        let mut out = Polygon::default();
-        for (i, &p) in self.vertices().iter().enumerate() {
-            let q = self.vertices[(i + 1) % self.len];
-            if inside(p) {
-                out.push(p);
-            }
-            if inside(p) != inside(q) {
-                let s = (plane - p[axis]) / (q[axis] - p[axis]);
-                let mut crossing = p + (q - p) * s;
+        out.len = 0;
+        out.overflowed = false;
+        let mut p = self.vertices[self.len - 1];
+        let mut p_inside = inside(&p);
+        for &q in self.vertices() {
+            // The edge from `p` to `q`, with `p` the previous vertex.
+            let q_inside = inside(&q);
+            if p_inside != q_inside {
+                let s = (plane - coord(&p)) / (coord(&q) - coord(&p));
+                let mut crossing = (p + (q - p) * s).to_array();
                 crossing[axis] = plane;
-                out.push(crossing);
+                out.push(DVec3::from_array(crossing));
             }
+            if q_inside {
+                out.push(q);
+            }
+            (p, p_inside) = (q, q_inside);
         }
-        *self = out;
+        true
     }
 }
 
-/// Which octants of `cell`, each grown by `margin`, the closed triangle touches: bit `i` for
-/// [`Aabb::octant`] `i`. The same separating-axis test as [`overlaps_box`]: the three box axes
-/// reduce to comparing the triangle's bounds with the cell's midplanes, and for the other ten
-/// axes each projection of the triangle is computed once and compared with every octant still
-/// in question.
-pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64) -> u8 {
+/// Which of the octants in `candidates` (bit `i` for [`Aabb::octant`] `i`) of `cell`, each
+/// grown by `margin`, the closed triangle touches. The same separating-axis test as
+/// [`overlaps_box`]: the three box axes reduce to comparing the triangle's bounds with the
+/// cell's midplanes, and for the other ten axes each projection of the triangle is computed
+/// once and compared with every octant still in question. A zero axis (an edge parallel to a
+/// box axis, or the normal of a degenerate triangle) separates nothing and is skipped.
+pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64, candidates: u8) -> u8 {
     let centre = cell.center();
     let quarter = cell.size() * 0.25;
     let half = quarter + DVec3::splat(margin);
     let v = tri.map(|p| p - centre);
     let (lo, hi) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
-    // Box axes: octant i spans [c - half, c + half] with c = ±quarter on each axis.
-    let mut mask = 0u8;
-    for i in 0..8 {
-        let c = octant_offset(i, quarter);
-        if (lo - c).cmple(half).all() && (hi - c).cmpge(-half).all() {
-            mask |= 1 << i;
-        }
-    }
+    let mut mask = candidates & box_axes_mask(lo, hi, quarter, half);
+    // Octants still in question: those holding a vertex well inside touch the triangle.
+    let mut open = mask & !holding_a_vertex(&v, quarter, half, margin);
     let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
     let mut axes = [edges[0].cross(edges[1]); 10];
     for (k, e) in edges.iter().enumerate() {
@@ -340,34 +352,82 @@ pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64) -> u8 {
         }
     }
     for axis in axes {
-        if mask == 0 {
+        if open == 0 {
             break;
         }
+        if axis == DVec3::ZERO {
+            continue;
+        }
+        // On an axis this small, rounding is not relative any more: test every octant.
+        let open_here = if axis.abs().max_element() < TINY_AXIS {
+            mask
+        } else {
+            open
+        };
         let p = [axis.dot(v[0]), axis.dot(v[1]), axis.dot(v[2])];
         let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
         let radius = half.dot(axis.abs());
-        // The octant centres projected on the axis, `octant_offset(i, quarter).dot(axis)`
-        // term by term (negating a product is exact), for all eight octants at once.
+        // Octant i's centre (±quarter on each axis) projected on the axis, term by term
+        // (negating a product is exact).
         let q = quarter * axis;
         let (x, y, z) = ([-q.x, q.x], [-q.y, q.y], [-q.z, q.z]);
-        let mut separated = 0u8;
-        for i in 0..8 {
+        let mut bits = open_here;
+        while bits != 0 {
+            let i = bits.trailing_zeros() as usize;
             let c = x[i & 1] + y[(i >> 1) & 1] + z[i >> 2];
-            separated |= u8::from(lo - c > radius || hi - c < -radius) << i;
+            if lo - c > radius || hi - c < -radius {
+                mask &= !(1 << i);
+                open &= !(1 << i);
+            }
+            bits &= bits - 1;
         }
-        mask &= !separated;
     }
     mask
 }
 
-/// Centre of octant `i` relative to the cell centre, for a cell whose quarter size is `quarter`.
-fn octant_offset(i: usize, quarter: DVec3) -> DVec3 {
-    let sign = |bit: usize| if i & bit != 0 { 1.0 } else { -1.0 };
-    DVec3::new(
-        sign(1) * quarter.x,
-        sign(2) * quarter.y,
-        sign(4) * quarter.z,
-    )
+/// Axes with no component above this in magnitude are tested in full by [`octant_mask`].
+const TINY_AXIS: f64 = 1e-200;
+
+/// The octants (spanning `±quarter ± half` about the cell centre on each axis) holding one
+/// of the vertices `v` (relative to the centre) at least `margin / 2` inside. The
+/// separating-axis test of [`octant_mask`] cannot separate such an octant: on an axis `a`
+/// the vertex lies `margin / 2 · |a|₁` inside the octant's projection, while the test's
+/// rounding is a few ulps of `|a|₁` times the largest coordinate, kept below 2⁻⁴⁰ of it here
+/// (and axes below [`TINY_AXIS`], where products may underflow, are tested in full).
+fn holding_a_vertex(v: &[DVec3; 3], quarter: DVec3, half: DVec3, margin: f64) -> u8 {
+    let slack = 0.5 * margin;
+    let scale = v
+        .iter()
+        .fold(half.max_element(), |m, p| m.max(p.abs().max_element()));
+    if slack <= 0.0 || slack < scale * TWO_TO_MINUS_40 {
+        return 0;
+    }
+    let inner = half - DVec3::splat(slack);
+    v.iter()
+        .fold(0, |m, &p| m | box_axes_mask(p, p, quarter, inner))
+}
+
+/// 2⁻⁴⁰.
+const TWO_TO_MINUS_40: f64 = 1.0 / (1u64 << 40) as f64;
+
+/// The octants that the box `[lo, hi]` (relative to the cell centre) touches: octant `i`
+/// spans `[c - half, c + half]` with `c = ±quarter` on each axis, so each
+/// axis decides its lower and upper octants with one pair of comparisons.
+fn box_axes_mask(lo: DVec3, hi: DVec3, quarter: DVec3, half: DVec3) -> u8 {
+    // Octants on the upper side of axis a (bit a of i set), for a = x, y, z.
+    const UPPER: [u8; 3] = [0b1010_1010, 0b1100_1100, 0b1111_0000];
+    let mut mask = 0xff;
+    for (a, upper) in UPPER.into_iter().enumerate() {
+        let touches = |c: f64| lo[a] - c <= half[a] && hi[a] - c >= -half[a];
+        let (low_side, high_side) = (touches(-quarter[a]), touches(quarter[a]));
+        mask &= match (low_side, high_side) {
+            (true, true) => 0xff,
+            (true, false) => !upper,
+            (false, true) => upper,
+            (false, false) => 0,
+        };
+    }
+    mask
 }
 
 #[cfg(test)]
@@ -411,8 +471,9 @@ mod tests {
         for i in 0..9 {
             polygon.push(DVec3::new((i % 2) as f64, i as f64, 0.0));
         }
-        polygon.clip(0, 0.5, 1.0);
-        assert!(polygon.overflowed);
+        let mut clipped = Polygon::default();
+        assert!(polygon.clip_into(0, 0.5, 1.0, &mut clipped));
+        assert!(clipped.overflowed);
     }
 
     #[test]
@@ -448,7 +509,11 @@ mod tests {
             let expected = (0..8)
                 .filter(|&i| overlaps_box(tri, &cell.octant(i).expanded(1e-9)))
                 .fold(0u8, |m, i| m | (1 << i));
-            assert_eq!(octant_mask(tri, &cell, 1e-9), expected, "{tri:?}");
+            assert_eq!(octant_mask(tri, &cell, 1e-9, 0xff), expected, "{tri:?}");
+            for candidates in [0b0000_0001, 0b1010_0101, 0b0111_1110] {
+                let restricted = octant_mask(tri, &cell, 1e-9, candidates);
+                assert_eq!(restricted, expected & candidates, "{tri:?}");
+            }
         }
     }
 

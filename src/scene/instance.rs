@@ -39,6 +39,11 @@ impl StoredMesh {
             .get_or_init(|| Octree::build(&self.set, self.params))
     }
 
+    /// Drops the octree, so that the next use builds it again.
+    pub(crate) fn forget_octree(&mut self) {
+        self.octree.take();
+    }
+
     /// Bytes of vertices, indices and (once built) octree.
     pub fn bytes(&self) -> usize {
         self.set.mesh.bytes() + self.octree.get().map_or(0, Octree::bytes)

@@ -265,8 +265,8 @@ impl PrimitiveSet for MeshSet {
         triangle::overlaps_box(&self.local(index), cell)
     }
 
-    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64) -> u8 {
-        triangle::octant_mask(&self.local(index), cell, margin)
+    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64, candidates: u8) -> u8 {
+        triangle::octant_mask(&self.local(index), cell, margin, candidates)
     }
 
     fn clipped_bounds(&self, index: usize, cell: &Aabb) -> Option<Aabb> {

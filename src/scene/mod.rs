@@ -193,6 +193,12 @@ impl Scene {
         });
     }
 
+    /// Drops the instanced meshes' octrees, so that the next build builds them again
+    /// (benchmarks time whole builds this way).
+    pub fn forget_instance_octrees(&mut self) {
+        self.meshes.iter_mut().for_each(StoredMesh::forget_octree);
+    }
+
     /// The instances.
     pub fn instances(&self) -> &[Instance] {
         &self.instances
@@ -375,10 +381,10 @@ impl PrimitiveSet for Scene {
         }
     }
 
-    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64) -> u8 {
+    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64, candidates: u8) -> u8 {
         match self.top(index) {
-            Top::Triangle(i) => self.world.child_mask(i, cell, margin),
-            _ => octants_by_overlap(self, index, cell, margin),
+            Top::Triangle(i) => self.world.child_mask(i, cell, margin, candidates),
+            _ => octants_by_overlap(self, index, cell, margin, candidates),
         }
     }
 

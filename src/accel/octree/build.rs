@@ -1,12 +1,15 @@
 //! Building the octree: the split rule, the exact distribution of primitives over children,
-//! and parallel construction of large subtrees.
+//! and parallel construction of large subtrees (smaller ones are built by [`super::arena`]).
 
+use super::arena::Arena;
 use super::{OctreeParams, OctreeStats};
 use crate::accel::{f32_above, f32_below, PrimitiveSet};
 use crate::geometry::Aabb;
 use glam::DVec3;
+use rayon::prelude::*;
 
-/// Cells with more references than this build their children in parallel.
+/// Cells with more references than this distribute them and build their children in
+/// parallel; smaller ones are built sequentially into one [`Arena`].
 const PARALLEL_REFS: usize = 8192;
 
 /// Set in [`Node::count`] for interior cells; the low eight bits then flag non-empty children.
@@ -23,6 +26,27 @@ pub(super) struct Node {
     pub bounds: [f32; 6],
 }
 
+impl Node {
+    /// A leaf holding `count` references from `first` on.
+    pub fn leaf(first: usize, count: usize, occupied: &Aabb) -> Node {
+        Node {
+            first: first as u32,
+            count: count as u32,
+            bounds: outward(occupied),
+        }
+    }
+
+    /// An interior cell whose non-empty children (bit `i` of `mask` for octant `i`) start at
+    /// node `first`.
+    pub fn interior(first: usize, mask: u32, occupied: &Aabb) -> Node {
+        Node {
+            first: first as u32,
+            count: INTERIOR | mask,
+            bounds: outward(occupied),
+        }
+    }
+}
+
 /// `occupied` rounded outward to f32 planes.
 fn outward(occupied: &Aabb) -> [f32; 6] {
     let (lo, hi) = (occupied.min, occupied.max);
@@ -37,14 +61,80 @@ fn outward(occupied: &Aabb) -> [f32; 6] {
 }
 
 /// A subtree in its own arrays: node 0 is its root; interior nodes point at their non-empty
-/// children, stored contiguously, by index into `nodes`, leaves at a run of `refs`.
-/// `occupied` bounds the parts of its primitives inside its cell (grown by the margin).
+/// children, stored contiguously, by index into `nodes`, leaves at a run of `refs`. Nodes
+/// that no cell points at may remain (a child left without references is not unlinked from
+/// the array); `stats` counts only the linked ones. `occupied` bounds the parts of its
+/// primitives inside its cell (grown by the margin).
 #[derive(Debug)]
 pub(super) struct Subtree {
     pub nodes: Vec<Node>,
     pub refs: Vec<u32>,
     pub stats: OctreeStats,
     pub occupied: Aabb,
+}
+
+/// The references of a cell's eight children, one child after another in octant order.
+#[derive(Debug, Default)]
+pub(super) struct Children {
+    refs: Vec<u32>,
+    /// Child `i` holds `refs[ends[i - 1]..ends[i]]` (from 0 for child 0).
+    ends: [usize; 8],
+}
+
+impl Children {
+    /// Sorts `refs` into the children by their octant masks, keeping their order within each
+    /// child; `counts` are the masks' bit counts per octant.
+    pub fn fill(&mut self, refs: &[u32], masks: &[u8], counts: &[usize; 8]) {
+        let mut starts = [0usize; 8];
+        let mut end = 0;
+        for i in 0..8 {
+            starts[i] = end;
+            end += counts[i];
+            self.ends[i] = end;
+        }
+        self.refs.clear();
+        self.refs.resize(end, 0);
+        for (&prim, &mask) in refs.iter().zip(masks) {
+            let mut bits = mask;
+            while bits != 0 {
+                let i = bits.trailing_zeros() as usize;
+                self.refs[starts[i]] = prim;
+                starts[i] += 1;
+                bits &= bits - 1;
+            }
+        }
+    }
+
+    /// The references of child `i`.
+    pub fn of(&self, i: usize) -> &[u32] {
+        let start = if i == 0 { 0 } else { self.ends[i - 1] };
+        &self.refs[start..self.ends[i]]
+    }
+}
+
+/// The references of each of the eight children, by the octant masks of `refs`; `counts` are
+/// the masks' bit counts per octant.
+fn split(refs: &[u32], masks: &[u8], counts: &[usize; 8]) -> Vec<Vec<u32>> {
+    let mut children: Vec<Vec<u32>> = counts.iter().map(|&n| Vec::with_capacity(n)).collect();
+    for (&prim, &mask) in refs.iter().zip(masks) {
+        let mut bits = mask;
+        while bits != 0 {
+            children[bits.trailing_zeros() as usize].push(prim);
+            bits &= bits - 1;
+        }
+    }
+    children
+}
+
+/// How many masks have bit `i` set, for each octant `i`.
+pub(super) fn octant_counts(masks: &[u8]) -> [usize; 8] {
+    let mut counts = [0usize; 8];
+    for &mask in masks {
+        for (i, count) in counts.iter_mut().enumerate() {
+            *count += usize::from(mask >> i & 1);
+        }
+    }
+    counts
 }
 
 /// What every cell of one build shares.
@@ -57,94 +147,102 @@ pub(super) struct Builder<'a, P> {
 }
 
 impl<P: PrimitiveSet> Builder<'_, P> {
-    /// The subtree for `cell` holding `refs`, at `depth`.
-    pub fn subtree(&self, cell: Aabb, refs: Vec<u32>, depth: u32) -> Subtree {
-        let Some(children) = self.split(&cell, &refs, depth) else {
-            return self.leaf(&cell, refs, depth);
-        };
-        drop(refs);
-        let build = |(i, child): (usize, Vec<u32>)| self.subtree(cell.octant(i), child, depth + 1);
-        let parts: Vec<Subtree> = if children.iter().map(Vec::len).sum::<usize>() > PARALLEL_REFS {
-            use rayon::prelude::*;
-            children.into_par_iter().enumerate().map(build).collect()
-        } else {
-            children.into_iter().enumerate().map(build).collect()
-        };
+    /// The subtree for `cell` holding `refs`, at `depth`. Each list is dropped as soon as it
+    /// is distributed, as the children's lists are built.
+    pub fn subtree(&self, cell: &Aabb, refs: Vec<u32>, depth: u32) -> Subtree {
+        if refs.len() <= PARALLEL_REFS || !self.may_split(refs.len(), depth) {
+            return Arena::new(self).subtree(cell, &refs, depth);
+        }
+        let mid = cell.center();
+        let masks: Vec<u8> = refs
+            .par_iter()
+            .map(|&prim| self.octants(cell, mid, prim))
+            .collect();
+        let counts = octant_counts(&masks);
+        if !self.pays(refs.len(), &counts) {
+            return Arena::new(self).leaf_subtree(cell, &refs, depth);
+        }
+        let children = split(&refs, &masks, &counts);
+        drop((refs, masks));
+        let parts: Vec<Subtree> = children
+            .into_par_iter()
+            .enumerate()
+            .map(|(i, child)| self.subtree(&cell.octant(i), child, depth + 1))
+            .collect();
         join(parts)
     }
 
-    /// A leaf subtree; its occupied box bounds the parts of its primitives inside the (grown)
-    /// cell.
-    fn leaf(&self, cell: &Aabb, refs: Vec<u32>, depth: u32) -> Subtree {
-        let grown = cell.expanded(self.margin);
-        let occupied = refs
-            .iter()
-            .filter_map(|&prim| self.set.clipped_bounds(prim as usize, &grown))
-            .fold(Aabb::EMPTY, Aabb::union)
-            .expanded(self.margin);
-        Subtree {
-            nodes: vec![Node {
-                first: 0,
-                count: refs.len() as u32,
-                bounds: outward(&occupied),
-            }],
-            stats: OctreeStats {
-                nodes: 1,
-                leaves: 1,
-                empty_leaves: usize::from(refs.is_empty()),
-                depth,
-                references: refs.len(),
-            },
-            refs,
-            occupied,
-        }
+    /// Whether a cell of `n` references at `depth` may be split at all.
+    pub fn may_split(&self, n: usize, depth: u32) -> bool {
+        n > self.params.leaf_size && depth < self.params.max_depth
     }
 
-    /// The children's references if splitting `cell` pays, by the rule in the module docs.
-    fn split(&self, cell: &Aabb, refs: &[u32], depth: u32) -> Option<Vec<Vec<u32>>> {
-        if refs.len() <= self.params.leaf_size || depth >= self.params.max_depth {
-            return None;
-        }
-        let children = self.distribute(cell, refs);
-        let child_refs: usize = children.iter().map(Vec::len).sum();
-        if child_refs > refs.len() && children.iter().any(|c| c.len() == refs.len()) {
-            return None;
+    /// Whether splitting a cell of `n` references into children holding `counts` pays, by the
+    /// rule in the module docs.
+    pub fn pays(&self, n: usize, counts: &[usize; 8]) -> bool {
+        let child_refs: usize = counts.iter().sum();
+        if child_refs > n && counts.contains(&n) {
+            return false;
         }
         let p = &self.params;
-        let leaf_cost = refs.len() as f64 * p.intersection_cost;
+        let leaf_cost = n as f64 * p.intersection_cost;
         let split_cost = p.traversal_cost + 0.25 * child_refs as f64 * p.intersection_cost;
-        (split_cost < leaf_cost).then_some(children)
+        split_cost < leaf_cost
     }
 
-    /// Sorts the references of `cell` into its eight children. A primitive whose bounds fall
-    /// in one child goes there directly; one whose bounds span several is tested exactly
-    /// against each.
-    fn distribute(&self, cell: &Aabb, refs: &[u32]) -> Vec<Vec<u32>> {
+    /// The octant masks of `refs` in `cell` (see [`Builder::octants`]), into `masks`.
+    pub fn masks(&self, cell: &Aabb, refs: &[u32], masks: &mut Vec<u8>) {
         let mid = cell.center();
-        let margin = DVec3::splat(self.margin);
-        let mut children: Vec<Vec<u32>> = vec![Vec::new(); 8];
-        for &prim in refs {
-            let b = &self.bounds[prim as usize];
-            let low = b.min.cmplt(mid + margin).bitmask();
-            let high = b.max.cmpgt(mid - margin).bitmask();
-            // Children whose (grown) cell the bounds reach: child i spans the upper half on
-            // axis a when bit a of i is set.
-            let reached = (0..8u32)
-                .filter(|&i| (high & i) == i && (low & !i & 0b111) == (!i & 0b111))
-                .fold(0u8, |m, i| m | (1 << i));
-            let mask = if reached.count_ones() == 1 {
-                reached
-            } else {
-                reached & self.set.child_mask(prim as usize, cell, self.margin)
-            };
-            for (i, child) in children.iter_mut().enumerate() {
-                if mask & (1 << i) != 0 {
-                    child.push(prim);
-                }
-            }
-        }
-        children
+        masks.clear();
+        masks.extend(refs.iter().map(|&prim| self.octants(cell, mid, prim)));
     }
+
+    /// The children of `cell` (centre `mid`) that primitive `prim` goes into. A primitive
+    /// whose bounds fall in one child goes there directly; one whose bounds span several is
+    /// tested exactly against each.
+    fn octants(&self, cell: &Aabb, mid: DVec3, prim: u32) -> u8 {
+        let margin = DVec3::splat(self.margin);
+        let b = &self.bounds[prim as usize];
+        let low = b.min.cmplt(mid + margin).bitmask();
+        let high = b.max.cmpgt(mid - margin).bitmask();
+        // Children whose (grown) cell the bounds reach: child i spans the upper half on
+        // axis a when bit a of i is set.
+        const UPPER: [u8; 3] = [0b1010_1010, 0b1100_1100, 0b1111_0000];
+        let reached = UPPER.iter().enumerate().fold(0xff, |m, (a, &upper)| {
+            let lower = if low >> a & 1 != 0 { !upper } else { 0 };
+            let higher = if high >> a & 1 != 0 { upper } else { 0 };
+            m & (lower | higher)
+        });
+        if reached.count_ones() == 1 {
+            reached
+        } else {
+            self.set
+                .child_mask(prim as usize, cell, self.margin, reached)
+        }
+    }
+
+    /// The box the primitives `refs` occupy inside `cell`: their parts inside the cell grown
+    /// by the margin, bounded and grown by the margin again.
+    pub fn occupied(&self, cell: &Aabb, refs: &[u32]) -> Aabb {
+        let grown = cell.expanded(self.margin);
+        refs.iter()
+            .filter_map(|&prim| self.set.clipped_bounds(prim as usize, &grown))
+            .fold(Aabb::EMPTY, Aabb::union)
+            .expanded(self.margin)
+    }
+}
+
+/// Adds a child's figures to its parent's `stats`: a child left without references counts
+/// only its empty leaves (it is not stored).
+pub(super) fn add_child(stats: &mut OctreeStats, child: &OctreeStats) {
+    stats.empty_leaves += child.empty_leaves;
+    if child.references == 0 {
+        return;
+    }
+    stats.nodes += child.nodes;
+    stats.leaves += child.leaves;
+    stats.depth = stats.depth.max(child.depth);
+    stats.references += child.references;
 }
 
 /// Joins the eight child subtrees of a cell under a new root: root, then the roots of the
@@ -152,12 +250,14 @@ impl<P: PrimitiveSet> Builder<'_, P> {
 /// stored; the root's child mask says which octants the stored children are.
 fn join(parts: Vec<Subtree>) -> Subtree {
     let mut mask = 0u32;
-    let mut stats = OctreeStats::default();
+    let mut stats = OctreeStats {
+        nodes: 1,
+        ..OctreeStats::default()
+    };
     let mut kept = Vec::with_capacity(8);
     for (i, part) in parts.into_iter().enumerate() {
-        if part.refs.is_empty() {
-            stats.empty_leaves += part.stats.empty_leaves;
-        } else {
+        add_child(&mut stats, &part.stats);
+        if part.stats.references != 0 {
             mask |= 1 << i;
             kept.push(part);
         }
@@ -168,13 +268,8 @@ fn join(parts: Vec<Subtree>) -> Subtree {
         .fold(Aabb::EMPTY, Aabb::union);
     let total: usize = kept.iter().map(|p| p.nodes.len()).sum();
     let mut nodes = Vec::with_capacity(total + 1);
-    nodes.push(Node {
-        first: 1,
-        count: INTERIOR | mask,
-        bounds: outward(&occupied),
-    });
-    let mut refs = Vec::with_capacity(kept.iter().map(|p| p.refs.len()).sum());
-    stats.nodes = total + 1;
+    nodes.push(Node::interior(1, mask, &occupied));
+    let mut refs = Vec::with_capacity(stats.references);
     // Where each child's non-root nodes start, and where its references start.
     let mut node_base = 1 + kept.len();
     let mut bases = Vec::with_capacity(kept.len());
@@ -182,10 +277,6 @@ fn join(parts: Vec<Subtree>) -> Subtree {
         bases.push((node_base, refs.len()));
         node_base += part.nodes.len() - 1;
         refs.extend_from_slice(&part.refs);
-        stats.leaves += part.stats.leaves;
-        stats.empty_leaves += part.stats.empty_leaves;
-        stats.depth = stats.depth.max(part.stats.depth);
-        stats.references += part.stats.references;
     }
     let relocate = |node: &Node, (node_base, ref_base): (usize, usize)| match node.count & INTERIOR
     {

@@ -44,6 +44,7 @@
 //! holding it, so that leaf is reached whenever the hit is not beyond the best one: the answer
 //! is exactly brute force's, for any kernel.
 
+mod arena;
 mod build;
 mod lanes;
 mod traverse;
@@ -137,7 +138,7 @@ impl Octree {
             margin,
         };
         let all: Vec<u32> = (0..set.len() as u32).collect();
-        let tree = builder.subtree(root, all, 0);
+        let tree = builder.subtree(&root, all, 0);
         // Occupied boxes lie within the root grown by two margins, then rounded to f32.
         let extent = root.min.abs().max(root.max.abs()).max_element() + 3.0 * margin;
         let scale = extent * (1.0 + 1e-6);

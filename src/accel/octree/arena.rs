@@ -1,0 +1,142 @@
+//! Building a subtree sequentially into one set of arrays: each cell's children are placed
+//! next to each other as soon as the cell splits, and every buffer is reused from cell to
+//! cell, so that no node or reference is copied after it is written.
+
+use super::build::{add_child, octant_counts, Builder, Children, Node, Subtree};
+use super::OctreeStats;
+use crate::accel::PrimitiveSet;
+use crate::geometry::Aabb;
+
+/// A node slot not yet written.
+const VACANT: Node = Node {
+    first: 0,
+    count: 0,
+    bounds: [0.0; 6],
+};
+
+/// The arrays of one subtree under construction, with the scratch buffers of its cells.
+pub(super) struct Arena<'b, 'a, P> {
+    builder: &'b Builder<'a, P>,
+    nodes: Vec<Node>,
+    refs: Vec<u32>,
+    /// The children's references of the cell being split at each depth below the subtree's
+    /// root (reused by its siblings and cousins).
+    levels: Vec<Children>,
+    masks: Vec<u8>,
+}
+
+impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
+    /// An empty arena for cells of `builder`.
+    pub fn new(builder: &'b Builder<'a, P>) -> Self {
+        Arena {
+            builder,
+            nodes: vec![VACANT],
+            refs: Vec::new(),
+            levels: Vec::new(),
+            masks: Vec::new(),
+        }
+    }
+
+    /// The subtree for `cell` holding `refs`, at `depth`.
+    pub fn subtree(mut self, cell: &Aabb, refs: &[u32], depth: u32) -> Subtree {
+        let (stats, occupied) = self.cell(0, cell, refs, depth);
+        self.finish(stats, occupied)
+    }
+
+    /// `cell` as one leaf holding `refs`, at `depth`.
+    pub fn leaf_subtree(mut self, cell: &Aabb, refs: &[u32], depth: u32) -> Subtree {
+        let (stats, occupied) = self.leaf(0, cell, refs, depth);
+        self.finish(stats, occupied)
+    }
+
+    /// The subtree built, its arrays trimmed to their length (they grew by doubling, and
+    /// wait for [`super::build`]'s join or the layout).
+    fn finish(mut self, stats: OctreeStats, occupied: Aabb) -> Subtree {
+        self.nodes.shrink_to_fit();
+        self.refs.shrink_to_fit();
+        Subtree {
+            nodes: self.nodes,
+            refs: self.refs,
+            stats,
+            occupied,
+        }
+    }
+
+    /// Builds `cell` (holding `refs`, at `depth`) into node `slot`; returns its figures and
+    /// occupied box.
+    fn cell(&mut self, slot: usize, cell: &Aabb, refs: &[u32], depth: u32) -> (OctreeStats, Aabb) {
+        let builder = self.builder;
+        if builder.may_split(refs.len(), depth) {
+            builder.masks(cell, refs, &mut self.masks);
+            let counts = octant_counts(&self.masks);
+            if builder.pays(refs.len(), &counts) {
+                let level = depth as usize;
+                if self.levels.len() <= level {
+                    self.levels.resize_with(level + 1, Children::default);
+                }
+                let mut children = std::mem::take(&mut self.levels[level]);
+                children.fill(refs, &self.masks, &counts);
+                let built = self.interior(slot, cell, &children, depth);
+                self.levels[level] = children;
+                return built;
+            }
+        }
+        self.leaf(slot, cell, refs, depth)
+    }
+
+    /// Places the non-empty children of a split cell next to each other, builds each, and
+    /// writes the cell into node `slot`.
+    fn interior(
+        &mut self,
+        slot: usize,
+        cell: &Aabb,
+        children: &Children,
+        depth: u32,
+    ) -> (OctreeStats, Aabb) {
+        let first = self.nodes.len();
+        let wanted = (0..8).filter(|&i| !children.of(i).is_empty()).count();
+        self.nodes.resize(first + wanted, VACANT);
+        let mut stats = OctreeStats {
+            nodes: 1,
+            ..OctreeStats::default()
+        };
+        let (mut mask, mut kept, mut occupied) = (0u32, 0usize, Aabb::EMPTY);
+        for i in 0..8 {
+            let refs = children.of(i);
+            if refs.is_empty() {
+                // An empty child is an empty leaf that is not stored.
+                stats.empty_leaves += 1;
+                continue;
+            }
+            let (nodes, refs_len) = (self.nodes.len(), self.refs.len());
+            let (child, child_occupied) = self.cell(first + kept, &cell.octant(i), refs, depth + 1);
+            add_child(&mut stats, &child);
+            if child.references == 0 {
+                // Left without references: dropped, and its slot goes to the next child.
+                self.nodes.truncate(nodes);
+                self.refs.truncate(refs_len);
+                continue;
+            }
+            mask |= 1 << i;
+            kept += 1;
+            occupied = occupied.union(child_occupied);
+        }
+        self.nodes[slot] = Node::interior(first, mask, &occupied);
+        (stats, occupied)
+    }
+
+    /// Writes `cell` as a leaf holding `refs` into node `slot`.
+    fn leaf(&mut self, slot: usize, cell: &Aabb, refs: &[u32], depth: u32) -> (OctreeStats, Aabb) {
+        let occupied = self.builder.occupied(cell, refs);
+        self.nodes[slot] = Node::leaf(self.refs.len(), refs.len(), &occupied);
+        self.refs.extend_from_slice(refs);
+        let stats = OctreeStats {
+            nodes: 1,
+            leaves: 1,
+            empty_leaves: usize::from(refs.is_empty()),
+            depth,
+            references: refs.len(),
+        };
+        (stats, occupied)
+    }
+}
