@@ -7,8 +7,24 @@
 
 use crate::accel::{Hit, Octree, PrimitiveSet};
 use crate::geometry::Ray;
+use crate::render::RaySource;
 use crate::scene::{Crossing, EdgeRule, Scene};
 use glam::DVec3;
+use rayon::prelude::*;
+
+/// The crossings of many rays in CSR form: ray `i`'s are entries `splits[i]..splits[i + 1]`
+/// of `t`, `id` and `prim`, nearest first (as [`Query::crossings`] lists them).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HitLists {
+    /// N + 1 offsets, from 0 to the number of crossings.
+    pub splits: Vec<u64>,
+    /// Ray parameter of each crossing (units of |direction|).
+    pub t: Vec<f64>,
+    /// 1-based object id of each crossing.
+    pub id: Vec<u32>,
+    /// Primitive index inside the object of each crossing.
+    pub prim: Vec<u32>,
+}
 
 /// A scene with its octree, ready for queries.
 #[derive(Debug, Clone, Copy)]
@@ -100,6 +116,44 @@ impl<'a> Query<'a> {
         });
         found.dedup();
         found
+    }
+
+    /// The [`Query::crossings`] of every ray of `source` in its `range`, the nearest `limit`
+    /// of each, resolved to object ids and primitives; in parallel.
+    pub fn hit_lists<S, R>(&self, source: &S, range: R, limit: usize) -> HitLists
+    where
+        S: RaySource + ?Sized,
+        R: Fn(usize) -> (f64, f64) + Sync,
+    {
+        let per_ray: Vec<Vec<(f64, u32, u32)>> = (0..source.len())
+            .into_par_iter()
+            .map(|i| {
+                let ray = source.ray(i);
+                let (t_min, t_max) = range(i);
+                let found = self.crossings(&ray, t_min, t_max);
+                let nearest = found.iter().take(limit);
+                nearest
+                    .map(|c| {
+                        let located = self.scene.locate_crossing(c, ray.origin, ray.dir);
+                        (c.t, located.object.id, located.prim)
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut lists = HitLists {
+            splits: Vec::with_capacity(per_ray.len() + 1),
+            ..HitLists::default()
+        };
+        lists.splits.push(0);
+        for hits in per_ray {
+            for (t, id, prim) in hits {
+                lists.t.push(t);
+                lists.id.push(id);
+                lists.prim.push(prim);
+            }
+            lists.splits.push(lists.t.len() as u64);
+        }
+        lists
     }
 
     /// Whether `point` lies inside the scene's closed surfaces: the parity of the crossings

@@ -353,6 +353,7 @@ fn progress_covers_tracing_and_writing() {
         strict_rays: false,
         depth_range: None,
         max_memory: None,
+        hits: None,
     };
     let mut events = Vec::new();
     let sidecar = job::run(&job, |event| events.push(event)).unwrap();

@@ -44,13 +44,13 @@ pub fn cast(scene: &Scene, rays: &[Ray]) -> Vec<Sample> {
     let b = render::render(&tracer, &rays.to_vec(), &aovs, |_| {});
     (0..rays.len())
         .map(|i| {
-            let id = b.id.as_ref().unwrap()[i];
+            let id = b.labels(Aov::Id).unwrap()[i];
             Sample {
-                depth: b.depth.as_ref().unwrap()[i],
-                normal: b.normal.as_ref().unwrap()[i],
-                position: b.position.as_ref().unwrap()[i],
+                depth: b.floats(Aov::Depth).unwrap()[i],
+                normal: DVec3::from_array(b.vectors(Aov::Normal).unwrap()[i]),
+                position: DVec3::from_array(b.vectors(Aov::Position).unwrap()[i]),
                 object: (id > 0).then(|| scene.objects[id as usize - 1].name.clone()),
-                prim: b.prim.as_ref().unwrap()[i],
+                prim: b.labels(Aov::Prim).unwrap()[i],
             }
         })
         .collect()
