@@ -5,7 +5,7 @@
 //! With `t_min = 0` the nearest hit is exactly [`crate::render::Tracer::trace`]'s (the same
 //! search), so buffers filled from it are bit-identical to the command line's rays mode.
 
-use crate::accel::{Hit, Octree, PrimitiveSet};
+use crate::accel::{test_primitive, Hit, Octree, PrimitiveSet};
 use crate::geometry::Ray;
 use crate::render::RaySource;
 use crate::scene::{Crossing, EdgeRule, Scene};
@@ -82,6 +82,48 @@ impl<'a> Query<'a> {
             best.map_or(t_max, |b| b.t)
         });
         best
+    }
+
+    /// Whether the ray has any crossing with `t_min < t <= t_max` (and `t > 0`): exactly
+    /// `self.nearest(ray, t_min, t_max).is_some()`, with the same primitive tests, but the
+    /// search stops at the first crossing in range instead of looking for the nearest.
+    pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        if !valid(ray, t_min, t_max) {
+            return false;
+        }
+        let local = ray.origin - self.scene.anchor;
+        let prepared = crate::accel::prepare_ray(self.scene, local, ray.dir);
+        // Returned to the traversal once a crossing is found: no leaf is entered below it.
+        let stop = f64::NEG_INFINITY;
+        let mut hit = false;
+        if t_min == 0.0 {
+            let mut best = None;
+            self.octree.traverse(local, ray.dir, t_max, |refs, _, _| {
+                for &prim in refs {
+                    if test_primitive(self.scene, prim, &prepared, t_max, &mut best) {
+                        hit = true;
+                        return stop;
+                    }
+                }
+                t_max
+            });
+            return hit;
+        }
+        let mut found = Vec::new();
+        self.octree.traverse(local, ray.dir, t_max, |refs, _, _| {
+            for &prim in refs {
+                let range = (t_min, t_max);
+                let rule = EdgeRule::Inclusive;
+                self.scene
+                    .crossings_of(prim as usize, &prepared, range, rule, &mut found);
+                if !found.is_empty() {
+                    hit = true;
+                    return stop;
+                }
+            }
+            t_max
+        });
+        hit
     }
 
     /// Every surface crossing with `t_min < t <= t_max` (and `t > 0`), nearest first (ties by

@@ -21,10 +21,12 @@ pub fn parse(name: &str, camera: bool) -> Result<Aov, String> {
         "prim" => Aov::Prim,
         "bary" => Aov::Bary,
         "z" => return Err("the z output needs a camera: use render(), not cast()".into()),
-        _ => return Err(format!(
+        _ => {
+            return Err(format!(
             "unknown output '{name}' (choose from t, distance, {}normal, position, id, prim, bary)",
             if camera { "z, " } else { "" }
-        )),
+        ))
+        }
     })
 }
 

@@ -12,7 +12,7 @@ use raycast::accel::{Octree, OctreeParams};
 use raycast::import::{self, LoadOptions};
 use raycast::query::Query;
 use raycast::render::{Aov, RaySource, Rays, Tracer};
-use raycast::scene::{Crossing, Scene};
+use raycast::scene::Scene;
 use rayon::prelude::*;
 use std::path::PathBuf;
 
@@ -134,9 +134,12 @@ impl PyScene {
         let rays = self::rays(&rays)?;
         let query = self.query();
         let hit: Vec<bool> = py.detach(|| {
-            nearest_all(&query, &rays)
-                .iter()
-                .map(Option::is_some)
+            (0..rays.len())
+                .into_par_iter()
+                .map(|i| {
+                    let (t0, t1) = rays.range(i);
+                    query.occluded(&rays.ray(i), t0, t1)
+                })
                 .collect()
         });
         py.detach(|| rays.check(|i| !hit[i]))?;
@@ -260,17 +263,6 @@ impl PyScene {
             }
         }
     }
-}
-
-/// The nearest crossing of every ray in its range, in parallel.
-fn nearest_all(query: &Query, rays: &RayArrays) -> Vec<Option<Crossing>> {
-    (0..rays.len())
-        .into_par_iter()
-        .map(|i| {
-            let (t0, t1) = rays.range(i);
-            query.nearest(&rays.ray(i), t0, t1)
-        })
-        .collect()
 }
 
 fn parse_outputs(names: &[String], camera: bool) -> PyResult<Vec<(String, Aov)>> {
