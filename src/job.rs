@@ -317,7 +317,7 @@ fn trace_all(
     let rays = Rays {
         source,
         range,
-        refused: |_| false,
+        refuse_untraceable: false,
     };
     let buffers = render::trace(tracer, &rays, &job.aovs, progress)
         .map_err(|i| Error::msg(format!("ray {i} cannot be traced")))?;

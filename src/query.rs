@@ -40,7 +40,7 @@ impl<'a> Query<'a> {
     /// untraceable ray (see [`Ray::is_valid`]), a NaN or negative `t_min` or a NaN `t_max`.
     /// Ties go to the smaller primitive index, as in [`Hit::beats`].
     pub fn nearest(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Crossing> {
-        if !valid(ray, t_min, t_max) {
+        if !traceable(ray, t_min, t_max) {
             return None;
         }
         let local = ray.origin - self.scene.anchor;
@@ -88,7 +88,7 @@ impl<'a> Query<'a> {
     /// `self.nearest(ray, t_min, t_max).is_some()`, with the same primitive tests, but the
     /// search stops at the first crossing in range instead of looking for the nearest.
     pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
-        if !valid(ray, t_min, t_max) {
+        if !traceable(ray, t_min, t_max) {
             return false;
         }
         let local = ray.origin - self.scene.anchor;
@@ -132,7 +132,7 @@ impl<'a> Query<'a> {
     /// ray tangent to a quadric touches it once.
     pub fn crossings(&self, ray: &Ray, t_min: f64, t_max: f64) -> Vec<Crossing> {
         let mut found = Vec::new();
-        if !valid(ray, t_min, t_max) {
+        if !traceable(ray, t_min, t_max) {
             return found;
         }
         let local = ray.origin - self.scene.anchor;
@@ -218,8 +218,9 @@ impl<'a> Query<'a> {
     }
 }
 
-/// A traceable ray with `t_min >= 0` and `t_max` not NaN.
-fn valid(ray: &Ray, t_min: f64, t_max: f64) -> bool {
+/// Whether [`Query::nearest`] can trace `ray` in `(t_min, t_max]`: a traceable ray (see
+/// [`Ray::is_valid`]) with `t_min >= 0` and `t_max` not NaN.
+pub fn traceable(ray: &Ray, t_min: f64, t_max: f64) -> bool {
     ray.is_valid() && t_min >= 0.0 && !t_max.is_nan()
 }
 

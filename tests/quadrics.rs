@@ -85,7 +85,14 @@ fn both_coefficient_forms_give_identical_buffers() {
     let a = render_view("quadrics/sphere_coefficients.gltf", eye, 65);
     let b = render_view("quadrics/sphere_matrices.gltf", eye, 65);
     assert_eq!(a, b);
-    assert!(a.labels(Aov::Id).unwrap().iter().filter(|&&i| i == 1).count() > 1000);
+    assert!(
+        a.labels(Aov::Id)
+            .unwrap()
+            .iter()
+            .filter(|&&i| i == 1)
+            .count()
+            > 1000
+    );
 }
 
 #[test]

@@ -8,17 +8,17 @@ use raycast::geometry::Ray;
 use raycast::render::RaySource;
 use rayon::prelude::*;
 
-/// The rows of an (N, 3) array: a flat slice when it is C-contiguous (read without index
+/// The rows of an (N, 3) array: a slice of rows when it is C-contiguous (read without index
 /// arithmetic), else the strided view.
 enum Rows<'a> {
-    Flat(&'a [f64]),
+    Flat(&'a [[f64; 3]]),
     Strided(ArrayView2<'a, f64>),
 }
 
 impl<'a> Rows<'a> {
     fn new(view: ArrayView2<'a, f64>) -> Rows<'a> {
         match view.to_slice() {
-            Some(flat) => Rows::Flat(flat),
+            Some(flat) => Rows::Flat(flat.as_chunks().0),
             None => Rows::Strided(view),
         }
     }
@@ -26,7 +26,7 @@ impl<'a> Rows<'a> {
     #[inline]
     fn get(&self, i: usize) -> DVec3 {
         match self {
-            Rows::Flat(v) => DVec3::from_slice(&v[3 * i..3 * i + 3]),
+            Rows::Flat(v) => DVec3::from_array(v[i]),
             Rows::Strided(v) => DVec3::new(v[[i, 0]], v[[i, 1]], v[[i, 2]]),
         }
     }
@@ -108,11 +108,6 @@ impl<'a> RayArrays<'a> {
             .into_par_iter()
             .find_first(|&i| suspect(i) && self.problem(i).is_some());
         first.map_or(Ok(()), |i| Err(self.error(i)))
-    }
-
-    /// Whether ray `i` cannot be traced (see [`RayArrays::check`]).
-    pub fn refused(&self, i: usize) -> bool {
-        self.problem(i).is_some()
     }
 
     /// The error that refuses ray `i`.

@@ -32,17 +32,16 @@ pub fn parse(name: &str, camera: bool) -> Result<Aov, String> {
 
 /// Traces `rays` and returns a dict of `outputs` (with their names), arrays of shape `shape`
 /// (+ `(3,)` for vectors), or the first refused ray. The tracing runs with the GIL released.
-pub fn trace_dict<'py, S, R, F>(
+pub fn trace_dict<'py, S, R>(
     py: Python<'py>,
     tracer: &Tracer,
-    rays: &Rays<S, R, F>,
+    rays: &Rays<S, R>,
     outputs: &[(String, Aov)],
     shape: &[usize],
 ) -> PyResult<Result<Bound<'py, PyDict>, usize>>
 where
     S: RaySource + ?Sized,
     R: Fn(usize) -> (f64, f64) + Sync,
-    F: Fn(usize) -> bool + Sync,
 {
     let aovs: Vec<Aov> = outputs.iter().map(|(_, a)| *a).collect();
     let buffers = match py.detach(|| render::trace(tracer, rays, &aovs, |_| {})) {

@@ -124,7 +124,7 @@ impl PyScene {
         let traced = Rays {
             source: &rays,
             range: |i| rays.range(i),
-            refused: |i| rays.refused(i),
+            refuse_untraceable: true,
         };
         trace_dict(py, &self.tracer(), &traced, &outputs, &[rays.len()])?.map_err(|i| rays.error(i))
     }
@@ -203,7 +203,7 @@ impl PyScene {
         let rays = Rays {
             source,
             range: |_| (0.0, f64::INFINITY),
-            refused: |_| false,
+            refuse_untraceable: false,
         };
         trace_dict(py, &self.tracer(), &rays, &outputs, &[height, width])?
             .map_err(|i| PyValueError::new_err(format!("camera ray {i} cannot be traced")))

@@ -1,10 +1,12 @@
 //! The per-ray outputs (AOVs) of a trace, computed in the same parallel pass as the nearest-hit
-//! search: each ray's values are written while its hit is at hand, with no array of hits in
-//! between. The command line's buffers and the Python package's `cast` and `render` are all
-//! made by [`trace`], so they share this loop.
+//! search: each task finds the hits of a block of 1,024 rays and at once fills the block's part
+//! of every output column, while the block is in cache; no array of hits for all rays is kept.
+//! The command line's buffers and the Python package's `cast` and `render` are all made by
+//! [`trace`], so they share this loop.
 
 use super::{Aov, RaySource, Tracer};
 use crate::geometry::Ray;
+use crate::query::traceable;
 use crate::scene::{Crossing, Located};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -22,10 +24,10 @@ pub enum Column {
 
 impl Column {
     fn new(aov: Aov, n: usize) -> Column {
-        match miss(aov) {
-            Value::Float(_) => Column::Float(vec![0.0; n]),
-            Value::Vector(_) => Column::Vector(vec![0.0; 3 * n]),
-            Value::Index(_) => Column::Index(vec![0; n]),
+        match aov {
+            Aov::T | Aov::Depth | Aov::Z => Column::Float(vec![0.0; n]),
+            Aov::Normal | Aov::Position | Aov::Bary => Column::Vector(vec![0.0; 3 * n]),
+            Aov::Id | Aov::Prim => Column::Index(vec![0; n]),
         }
     }
 
@@ -33,7 +35,7 @@ impl Column {
     fn blocks(&mut self) -> Box<dyn Iterator<Item = Slot<'_>> + '_> {
         match self {
             Column::Float(v) => Box::new(v.chunks_mut(BLOCK).map(Slot::Float)),
-            Column::Vector(v) => Box::new(v.chunks_mut(3 * BLOCK).map(Slot::Vector)),
+            Column::Vector(v) => Box::new(v.as_chunks_mut().0.chunks_mut(BLOCK).map(Slot::Vector)),
             Column::Index(v) => Box::new(v.chunks_mut(BLOCK).map(Slot::Index)),
         }
     }
@@ -81,78 +83,80 @@ impl Buffers {
     }
 }
 
-/// The value of `aov` on a miss.
-fn miss(aov: Aov) -> Value {
-    match aov {
-        Aov::T | Aov::Depth | Aov::Z => Value::Float(f64::INFINITY),
-        Aov::Position => Value::Vector(DVec3::INFINITY),
-        Aov::Normal | Aov::Bary => Value::Vector(DVec3::ZERO),
-        Aov::Id => Value::Index(0),
-        Aov::Prim => Value::Index(u32::MAX),
+/// One block of a column.
+enum Slot<'a> {
+    Float(&'a mut [f64]),
+    Vector(&'a mut [[f64; 3]]),
+    Index(&'a mut [u32]),
+}
+
+/// Sets `out[j]` to `value(j, hit)` for each ray `j` of a block with a hit, `miss` for the
+/// others.
+#[inline(always)]
+fn fill<T: Copy>(
+    out: &mut [T],
+    hits: &[Option<Crossing>],
+    miss: T,
+    value: impl Fn(usize, &Crossing) -> T,
+) {
+    for (j, (slot, hit)) in out.iter_mut().zip(hits).enumerate() {
+        *slot = hit.as_ref().map_or(miss, |hit| value(j, hit));
     }
 }
 
-/// Whether `aov` needs the hit resolved to its object and primitive.
-fn needs_locate(aov: Aov) -> bool {
-    matches!(aov, Aov::Normal | Aov::Id | Aov::Prim)
-}
-
-/// What the outputs of one ray's hit are computed from.
-struct At<'a> {
+/// Where the hits of one block of rays are turned into AOV values.
+struct Block<'a, S: ?Sized> {
     tracer: &'a Tracer<'a>,
-    ray: &'a Ray,
-    hit: &'a Crossing,
-    /// The hit's object and primitive, when an output needs them.
-    located: Option<Located<'a>>,
+    source: &'a S,
+    /// The index of the block's first ray.
+    start: usize,
     /// The camera's eye and view axis (zeros without a camera).
     eye: DVec3,
     forward: DVec3,
 }
 
-impl At<'_> {
-    /// The value of `aov` at this hit.
-    fn value(&self, aov: Aov) -> Value {
-        let (ray, hit) = (self.ray, self.hit);
-        let located = || self.located.as_ref();
-        match aov {
-            Aov::T => Value::Float(hit.t),
-            Aov::Depth => Value::Float(hit.t * ray.dir.length()),
-            Aov::Z => Value::Float((ray.at(hit.t) - self.eye).dot(self.forward)),
-            Aov::Position => Value::Vector(ray.at(hit.t)),
-            Aov::Normal => located().map_or(miss(aov), |l| Value::Vector(l.normal)),
-            Aov::Id => located().map_or(miss(aov), |l| Value::Index(l.object.id)),
-            Aov::Prim => located().map_or(miss(aov), |l| Value::Index(l.prim)),
-            Aov::Bary => {
-                let weights = self.tracer.scene.barycentric(hit, ray.origin, ray.dir);
-                Value::Vector(weights.map_or(DVec3::ZERO, DVec3::from_array))
-            }
-        }
+impl<S: RaySource + ?Sized> Block<'_, S> {
+    /// The `j`-th ray of the block.
+    #[inline(always)]
+    fn ray(&self, j: usize) -> Ray {
+        self.source.ray(self.start + j)
     }
-}
 
-/// One AOV's value for one ray.
-enum Value {
-    Float(f64),
-    Vector(DVec3),
-    Index(u32),
-}
+    /// The hit's object and primitive.
+    #[inline(always)]
+    fn locate(&self, j: usize, hit: &Crossing) -> Located<'_> {
+        let ray = self.ray(j);
+        self.tracer.scene.locate_crossing(hit, ray.origin, ray.dir)
+    }
 
-/// One block of a column.
-enum Slot<'a> {
-    Float(&'a mut [f64]),
-    Vector(&'a mut [f64]),
-    Index(&'a mut [u32]),
-}
-
-impl Slot<'_> {
-    /// Stores the `j`-th value of the block (a column holds its AOV's type of value).
-    fn set(&mut self, j: usize, value: Value) {
-        match (self, value) {
-            (Slot::Float(s), Value::Float(v)) => s[j] = v,
-            (Slot::Vector(s), Value::Vector(v)) => {
-                s[3 * j..3 * j + 3].copy_from_slice(&v.to_array())
+    /// Fills `slot`, the block's part of the column of `aov`, from the block's `hits`.
+    fn fill(&self, aov: Aov, slot: &mut Slot, hits: &[Option<Crossing>]) {
+        let inf = f64::INFINITY;
+        match (aov, slot) {
+            (Aov::T, Slot::Float(out)) => fill(out, hits, inf, |_, h| h.t),
+            (Aov::Depth, Slot::Float(out)) => {
+                fill(out, hits, inf, |j, h| h.t * self.ray(j).dir.length())
             }
-            (Slot::Index(s), Value::Index(v)) => s[j] = v,
+            (Aov::Z, Slot::Float(out)) => fill(out, hits, inf, |j, h| {
+                (self.ray(j).at(h.t) - self.eye).dot(self.forward)
+            }),
+            (Aov::Position, Slot::Vector(out)) => {
+                fill(out, hits, [inf; 3], |j, h| self.ray(j).at(h.t).to_array())
+            }
+            (Aov::Normal, Slot::Vector(out)) => fill(out, hits, [0.0; 3], |j, h| {
+                self.locate(j, h).normal.to_array()
+            }),
+            (Aov::Bary, Slot::Vector(out)) => fill(out, hits, [0.0; 3], |j, h| {
+                let ray = self.ray(j);
+                let weights = self.tracer.scene.barycentric(h, ray.origin, ray.dir);
+                weights.unwrap_or([0.0; 3])
+            }),
+            (Aov::Id, Slot::Index(out)) => {
+                fill(out, hits, 0, |_, h| self.tracer.scene.object(h.top).id)
+            }
+            (Aov::Prim, Slot::Index(out)) => {
+                fill(out, hits, u32::MAX, |j, h| self.locate(j, h).prim)
+            }
             _ => unreachable!("a column is made for its AOV's type"),
         }
     }
@@ -164,31 +168,33 @@ const BLOCK: usize = 1024;
 /// Tasks between two progress reports (64 Ki rays).
 const BLOCKS_PER_REPORT: usize = 64;
 
-/// The rays of a trace: their source, each ray's `(t_min, t_max]`, and which rays without a
-/// hit are refused. Generic, so that reading a ray and its range is inlined into the search
-/// loop.
-pub struct Rays<'a, S: ?Sized, R, F> {
+/// The rays of a trace: their source, each ray's `(t_min, t_max]`, and whether a ray that
+/// cannot be traced is an error. Generic, so that reading a ray and its range is inlined into
+/// the search loop.
+pub struct Rays<'a, S: ?Sized, R> {
     /// The rays.
     pub source: &'a S,
     /// Ray `i`'s parameter range `(t_min, t_max]`.
     pub range: R,
-    /// Whether ray `i`, which has no hit, is one that cannot be traced (an error).
-    pub refused: F,
+    /// Whether a ray [`crate::query::traceable`] refuses (non-finite or zero, or a bad range)
+    /// makes [`trace`] fail; otherwise it is a miss.
+    pub refuse_untraceable: bool,
 }
 
 /// Finds the nearest hit of every ray in its range ([`Tracer::nearest`]) and computes `aovs`
 /// from it, in one parallel pass over blocks of rays. `progress` is told how many rays are
-/// done after every 64 Ki rays. Returns the buffers, or the first refused ray.
-pub fn trace<S, R, F>(
+/// done after every 64 Ki rays. Returns the buffers, or the first refused ray (with
+/// [`Rays::refuse_untraceable`]); whether a ray without a hit is refused is checked with the
+/// ray at hand, not read again.
+pub fn trace<S, R>(
     tracer: &Tracer,
-    rays: &Rays<S, R, F>,
+    rays: &Rays<S, R>,
     aovs: &[Aov],
     mut progress: impl FnMut(usize),
 ) -> Result<Buffers, usize>
 where
     S: RaySource + ?Sized,
     R: Fn(usize) -> (f64, f64) + Sync,
-    F: Fn(usize) -> bool + Sync,
 {
     let n = rays.source.len();
     let mut columns: Vec<(Aov, Column)> = aovs.iter().map(|&a| (a, Column::new(a, n))).collect();
@@ -198,32 +204,37 @@ where
             block.push(slot);
         }
     }
-    let locate = aovs.iter().any(|&a| needs_locate(a));
     let (eye, forward) = rays
         .source
         .view_axis()
         .unwrap_or((DVec3::ZERO, DVec3::ZERO));
+    // Finds the block's hits, then fills each column's part, the columns one after another.
     let fill = |b: usize, slots: &mut [Slot]| -> Option<usize> {
+        let block = Block {
+            tracer,
+            source: rays.source,
+            start: b * BLOCK,
+            eye,
+            forward,
+        };
         let mut refused = None;
-        for i in b * BLOCK..n.min((b + 1) * BLOCK) {
-            let ray = rays.source.ray(i);
-            let (t_min, t_max) = (rays.range)(i);
-            let hit = tracer.nearest(&ray, t_min, t_max);
-            let at = hit.as_ref().map(|hit| At {
-                tracer,
-                ray: &ray,
-                hit,
-                located: locate.then(|| tracer.scene.locate_crossing(hit, ray.origin, ray.dir)),
-                eye,
-                forward,
-            });
-            if at.is_none() && refused.is_none() && (rays.refused)(i) {
-                refused = Some(i);
-            }
-            for (slot, &aov) in slots.iter_mut().zip(aovs) {
-                let value = at.as_ref().map_or(miss(aov), |at| at.value(aov));
-                slot.set(i - b * BLOCK, value);
-            }
+        let hits: Vec<Option<Crossing>> = (block.start..n.min(block.start + BLOCK))
+            .map(|i| {
+                let (t_min, t_max) = (rays.range)(i);
+                let ray = rays.source.ray(i);
+                let hit = tracer.nearest(&ray, t_min, t_max);
+                if hit.is_none()
+                    && rays.refuse_untraceable
+                    && refused.is_none()
+                    && !traceable(&ray, t_min, t_max)
+                {
+                    refused = Some(i);
+                }
+                hit
+            })
+            .collect();
+        for (slot, &aov) in slots.iter_mut().zip(aovs) {
+            block.fill(aov, slot, &hits);
         }
         refused
     };

@@ -333,7 +333,7 @@ pub fn render(
     let rays = Rays {
         source,
         range: |_| (0.0, f64::INFINITY),
-        refused: |_| false,
+        refuse_untraceable: false,
     };
     match trace(tracer, &rays, aovs, progress) {
         Ok(buffers) => buffers,
