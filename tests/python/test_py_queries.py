@@ -242,3 +242,14 @@ def test_cli_hits_are_bit_identical_to_list_intersections(tmp_path):
         assert (np.diff(cli["ray_splits"]) == np.minimum(counts, 2)).all()
         for key in ("t", "id", "prim"):
             assert cli[key].tobytes() == ours[key][keep].tobytes(), key
+
+
+def test_occluded_agrees_with_cast_under_ranges():
+    # occluded() stops at the first crossing in range; cast() looks for the nearest: the same
+    # rays must be occluded exactly where cast() finds a hit.
+    scene = raycast.load(ROOT / "fixtures" / "gltf" / "instances.gltf")
+    origins, directions, tmin, tmax = _ranged_rays(scene, 3000, 13)
+    occluded = scene.occluded(origins, directions, tmin=tmin, tmax=tmax)
+    hit = scene.cast(origins, directions, tmin=tmin, tmax=tmax, aovs=["id"])["id"] > 0
+    assert (occluded == hit).all()
+    assert 100 < hit.sum() < len(hit) - 100
