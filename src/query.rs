@@ -43,6 +43,17 @@ impl<'a> Query<'a> {
         if !traceable(ray, t_min, t_max) {
             return None;
         }
+        self.nearest_of_traceable(ray, t_min, t_max)
+    }
+
+    /// [`Query::nearest`] for a ray and range known to be [`traceable`].
+    #[inline]
+    pub(crate) fn nearest_of_traceable(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<Crossing> {
         let local = ray.origin - self.scene.anchor;
         if t_min == 0.0 {
             let hit = self

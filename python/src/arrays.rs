@@ -93,6 +93,21 @@ impl<'a> RayArrays<'a> {
         })
     }
 
+    /// The common case, read without a choice per ray: C-contiguous origins and directions
+    /// and one `(tmin, tmax]` for every ray.
+    pub fn contiguous(&self) -> Option<(ContiguousRays<'a>, (f64, f64))> {
+        match (&self.origins, &self.directions, &self.tmin, &self.tmax) {
+            (Rows::Flat(o), Rows::Flat(d), PerRay::All(t0), PerRay::All(t1)) => Some((
+                ContiguousRays {
+                    origins: o,
+                    directions: d,
+                },
+                (*t0, *t1),
+            )),
+            _ => None,
+        }
+    }
+
     /// The parameter range `(tmin, tmax]` of ray `i`.
     #[inline]
     pub fn range(&self, i: usize) -> (f64, f64) {
@@ -132,6 +147,26 @@ impl<'a> RayArrays<'a> {
         } else {
             None
         }
+    }
+}
+
+/// Rays from C-contiguous (N, 3) arrays (see [`RayArrays::contiguous`]).
+pub struct ContiguousRays<'a> {
+    origins: &'a [[f64; 3]],
+    directions: &'a [[f64; 3]],
+}
+
+impl RaySource for ContiguousRays<'_> {
+    fn len(&self) -> usize {
+        self.origins.len()
+    }
+
+    #[inline]
+    fn ray(&self, i: usize) -> Ray {
+        Ray::new(
+            DVec3::from_array(self.origins[i]),
+            DVec3::from_array(self.directions[i]),
+        )
     }
 }
 

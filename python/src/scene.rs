@@ -121,12 +121,27 @@ impl PyScene {
     ) -> PyResult<Bound<'py, PyDict>> {
         let outputs = parse_outputs(&outputs, false)?;
         let rays = self::rays(&rays)?;
-        let traced = Rays {
-            source: &rays,
-            range: |i| rays.range(i),
-            refuse_untraceable: true,
+        let shape = [rays.len()];
+        // Contiguous arrays with one range are read without a choice per ray.
+        let traced = match rays.contiguous() {
+            Some((contiguous, range)) => {
+                let traced = Rays {
+                    source: &contiguous,
+                    range: |_| range,
+                    refuse_untraceable: true,
+                };
+                trace_dict(py, &self.tracer(), &traced, &outputs, &shape)?
+            }
+            None => {
+                let traced = Rays {
+                    source: &rays,
+                    range: |i| rays.range(i),
+                    refuse_untraceable: true,
+                };
+                trace_dict(py, &self.tracer(), &traced, &outputs, &shape)?
+            }
         };
-        trace_dict(py, &self.tracer(), &traced, &outputs, &[rays.len()])?.map_err(|i| rays.error(i))
+        traced.map_err(|i| rays.error(i))
     }
 
     /// Whether each ray hits anything in `(tmin, tmax]`.
