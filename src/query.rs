@@ -43,17 +43,6 @@ impl<'a> Query<'a> {
         if !traceable(ray, t_min, t_max) {
             return None;
         }
-        self.nearest_of_traceable(ray, t_min, t_max)
-    }
-
-    /// [`Query::nearest`] for a ray and range known to be [`traceable`].
-    #[inline]
-    pub(crate) fn nearest_of_traceable(
-        &self,
-        ray: &Ray,
-        t_min: f64,
-        t_max: f64,
-    ) -> Option<Crossing> {
         let local = ray.origin - self.scene.anchor;
         if t_min == 0.0 {
             let hit = self
@@ -231,6 +220,7 @@ impl<'a> Query<'a> {
 
 /// Whether [`Query::nearest`] can trace `ray` in `(t_min, t_max]`: a traceable ray (see
 /// [`Ray::is_valid`]) with `t_min >= 0` and `t_max` not NaN.
+#[inline]
 pub fn traceable(ray: &Ray, t_min: f64, t_max: f64) -> bool {
     ray.is_valid() && t_min >= 0.0 && !t_max.is_nan()
 }

@@ -67,6 +67,27 @@ impl PyScene {
     fn tracer(&self) -> Tracer<'_> {
         Tracer::new(&self.scene, &self.octree)
     }
+
+    /// `cast()` of the rays of `source` in their `range` (see [`trace_dict`]).
+    fn cast_rays<'py, S, R>(
+        &self,
+        py: Python<'py>,
+        source: &S,
+        range: R,
+        outputs: &[(String, Aov)],
+        shape: &[usize],
+    ) -> PyResult<Result<Bound<'py, PyDict>, usize>>
+    where
+        S: RaySource + ?Sized,
+        R: Fn(usize) -> (f64, f64) + Sync,
+    {
+        let rays = Rays {
+            source,
+            range,
+            refuse_untraceable: true,
+        };
+        trace_dict(py, &self.tracer(), &rays, outputs, shape)
+    }
 }
 
 /// Loads the scene file `path` (`scene`: a glTF scene by index or name, a USD prim path).
@@ -125,22 +146,10 @@ impl PyScene {
         // Contiguous arrays with one range are read without a choice per ray.
         let traced = match rays.contiguous() {
             Some((contiguous, range)) => {
-                let traced = Rays {
-                    source: &contiguous,
-                    range: |_| range,
-                    refuse_untraceable: true,
-                };
-                trace_dict(py, &self.tracer(), &traced, &outputs, &shape)?
+                self.cast_rays(py, &contiguous, |_| range, &outputs, &shape)
             }
-            None => {
-                let traced = Rays {
-                    source: &rays,
-                    range: |i| rays.range(i),
-                    refuse_untraceable: true,
-                };
-                trace_dict(py, &self.tracer(), &traced, &outputs, &shape)?
-            }
-        };
+            None => self.cast_rays(py, &rays, |i| rays.range(i), &outputs, &shape),
+        }?;
         traced.map_err(|i| rays.error(i))
     }
 

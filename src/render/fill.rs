@@ -222,14 +222,15 @@ where
             .map(|i| {
                 let (t_min, t_max) = (rays.range)(i);
                 let ray = rays.source.ray(i);
-                if traceable(&ray, t_min, t_max) {
-                    tracer.nearest_of_traceable(&ray, t_min, t_max)
-                } else {
-                    if rays.refuse_untraceable && refused.is_none() {
-                        refused = Some(i);
-                    }
-                    None
+                let hit = tracer.nearest(&ray, t_min, t_max);
+                if hit.is_none()
+                    && rays.refuse_untraceable
+                    && refused.is_none()
+                    && !traceable(&ray, t_min, t_max)
+                {
+                    refused = Some(i);
                 }
+                hit
             })
             .collect();
         for (slot, &aov) in slots.iter_mut().zip(aovs) {

@@ -10,7 +10,7 @@ pub use fill::{trace, Buffers, Column, Rays};
 use crate::accel::{prepare_ray, Bvh, BvhKind, Hit, Octree, OctreeParams};
 use crate::camera::Camera;
 use crate::geometry::Ray;
-use crate::query::{traceable, Query};
+use crate::query::Query;
 use crate::scene::{Crossing, Scene};
 use glam::DVec3;
 use std::fmt;
@@ -286,29 +286,16 @@ impl<'a> Tracer<'a> {
     /// ray [`Query::nearest`] refuses. With `t_min = 0` it is [`Tracer::trace`]'s hit. The
     /// BVH backends search from `t = 0` only: they give `None` for `t_min > 0` (ranges need
     /// the octree, see [`Tracer::query`]).
-    pub fn nearest(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Crossing> {
-        if !traceable(ray, t_min, t_max) {
-            return None;
-        }
-        self.nearest_of_traceable(ray, t_min, t_max)
-    }
-
-    /// [`Tracer::nearest`] for a ray and range known to be [`traceable`].
     #[inline]
-    pub(crate) fn nearest_of_traceable(
-        &self,
-        ray: &Ray,
-        t_min: f64,
-        t_max: f64,
-    ) -> Option<Crossing> {
+    pub fn nearest(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Crossing> {
         match self.accel {
             Accel::Octree(octree) => Query {
                 scene: self.scene,
                 octree,
             }
-            .nearest_of_traceable(ray, t_min, t_max),
+            .nearest(ray, t_min, t_max),
             Accel::Bvh(bvh) => {
-                if t_min != 0.0 {
+                if !ray.is_valid() || t_min != 0.0 || t_max.is_nan() {
                     return None;
                 }
                 let local = ray.origin - self.scene.anchor;
