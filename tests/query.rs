@@ -185,7 +185,10 @@ fn occluded_agrees_with_the_nearest_hit_on_random_scenes() {
         };
         let (mut hits, mut misses) = (0, 0);
         for _ in 0..4000 {
-            let ray = Ray::new(rng.point(-14.0, 14.0) + offset, rng.direction());
+            // Toward a point among the primitives, so that many rays hit something.
+            let origin = rng.point(-14.0, 14.0) + offset;
+            let target = rng.point(-8.0, 8.0) + offset;
+            let ray = Ray::new(origin, (target - origin).normalize());
             let t_min = if rng.uniform(0.0, 1.0) < 0.5 {
                 0.0
             } else {
@@ -200,6 +203,6 @@ fn occluded_agrees_with_the_nearest_hit_on_random_scenes() {
             );
             *(if nearest { &mut hits } else { &mut misses }) += 1;
         }
-        assert!(hits > 500 && misses > 500, "{hits} hits, {misses} misses");
+        assert!(hits > 400 && misses > 400, "{hits} hits, {misses} misses");
     }
 }
