@@ -217,8 +217,7 @@ fn main() {
                 pool.install(|| {
                     let warm = trace_once(&tracer, rays, &[Aov::Depth]);
                     hits = warm
-                        .depth
-                        .as_ref()
+                        .floats(Aov::Depth)
                         .map_or(0, |d| d.iter().filter(|t| t.is_finite()).count());
                     for _ in 0..args.runs.max(1) {
                         let (_, s) = timed(|| trace_once(&tracer, rays, &[Aov::Depth]));

@@ -4,12 +4,14 @@
 use crate::accel::OctreeParams;
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
-use crate::geometry::Ray;
 use crate::import::{self, LoadOptions};
+use crate::output::npy::RayFile;
 use crate::output::request::{self, buffer_bytes, check_memory};
-use crate::output::sidecar::{self, CameraInfo, Sidecar, Stats, Timings};
-use crate::output::{self, Format, Layout, Staging};
-use crate::render::{self, AccelKind, AccelStructure, Aov, CameraView, RaySource, Tracer};
+use crate::output::sidecar::{self, CameraInfo, HitsInfo, Sidecar, Stats, Timings};
+use crate::output::{self, npz, Format, Layout, Staging};
+use crate::query::HitLists;
+use crate::render::{self, AccelKind, AccelStructure, Aov, Buffers, CameraView, RaySource};
+use crate::render::{Rays, Tracer};
 use crate::scene::Scene;
 use glam::DVec3;
 use std::io::Write;
@@ -64,6 +66,42 @@ pub struct RenderJob {
     /// Refuse a run whose buffers need more bytes than this; `None`: the memory the system
     /// reports available.
     pub max_memory: Option<u64>,
+    /// List every surface crossing of each ray (or the nearest few) into `hits.npz`.
+    pub hits: Option<HitLimit>,
+}
+
+/// How many crossings `--hits` lists per ray.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HitLimit {
+    /// Every crossing.
+    All,
+    /// The nearest `n` (at least 1).
+    Nearest(usize),
+}
+
+impl HitLimit {
+    /// The most crossings listed per ray.
+    pub fn count(self) -> usize {
+        match self {
+            HitLimit::All => usize::MAX,
+            HitLimit::Nearest(n) => n,
+        }
+    }
+}
+
+impl std::str::FromStr for HitLimit {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s.trim() {
+            "all" => Ok(HitLimit::All),
+            n => match n.parse::<usize>() {
+                Ok(n) if n > 0 => Ok(HitLimit::Nearest(n)),
+                _ => Err(format!(
+                    "'{s}' is not a number of hits per ray: give all or a count of at least 1"
+                )),
+            },
+        }
+    }
 }
 
 /// Default image width and height.
@@ -122,15 +160,17 @@ fn run_checked(
     formats: &[Format],
     progress: impl FnMut(Progress) + Send,
 ) -> Result<Sidecar> {
+    let mut ray_warnings = Vec::new();
+    let rays = job
+        .rays
+        .as_deref()
+        .map(|path| read_rays(path, job, &mut ray_warnings))
+        .transpose()?;
     let started = Instant::now();
     let scene = import::load(&job.scene, &job.load)?;
     let load = started.elapsed().as_secs_f64();
     let mut warnings = scene.warnings.clone();
-    let rays = job
-        .rays
-        .as_deref()
-        .map(|path| read_rays(path, job.strict_rays, &mut warnings))
-        .transpose()?;
+    warnings.append(&mut ray_warnings);
     let view = match rays {
         Some(_) => None,
         None => Some(camera_view(&scene, job)?),
@@ -140,10 +180,10 @@ fn run_checked(
             width: v.width,
             height: v.height,
         },
-        (None, rays) => Layout::Rays(rays.as_ref().map_or(0, Vec::len)),
+        (None, rays) => Layout::Rays(rays.as_ref().map_or(0, |r| r.rays.len())),
     };
     check_memory(
-        buffer_bytes(&job.aovs, formats, layout),
+        buffer_bytes(&job.aovs, formats, layout, job.hits.map(HitLimit::count)),
         job.max_memory,
         &match layout {
             Layout::Image { width, height } => format!(
@@ -160,19 +200,17 @@ fn run_checked(
         scene: &scene,
         accel: accel.view(),
     };
-    let source: &dyn RaySource = match (&rays, &view) {
-        (Some(rays), _) => rays,
-        (None, Some(view)) => view,
-        (None, None) => unreachable!("camera mode always has a view"),
-    };
-    let total = source.len();
+    let total = layout_len(layout);
     let started = Instant::now();
     // Files are written in parallel; their reports take turns.
     let progress = Mutex::new(progress);
     let report = |event| (progress.lock().unwrap_or_else(|p| p.into_inner()))(event);
-    let buffers = render::render(&tracer, source, &job.aovs, |done| {
-        report(Progress::Tracing { done, total })
-    });
+    let tracing = |done| report(Progress::Tracing { done, total });
+    let (buffers, hits) = match (&rays, &view) {
+        (Some(file), _) => trace_all(&tracer, job, file, &file.rays, tracing)?,
+        (None, Some(view)) => trace_all(&tracer, job, &RayFile::default(), view, tracing)?,
+        (None, None) => unreachable!("camera mode always has a view"),
+    };
     let trace = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
@@ -189,6 +227,9 @@ fn run_checked(
         job.depth_range,
         |done, files| report(Progress::Writing { done, total: files }),
     )?;
+    if let Some(hits) = &hits {
+        staging.write(npz::HITS_FILE, |out| npz::write_hits(out, hits))?;
+    }
     let write = started.elapsed().as_secs_f64();
     let mut files = staging.names();
     files.push("raycast.json".into());
@@ -205,6 +246,13 @@ fn run_checked(
         aovs: job.aovs.iter().map(|a| a.to_string()).collect(),
         conventions: sidecar::conventions(),
         files,
+        hits: job.hits.zip(hits.as_ref()).map(|(limit, lists)| HitsInfo {
+            limit: match limit {
+                HitLimit::All => None,
+                HitLimit::Nearest(n) => Some(n),
+            },
+            crossings: lists.t.len(),
+        }),
         depth_png_range,
         objects: scene.objects.clone(),
         stats: Stats {
@@ -244,12 +292,66 @@ fn run_checked(
     Ok(sidecar)
 }
 
-/// Reads a ray file. Untraceable rays are misses with one warning, or with `strict` an error
-/// naming the first.
-fn read_rays(path: &Path, strict: bool, warnings: &mut Vec<String>) -> Result<Vec<Ray>> {
+/// The number of rays of a layout.
+fn layout_len(layout: Layout) -> usize {
+    match layout {
+        Layout::Image { width, height } => width * height,
+        Layout::Rays(n) => n,
+    }
+}
+
+/// Traces the rays of `source` (with the ranges of `file`, if it has them) into the buffers of
+/// the job's AOVs, and lists their crossings when the job asks for hits.
+fn trace_all(
+    tracer: &Tracer,
+    job: &RenderJob,
+    file: &RayFile,
+    source: &(impl RaySource + ?Sized),
+    progress: impl FnMut(usize),
+) -> Result<(Buffers, Option<HitLists>)> {
+    let range = |i: usize| {
+        file.ranges
+            .as_ref()
+            .map_or((0.0, f64::INFINITY), |ranges| ranges[i])
+    };
+    let rays = Rays {
+        source,
+        range,
+        refuse_untraceable: false,
+    };
+    let buffers = render::trace(tracer, &rays, &job.aovs, progress)
+        .map_err(|i| Error::msg(format!("ray {i} cannot be traced")))?;
+    let hits = match job.hits {
+        Some(limit) => {
+            let query = tracer.query().ok_or_else(hits_need_octree)?;
+            Some(query.hit_lists(source, range, limit.count()))
+        }
+        None => None,
+    };
+    Ok((buffers, hits))
+}
+
+/// The error for `--hits` with a BVH.
+fn hits_need_octree() -> Error {
+    Error::usage("--hits needs --accel octree (the crossing lists are searched in the octree)")
+}
+
+/// Reads a ray file. Untraceable rays are misses with one warning, or with `--strict-rays` an
+/// error naming the first. Per-ray ranges (an (N, 8) file) need the octree.
+fn read_rays(path: &Path, job: &RenderJob, warnings: &mut Vec<String>) -> Result<RayFile> {
     let file = output::npy::read_rays(path)?;
+    if file.ranges.is_some() && job.accel != AccelKind::Octree {
+        return Err(Error::in_file(
+            path,
+            format!(
+                "per-ray tmin and tmax (an (N, 8) ray file) need --accel octree, not --accel {}",
+                job.accel
+            ),
+        )
+        .as_usage());
+    }
     if let Some(first) = file.untraceable.first() {
-        if strict {
+        if job.strict_rays {
             return Err(Error::in_file(path, format!("{first} (--strict-rays)")));
         }
         let n = file.untraceable.len();
@@ -263,7 +365,7 @@ fn read_rays(path: &Path, strict: bool, warnings: &mut Vec<String>) -> Result<Ve
             path.display(),
         ));
     }
-    Ok(file.rays)
+    Ok(file)
 }
 
 /// Checks what can be checked before loading (see [`run`]); returns the formats to write,
@@ -281,6 +383,9 @@ fn check_request(job: &RenderJob) -> Result<Vec<Format>> {
         None => vec![Format::Exr, Format::Png],
     };
     request::check_files(&job.aovs, &formats, rays_mode)?;
+    if job.hits.is_some() && job.accel != AccelKind::Octree {
+        return Err(hits_need_octree());
+    }
     Ok(formats)
 }
 

@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raycast::accel::OctreeParams;
 use raycast::import::{self, LoadOptions};
 use raycast::info::SceneInfo;
-use raycast::job::{self, CameraChoice, RenderJob};
+use raycast::job::{self, CameraChoice, HitLimit, RenderJob};
 use raycast::output::Format;
 use raycast::render::{AccelKind, Aov};
 use std::io::IsTerminal;
@@ -96,7 +96,7 @@ struct RenderArgs {
     /// Scene file (.gltf, .glb, .obj, .usda, .usdc, .usd, .usdz).
     #[arg(required = true)]
     scene: Option<PathBuf>,
-    /// Buffers to compute: depth, z, normal, position, id, prim.
+    /// Buffers to compute: depth, z, t, normal, position, bary, id, prim.
     #[arg(long, value_delimiter = ',', default_value = "depth")]
     aov: Vec<Aov>,
     /// Image width in pixels (default 512, or from the camera's aspect ratio).
@@ -123,13 +123,18 @@ struct RenderArgs {
     /// Orthographic projection with this view height in scene units.
     #[arg(long, value_parser = parse_positive)]
     ortho: Option<f64>,
-    /// Trace the rays of an (N, 6) .npy file (origin xyz, direction xyz) instead of a camera.
+    /// Trace the rays of an (N, 6) .npy file (origin xyz, direction xyz) instead of a camera,
+    /// or of an (N, 8) file that adds each ray's tmin and tmax (a hit needs tmin < t <= tmax).
     #[arg(long, value_name = "FILE.npy", conflicts_with_all = ["camera", "eye", "width", "height", "fov", "ortho"])]
     rays: Option<PathBuf>,
     /// With --rays: a ray with a non-finite origin or direction, or a zero direction, is an
     /// error (default: a miss, counted in the warnings).
     #[arg(long, requires = "rays")]
     strict_rays: bool,
+    /// Also list every surface crossing of each ray (all), or the nearest N, into hits.npz
+    /// (CSR: ray_splits, t, id, prim).
+    #[arg(long, value_name = "all|N")]
+    hits: Option<HitLimit>,
     /// Output folder (default: <scene stem>.raycast).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -350,6 +355,7 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         max_memory: args.max_memory,
         strict_rays: args.strict_rays,
         depth_range: args.depth_range,
+        hits: args.hits,
     };
     let bar = Progress::new(args.quiet);
     let sidecar = job::run(&job, |event| bar.update(event))?;

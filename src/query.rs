@@ -5,10 +5,26 @@
 //! With `t_min = 0` the nearest hit is exactly [`crate::render::Tracer::trace`]'s (the same
 //! search), so buffers filled from it are bit-identical to the command line's rays mode.
 
-use crate::accel::{Hit, Octree, PrimitiveSet};
+use crate::accel::{test_primitive, Hit, Octree, PrimitiveSet};
 use crate::geometry::Ray;
+use crate::render::RaySource;
 use crate::scene::{Crossing, EdgeRule, Scene};
 use glam::DVec3;
+use rayon::prelude::*;
+
+/// The crossings of many rays in CSR form: ray `i`'s are entries `splits[i]..splits[i + 1]`
+/// of `t`, `id` and `prim`, nearest first (as [`Query::crossings`] lists them).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HitLists {
+    /// N + 1 offsets, from 0 to the number of crossings.
+    pub splits: Vec<u64>,
+    /// Ray parameter of each crossing (units of |direction|).
+    pub t: Vec<f64>,
+    /// 1-based object id of each crossing.
+    pub id: Vec<u32>,
+    /// Primitive index inside the object of each crossing.
+    pub prim: Vec<u32>,
+}
 
 /// A scene with its octree, ready for queries.
 #[derive(Debug, Clone, Copy)]
@@ -24,7 +40,7 @@ impl<'a> Query<'a> {
     /// untraceable ray (see [`Ray::is_valid`]), a NaN or negative `t_min` or a NaN `t_max`.
     /// Ties go to the smaller primitive index, as in [`Hit::beats`].
     pub fn nearest(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Crossing> {
-        if !valid(ray, t_min, t_max) {
+        if !traceable(ray, t_min, t_max) {
             return None;
         }
         let local = ray.origin - self.scene.anchor;
@@ -68,13 +84,55 @@ impl<'a> Query<'a> {
         best
     }
 
+    /// Whether the ray has any crossing with `t_min < t <= t_max` (and `t > 0`): exactly
+    /// `self.nearest(ray, t_min, t_max).is_some()`, with the same primitive tests, but the
+    /// search stops at the first crossing in range instead of looking for the nearest.
+    pub fn occluded(&self, ray: &Ray, t_min: f64, t_max: f64) -> bool {
+        if !traceable(ray, t_min, t_max) {
+            return false;
+        }
+        let local = ray.origin - self.scene.anchor;
+        let prepared = crate::accel::prepare_ray(self.scene, local, ray.dir);
+        // Returned to the traversal once a crossing is found: no leaf is entered below it.
+        let stop = f64::NEG_INFINITY;
+        let mut hit = false;
+        if t_min == 0.0 {
+            let mut best = None;
+            self.octree.traverse(local, ray.dir, t_max, |refs, _, _| {
+                for &prim in refs {
+                    if test_primitive(self.scene, prim, &prepared, t_max, &mut best) {
+                        hit = true;
+                        return stop;
+                    }
+                }
+                t_max
+            });
+            return hit;
+        }
+        let mut found = Vec::new();
+        self.octree.traverse(local, ray.dir, t_max, |refs, _, _| {
+            for &prim in refs {
+                let range = (t_min, t_max);
+                let rule = EdgeRule::Inclusive;
+                self.scene
+                    .crossings_of(prim as usize, &prepared, range, rule, &mut found);
+                if !found.is_empty() {
+                    hit = true;
+                    return stop;
+                }
+            }
+            t_max
+        });
+        hit
+    }
+
     /// Every surface crossing with `t_min < t <= t_max` (and `t > 0`), nearest first (ties by
     /// primitive); none for the rays [`Query::nearest`] refuses. A ray through an edge or vertex shared by triangles of a consistently wound
     /// mesh crosses it once (see [`crate::geometry::triangle::WatertightRay::crossing`]); a
     /// ray tangent to a quadric touches it once.
     pub fn crossings(&self, ray: &Ray, t_min: f64, t_max: f64) -> Vec<Crossing> {
         let mut found = Vec::new();
-        if !valid(ray, t_min, t_max) {
+        if !traceable(ray, t_min, t_max) {
             return found;
         }
         let local = ray.origin - self.scene.anchor;
@@ -102,6 +160,44 @@ impl<'a> Query<'a> {
         found
     }
 
+    /// The [`Query::crossings`] of every ray of `source` in its `range`, the nearest `limit`
+    /// of each, resolved to object ids and primitives; in parallel.
+    pub fn hit_lists<S, R>(&self, source: &S, range: R, limit: usize) -> HitLists
+    where
+        S: RaySource + ?Sized,
+        R: Fn(usize) -> (f64, f64) + Sync,
+    {
+        let per_ray: Vec<Vec<(f64, u32, u32)>> = (0..source.len())
+            .into_par_iter()
+            .map(|i| {
+                let ray = source.ray(i);
+                let (t_min, t_max) = range(i);
+                let found = self.crossings(&ray, t_min, t_max);
+                let nearest = found.iter().take(limit);
+                nearest
+                    .map(|c| {
+                        let located = self.scene.locate_crossing(c, ray.origin, ray.dir);
+                        (c.t, located.object.id, located.prim)
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut lists = HitLists {
+            splits: Vec::with_capacity(per_ray.len() + 1),
+            ..HitLists::default()
+        };
+        lists.splits.push(0);
+        for hits in per_ray {
+            for (t, id, prim) in hits {
+                lists.t.push(t);
+                lists.id.push(id);
+                lists.prim.push(prim);
+            }
+            lists.splits.push(lists.t.len() as u64);
+        }
+        lists
+    }
+
     /// Whether `point` lies inside the scene's closed surfaces: the parity of the crossings
     /// of three rays from it in fixed, unrelated directions, by majority. A single ray can
     /// only be wrong where it passes exactly through a silhouette edge or a vertex where the
@@ -122,8 +218,10 @@ impl<'a> Query<'a> {
     }
 }
 
-/// A traceable ray with `t_min >= 0` and `t_max` not NaN.
-fn valid(ray: &Ray, t_min: f64, t_max: f64) -> bool {
+/// Whether [`Query::nearest`] can trace `ray` in `(t_min, t_max]`: a traceable ray (see
+/// [`Ray::is_valid`]) with `t_min >= 0` and `t_max` not NaN.
+#[inline]
+pub fn traceable(ray: &Ray, t_min: f64, t_max: f64) -> bool {
     ray.is_valid() && t_min >= 0.0 && !t_max.is_nan()
 }
 

@@ -31,8 +31,9 @@ fn buffers_beyond_max_memory_are_refused_before_allocating() {
     ]);
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert_eq!(result.status.code(), Some(2), "{stderr}");
-    // 576e6 pixels × (24 hit + 60 buffers + 2 × 12 for the normal's EXR) bytes = 57.9 GiB.
-    assert!(stderr.contains("need about 57.9 GiB"), "{stderr}");
+    // 576e6 pixels × (60 buffers + 2 × 12 for the normal's EXR) bytes = 45.1 GiB (no array
+    // of hits: each ray's buffers are filled as its hit is found).
+    assert!(stderr.contains("need about 45.1 GiB"), "{stderr}");
     assert!(stderr.contains("--max-memory"), "{stderr}");
     assert!(file_names(&out).is_empty(), "{:?}", file_names(&out));
 }
@@ -353,6 +354,7 @@ fn progress_covers_tracing_and_writing() {
         strict_rays: false,
         depth_range: None,
         max_memory: None,
+        hits: None,
     };
     let mut events = Vec::new();
     let sidecar = job::run(&job, |event| events.push(event)).unwrap();

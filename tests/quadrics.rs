@@ -85,7 +85,14 @@ fn both_coefficient_forms_give_identical_buffers() {
     let a = render_view("quadrics/sphere_coefficients.gltf", eye, 65);
     let b = render_view("quadrics/sphere_matrices.gltf", eye, 65);
     assert_eq!(a, b);
-    assert!(a.id.unwrap().iter().filter(|&&i| i == 1).count() > 1000);
+    assert!(
+        a.labels(Aov::Id)
+            .unwrap()
+            .iter()
+            .filter(|&&i| i == 1)
+            .count()
+            > 1000
+    );
 }
 
 #[test]
@@ -96,8 +103,8 @@ fn sphere_centre_pixel_and_normal() {
         65,
     );
     let centre = 32 * 65 + 32;
-    assert_eq!(b.depth.as_ref().unwrap()[centre], 8.0);
-    assert_eq!(b.normal.as_ref().unwrap()[centre], DVec3::Z);
+    assert_eq!(b.floats(Aov::Depth).unwrap()[centre], 8.0);
+    assert_eq!(b.vectors(Aov::Normal).unwrap()[centre], [0.0, 0.0, 1.0]);
 }
 
 #[test]

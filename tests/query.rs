@@ -2,6 +2,8 @@
 //! vertices, the parameter range, containment, loading from bytes, typed errors.
 //! Expected values from the geometry (analysis), not from the code under test.
 
+mod common;
+
 use glam::DVec3;
 use raycast::accel::{Octree, OctreeParams};
 use raycast::error::ErrorKind;
@@ -137,4 +139,70 @@ fn loading_from_bytes_and_typed_errors() {
         &LoadOptions::default(),
     );
     assert!(wrong.unwrap_err().message.contains("binary glTF"));
+}
+
+#[test]
+fn occluded_stops_at_any_crossing_in_range() {
+    // Down through the cube [-1, 1]^3 from z = 5: crossings at t = 4 and t = 6.
+    let scene = cube();
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let query = Query {
+        scene: &scene,
+        octree: &octree,
+    };
+    let ray = Ray::new(DVec3::new(0.2, 0.3, 5.0), DVec3::NEG_Z);
+    let inf = f64::INFINITY;
+    let ranges = [
+        ((0.0, inf), true),
+        ((0.0, 3.9), false),
+        ((0.0, 4.0), true),
+        ((4.0, 5.9), false),
+        ((4.0, 6.0), true),
+        ((6.0, inf), false),
+        ((-1.0, inf), false), // refused, as by nearest
+    ];
+    for ((t_min, t_max), want) in ranges {
+        assert_eq!(
+            query.occluded(&ray, t_min, t_max),
+            want,
+            "({t_min}, {t_max}]"
+        );
+    }
+    let zero = Ray::new(DVec3::ZERO, DVec3::ZERO);
+    assert!(!query.occluded(&zero, 0.0, inf));
+}
+
+#[test]
+fn occluded_agrees_with_the_nearest_hit_on_random_scenes() {
+    // A different method: the nearest-hit search, which does not stop early.
+    let mut rng = common::Rng(0x0cc1_0ded);
+    for offset in [DVec3::ZERO, DVec3::splat(1e5)] {
+        let scene = common::random_scene(&mut rng, 300, 12, offset);
+        let octree = Octree::build(&scene, OctreeParams::default());
+        let query = Query {
+            scene: &scene,
+            octree: &octree,
+        };
+        let (mut hits, mut misses) = (0, 0);
+        for _ in 0..4000 {
+            // Toward a point among the primitives, so that many rays hit something.
+            let origin = rng.point(-14.0, 14.0) + offset;
+            let target = rng.point(-8.0, 8.0) + offset;
+            let ray = Ray::new(origin, (target - origin).normalize());
+            let t_min = if rng.uniform(0.0, 1.0) < 0.5 {
+                0.0
+            } else {
+                rng.uniform(0.0, 10.0)
+            };
+            let t_max = t_min + rng.uniform(0.0, 20.0);
+            let nearest = query.nearest(&ray, t_min, t_max).is_some();
+            assert_eq!(
+                query.occluded(&ray, t_min, t_max),
+                nearest,
+                "{ray:?} ({t_min}, {t_max}]"
+            );
+            *(if nearest { &mut hits } else { &mut misses }) += 1;
+        }
+        assert!(hits > 400 && misses > 400, "{hits} hits, {misses} misses");
+    }
 }

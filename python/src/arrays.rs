@@ -8,17 +8,17 @@ use raycast::geometry::Ray;
 use raycast::render::RaySource;
 use rayon::prelude::*;
 
-/// The rows of an (N, 3) array: a flat slice when it is C-contiguous (read without index
+/// The rows of an (N, 3) array: a slice of rows when it is C-contiguous (read without index
 /// arithmetic), else the strided view.
 enum Rows<'a> {
-    Flat(&'a [f64]),
+    Flat(&'a [[f64; 3]]),
     Strided(ArrayView2<'a, f64>),
 }
 
 impl<'a> Rows<'a> {
     fn new(view: ArrayView2<'a, f64>) -> Rows<'a> {
         match view.to_slice() {
-            Some(flat) => Rows::Flat(flat),
+            Some(flat) => Rows::Flat(flat.as_chunks().0),
             None => Rows::Strided(view),
         }
     }
@@ -26,7 +26,7 @@ impl<'a> Rows<'a> {
     #[inline]
     fn get(&self, i: usize) -> DVec3 {
         match self {
-            Rows::Flat(v) => DVec3::from_slice(&v[3 * i..3 * i + 3]),
+            Rows::Flat(v) => DVec3::from_array(v[i]),
             Rows::Strided(v) => DVec3::new(v[[i, 0]], v[[i, 1]], v[[i, 2]]),
         }
     }
@@ -93,6 +93,21 @@ impl<'a> RayArrays<'a> {
         })
     }
 
+    /// The common case, read without a choice per ray: C-contiguous origins and directions
+    /// and one `(tmin, tmax]` for every ray.
+    pub fn contiguous(&self) -> Option<(ContiguousRays<'a>, (f64, f64))> {
+        match (&self.origins, &self.directions, &self.tmin, &self.tmax) {
+            (Rows::Flat(o), Rows::Flat(d), PerRay::All(t0), PerRay::All(t1)) => Some((
+                ContiguousRays {
+                    origins: o,
+                    directions: d,
+                },
+                (*t0, *t1),
+            )),
+            _ => None,
+        }
+    }
+
     /// The parameter range `(tmin, tmax]` of ray `i`.
     #[inline]
     pub fn range(&self, i: usize) -> (f64, f64) {
@@ -108,11 +123,6 @@ impl<'a> RayArrays<'a> {
             .into_par_iter()
             .find_first(|&i| suspect(i) && self.problem(i).is_some());
         first.map_or(Ok(()), |i| Err(self.error(i)))
-    }
-
-    /// Whether ray `i` cannot be traced (see [`RayArrays::check`]).
-    pub fn refused(&self, i: usize) -> bool {
-        self.problem(i).is_some()
     }
 
     /// The error that refuses ray `i`.
@@ -137,6 +147,26 @@ impl<'a> RayArrays<'a> {
         } else {
             None
         }
+    }
+}
+
+/// Rays from C-contiguous (N, 3) arrays (see [`RayArrays::contiguous`]).
+pub struct ContiguousRays<'a> {
+    origins: &'a [[f64; 3]],
+    directions: &'a [[f64; 3]],
+}
+
+impl RaySource for ContiguousRays<'_> {
+    fn len(&self) -> usize {
+        self.origins.len()
+    }
+
+    #[inline]
+    fn ray(&self, i: usize) -> Ray {
+        Ray::new(
+            DVec3::from_array(self.origins[i]),
+            DVec3::from_array(self.directions[i]),
+        )
     }
 }
 

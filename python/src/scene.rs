@@ -2,7 +2,7 @@
 
 use crate::arrays::RayArrays;
 use crate::camera::{Kind, PyCamera, View};
-use crate::fill::{array, trace_dict, Output, Rays};
+use crate::fill::{array, trace_dict};
 use glam::DVec3;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
@@ -11,8 +11,8 @@ use pyo3::types::{PyBytes, PyDict, PyTuple};
 use raycast::accel::{Octree, OctreeParams};
 use raycast::import::{self, LoadOptions};
 use raycast::query::Query;
-use raycast::render::RaySource;
-use raycast::scene::{Crossing, Scene};
+use raycast::render::{Aov, RaySource, Rays, Tracer};
+use raycast::scene::Scene;
 use rayon::prelude::*;
 use std::path::PathBuf;
 
@@ -61,6 +61,32 @@ impl PyScene {
             scene: &self.scene,
             octree: &self.octree,
         }
+    }
+
+    /// The scene and its octree as the tracer of the command line's buffers.
+    fn tracer(&self) -> Tracer<'_> {
+        Tracer::new(&self.scene, &self.octree)
+    }
+
+    /// `cast()` of the rays of `source` in their `range` (see [`trace_dict`]).
+    fn cast_rays<'py, S, R>(
+        &self,
+        py: Python<'py>,
+        source: &S,
+        range: R,
+        outputs: &[(String, Aov)],
+        shape: &[usize],
+    ) -> PyResult<Result<Bound<'py, PyDict>, usize>>
+    where
+        S: RaySource + ?Sized,
+        R: Fn(usize) -> (f64, f64) + Sync,
+    {
+        let rays = Rays {
+            source,
+            range,
+            refuse_untraceable: true,
+        };
+        trace_dict(py, &self.tracer(), &rays, outputs, shape)
     }
 }
 
@@ -116,12 +142,15 @@ impl PyScene {
     ) -> PyResult<Bound<'py, PyDict>> {
         let outputs = parse_outputs(&outputs, false)?;
         let rays = self::rays(&rays)?;
-        let traced = Rays {
-            source: &rays,
-            range: |i| rays.range(i),
-            refused: |i| rays.refused(i),
-        };
-        trace_dict(py, &self.query(), &traced, &outputs, &[rays.len()])?.map_err(|i| rays.error(i))
+        let shape = [rays.len()];
+        // Contiguous arrays with one range are read without a choice per ray.
+        let traced = match rays.contiguous() {
+            Some((contiguous, range)) => {
+                self.cast_rays(py, &contiguous, |_| range, &outputs, &shape)
+            }
+            None => self.cast_rays(py, &rays, |i| rays.range(i), &outputs, &shape),
+        }?;
+        traced.map_err(|i| rays.error(i))
     }
 
     /// Whether each ray hits anything in `(tmin, tmax]`.
@@ -129,9 +158,12 @@ impl PyScene {
         let rays = self::rays(&rays)?;
         let query = self.query();
         let hit: Vec<bool> = py.detach(|| {
-            nearest_all(&query, &rays)
-                .iter()
-                .map(Option::is_some)
+            (0..rays.len())
+                .into_par_iter()
+                .map(|i| {
+                    let (t0, t1) = rays.range(i);
+                    query.occluded(&rays.ray(i), t0, t1)
+                })
                 .collect()
         });
         py.detach(|| rays.check(|i| !hit[i]))?;
@@ -143,42 +175,19 @@ impl PyScene {
     fn crossings<'py>(&self, py: Python<'py>, rays: RayArgs<'py>) -> PyResult<Bound<'py, PyTuple>> {
         let rays = self::rays(&rays)?;
         let query = self.query();
-        let (splits, t, id, prim) = py.detach(|| {
-            let per_ray: Vec<Vec<(f64, u32, u32)>> = (0..rays.len())
-                .into_par_iter()
-                .map(|i| {
-                    let ray = rays.ray(i);
-                    let (t0, t1) = rays.range(i);
-                    let found = query.crossings(&ray, t0, t1);
-                    found
-                        .iter()
-                        .map(|c| {
-                            let located = query.scene.locate_crossing(c, ray.origin, ray.dir);
-                            (c.t, located.object.id, located.prim)
-                        })
-                        .collect()
-                })
-                .collect();
-            rays.check(|i| per_ray[i].is_empty())?;
-            let mut splits = Vec::with_capacity(per_ray.len() + 1);
-            splits.push(0u64);
-            for hits in &per_ray {
-                splits.push(splits.last().copied().unwrap_or(0) + hits.len() as u64);
-            }
-            let flat: Vec<(f64, u32, u32)> = per_ray.into_iter().flatten().collect();
-            let t: Vec<f64> = flat.iter().map(|h| h.0).collect();
-            let id: Vec<u32> = flat.iter().map(|h| h.1).collect();
-            let prim: Vec<u32> = flat.iter().map(|h| h.2).collect();
-            PyResult::Ok((splits, t, id, prim))
+        let lists = py.detach(|| {
+            let lists = query.hit_lists(&rays, |i| rays.range(i), usize::MAX);
+            rays.check(|i| lists.splits[i] == lists.splits[i + 1])?;
+            PyResult::Ok(lists)
         })?;
-        let n = t.len();
+        let n = lists.t.len();
         PyTuple::new(
             py,
             [
-                array(py, &[splits.len()], splits)?,
-                array(py, &[n], t)?,
-                array(py, &[n], id)?,
-                array(py, &[n], prim)?,
+                array(py, &[lists.splits.len()], lists.splits)?,
+                array(py, &[n], lists.t)?,
+                array(py, &[n], lists.id)?,
+                array(py, &[n], lists.prim)?,
             ],
         )
     }
@@ -218,9 +227,9 @@ impl PyScene {
         let rays = Rays {
             source,
             range: |_| (0.0, f64::INFINITY),
-            refused: |_| false,
+            refuse_untraceable: false,
         };
-        trace_dict(py, &self.query(), &rays, &outputs, &[height, width])?
+        trace_dict(py, &self.tracer(), &rays, &outputs, &[height, width])?
             .map_err(|i| PyValueError::new_err(format!("camera ray {i} cannot be traced")))
     }
 
@@ -280,21 +289,10 @@ impl PyScene {
     }
 }
 
-/// The nearest crossing of every ray in its range, in parallel.
-fn nearest_all(query: &Query, rays: &RayArrays) -> Vec<Option<Crossing>> {
-    (0..rays.len())
-        .into_par_iter()
-        .map(|i| {
-            let (t0, t1) = rays.range(i);
-            query.nearest(&rays.ray(i), t0, t1)
-        })
-        .collect()
-}
-
-fn parse_outputs(names: &[String], camera: bool) -> PyResult<Vec<(String, Output)>> {
+fn parse_outputs(names: &[String], camera: bool) -> PyResult<Vec<(String, Aov)>> {
     names
         .iter()
-        .map(|n| Output::parse(n, camera).map(|o| (n.clone(), o)))
+        .map(|n| crate::fill::parse(n, camera).map(|o| (n.clone(), o)))
         .collect::<Result<_, _>>()
         .map_err(PyValueError::new_err)
 }

@@ -72,11 +72,11 @@ pub fn check(scene: &Scene, key: &Path, options: &GoldenOptions, findings: &mut 
 }
 
 fn depth(b: &Buffers) -> &[f64] {
-    b.depth.as_deref().unwrap_or_default()
+    b.floats(Aov::Depth).unwrap_or_default()
 }
 
 fn ids(b: &Buffers) -> &[u32] {
-    b.id.as_deref().unwrap_or_default()
+    b.labels(Aov::Id).unwrap_or_default()
 }
 
 type Failure = (&'static str, String);

@@ -6,13 +6,13 @@
 
 pub mod exr;
 pub mod npy;
+pub mod npz;
 pub mod png;
 pub mod request;
 pub mod sidecar;
 
 use crate::error::{Error, Result};
 use crate::render::{Aov, Buffers};
-use glam::DVec3;
 use npy::NpyData;
 use rayon::prelude::*;
 use std::fs::File;
@@ -56,6 +56,7 @@ fn untrack_partial(path: &Path) {
 /// Whether `name` is a file name raycast writes into an output folder.
 fn is_output_name(name: &str) -> bool {
     name == "raycast.json"
+        || name == npz::HITS_FILE
         || name
             .split_once('.')
             .is_some_and(|(aov, ext)| aov.parse::<Aov>().is_ok() && ext.parse::<Format>().is_ok())
@@ -334,31 +335,23 @@ fn shape(layout: Layout, components: usize) -> Vec<usize> {
     shape
 }
 
-fn flatten(v: &[DVec3]) -> Vec<f64> {
-    v.iter().flat_map(|p| p.to_array()).collect()
-}
-
 /// The values of one computed AOV.
 #[derive(Debug, Clone, Copy)]
 enum Values<'a> {
-    /// Distances (depth, z).
+    /// Distances (depth, z, t).
     Distances(&'a [f64]),
-    /// Vectors (normal, position).
-    Vectors(&'a [DVec3]),
+    /// Vectors (normal, position, bary).
+    Vectors(&'a [[f64; 3]]),
     /// Labels (id, prim).
     Labels(&'a [u32]),
 }
 
 /// The values of `aov`, if it was computed.
 fn values(b: &Buffers, aov: Aov) -> Option<Values<'_>> {
-    match aov {
-        Aov::Depth => b.depth.as_deref().map(Values::Distances),
-        Aov::Z => b.z.as_deref().map(Values::Distances),
-        Aov::Normal => b.normal.as_deref().map(Values::Vectors),
-        Aov::Position => b.position.as_deref().map(Values::Vectors),
-        Aov::Id => b.id.as_deref().map(Values::Labels),
-        Aov::Prim => b.prim.as_deref().map(Values::Labels),
-    }
+    b.floats(aov)
+        .map(Values::Distances)
+        .or_else(|| b.vectors(aov).map(Values::Vectors))
+        .or_else(|| b.labels(aov).map(Values::Labels))
 }
 
 /// The `.npy` file of `aov`: float64 or uint32, one row per pixel or ray.
@@ -371,7 +364,7 @@ fn npy_job(values: Values<'_>, aov: Aov, layout: Layout) -> FileJob<'_> {
     let shape = shape(layout, components);
     FileJob::new(format!("{aov}.npy"), move |out| match values {
         Values::Distances(v) => npy::write(out, &shape, NpyData::F64(v)),
-        Values::Vectors(v) => npy::write(out, &shape, NpyData::F64(&flatten(v))),
+        Values::Vectors(v) => npy::write(out, &shape, NpyData::F64(v.as_flattened())),
         Values::Labels(v) => npy::write(out, &shape, NpyData::U32(v)),
     })
 }
@@ -380,6 +373,8 @@ fn npy_job(values: Values<'_>, aov: Aov, layout: Layout) -> FileJob<'_> {
 fn exr_note(aov: Aov) -> &'static str {
     match aov {
         Aov::Depth => "Z = distance from the ray origin to the hit along the ray (|hit - origin|), scene units; miss = +inf",
+        Aov::T => "Z = ray parameter t of the hit, hit = origin + t * direction (units of |direction|); miss = +inf",
+        Aov::Bary => "B = barycentric weights (w0, w1, w2) of the hit triangle's vertices in the mesh's order; miss or quadric = (0,0,0)",
         Aov::Z => "Z = camera-space depth along the view axis, scene units; miss = +inf",
         Aov::Normal => "N = world-space unit geometric normal (counter-clockwise winding is front; quadrics: toward f > 0); miss = (0,0,0)",
         Aov::Position => "P = world-space hit point; miss = (+inf,+inf,+inf)",
@@ -396,10 +391,10 @@ fn exr_job(values: Values<'_>, aov: Aov, width: usize, height: usize) -> FileJob
         let channels = match values {
             Values::Distances(v) => vec![Float("Z", v.iter().map(|&x| x as f32).collect())],
             Values::Vectors(v) => {
-                let names = if aov == Aov::Normal {
-                    ["N.X", "N.Y", "N.Z"]
-                } else {
-                    ["P.X", "P.Y", "P.Z"]
+                let names = match aov {
+                    Aov::Normal => ["N.X", "N.Y", "N.Z"],
+                    Aov::Bary => ["B.X", "B.Y", "B.Z"],
+                    _ => ["P.X", "P.Y", "P.Z"],
                 };
                 (0..3)
                     .map(|c| Float(names[c], v.iter().map(|p| p[c] as f32).collect()))
@@ -430,7 +425,7 @@ fn png_job(
             });
             (Some(job), (aov == Aov::Depth).then_some(range))
         }
-        Values::Vectors(_) if aov == Aov::Position => (None, None),
+        Values::Vectors(_) if aov != Aov::Normal => (None, None),
         Values::Vectors(v) => {
             let job = FileJob::new(name, move |out| {
                 png::write(out, &png::normal_image(v, width))

@@ -13,6 +13,19 @@ pub enum NpyData<'a> {
     F64(&'a [f64]),
     /// Little-endian uint32 (`<u4`).
     U32(&'a [u32]),
+    /// Little-endian uint64 (`<u8`).
+    U64(&'a [u64]),
+}
+
+impl NpyData<'_> {
+    /// The number of data bytes.
+    pub fn bytes(&self) -> usize {
+        match self {
+            NpyData::F64(v) => 8 * v.len(),
+            NpyData::U32(v) => 4 * v.len(),
+            NpyData::U64(v) => 8 * v.len(),
+        }
+    }
 }
 
 /// Writes a C-order array of the given shape to `out`.
@@ -24,6 +37,7 @@ pub fn write(
     let descr = match data {
         NpyData::F64(_) => "<f8",
         NpyData::U32(_) => "<u4",
+        NpyData::U64(_) => "<u8",
     };
     let dims: Vec<String> = shape.iter().map(usize::to_string).collect();
     let shape_text = match dims.len() {
@@ -45,14 +59,18 @@ pub fn write(
     match data {
         NpyData::F64(v) => v.iter().try_for_each(|x| write_all(&x.to_le_bytes())),
         NpyData::U32(v) => v.iter().try_for_each(|x| write_all(&x.to_le_bytes())),
+        NpyData::U64(v) => v.iter().try_for_each(|x| write_all(&x.to_le_bytes())),
     }
 }
 
 /// The rays of a ray file in file order, and those that cannot be traced.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct RayFile {
     /// Every ray, in file order (untraceable ones included: they count as misses).
     pub rays: Vec<Ray>,
+    /// Each ray's parameter range `(tmin, tmax]`, from an (N, 8) file; `None` for an (N, 6)
+    /// file (every ray from `t > 0`).
+    pub ranges: Option<Vec<(f64, f64)>>,
     /// The rays with a non-finite origin or direction, or a zero direction.
     pub untraceable: Vec<Untraceable>,
 }
@@ -74,8 +92,9 @@ impl std::fmt::Display for Untraceable {
     }
 }
 
-/// Reads an (N, 6) float32 or float64 array (C or Fortran order) of ray origins and
-/// directions. Rays with a non-finite origin or direction or a zero direction are kept and
+/// Reads an (N, 6) or (N, 8) float32 or float64 array (C or Fortran order) of ray origins and
+/// directions, and with 8 columns each ray's `tmin` and `tmax` (a hit needs `tmin < t <= tmax`;
+/// a NaN or negative `tmin`, a NaN `tmax` or `tmin > tmax` is an error). Rays with a non-finite origin or direction or a zero direction are kept and
 /// listed in [`RayFile::untraceable`]; the tracer counts them as misses.
 pub fn read_rays(path: &Path) -> Result<RayFile> {
     let bytes =
@@ -138,9 +157,15 @@ fn parse_array(bytes: &[u8]) -> std::result::Result<(Vec<usize>, Vec<f64>), Stri
 
 fn parse_rays(bytes: &[u8]) -> std::result::Result<RayFile, String> {
     let header = parse_header(bytes)?;
-    let rows = match header.shape[..] {
-        [rows, 6] => rows,
-        _ => return Err(format!("expected shape (N, 6), found {:?}", header.shape)),
+    let (rows, columns) = match header.shape[..] {
+        [rows, columns @ (6 | 8)] => (rows, columns),
+        _ => {
+            return Err(format!(
+                "expected shape (N, 6) (origin, direction) or (N, 8) (origin, direction, tmin, \
+                 tmax), found {:?}",
+                header.shape
+            ))
+        }
     };
     let width = match header.descr.as_str() {
         "<f4" => 4,
@@ -152,7 +177,7 @@ fn parse_rays(bytes: &[u8]) -> std::result::Result<RayFile, String> {
         }
     };
     let data = &bytes[header.data_offset..];
-    let needed = rows.checked_mul(6 * width).ok_or("array too large")?;
+    let needed = rows.checked_mul(columns * width).ok_or("array too large")?;
     if data.len() != needed {
         return Err(format!(
             "data holds {} bytes, shape needs {needed}",
@@ -168,7 +193,7 @@ fn parse_rays(bytes: &[u8]) -> std::result::Result<RayFile, String> {
     };
     // Element (r, c): C order stores rows one after another, Fortran order columns.
     let at = |r: usize, c: usize| match header.fortran {
-        false => value(r * 6 + c),
+        false => value(r * columns + c),
         true => value(c * rows + r),
     };
     let rays: Vec<Ray> = (0..rows)
@@ -182,7 +207,33 @@ fn parse_rays(bytes: &[u8]) -> std::result::Result<RayFile, String> {
         .enumerate()
         .filter_map(|(i, ray)| untraceable(i, ray))
         .collect();
-    Ok(RayFile { rays, untraceable })
+    let ranges = (columns == 8)
+        .then(|| {
+            (0..rows)
+                .map(|r| check_range(r, at(r, 6), at(r, 7)))
+                .collect::<std::result::Result<Vec<_>, _>>()
+        })
+        .transpose()?;
+    Ok(RayFile {
+        rays,
+        ranges,
+        untraceable,
+    })
+}
+
+/// Ray `index`'s range `(tmin, tmax]`, or why it is not one.
+fn check_range(index: usize, tmin: f64, tmax: f64) -> std::result::Result<(f64, f64), String> {
+    if tmin.is_nan() || tmin < 0.0 {
+        Err(format!("ray {index}: tmin {tmin} is not a number >= 0"))
+    } else if tmax.is_nan() {
+        Err(format!("ray {index}: tmax is NaN"))
+    } else if tmin > tmax {
+        Err(format!(
+            "ray {index}: tmin {tmin} is greater than tmax {tmax}"
+        ))
+    } else {
+        Ok((tmin, tmax))
+    }
 }
 
 /// What the header of an `.npy` file says.
@@ -322,11 +373,54 @@ mod tests {
     }
 
     #[test]
+    fn reads_ranges_from_eight_columns() {
+        let values = [
+            [0.0f64, 0.0, 5.0, 0.0, 0.0, -1.0, 0.5, f64::INFINITY],
+            [1.0, 2.0, 3.0, 1.0, 0.0, 0.0, 0.0, 2.0],
+        ];
+        let f8: Vec<u8> = values
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let file = parse_rays(&npy("<f8", "(2, 8)", &f8)).unwrap();
+        assert_eq!(file.rays[1], Ray::new(DVec3::new(1.0, 2.0, 3.0), DVec3::X));
+        assert_eq!(file.ranges, Some(vec![(0.5, f64::INFINITY), (0.0, 2.0)]));
+        let six: Vec<u8> = values[0][..6]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        assert_eq!(
+            parse_rays(&npy("<f8", "(1, 6)", &six)).unwrap().ranges,
+            None
+        );
+    }
+
+    #[test]
+    fn rejects_bad_ranges() {
+        let cases = [
+            (f64::NAN, 1.0, "ray 0: tmin NaN is not a number >= 0"),
+            (-1.0, 1.0, "ray 0: tmin -1 is not a number >= 0"),
+            (0.0, f64::NAN, "ray 0: tmax is NaN"),
+            (2.0, 1.0, "ray 0: tmin 2 is greater than tmax 1"),
+        ];
+        for (tmin, tmax, message) in cases {
+            let row = [0.0f64, 0.0, 5.0, 0.0, 0.0, -1.0, tmin, tmax];
+            let f8: Vec<u8> = row.iter().flat_map(|v| v.to_le_bytes()).collect();
+            assert_eq!(parse_rays(&npy("<f8", "(1, 8)", &f8)).unwrap_err(), message);
+        }
+    }
+
+    #[test]
     fn rejects_bad_arrays() {
         let f8: Vec<u8> = [0.0f64; 6].iter().flat_map(|v| v.to_le_bytes()).collect();
         assert!(parse_rays(&npy("<f8", "(2, 3)", &f8))
             .unwrap_err()
             .contains("shape"));
+        let seven: Vec<u8> = [0.0f64; 7].iter().flat_map(|v| v.to_le_bytes()).collect();
+        assert!(parse_rays(&npy("<f8", "(1, 7)", &seven))
+            .unwrap_err()
+            .contains("expected shape (N, 6) (origin, direction) or (N, 8)"));
         assert!(parse_rays(&npy("<i4", "(1, 6)", &f8))
             .unwrap_err()
             .contains("float"));

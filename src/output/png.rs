@@ -47,12 +47,13 @@ pub fn distance_image(values: &[f64], width: usize, range: [f64; 2]) -> RgbImage
 }
 
 /// Colour preview of unit vectors: each component mapped from [-1, 1] to [0, 255].
-pub fn normal_image(values: &[DVec3], width: usize) -> RgbImage {
+pub fn normal_image(values: &[[f64; 3]], width: usize) -> RgbImage {
     image_from(values, width, |n| {
-        if *n == DVec3::ZERO {
+        let n = DVec3::from_array(*n);
+        if n == DVec3::ZERO {
             return [0, 0, 0];
         }
-        let c = (*n * 0.5 + DVec3::splat(0.5)).clamp(DVec3::ZERO, DVec3::ONE) * 255.0;
+        let c = (n * 0.5 + DVec3::splat(0.5)).clamp(DVec3::ZERO, DVec3::ONE) * 255.0;
         [c.x.round() as u8, c.y.round() as u8, c.z.round() as u8]
     })
 }

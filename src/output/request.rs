@@ -7,8 +7,14 @@ use crate::error::{Error, Result};
 use crate::render::Aov;
 use std::path::{Path, PathBuf};
 
-/// Bytes per traced ray kept until the buffers are filled (`Option<Hit>`).
-const HIT_BYTES: u64 = 24;
+/// Bytes per ray of `--hits`'s splits, and per listed crossing (t, id, prim, twice: while
+/// they are gathered per ray and in the flat lists).
+const SPLIT_BYTES: u64 = 8;
+const CROSSING_BYTES: u64 = 32;
+
+/// Crossings per ray assumed by the memory estimate of `--hits all` (a ray through one closed
+/// surface).
+const ASSUMED_CROSSINGS: u64 = 2;
 
 /// The formats in the order first given, without repeats (`png,png` is `png`).
 pub fn merge_formats(formats: &[Format]) -> Vec<Format> {
@@ -32,12 +38,13 @@ impl Format {
     }
 
     /// Whether this format writes a file for `aov`: NPY always; EXR for images; PNG previews
-    /// for images, except positions (which have no meaningful preview).
+    /// for images, except positions and barycentric weights (which have no meaningful
+    /// preview).
     pub fn holds(self, aov: Aov, rays_mode: bool) -> bool {
         match self {
             Format::Npy => true,
             Format::Exr => !rays_mode,
-            Format::Png => !rays_mode && aov != Aov::Position,
+            Format::Png => !rays_mode && !matches!(aov, Aov::Position | Aov::Bary),
         }
     }
 }
@@ -130,8 +137,8 @@ pub fn remove_created_folder(dir: &Path, created: Option<&Path>) {
 /// Bytes per element (pixel or ray) of each AOV's buffer.
 fn aov_bytes(aov: Aov) -> u64 {
     match aov {
-        Aov::Depth | Aov::Z => 8,
-        Aov::Normal | Aov::Position => 24,
+        Aov::Depth | Aov::Z | Aov::T => 8,
+        Aov::Normal | Aov::Position | Aov::Bary => 24,
         Aov::Id | Aov::Prim => 4,
     }
 }
@@ -148,9 +155,10 @@ fn encoding_bytes(aov: Aov, format: Format) -> u64 {
     }
 }
 
-/// An estimate of the memory the buffers of a run take at their peak: the traced hits, every
-/// AOV buffer, and twice the largest file being encoded.
-pub fn buffer_bytes(aovs: &[Aov], formats: &[Format], layout: Layout) -> u64 {
+/// An estimate of the memory the buffers of a run take at their peak: every AOV buffer, twice
+/// the largest file being encoded, and with `--hits` (at most `hits` crossings per ray) the
+/// crossing lists, counting two crossings per ray at most.
+pub fn buffer_bytes(aovs: &[Aov], formats: &[Format], layout: Layout, hits: Option<usize>) -> u64 {
     let rays_mode = matches!(layout, Layout::Rays(_));
     let count = match layout {
         Layout::Image { width, height } => width as u64 * height as u64,
@@ -164,7 +172,10 @@ pub fn buffer_bytes(aovs: &[Aov], formats: &[Format], layout: Layout) -> u64 {
         .map(|(a, f)| encoding_bytes(a, f))
         .max()
         .unwrap_or(0);
-    count.saturating_mul(HIT_BYTES + buffers + 2 * encoding)
+    let lists = hits.map_or(0, |limit| {
+        SPLIT_BYTES + CROSSING_BYTES * ASSUMED_CROSSINGS.min(limit as u64)
+    });
+    count.saturating_mul(buffers + 2 * encoding + lists)
 }
 
 /// Refuses a run whose buffers need more than `limit` bytes (`--max-memory`, or by default
@@ -226,13 +237,16 @@ mod tests {
 
     #[test]
     fn memory_estimate_counts_hits_buffers_and_encoding() {
-        // 10 pixels, depth (8) + normal (24), exr encodes normal as 12: 10 * (24 + 32 + 24).
+        // 10 pixels, depth (8) + normal (24), exr encodes normal as 12: 10 * (32 + 24).
         let layout = Layout::Image {
             width: 5,
             height: 2,
         };
-        let bytes = buffer_bytes(&[Aov::Depth, Aov::Normal], &[Format::Exr], layout);
-        assert_eq!(bytes, 800);
+        let bytes = buffer_bytes(&[Aov::Depth, Aov::Normal], &[Format::Exr], layout, None);
+        assert_eq!(bytes, 560);
+        // --hits 1: + 10 * (8 + 32).
+        let with_hits = buffer_bytes(&[Aov::Depth, Aov::Normal], &[Format::Exr], layout, Some(1));
+        assert_eq!(with_hits, 960);
         assert!(check_memory(800, Some(800), "buffers").is_ok());
         let e = check_memory(801, Some(800), "buffers").unwrap_err();
         assert!(e.message.contains("--max-memory"), "{e}");

@@ -33,6 +33,9 @@ pub struct Sidecar {
     pub conventions: BTreeMap<&'static str, &'static str>,
     /// Files written, besides this one.
     pub files: Vec<String>,
+    /// What `hits.npz` holds (with `--hits`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hits: Option<HitsInfo>,
     /// Depth range mapped into `depth.png` (near = light, far = dark).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub depth_png_range: Option<[f64; 2]>,
@@ -50,6 +53,15 @@ pub struct Sidecar {
     pub decoded: Vec<String>,
     /// Importer and render warnings.
     pub warnings: Vec<String>,
+}
+
+/// The crossing lists of `--hits`.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct HitsInfo {
+    /// The most crossings listed per ray; `None` (null) for all.
+    pub limit: Option<usize>,
+    /// Crossings listed in all.
+    pub crossings: usize,
 }
 
 /// Scene and acceleration totals.
@@ -135,6 +147,9 @@ impl CameraInfo {
 pub fn conventions() -> BTreeMap<&'static str, &'static str> {
     BTreeMap::from([
         ("depth", "distance from the ray origin to the hit, |hit - origin|, in scene units; miss = +inf"),
+        ("t", "ray parameter of the hit, hit = origin + t * direction, in units of |direction|; miss = +inf"),
+        ("bary", "barycentric weights (w0, w1, w2) of the hit triangle's vertices in the mesh's order; miss or quadric = (0, 0, 0)"),
+        ("hits", "hits.npz: ray i's crossings are entries ray_splits[i]:ray_splits[i+1] of t, id and prim, nearest first; each surface crossing once"),
         ("z", "camera-space depth along the view axis; miss = +inf"),
         ("normal", "world-space unit geometric normal; triangles: counter-clockwise winding is the front, not flipped toward the ray; quadrics: gradient direction, toward f > 0; miss = (0, 0, 0)"),
         ("position", "world-space hit point; miss = (+inf, +inf, +inf)"),

@@ -44,13 +44,13 @@ pub fn cast(scene: &Scene, rays: &[Ray]) -> Vec<Sample> {
     let b = render::render(&tracer, &rays.to_vec(), &aovs, |_| {});
     (0..rays.len())
         .map(|i| {
-            let id = b.id.as_ref().unwrap()[i];
+            let id = b.labels(Aov::Id).unwrap()[i];
             Sample {
-                depth: b.depth.as_ref().unwrap()[i],
-                normal: b.normal.as_ref().unwrap()[i],
-                position: b.position.as_ref().unwrap()[i],
+                depth: b.floats(Aov::Depth).unwrap()[i],
+                normal: DVec3::from_array(b.vectors(Aov::Normal).unwrap()[i]),
+                position: DVec3::from_array(b.vectors(Aov::Position).unwrap()[i]),
                 object: (id > 0).then(|| scene.objects[id as usize - 1].name.clone()),
-                prim: b.prim.as_ref().unwrap()[i],
+                prim: b.labels(Aov::Prim).unwrap()[i],
             }
         })
         .collect()
@@ -150,6 +150,11 @@ impl Rng {
 /// Reads the shape and raw little-endian payload of a `.npy` file written by raycast.
 pub fn read_npy(path: &std::path::Path) -> (String, Vec<usize>, Vec<u8>) {
     let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    parse_npy(&bytes)
+}
+
+/// The header, shape and raw little-endian payload of `.npy` bytes written by raycast.
+pub fn parse_npy(bytes: &[u8]) -> (String, Vec<usize>, Vec<u8>) {
     assert_eq!(&bytes[..8], b"\x93NUMPY\x01\x00");
     let len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
     let header = std::str::from_utf8(&bytes[10..10 + len])
@@ -194,10 +199,10 @@ pub fn read_u32(path: &std::path::Path) -> (Vec<usize>, Vec<u32>) {
     )
 }
 
-/// Writes an (N, 6) float64 ray file.
-pub fn write_rays(path: &std::path::Path, rays: &[[f64; 6]]) {
+/// Writes an (N, 6) or (N, 8) float64 ray file.
+pub fn write_rays<const C: usize>(path: &std::path::Path, rays: &[[f64; C]]) {
     let header = format!(
-        "{{'descr': '<f8', 'fortran_order': False, 'shape': ({}, 6), }}\n",
+        "{{'descr': '<f8', 'fortran_order': False, 'shape': ({}, {C}), }}\n",
         rays.len()
     );
     let mut out = b"\x93NUMPY\x01\x00".to_vec();

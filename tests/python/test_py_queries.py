@@ -172,3 +172,84 @@ def test_render_is_bit_identical_to_the_cli(tmp_path, cube):
     ours = cube.render(cube.cameras[0], 24, 16, aovs=["depth", "normal", "id"])
     for aov in ("depth", "normal", "id"):
         assert np.load(out / f"{aov}.npy").tobytes() == ours[aov].tobytes(), aov
+
+
+def _ranged_rays(scene, n, seed):
+    """Random rays through the scene's box with per-ray ranges: some from 0, some cut short,
+    some starting past their first hit."""
+    rng = np.random.default_rng(seed)
+    lo, hi = scene.bounds
+    origins = rng.uniform(lo - 1, hi + 1, (n, 3))
+    directions = rng.uniform(lo, hi, (n, 3)) - origins
+    tmin = np.where(rng.random(n) < 0.3, 0.0, rng.uniform(0.0, 0.8, n))
+    tmax = np.where(rng.random(n) < 0.3, np.inf, tmin + rng.uniform(0.0, 1.5, n))
+    return origins, directions, tmin, tmax
+
+
+def _run_cli(scene_path, rays, out, *extra):
+    subprocess.run(
+        [find_raycast(), scene_path, "--rays", rays, "--out", out, "--quiet", *extra],
+        check=True,
+    )
+
+
+def test_cli_ranges_t_and_bary_are_bit_identical_to_cast(tmp_path):
+    # An (N, 8) ray file (origin, direction, tmin, tmax) through the CLI and the same rays and
+    # ranges through cast(): equal bits in every output, t and bary included.
+    scene_path = ROOT / "fixtures" / "gltf" / "instances.gltf"
+    scene = raycast.load(scene_path)
+    origins, directions, tmin, tmax = _ranged_rays(scene, 3000, 11)
+    np.save(tmp_path / "rays.npy", np.column_stack([origins, directions, tmin, tmax]))
+    aovs = ["t", "depth", "normal", "position", "bary", "id", "prim"]
+    _run_cli(scene_path, tmp_path / "rays.npy", tmp_path / "out", "--aov", ",".join(aovs))
+    ours = scene.cast(origins, directions, tmin=tmin, tmax=tmax, aovs=aovs)
+    for aov in aovs:
+        cli = np.load(tmp_path / "out" / f"{aov}.npy")
+        assert cli.dtype == ours[aov].dtype and cli.shape == ours[aov].shape, aov
+        assert cli.tobytes() == ours[aov].tobytes(), aov
+    hit = ours["id"] > 0
+    assert 100 < hit.sum() < len(hit)
+    # The ranges were applied: every hit lies in (tmin, tmax], and some rays that hit from 0
+    # miss in their range.
+    assert ((ours["t"][hit] > tmin[hit]) & (ours["t"][hit] <= tmax[hit])).all()
+    from_zero = scene.cast(origins, directions, aovs=["id"])["id"] > 0
+    assert (from_zero & ~hit).sum() > 100
+
+
+def test_cli_hits_are_bit_identical_to_list_intersections(tmp_path):
+    scene_path = ROOT / "fixtures" / "gltf" / "instances.gltf"
+    scene = raycast.load(scene_path)
+    origins, directions, tmin, tmax = _ranged_rays(scene, 2000, 12)
+    np.save(tmp_path / "rays.npy", np.column_stack([origins, directions, tmin, tmax]))
+    ours = scene.list_intersections(origins, directions, tmin=tmin, tmax=tmax)
+    counts = np.diff(ours["ray_splits"])
+    assert counts.max() >= 3 and (counts == 0).any()
+    _run_cli(scene_path, tmp_path / "rays.npy", tmp_path / "all", "--hits", "all")
+    with np.load(tmp_path / "all" / "hits.npz") as cli:
+        assert sorted(cli.files) == ["id", "prim", "ray_splits", "t"]
+        for key in ("ray_splits", "t", "id", "prim"):
+            assert cli[key].dtype == ours[key].dtype, key
+            assert cli[key].tobytes() == ours[key].tobytes(), key
+    # --hits 2: the nearest two of each ray's list.
+    _run_cli(scene_path, tmp_path / "rays.npy", tmp_path / "two", "--hits", "2")
+    keep = np.concatenate(
+        [
+            np.arange(a, min(b, a + 2))
+            for a, b in zip(ours["ray_splits"][:-1], ours["ray_splits"][1:])
+        ]
+    ).astype(np.int64)
+    with np.load(tmp_path / "two" / "hits.npz") as cli:
+        assert (np.diff(cli["ray_splits"]) == np.minimum(counts, 2)).all()
+        for key in ("t", "id", "prim"):
+            assert cli[key].tobytes() == ours[key][keep].tobytes(), key
+
+
+def test_occluded_agrees_with_cast_under_ranges():
+    # occluded() stops at the first crossing in range; cast() looks for the nearest: the same
+    # rays must be occluded exactly where cast() finds a hit.
+    scene = raycast.load(ROOT / "fixtures" / "gltf" / "instances.gltf")
+    origins, directions, tmin, tmax = _ranged_rays(scene, 3000, 13)
+    occluded = scene.occluded(origins, directions, tmin=tmin, tmax=tmax)
+    hit = scene.cast(origins, directions, tmin=tmin, tmax=tmax, aovs=["id"])["id"] > 0
+    assert (occluded == hit).all()
+    assert 100 < hit.sum() < len(hit) - 100

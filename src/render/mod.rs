@@ -3,12 +3,16 @@
 //! Every ray is traced independently and results are stored by ray index, so the buffers are
 //! bit-identical for any thread count. Only the requested AOVs are computed.
 
+mod fill;
+
+pub use fill::{trace, Buffers, Column, Rays};
+
 use crate::accel::{prepare_ray, Bvh, BvhKind, Hit, Octree, OctreeParams};
 use crate::camera::Camera;
 use crate::geometry::Ray;
-use crate::scene::Scene;
+use crate::query::Query;
+use crate::scene::{Crossing, Scene};
 use glam::DVec3;
-use rayon::prelude::*;
 use std::fmt;
 use std::str::FromStr;
 
@@ -19,10 +23,16 @@ pub enum Aov {
     Depth,
     /// Camera-space depth along the view axis (camera mode only); +inf on a miss.
     Z,
+    /// The ray parameter of the hit, `hit = origin + t · direction` (units of |direction|);
+    /// +inf on a miss.
+    T,
     /// World-space unit geometric normal; (0, 0, 0) on a miss.
     Normal,
     /// World-space hit point; (+inf, +inf, +inf) on a miss.
     Position,
+    /// Barycentric weights of the hit triangle's three vertices, in the mesh's order;
+    /// (0, 0, 0) on a miss or a quadric.
+    Bary,
     /// 1-based object id; 0 on a miss.
     Id,
     /// Primitive index inside the object; `u32::MAX` on a miss.
@@ -31,11 +41,13 @@ pub enum Aov {
 
 impl Aov {
     /// All AOVs, in output order.
-    pub const ALL: [Aov; 6] = [
+    pub const ALL: [Aov; 8] = [
         Aov::Depth,
         Aov::Z,
+        Aov::T,
         Aov::Normal,
         Aov::Position,
+        Aov::Bary,
         Aov::Id,
         Aov::Prim,
     ];
@@ -45,8 +57,10 @@ impl Aov {
         match self {
             Aov::Depth => "depth",
             Aov::Z => "z",
+            Aov::T => "t",
             Aov::Normal => "normal",
             Aov::Position => "position",
+            Aov::Bary => "bary",
             Aov::Id => "id",
             Aov::Prim => "prim",
         }
@@ -63,7 +77,7 @@ impl FromStr for Aov {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
         Aov::ALL.into_iter().find(|a| a.name() == s).ok_or_else(|| {
-            format!("unknown AOV '{s}' (choose from depth, z, normal, position, id, prim)")
+            format!("unknown AOV '{s}' (choose from depth, z, t, normal, position, bary, id, prim)")
         })
     }
 }
@@ -269,99 +283,62 @@ impl<'a> Tracer<'a> {
             }
         }
     }
+
+    /// The nearest crossing with `t_min < t <= t_max` (and `t > 0`); `None` for a miss or a
+    /// ray [`Query::nearest`] refuses. With `t_min = 0` it is [`Tracer::trace`]'s hit. The
+    /// BVH backends search from `t = 0` only: they give `None` for `t_min > 0` (ranges need
+    /// the octree, see [`Tracer::query`]).
+    #[inline]
+    pub fn nearest(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Crossing> {
+        match self.accel {
+            Accel::Octree(octree) => Query {
+                scene: self.scene,
+                octree,
+            }
+            .nearest(ray, t_min, t_max),
+            Accel::Bvh(bvh) => {
+                if !ray.is_valid() || t_min != 0.0 || t_max.is_nan() {
+                    return None;
+                }
+                let local = ray.origin - self.scene.anchor;
+                let prepared = prepare_ray(self.scene, local, ray.dir);
+                let hit = bvh.intersect(self.scene, &prepared, t_max)?;
+                Some(Crossing {
+                    t: hit.t,
+                    top: hit.prim,
+                    inner: None,
+                })
+            }
+        }
+    }
+
+    /// The queries beyond the nearest hit ([`Query`]), which need the octree.
+    pub fn query(&self) -> Option<Query<'a>> {
+        match self.accel {
+            Accel::Octree(octree) => Some(Query {
+                scene: self.scene,
+                octree,
+            }),
+            Accel::Bvh(_) => None,
+        }
+    }
 }
 
-/// The requested buffers, one value per ray (row-major pixels in camera mode).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Buffers {
-    /// `depth` values.
-    pub depth: Option<Vec<f64>>,
-    /// `z` values.
-    pub z: Option<Vec<f64>>,
-    /// `normal` values.
-    pub normal: Option<Vec<DVec3>>,
-    /// `position` values.
-    pub position: Option<Vec<DVec3>>,
-    /// `id` values.
-    pub id: Option<Vec<u32>>,
-    /// `prim` values.
-    pub prim: Option<Vec<u32>>,
-}
-
-/// Rays traced per progress report.
-const CHUNK: usize = 1 << 16;
-
-/// Traces every ray of `source` and fills the buffers of `aovs`. `progress` is told how many
-/// rays are done after each chunk.
+/// Traces every ray of `source` from `t > 0` and fills the buffers of `aovs` (see [`trace`]).
+/// `progress` is told how many rays are done after each chunk.
 pub fn render(
     tracer: &Tracer,
     source: &(impl RaySource + ?Sized),
     aovs: &[Aov],
-    mut progress: impl FnMut(usize),
+    progress: impl FnMut(usize),
 ) -> Buffers {
-    let n = source.len();
-    let mut hits: Vec<Option<Hit>> = Vec::with_capacity(n);
-    for start in (0..n).step_by(CHUNK) {
-        let end = (start + CHUNK).min(n);
-        hits.par_extend(
-            (start..end)
-                .into_par_iter()
-                .map(|i| tracer.trace(&source.ray(i))),
-        );
-        progress(end);
+    let rays = Rays {
+        source,
+        range: |_| (0.0, f64::INFINITY),
+        refuse_untraceable: false,
+    };
+    match trace(tracer, &rays, aovs, progress) {
+        Ok(buffers) => buffers,
+        Err(_) => unreachable!("no ray is refused"),
     }
-    let fill = |f: &(dyn Fn(usize, &Hit) -> f64 + Sync), miss: f64| {
-        (0..n)
-            .into_par_iter()
-            .map(|i| hits[i].as_ref().map_or(miss, |h| f(i, h)))
-            .collect::<Vec<f64>>()
-    };
-    let fill3 = |f: &(dyn Fn(usize, &Hit) -> DVec3 + Sync), miss: DVec3| {
-        (0..n)
-            .into_par_iter()
-            .map(|i| hits[i].as_ref().map_or(miss, |h| f(i, h)))
-            .collect::<Vec<DVec3>>()
-    };
-    let fill_u32 = |f: &(dyn Fn(usize, &Hit) -> u32 + Sync), miss: u32| {
-        (0..n)
-            .into_par_iter()
-            .map(|i| hits[i].as_ref().map_or(miss, |h| f(i, h)))
-            .collect::<Vec<u32>>()
-    };
-    let point = |i: usize, h: &Hit| source.ray(i).at(h.t);
-    let mut buffers = Buffers::default();
-    for aov in aovs {
-        match aov {
-            Aov::Depth => {
-                buffers.depth = Some(fill(
-                    &|i, h| h.t * source.ray(i).dir.length(),
-                    f64::INFINITY,
-                ))
-            }
-            Aov::Z => {
-                let (eye, forward) = source.view_axis().unwrap_or((DVec3::ZERO, DVec3::ZERO));
-                buffers.z = Some(fill(
-                    &|i, h| (point(i, h) - eye).dot(forward),
-                    f64::INFINITY,
-                ))
-            }
-            Aov::Normal => {
-                let normal = |i: usize, h: &Hit| {
-                    let ray = source.ray(i);
-                    tracer.scene.locate(h, ray.origin, ray.dir).normal
-                };
-                buffers.normal = Some(fill3(&normal, DVec3::ZERO))
-            }
-            Aov::Position => buffers.position = Some(fill3(&point, DVec3::INFINITY)),
-            Aov::Id => buffers.id = Some(fill_u32(&|_, h| tracer.scene.object(h.prim).id, 0)),
-            Aov::Prim => {
-                let prim = |i: usize, h: &Hit| {
-                    let ray = source.ray(i);
-                    tracer.scene.locate(h, ray.origin, ray.dir).prim
-                };
-                buffers.prim = Some(fill_u32(&prim, u32::MAX))
-            }
-        }
-    }
-    buffers
 }

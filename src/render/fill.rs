@@ -1,0 +1,255 @@
+//! The per-ray outputs (AOVs) of a trace, computed in the same parallel pass as the nearest-hit
+//! search: each task finds the hits of a block of 1,024 rays and at once fills the block's part
+//! of every output column, while the block is in cache; no array of hits for all rays is kept.
+//! The command line's buffers and the Python package's `cast` and `render` are all made by
+//! [`trace`], so they share this loop.
+
+use super::{Aov, RaySource, Tracer};
+use crate::geometry::Ray;
+use crate::query::traceable;
+use crate::scene::{Crossing, Located};
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// One AOV's values for every ray.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Column {
+    /// One number per ray (depth, z, t).
+    Float(Vec<f64>),
+    /// Three numbers per ray, flattened (normal, position, bary).
+    Vector(Vec<f64>),
+    /// One label per ray (id, prim).
+    Index(Vec<u32>),
+}
+
+impl Column {
+    fn new(aov: Aov, n: usize) -> Column {
+        match aov {
+            Aov::T | Aov::Depth | Aov::Z => Column::Float(vec![0.0; n]),
+            Aov::Normal | Aov::Position | Aov::Bary => Column::Vector(vec![0.0; 3 * n]),
+            Aov::Id | Aov::Prim => Column::Index(vec![0; n]),
+        }
+    }
+
+    /// The column cut into blocks of `BLOCK` rays.
+    fn blocks(&mut self) -> Box<dyn Iterator<Item = Slot<'_>> + '_> {
+        match self {
+            Column::Float(v) => Box::new(v.chunks_mut(BLOCK).map(Slot::Float)),
+            Column::Vector(v) => Box::new(v.as_chunks_mut().0.chunks_mut(BLOCK).map(Slot::Vector)),
+            Column::Index(v) => Box::new(v.chunks_mut(BLOCK).map(Slot::Index)),
+        }
+    }
+}
+
+/// The buffers of a trace: one column per requested AOV, in the order requested.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Buffers {
+    columns: Vec<(Aov, Column)>,
+}
+
+impl Buffers {
+    /// The values of `aov`, if it was computed.
+    pub fn column(&self, aov: Aov) -> Option<&Column> {
+        self.columns.iter().find(|(a, _)| *a == aov).map(|(_, c)| c)
+    }
+
+    /// The values of a one-number AOV (depth, z, t).
+    pub fn floats(&self, aov: Aov) -> Option<&[f64]> {
+        match self.column(aov)? {
+            Column::Float(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// The values of a vector AOV (normal, position, bary).
+    pub fn vectors(&self, aov: Aov) -> Option<&[[f64; 3]]> {
+        match self.column(aov)? {
+            Column::Vector(v) => Some(v.as_chunks().0),
+            _ => None,
+        }
+    }
+
+    /// The values of a label AOV (id, prim).
+    pub fn labels(&self, aov: Aov) -> Option<&[u32]> {
+        match self.column(aov)? {
+            Column::Index(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// The columns, in the order the AOVs were requested.
+    pub fn into_columns(self) -> Vec<(Aov, Column)> {
+        self.columns
+    }
+}
+
+/// One block of a column.
+enum Slot<'a> {
+    Float(&'a mut [f64]),
+    Vector(&'a mut [[f64; 3]]),
+    Index(&'a mut [u32]),
+}
+
+/// Sets `out[j]` to `value(j, hit)` for each ray `j` of a block with a hit, `miss` for the
+/// others.
+#[inline(always)]
+fn fill<T: Copy>(
+    out: &mut [T],
+    hits: &[Option<Crossing>],
+    miss: T,
+    value: impl Fn(usize, &Crossing) -> T,
+) {
+    for (j, (slot, hit)) in out.iter_mut().zip(hits).enumerate() {
+        *slot = hit.as_ref().map_or(miss, |hit| value(j, hit));
+    }
+}
+
+/// Where the hits of one block of rays are turned into AOV values.
+struct Block<'a, S: ?Sized> {
+    tracer: &'a Tracer<'a>,
+    source: &'a S,
+    /// The index of the block's first ray.
+    start: usize,
+    /// The camera's eye and view axis (zeros without a camera).
+    eye: DVec3,
+    forward: DVec3,
+}
+
+impl<S: RaySource + ?Sized> Block<'_, S> {
+    /// The `j`-th ray of the block.
+    #[inline(always)]
+    fn ray(&self, j: usize) -> Ray {
+        self.source.ray(self.start + j)
+    }
+
+    /// The hit's object and primitive.
+    #[inline(always)]
+    fn locate(&self, j: usize, hit: &Crossing) -> Located<'_> {
+        let ray = self.ray(j);
+        self.tracer.scene.locate_crossing(hit, ray.origin, ray.dir)
+    }
+
+    /// Fills `slot`, the block's part of the column of `aov`, from the block's `hits`.
+    fn fill(&self, aov: Aov, slot: &mut Slot, hits: &[Option<Crossing>]) {
+        let inf = f64::INFINITY;
+        match (aov, slot) {
+            (Aov::T, Slot::Float(out)) => fill(out, hits, inf, |_, h| h.t),
+            (Aov::Depth, Slot::Float(out)) => {
+                fill(out, hits, inf, |j, h| h.t * self.ray(j).dir.length())
+            }
+            (Aov::Z, Slot::Float(out)) => fill(out, hits, inf, |j, h| {
+                (self.ray(j).at(h.t) - self.eye).dot(self.forward)
+            }),
+            (Aov::Position, Slot::Vector(out)) => {
+                fill(out, hits, [inf; 3], |j, h| self.ray(j).at(h.t).to_array())
+            }
+            (Aov::Normal, Slot::Vector(out)) => fill(out, hits, [0.0; 3], |j, h| {
+                self.locate(j, h).normal.to_array()
+            }),
+            (Aov::Bary, Slot::Vector(out)) => fill(out, hits, [0.0; 3], |j, h| {
+                let ray = self.ray(j);
+                let weights = self.tracer.scene.barycentric(h, ray.origin, ray.dir);
+                weights.unwrap_or([0.0; 3])
+            }),
+            (Aov::Id, Slot::Index(out)) => {
+                fill(out, hits, 0, |_, h| self.tracer.scene.object(h.top).id)
+            }
+            (Aov::Prim, Slot::Index(out)) => {
+                fill(out, hits, u32::MAX, |j, h| self.locate(j, h).prim)
+            }
+            _ => unreachable!("a column is made for its AOV's type"),
+        }
+    }
+}
+
+/// Rays per parallel task.
+const BLOCK: usize = 1024;
+
+/// Tasks between two progress reports (64 Ki rays).
+const BLOCKS_PER_REPORT: usize = 64;
+
+/// The rays of a trace: their source, each ray's `(t_min, t_max]`, and whether a ray that
+/// cannot be traced is an error. Generic, so that reading a ray and its range is inlined into
+/// the search loop.
+pub struct Rays<'a, S: ?Sized, R> {
+    /// The rays.
+    pub source: &'a S,
+    /// Ray `i`'s parameter range `(t_min, t_max]`.
+    pub range: R,
+    /// Whether a ray [`crate::query::traceable`] refuses (non-finite or zero, or a bad range)
+    /// makes [`trace`] fail; otherwise it is a miss.
+    pub refuse_untraceable: bool,
+}
+
+/// Finds the nearest hit of every ray in its range ([`Tracer::nearest`]) and computes `aovs`
+/// from it, in one parallel pass over blocks of rays. `progress` is told how many rays are
+/// done after every 64 Ki rays. Returns the buffers, or the first refused ray (with
+/// [`Rays::refuse_untraceable`]); whether a ray without a hit is refused is checked with the
+/// ray at hand, not read again.
+pub fn trace<S, R>(
+    tracer: &Tracer,
+    rays: &Rays<S, R>,
+    aovs: &[Aov],
+    mut progress: impl FnMut(usize),
+) -> Result<Buffers, usize>
+where
+    S: RaySource + ?Sized,
+    R: Fn(usize) -> (f64, f64) + Sync,
+{
+    let n = rays.source.len();
+    let mut columns: Vec<(Aov, Column)> = aovs.iter().map(|&a| (a, Column::new(a, n))).collect();
+    let mut blocks: Vec<Vec<Slot>> = (0..n.div_ceil(BLOCK)).map(|_| Vec::new()).collect();
+    for (_, column) in &mut columns {
+        for (block, slot) in blocks.iter_mut().zip(column.blocks()) {
+            block.push(slot);
+        }
+    }
+    let (eye, forward) = rays
+        .source
+        .view_axis()
+        .unwrap_or((DVec3::ZERO, DVec3::ZERO));
+    // Finds the block's hits, then fills each column's part, the columns one after another.
+    let fill = |b: usize, slots: &mut [Slot]| -> Option<usize> {
+        let block = Block {
+            tracer,
+            source: rays.source,
+            start: b * BLOCK,
+            eye,
+            forward,
+        };
+        let mut refused = None;
+        let hits: Vec<Option<Crossing>> = (block.start..n.min(block.start + BLOCK))
+            .map(|i| {
+                let (t_min, t_max) = (rays.range)(i);
+                let ray = rays.source.ray(i);
+                let hit = tracer.nearest(&ray, t_min, t_max);
+                if hit.is_none()
+                    && rays.refuse_untraceable
+                    && refused.is_none()
+                    && !traceable(&ray, t_min, t_max)
+                {
+                    refused = Some(i);
+                }
+                hit
+            })
+            .collect();
+        for (slot, &aov) in slots.iter_mut().zip(aovs) {
+            block.fill(aov, slot, &hits);
+        }
+        refused
+    };
+    let mut blocks = blocks.into_iter().enumerate().peekable();
+    while blocks.peek().is_some() {
+        let group: Vec<_> = blocks.by_ref().take(BLOCKS_PER_REPORT).collect();
+        let end = group.last().map_or(0, |(b, _)| n.min((b + 1) * BLOCK));
+        let refused = group
+            .into_par_iter()
+            .filter_map(|(b, mut slots)| fill(b, &mut slots))
+            .min();
+        if let Some(i) = refused {
+            return Err(i);
+        }
+        progress(end);
+    }
+    Ok(Buffers { columns })
+}
