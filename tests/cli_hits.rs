@@ -267,3 +267,35 @@ fn bad_ray_ranges_and_hit_options_are_one_line_errors() {
         assert!(!out.exists(), "{extra:?} left {}", out.display());
     }
 }
+
+/// `--depth-range` is in scene units and maps depth and z; the `t` preview, in units of each
+/// ray's direction, spans its own percentile range. The cube seen obliquely from (3, 4, 5) has
+/// t between about 5.4 and 7.8: over a depth range of 0..1000 every hit would be white (at
+/// most 2 grey levels below 255), over its own range the far hits are dark.
+#[test]
+fn the_t_preview_maps_its_own_range() {
+    let dir = temp_dir("t-preview");
+    raycast_ok(&[
+        arg(&fixture("gltf/cube.gltf")),
+        "--aov",
+        "t",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--format",
+        "png",
+        "--depth-range",
+        "0,1000",
+        "--eye",
+        "3,4,5",
+        "--target",
+        "0,0,0",
+        "--out",
+        arg(&dir),
+        "-q",
+    ]);
+    let png = image::open(dir.join("t.png")).unwrap().to_rgb8();
+    let darkest = png.pixels().map(|p| p[0]).filter(|&g| g > 0).min().unwrap();
+    assert!(darkest < 128, "darkest hit grey {darkest}");
+}

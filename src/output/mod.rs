@@ -407,7 +407,9 @@ fn exr_job(values: Values<'_>, aov: Aov, width: usize, height: usize) -> FileJob
     })
 }
 
-/// The `.png` preview of `aov` (position has none), and for depth the range it maps.
+/// The `.png` preview of `aov` (position and bary have none), and for depth the range it maps.
+/// `depth_range` (scene units) applies to depth and z; `t`, in units of each ray's direction,
+/// maps its own percentile range.
 fn png_job(
     values: Values<'_>,
     aov: Aov,
@@ -418,6 +420,7 @@ fn png_job(
     match values {
         Values::Distances(v) => {
             let range = depth_range
+                .filter(|_| aov != Aov::T)
                 .or_else(|| png::percentile_range(v))
                 .unwrap_or([0.0, 1.0]);
             let job = FileJob::new(name, move |out| {
