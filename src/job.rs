@@ -200,7 +200,7 @@ fn run_checked(
         scene: &scene,
         accel: accel.view(),
     };
-    let total = layout_len(layout);
+    let total = layout.rays();
     let started = Instant::now();
     // Files are written in parallel; their reports take turns.
     let progress = Mutex::new(progress);
@@ -290,14 +290,6 @@ fn run_checked(
     })?;
     staging.commit()?;
     Ok(sidecar)
-}
-
-/// The number of rays of a layout.
-fn layout_len(layout: Layout) -> usize {
-    match layout {
-        Layout::Image { width, height } => width * height,
-        Layout::Rays(n) => n,
-    }
 }
 
 /// Traces the rays of `source` (with the ranges of `file`, if it has them) into the buffers of

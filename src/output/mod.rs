@@ -117,6 +117,16 @@ pub enum Layout {
     Rays(usize),
 }
 
+impl Layout {
+    /// The number of rays: pixels of an image, or input rays.
+    pub fn rays(self) -> usize {
+        match self {
+            Layout::Image { width, height } => width * height,
+            Layout::Rays(n) => n,
+        }
+    }
+}
+
 /// Encodes one file into its open temporary file; the error is a one-line message.
 type Encoder<'a> =
     Box<dyn FnOnce(&mut BufWriter<File>) -> std::result::Result<(), String> + Send + 'a>;

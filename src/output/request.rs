@@ -160,10 +160,7 @@ fn encoding_bytes(aov: Aov, format: Format) -> u64 {
 /// crossing lists, counting two crossings per ray at most.
 pub fn buffer_bytes(aovs: &[Aov], formats: &[Format], layout: Layout, hits: Option<usize>) -> u64 {
     let rays_mode = matches!(layout, Layout::Rays(_));
-    let count = match layout {
-        Layout::Image { width, height } => width as u64 * height as u64,
-        Layout::Rays(n) => n as u64,
-    };
+    let count = layout.rays() as u64;
     let buffers: u64 = aovs.iter().map(|&a| aov_bytes(a)).sum();
     let encoding = aovs
         .iter()

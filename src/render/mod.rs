@@ -77,7 +77,8 @@ impl FromStr for Aov {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
         Aov::ALL.into_iter().find(|a| a.name() == s).ok_or_else(|| {
-            format!("unknown AOV '{s}' (choose from depth, z, t, normal, position, bary, id, prim)")
+            let names: Vec<&str> = Aov::ALL.iter().map(|a| a.name()).collect();
+            format!("unknown AOV '{s}' (choose from {})", names.join(", "))
         })
     }
 }
