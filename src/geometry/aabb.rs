@@ -44,6 +44,11 @@ impl Aabb {
         (!both.is_empty()).then_some(both)
     }
 
+    /// True when `other` lies inside this box (faces may touch).
+    pub fn holds(&self, other: &Aabb) -> bool {
+        other.min.cmpge(self.min).all() && other.max.cmple(self.max).all()
+    }
+
     /// True when the box holds no point.
     pub fn is_empty(&self) -> bool {
         self.min.cmpgt(self.max).any()

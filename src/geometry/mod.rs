@@ -1,8 +1,9 @@
-//! Geometric building blocks: boxes, rays and the triangle tests.
+//! Geometric building blocks: boxes, rays, the triangle tests and the triangle/box tests.
 
 mod aabb;
 mod ray;
 pub mod triangle;
+pub mod triangle_box;
 
 pub use aabb::Aabb;
 pub use ray::Ray;

@@ -11,6 +11,7 @@
 
 use crate::accel::{PreparedRay, PrimitiveSet};
 use crate::geometry::triangle::{self, WatertightRay};
+use crate::geometry::triangle_box;
 use crate::geometry::Aabb;
 use glam::{DAffine3, DVec3, Vec3};
 use std::collections::HashMap;
@@ -129,17 +130,24 @@ impl Mesh {
 
     /// A hash of the stored vertices' bits and the index triples: equal meshes hash equally.
     pub fn content_hash(&self) -> u64 {
-        use std::hash::{Hash, Hasher};
-        let mut h = std::collections::hash_map::DefaultHasher::new();
+        use std::hash::Hasher;
+        // FxHash: the meshes it finds equal are compared in full afterwards, so speed
+        // matters more here than resistance to chosen collisions.
+        let mut h = rustc_hash::FxHasher::default();
         match &self.positions {
             Positions::F32(p) => p
                 .iter()
-                .for_each(|v| v.to_array().map(f32::to_bits).hash(&mut h)),
+                .flat_map(|v| v.to_array())
+                .for_each(|x| h.write_u32(x.to_bits())),
             Positions::F64(p) => p
                 .iter()
-                .for_each(|v| v.to_array().map(f64::to_bits).hash(&mut h)),
+                .flat_map(|v| v.to_array())
+                .for_each(|x| h.write_u64(x.to_bits())),
         }
-        self.triangles.hash(&mut h);
+        self.triangles
+            .iter()
+            .flatten()
+            .for_each(|&i| h.write_u32(i));
         h.finish()
     }
 
@@ -262,16 +270,16 @@ impl PrimitiveSet for MeshSet {
     }
 
     fn overlaps(&self, index: usize, cell: &Aabb) -> bool {
-        triangle::overlaps_box(&self.local(index), cell)
+        triangle_box::overlaps_box(&self.local(index), cell)
     }
 
     fn child_mask(&self, index: usize, cell: &Aabb, margin: f64, candidates: u8) -> u8 {
-        triangle::octant_mask(&self.local(index), cell, margin, candidates)
+        triangle_box::octant_mask(&self.local(index), cell, margin, candidates)
     }
 
     fn clipped_bounds(&self, index: usize, cell: &Aabb) -> Option<Aabb> {
         // Clipping a triangle that only touches the cell can round away to nothing.
-        triangle::clipped_bounds(&self.local(index), cell)
+        triangle_box::clipped_bounds(&self.local(index), cell)
             .or_else(|| self.bounds(index).common(*cell))
     }
 

@@ -222,13 +222,24 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     }
 
     /// The box the primitives `refs` occupy inside `cell`: their parts inside the cell grown
-    /// by the margin, bounded and grown by the margin again.
+    /// by the margin, bounded and grown by the margin again. A primitive whose bounds within
+    /// the grown cell already lie inside the box so far is not clipped: its part there lies
+    /// inside those bounds, so it cannot add to the box.
     pub fn occupied(&self, cell: &Aabb, refs: &[u32]) -> Aabb {
         let grown = cell.expanded(self.margin);
-        refs.iter()
-            .filter_map(|&prim| self.set.clipped_bounds(prim as usize, &grown))
-            .fold(Aabb::EMPTY, Aabb::union)
-            .expanded(self.margin)
+        let mut occupied = Aabb::EMPTY;
+        for &prim in refs {
+            let Some(within) = self.bounds[prim as usize].common(grown) else {
+                continue;
+            };
+            if occupied.holds(&within) {
+                continue;
+            }
+            if let Some(part) = self.set.clipped_bounds(prim as usize, &grown) {
+                occupied = occupied.union(part);
+            }
+        }
+        occupied.expanded(self.margin)
     }
 }
 
