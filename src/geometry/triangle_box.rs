@@ -45,15 +45,18 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
     for v in tri {
         pair[0].push(*v);
     }
-    for axis in 0..3 {
-        for (plane, side) in [(cell.min[axis], 1.0), (cell.max[axis], -1.0)] {
+    let mut clip = |clip_into: fn(&Polygon, f64, f64, &mut Polygon) -> bool, lo, hi| {
+        for (plane, side) in [(lo, 1.0), (hi, -1.0)] {
             let [a, b] = &mut pair;
             let (from, to) = if current == 0 { (a, b) } else { (b, a) };
-            if from.clip_into(axis, plane, side, to) {
+            if clip_into(from, plane, side, to) {
                 current ^= 1;
             }
         }
-    }
+    };
+    clip(Polygon::clip_into::<0>, cell.min.x, cell.max.x);
+    clip(Polygon::clip_into::<1>, cell.min.y, cell.max.y);
+    clip(Polygon::clip_into::<2>, cell.min.z, cell.max.z);
     let polygon = &pair[current];
     let bounds = if polygon.overflowed {
         bounds.common(*cell)
@@ -96,12 +99,11 @@ impl Polygon {
         &self.vertices[..self.len]
     }
 
-    /// Writes into `out` the part with `side · (p[axis] - plane) >= 0` (crossing points sit
+    /// Writes into `out` the part with `side · (p[AXIS] - plane) >= 0` (crossing points sit
     /// exactly on the plane) and returns true, or returns false when that part is the whole
     /// polygon (or it overflowed), leaving `out` as it is.
-    fn clip_into(&self, axis: usize, plane: f64, side: f64, out: &mut Polygon) -> bool {
-        // Coordinates by array index (indexing a `DVec3` branches on the axis).
-        let coord = |p: &DVec3| p.as_ref()[axis];
+    fn clip_into<const AXIS: usize>(&self, plane: f64, side: f64, out: &mut Polygon) -> bool {
+        let coord = |p: &DVec3| p.as_ref()[AXIS];
         let inside = |p: &DVec3| side * (coord(p) - plane) >= 0.0;
         let vertices = self.vertices();
         if self.overflowed || vertices.iter().all(inside) {
@@ -124,7 +126,7 @@ impl Polygon {
             if p_inside != q_inside {
                 let s = (plane - coord(&p)) / (coord(&q) - coord(&p));
                 let mut crossing = (p + (q - p) * s).to_array();
-                crossing[axis] = plane;
+                crossing[AXIS] = plane;
                 emit(DVec3::from_array(crossing));
             }
             if q_inside {
@@ -196,7 +198,7 @@ impl OctantTest {
         }
         let v = &self.v;
         let p = [axis.dot(v[0]), axis.dot(v[1]), axis.dot(v[2])];
-        let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+        let (lo, hi) = extent(p);
         // Octant i's centre (±quarter on each axis) projected on the axis, term by term
         // (negating a product is exact).
         let q = self.quarter * axis;
@@ -228,6 +230,14 @@ impl OctantTest {
     }
 }
 
+/// The least and greatest of three projections, by plain comparisons (cheaper than
+/// `f64::min`'s NaN rule). A NaN, which only an overflowing product can give, makes the
+/// comparisons that use it false: the axis then separates less, never more.
+fn extent([a, b, c]: [f64; 3]) -> (f64, f64) {
+    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+    (if c < lo { c } else { lo }, if c > hi { c } else { hi })
+}
+
 /// Axes with no component above this in magnitude are tested in full by [`octant_mask`].
 const TINY_AXIS: f64 = 1e-200;
 
@@ -249,7 +259,11 @@ fn witness_half(v: &[DVec3; 3], half: DVec3, margin: f64) -> Option<DVec3> {
 /// The octants (spanning `±quarter ± inner` about the cell centre) holding one of the
 /// vertices `v` (relative to the centre).
 fn vertices_inside(v: &[DVec3; 3], quarter: DVec3, inner: DVec3) -> u8 {
+    // A vertex beyond every octant is passed over without classifying it (a vertex the
+    // rounding of this first look passes over only leaves its octant to the axes).
+    let outer = quarter + inner;
     v.iter()
+        .filter(|p| p.abs().cmple(outer).all())
         .fold(0, |m, &p| m | box_axes_mask(p, p, quarter, inner))
 }
 
@@ -325,7 +339,7 @@ mod tests {
             polygon.push(DVec3::new((i % 2) as f64, i as f64, 0.0));
         }
         let mut clipped = Polygon::new();
-        assert!(polygon.clip_into(0, 0.5, 1.0, &mut clipped));
+        assert!(polygon.clip_into::<0>(0.5, 1.0, &mut clipped));
         assert!(clipped.overflowed);
     }
 
