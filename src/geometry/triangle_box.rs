@@ -45,18 +45,9 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
     for v in tri {
         pair[0].push(*v);
     }
-    let mut clip = |clip_into: fn(&Polygon, f64, f64, &mut Polygon) -> bool, lo, hi| {
-        for (plane, side) in [(lo, 1.0), (hi, -1.0)] {
-            let [a, b] = &mut pair;
-            let (from, to) = if current == 0 { (a, b) } else { (b, a) };
-            if clip_into(from, plane, side, to) {
-                current ^= 1;
-            }
-        }
-    };
-    clip(Polygon::clip_into::<0>, cell.min.x, cell.max.x);
-    clip(Polygon::clip_into::<1>, cell.min.y, cell.max.y);
-    clip(Polygon::clip_into::<2>, cell.min.z, cell.max.z);
+    clip_slab::<0>(&mut pair, &mut current, cell);
+    clip_slab::<1>(&mut pair, &mut current, cell);
+    clip_slab::<2>(&mut pair, &mut current, cell);
     let polygon = &pair[current];
     let bounds = if polygon.overflowed {
         bounds.common(*cell)
@@ -64,6 +55,18 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
         Some(Aabb::from_points(polygon.vertices().iter().copied()))
     };
     bounds.filter(|b| !b.is_empty())
+}
+
+/// Clips polygon `pair[*current]` to the slab of `cell` on axis `AXIS`, one face after the
+/// other, each into the other polygon of the pair; `current` follows the result.
+fn clip_slab<const AXIS: usize>(pair: &mut [Polygon; 2], current: &mut usize, cell: &Aabb) {
+    for (plane, side) in [(cell.min[AXIS], 1.0), (cell.max[AXIS], -1.0)] {
+        let [a, b] = pair;
+        let (from, to) = if *current == 0 { (a, b) } else { (b, a) };
+        if from.clip_into::<AXIS>(plane, side, to) {
+            *current ^= 1;
+        }
+    }
 }
 
 /// A convex polygon of at most nine vertices: a triangle clipped by six planes. Rounding can
@@ -164,10 +167,10 @@ pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64, candidates: u8) -
         open: mask & !vertices,
     };
     let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
-    test.axis(edges[0].cross(edges[1]));
     if let Some(inner) = witness.filter(|_| test.open != 0) {
         test.open &= !crossings_inside(&v, quarter, inner);
     }
+    test.axis(edges[0].cross(edges[1]));
     for e in edges {
         for axis in DVec3::AXES {
             if test.open == 0 {
