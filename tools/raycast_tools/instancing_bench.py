@@ -7,7 +7,8 @@ Scenes: the bunny drawn by 1 and by 64 glTF nodes (one mesh), the 72-bunny bench
 when missing). Each binary renders a 256x256 depth image; reported: the sidecar's load and
 build seconds, the whole process's wall-clock and CPU seconds (GNU time's %e and %U + %S;
 for USD this includes the child `raycast info` that reads the stage first), each the median
-of the runs, and the peak resident memory (GNU time's %M).
+of the runs (made interleaved: before, after, before, ...), and the peak resident memory
+(GNU time's %M).
 """
 
 import argparse
@@ -81,10 +82,18 @@ def main(argv=None):
         )
     print("| scene | binary | load s | build s | load+build s | wall s | CPU s | peak MiB |")
     print("|---|---|---|---|---|---|---|---|")
+    binaries = (("before", a.before), ("after", a.after))
     for title, path in scenes:
-        for label, binary in (("before", a.before), ("after", a.after)):
-            runs = [run(binary, path, tmp / f"out_{label}") for _ in range(a.runs)]
-            load, build, wall, cpu, peak = (statistics.median(r[k] for r in runs) for k in range(5))
+        # Interleaved (before, after, before, ...), so that a change in the machine's load
+        # touches both binaries alike.
+        runs = {label: [] for label, _ in binaries}
+        for _ in range(a.runs):
+            for label, binary in binaries:
+                runs[label].append(run(binary, path, tmp / f"out_{label}"))
+        for label, _ in binaries:
+            load, build, wall, cpu, peak = (
+                statistics.median(r[k] for r in runs[label]) for k in range(5)
+            )
             print(
                 f"| {title} | {label} | {load:.3f} | {build:.3f} | {load + build:.3f} "
                 f"| {wall:.2f} | {cpu:.2f} | {peak:.0f} |",
