@@ -61,6 +61,13 @@ pub trait PrimitiveSet: Sync {
     /// Bounding box of primitive `index`, in local coordinates.
     fn bounds(&self, index: usize) -> Aabb;
 
+    /// What testing primitive `index` against a ray costs, in units of one triangle test:
+    /// the octree's split rule weighs each reference by it. The default, 1, suits sets of
+    /// triangles.
+    fn cost(&self, _index: usize) -> f64 {
+        1.0
+    }
+
     /// Conservative test: may primitive `index` touch the closed box `cell`?
     fn overlaps(&self, index: usize, cell: &Aabb) -> bool;
 

@@ -66,10 +66,11 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
     /// occupied box.
     fn cell(&mut self, slot: usize, cell: &Aabb, refs: &[u32], depth: u32) -> (OctreeStats, Aabb) {
         let builder = self.builder;
-        if builder.may_split(refs.len(), depth) {
+        let weight = builder.weight(refs);
+        if builder.may_split(refs.len(), weight, depth) {
             builder.masks(cell, refs, &mut self.masks);
             let counts = octant_counts(&self.masks);
-            if builder.pays(refs.len(), &counts) {
+            if builder.pays(refs, weight, &self.masks, &counts) {
                 let level = depth as usize;
                 if self.levels.len() <= level {
                     self.levels.resize_with(level + 1, Children::default);

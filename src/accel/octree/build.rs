@@ -141,6 +141,9 @@ pub(super) fn octant_counts(masks: &[u8]) -> [usize; 8] {
 pub(super) struct Builder<'a, P> {
     pub set: &'a P,
     pub bounds: Vec<Aabb>,
+    /// Each primitive's [`PrimitiveSet::cost`], or `None` when every one costs 1 (a
+    /// reference then weighs 1 and a cell's weight is its count).
+    pub costs: Option<Vec<f64>>,
     pub params: OctreeParams,
     /// Cells are grown by this much for the overlap tests.
     pub margin: f64,
@@ -150,7 +153,8 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     /// The subtree for `cell` holding `refs`, at `depth`. Each list is dropped as soon as it
     /// is distributed, as the children's lists are built.
     pub fn subtree(&self, cell: &Aabb, refs: Vec<u32>, depth: u32) -> Subtree {
-        if refs.len() <= PARALLEL_REFS || !self.may_split(refs.len(), depth) {
+        let weight = self.weight(&refs);
+        if refs.len() <= PARALLEL_REFS || !self.may_split(refs.len(), weight, depth) {
             return Arena::new(self).subtree(cell, &refs, depth);
         }
         let mid = cell.center();
@@ -159,7 +163,7 @@ impl<P: PrimitiveSet> Builder<'_, P> {
             .map(|&prim| self.octants(cell, mid, prim))
             .collect();
         let counts = octant_counts(&masks);
-        if !self.pays(refs.len(), &counts) {
+        if !self.pays(&refs, weight, &masks, &counts) {
             return Arena::new(self).leaf_subtree(cell, &refs, depth);
         }
         let children = split(&refs, &masks, &counts);
@@ -172,21 +176,38 @@ impl<P: PrimitiveSet> Builder<'_, P> {
         join(parts)
     }
 
-    /// Whether a cell of `n` references at `depth` may be split at all.
-    pub fn may_split(&self, n: usize, depth: u32) -> bool {
-        n > self.params.leaf_size && depth < self.params.max_depth
+    /// The weight of the references `refs`: the sum of their primitives' costs.
+    pub fn weight(&self, refs: &[u32]) -> f64 {
+        match &self.costs {
+            None => refs.len() as f64,
+            Some(costs) => refs.iter().map(|&prim| costs[prim as usize]).sum(),
+        }
     }
 
-    /// Whether splitting a cell of `n` references into children holding `counts` pays, by the
-    /// rule in the module docs.
-    pub fn pays(&self, n: usize, counts: &[usize; 8]) -> bool {
+    /// Whether a cell of `n` references weighing `weight` at `depth` may be split at all.
+    pub fn may_split(&self, n: usize, weight: f64, depth: u32) -> bool {
+        n > 1 && weight > self.params.leaf_size as f64 && depth < self.params.max_depth
+    }
+
+    /// Whether splitting a cell holding `refs` (weighing `weight`) into children by their
+    /// octant `masks` (`counts` references per child) pays, by the rule in the module docs.
+    pub fn pays(&self, refs: &[u32], weight: f64, masks: &[u8], counts: &[usize; 8]) -> bool {
+        let n = refs.len();
         let child_refs: usize = counts.iter().sum();
         if child_refs > n && counts.contains(&n) {
             return false;
         }
+        let child_weight = match &self.costs {
+            None => child_refs as f64,
+            Some(costs) => refs
+                .iter()
+                .zip(masks)
+                .map(|(&prim, &mask)| costs[prim as usize] * f64::from(mask.count_ones()))
+                .sum(),
+        };
         let p = &self.params;
-        let leaf_cost = n as f64 * p.intersection_cost;
-        let split_cost = p.traversal_cost + 0.25 * child_refs as f64 * p.intersection_cost;
+        let leaf_cost = weight * p.intersection_cost;
+        let split_cost = p.traversal_cost + 0.25 * child_weight * p.intersection_cost;
         split_cost < leaf_cost
     }
 

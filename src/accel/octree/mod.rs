@@ -1,21 +1,25 @@
 //! The octree: cubic cells split into eight equal children, built over any [`PrimitiveSet`].
 //!
 //! # Build rule
-//! A cell holding `n` primitive references becomes a leaf when `n <= leaf_size`, when its
-//! depth reaches `max_depth`, or when splitting does not pay by the surface-area cost model:
-//! a leaf costs `n · intersection_cost`; a split costs
-//! `traversal_cost + Σ_children (area_child / area_cell) · n_child · intersection_cost`, where
-//! every child cube has a quarter of its parent's surface area. Primitives that straddle cells
-//! count in every child they touch, so splitting stops by itself where duplication outweighs
-//! separation. A cell is also kept whole when one of its children would hold every one of its
-//! references while others hold copies of some (the triangles around a shared vertex, say): no
-//! split can separate them there, and without this rule the cost model alone keeps splitting such
-//! cells to the depth cap. (When all references fall into one child and no other, the split goes
-//! ahead: it only shrinks the cell around them.) A primitive goes into every child it really
-//! overlaps (exact triangle/box test; see [`PrimitiveSet::overlaps`]), tested against the child
-//! cell grown by a tiny margin, so that a primitive lying on a cell face belongs to the cells on
-//! both sides. (Rounding in the traversal is covered separately, by the rounding bound of the
-//! node test.)
+//! Each reference weighs what testing its primitive costs ([`PrimitiveSet::cost`]: 1 for a
+//! triangle, `Quadric::TEST_COST` for a quadric), and a cell's weight `w` is the sum over its
+//! references. A cell becomes a leaf when `w <= leaf_size`, when it holds a single reference,
+//! when its depth reaches `max_depth`, or when splitting does not pay by the surface-area cost
+//! model: a leaf costs `w · intersection_cost`; a split costs
+//! `traversal_cost + Σ_children (area_child / area_cell) · w_child · intersection_cost`, where
+//! every child cube has a quarter of its parent's surface area. For triangles alone the weights
+//! are the reference counts; cells of quadrics, which cost about three triangle tests each,
+//! split into smaller leaves (reports/octree_profile.md has the measurements behind the
+//! weight). Primitives that straddle cells count in every child they touch, so splitting stops
+//! by itself where duplication outweighs separation. A cell is also kept whole when one of its
+//! children would hold every one of its references while others hold copies of some (the
+//! triangles around a shared vertex, say): no split can separate them there, and without this
+//! rule the cost model alone keeps splitting such cells to the depth cap. (When all references
+//! fall into one child and no other, the split goes ahead: it only shrinks the cell around
+//! them.) A primitive goes into every child it really overlaps (exact triangle/box test; see
+//! [`PrimitiveSet::overlaps`]), tested against the child cell grown by a tiny margin, so that a
+//! primitive lying on a cell face belongs to the cells on both sides. (Rounding in the
+//! traversal is covered separately, by the rounding bound of the node test.)
 //!
 //! Large cells build their eight subtrees in parallel; the result does not depend on the thread
 //! count. Each interior cell records which children hold any primitive; empty children are not
@@ -65,11 +69,12 @@ use wide::Layout;
 pub struct OctreeParams {
     /// Cells at this depth are never split (the root has depth 0); at most 24.
     pub max_depth: u32,
-    /// Cells with at most this many references are never split.
+    /// Cells whose references weigh at most this much (this many triangles) are never split.
     pub leaf_size: usize,
-    /// Cost of visiting one interior cell, in units of one primitive test.
+    /// Cost of visiting one interior cell, in units of one triangle test.
     pub traversal_cost: f64,
-    /// Cost of one ray/primitive test.
+    /// Cost of one ray/triangle test; a reference costs this times its primitive's
+    /// [`PrimitiveSet::cost`].
     pub intersection_cost: f64,
 }
 
@@ -131,9 +136,11 @@ impl Octree {
             .fold(Aabb::EMPTY, |a, b| a.union(*b));
         let root = cube_around(&finite);
         let margin = root.size().x * 1e-9;
+        let costs: Vec<f64> = (0..set.len()).map(|i| set.cost(i)).collect();
         let builder = Builder {
             set,
             bounds,
+            costs: costs.iter().any(|&c| c != 1.0).then_some(costs),
             params,
             margin,
         };
