@@ -4,8 +4,10 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams};
-use raycast::scene::{Scene, SceneBuilder};
+use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams, PreparedRay, PrimitiveSet};
+use raycast::geometry::Aabb;
+use raycast::quadric::{Quadric, QuadricSpec};
+use raycast::scene::{Scene, SceneBuilder, SceneRay};
 
 fn assert_same_as_brute_force(scene: &Scene, octree: &Octree, origin: DVec3, dir: DVec3) {
     let local = origin - scene.anchor;
@@ -156,4 +158,97 @@ fn traverse_treats_negative_zero_as_zero() {
         visited > 300,
         "the rays should pass through leaves ({visited})"
     );
+}
+
+/// A scene whose primitives all weigh `cost` in the split rule (everything else is the
+/// scene's own).
+struct Weighed<'a> {
+    scene: &'a Scene,
+    cost: f64,
+}
+
+impl PrimitiveSet for Weighed<'_> {
+    type RayData = SceneRay;
+
+    fn len(&self) -> usize {
+        self.scene.len()
+    }
+    fn bounds(&self, index: usize) -> Aabb {
+        self.scene.bounds(index)
+    }
+    fn cost(&self, _index: usize) -> f64 {
+        self.cost
+    }
+    fn overlaps(&self, index: usize, cell: &Aabb) -> bool {
+        self.scene.overlaps(index, cell)
+    }
+    fn child_mask(&self, index: usize, cell: &Aabb, margin: f64, candidates: u8) -> u8 {
+        self.scene.child_mask(index, cell, margin, candidates)
+    }
+    fn clipped_bounds(&self, index: usize, cell: &Aabb) -> Option<Aabb> {
+        self.scene.clipped_bounds(index, cell)
+    }
+    fn prepare(&self, local_origin: DVec3, dir: DVec3) -> SceneRay {
+        self.scene.prepare(local_origin, dir)
+    }
+    fn intersect(&self, index: usize, ray: &PreparedRay<SceneRay>, t_max: f64) -> Option<f64> {
+        self.scene.intersect(index, ray, t_max)
+    }
+}
+
+/// Quadrics weigh [`Quadric::TEST_COST`] triangle tests: their cells split into more, smaller
+/// leaves than the same primitives weighed as triangles, and the answers stay brute force's.
+#[test]
+fn costlier_primitives_split_into_smaller_leaves() {
+    let mut rng = Rng(0x5eed_0005);
+    let scene = random_scene(&mut rng, 0, 600, DVec3::ZERO);
+    let params = OctreeParams::default();
+    let weighed = Octree::build(&scene, params);
+    let as_triangles = Octree::build(
+        &Weighed {
+            scene: &scene,
+            cost: 1.0,
+        },
+        params,
+    );
+    let (w, t) = (weighed.stats(), as_triangles.stats());
+    let per_leaf = |s: raycast::accel::OctreeStats| s.references as f64 / s.leaves as f64;
+    assert!(
+        w.leaves > 2 * t.leaves && per_leaf(w) < per_leaf(t),
+        "weighed {w:?}, as triangles {t:?}"
+    );
+    for _ in 0..3000 {
+        let origin = rng.point(-14.0, 14.0);
+        let dir = rng.direction();
+        assert_same_as_brute_force(&scene, &weighed, origin, dir);
+    }
+}
+
+/// A cell holding one reference is never split, however much it weighs: splitting cannot
+/// separate anything, and an expensive primitive inside one octant would otherwise be passed
+/// down a chain of single-child cells to the depth cap.
+#[test]
+fn a_single_heavy_primitive_stays_in_one_leaf() {
+    let mut builder = SceneBuilder::new();
+    let sphere =
+        QuadricSpec::from_coefficients([1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0], None)
+            .unwrap();
+    // Two small spheres in opposite corners of the scene: each lies inside one octant of the
+    // root and of several levels below it.
+    for (i, centre) in [DVec3::splat(1.5), DVec3::splat(98.5)]
+        .into_iter()
+        .enumerate()
+    {
+        let world =
+            glam::DMat4::from_scale_rotation_translation(DVec3::ONE, glam::DQuat::IDENTITY, centre);
+        let quadric = Quadric::new(&sphere, world).unwrap();
+        builder.add_quadric(format!("q{i}"), "test".into(), quadric);
+    }
+    let scene = builder.finish("corners".into());
+    let heavy = Weighed {
+        scene: &scene,
+        cost: 100.0,
+    };
+    let stats = Octree::build(&heavy, OctreeParams::default()).stats();
+    assert_eq!((stats.depth, stats.leaves), (1, 2), "{stats:?}");
 }
