@@ -128,8 +128,9 @@ impl<'a> Query<'a> {
 
     /// Every surface crossing with `t_min < t <= t_max` (and `t > 0`), nearest first (ties by
     /// primitive); none for the rays [`Query::nearest`] refuses. A ray through an edge or
-    /// vertex shared by triangles of a consistently wound mesh crosses it once (see [`crate::geometry::triangle::WatertightRay::crossing`]); a
-    /// ray tangent to a quadric touches it once.
+    /// vertex shared by triangles of a consistently wound mesh crosses it once (see
+    /// [`crate::geometry::triangle::WatertightRay::crossing`]); a ray tangent to a quadric
+    /// touches it once.
     pub fn crossings(&self, ray: &Ray, t_min: f64, t_max: f64) -> Vec<Crossing> {
         let mut found = Vec::new();
         if !traceable(ray, t_min, t_max) {

@@ -7,3 +7,12 @@ pub mod triangle_box;
 
 pub use aabb::Aabb;
 pub use ray::Ray;
+
+/// A triangle in the plane z = 0 around the origin, for the unit tests of [`triangle`] and
+/// [`triangle_box`].
+#[cfg(test)]
+const TEST_TRIANGLE: [glam::DVec3; 3] = [
+    glam::DVec3::new(-1.0, -1.0, 0.0),
+    glam::DVec3::new(1.0, -1.0, 0.0),
+    glam::DVec3::new(0.0, 1.0, 0.0),
+];

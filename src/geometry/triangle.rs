@@ -220,11 +220,7 @@ pub fn geometric_normal(tri: &[DVec3; 3]) -> Option<DVec3> {
 mod tests {
     use super::*;
 
-    const TRI: [DVec3; 3] = [
-        DVec3::new(-1.0, -1.0, 0.0),
-        DVec3::new(1.0, -1.0, 0.0),
-        DVec3::new(0.0, 1.0, 0.0),
-    ];
+    use crate::geometry::TEST_TRIANGLE as TRI;
 
     #[test]
     fn hits_at_the_analytic_distance() {

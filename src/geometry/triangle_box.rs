@@ -35,7 +35,7 @@ pub fn overlaps_box(tri: &[DVec3; 3], aabb: &Aabb) -> bool {
 /// a few ulps of the coordinates; callers grow the box by their margin.
 pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
     let bounds = Aabb::from_points(tri.iter().copied());
-    if bounds.min.cmpge(cell.min).all() && bounds.max.cmple(cell.max).all() {
+    if cell.holds(&bounds) {
         // No plane cuts it: clipping would keep the triangle as it is.
         return Some(bounds);
     }
@@ -327,11 +327,7 @@ fn negative_axes(p: DVec3) -> u8 {
 mod tests {
     use super::*;
 
-    const TRI: [DVec3; 3] = [
-        DVec3::new(-1.0, -1.0, 0.0),
-        DVec3::new(1.0, -1.0, 0.0),
-        DVec3::new(0.0, 1.0, 0.0),
-    ];
+    use crate::geometry::TEST_TRIANGLE as TRI;
 
     #[test]
     fn clipping_a_polygon_past_nine_vertices_does_not_panic() {

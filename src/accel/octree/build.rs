@@ -153,10 +153,13 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     /// The subtree for `cell` holding `refs`, at `depth`. Each list is dropped as soon as it
     /// is distributed, as the children's lists are built.
     pub fn subtree(&self, cell: &Aabb, refs: Vec<u32>, depth: u32) -> Subtree {
-        let weight = self.weight(&refs);
-        if refs.len() <= PARALLEL_REFS || !self.may_split(refs.len(), weight, depth) {
+        // Weighed only when the cell is large enough to be built here.
+        let weight = (refs.len() > PARALLEL_REFS)
+            .then(|| self.weight(&refs))
+            .filter(|&weight| self.may_split(refs.len(), weight, depth));
+        let Some(weight) = weight else {
             return Arena::new(self).subtree(cell, &refs, depth);
-        }
+        };
         let mid = cell.center();
         let masks: Vec<u8> = refs
             .par_iter()

@@ -136,11 +136,14 @@ impl Octree {
             .fold(Aabb::EMPTY, |a, b| a.union(*b));
         let root = cube_around(&finite);
         let margin = root.size().x * 1e-9;
-        let costs: Vec<f64> = (0..set.len()).map(|i| set.cost(i)).collect();
+        // Only a set with a primitive that does not cost 1 keeps a cost per primitive.
+        let costs = (0..set.len())
+            .any(|i| set.cost(i) != 1.0)
+            .then(|| (0..set.len()).map(|i| set.cost(i)).collect());
         let builder = Builder {
             set,
             bounds,
-            costs: costs.iter().any(|&c| c != 1.0).then_some(costs),
+            costs,
             params,
             margin,
         };
