@@ -3,7 +3,7 @@
 //! # Why an f32 test cannot lose a hit
 //! A lane's slab parameter on an axis with direction component `d ≠ 0` is `t = (P - o) · r`
 //! with `r = 1/d`, computed as `P · r₃₂ + c` (one FMA, or a multiply and an add), where `P` is
-//! the f32 plane, `r₃₂` is `r` rounded to f32 and `c` is `-o · r` moved by `ε` (down for the
+//! the f32 plane (decoded exactly from its byte, see `super::wide`), `r₃₂` is `r` rounded to f32 and `c` is `-o · r` moved by `ε` (down for the
 //! near plane, up for the far plane), then rounded to f32. With `u = 2⁻²⁴`, `B` the largest
 //! coordinate magnitude of any plane and `s = (B + |o|) · |r|`, the roundings of `r₃₂`, of the
 //! product and of the sum together move the result by less than `4u · s`, and rounding `c`
@@ -165,10 +165,12 @@ pub(super) fn test_portable(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
     for axis in 0..3 {
         let (near, far) = rows(ray, axis);
         let (near, far) = (&node.planes[near], &node.planes[far]);
+        let (step, origin) = (node.step[axis], node.origin[axis]);
         let (r, c_near, c_far) = (ray.r[axis], ray.c_near[axis], ray.c_far[axis]);
         for lane in 0..8 {
-            let n = near[lane] * r + c_near;
-            let f = far[lane] * r + c_far;
+            // Exact decoding (see `super::wide`), then the slab parameters.
+            let n = (f32::from(near[lane]) * step + origin) * r + c_near;
+            let f = (f32::from(far[lane]) * step + origin) * r + c_far;
             enter[lane] = if n > enter[lane] { n } else { enter[lane] };
             exit[lane] = if f < exit[lane] { f } else { exit[lane] };
         }
@@ -177,11 +179,15 @@ pub(super) fn test_portable(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
     for lane in 0..8 {
         hit |= u32::from(enter[lane] <= exit[lane]) << lane;
     }
+    hit &= node.occupancy();
     if ray.parallel {
         for axis in 0..3 {
             let (lo, hi) = (&node.planes[axis], &node.planes[axis + 3]);
+            let (step, origin) = (node.step[axis], node.origin[axis]);
             for lane in 0..8 {
-                let inside = lo[lane] <= ray.o_hi[axis] && hi[lane] >= ray.o_lo[axis];
+                let lo = f32::from(lo[lane]) * step + origin;
+                let hi = f32::from(hi[lane]) * step + origin;
+                let inside = lo <= ray.o_hi[axis] && hi >= ray.o_lo[axis];
                 hit &= !(u32::from(!inside) << lane);
             }
         }
@@ -189,7 +195,8 @@ pub(super) fn test_portable(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
     Tested { enter, exit, hit }
 }
 
-/// The AVX2 kernel: one FMA per plane row.
+/// The AVX2 kernel: per plane row, one FMA decodes the quantised planes and one computes
+/// their slab parameters.
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA.
@@ -197,25 +204,37 @@ pub(super) fn test_portable(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
 #[target_feature(enable = "avx2,fma")]
 #[inline]
 pub(super) unsafe fn test_avx2(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
-    let row = |i: usize| _mm256_load_ps(node.planes[i].as_ptr());
+    let planes = |row: usize, axis: usize| {
+        // SAFETY: a row is eight bytes, the size of the unaligned load.
+        let bytes = unsafe { _mm_loadl_epi64(node.planes[row].as_ptr().cast()) };
+        let q = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
+        let step = _mm256_set1_ps(node.step[axis]);
+        _mm256_fmadd_ps(q, step, _mm256_set1_ps(node.origin[axis]))
+    };
     let mut enter = _mm256_setzero_ps();
     let mut exit = _mm256_set1_ps(t_best);
     for axis in 0..3 {
         let (near, far) = rows(ray, axis);
         let r = _mm256_set1_ps(ray.r[axis]);
-        let n = _mm256_fmadd_ps(row(near), r, _mm256_set1_ps(ray.c_near[axis]));
-        let f = _mm256_fmadd_ps(row(far), r, _mm256_set1_ps(ray.c_far[axis]));
+        let n = _mm256_fmadd_ps(planes(near, axis), r, _mm256_set1_ps(ray.c_near[axis]));
+        let f = _mm256_fmadd_ps(planes(far, axis), r, _mm256_set1_ps(ray.c_far[axis]));
         enter = _mm256_max_ps(enter, n);
         exit = _mm256_min_ps(exit, f);
     }
     let mut hit = _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit);
     if ray.parallel {
         for axis in 0..3 {
-            let lo = _mm256_cmp_ps::<_CMP_LE_OQ>(row(axis), _mm256_set1_ps(ray.o_hi[axis]));
-            let hi = _mm256_cmp_ps::<_CMP_GE_OQ>(row(axis + 3), _mm256_set1_ps(ray.o_lo[axis]));
+            let lo =
+                _mm256_cmp_ps::<_CMP_LE_OQ>(planes(axis, axis), _mm256_set1_ps(ray.o_hi[axis]));
+            let hi =
+                _mm256_cmp_ps::<_CMP_GE_OQ>(planes(axis + 3, axis), _mm256_set1_ps(ray.o_lo[axis]));
             hit = _mm256_and_ps(hit, _mm256_and_ps(lo, hi));
         }
     }
+    // SAFETY: `children` is eight u32, the size of the unaligned load.
+    let children = unsafe { _mm256_loadu_si256(node.children.as_ptr().cast()) };
+    let empty = _mm256_cmpeq_epi32(children, _mm256_set1_epi32(-1));
+    hit = _mm256_andnot_ps(_mm256_castsi256_ps(empty), hit);
     let mut out = Tested {
         enter: [0.0; 8],
         exit: [0.0; 8],

@@ -33,7 +33,8 @@
 //!
 //! # Traversal
 //! Cells are traversed as eight-wide nodes (module `wide`): an interior cell holds its eight
-//! children's occupied boxes as f32 planes, one SIMD lane per octant, and one test
+//! children's occupied boxes, one SIMD lane per octant, as one byte per plane on a grid of the
+//! node's own (rounded outward again, and decoded exactly to f32), and one test
 //! (module `lanes`: AVX2 with FMA when the CPU has it, else portable code the compiler
 //! vectorises) tells which children the ray enters and where. The test is conservative: the
 //! f32 interval of every lane contains the exact one, with a rounding bound that grows with the
@@ -113,9 +114,8 @@ const DEPTH_CAP: u32 = 24;
 pub struct Octree {
     root: Aabb,
     layout: Layout,
-    refs: Vec<u32>,
-    /// The largest coordinate magnitude of any stored plane (infinite when the planes do not
-    /// fit f32 comfortably; no axis then culls).
+    /// The largest magnitude of any stored plane (infinite when the planes could not be
+    /// quantised; no axis then culls).
     scale: f64,
     kernel: Kernel,
     params: OctreeParams,
@@ -149,18 +149,17 @@ impl Octree {
         };
         let all: Vec<u32> = (0..set.len() as u32).collect();
         let tree = builder.subtree(&root, all, 0);
-        // Occupied boxes lie within the root grown by two margins, then rounded to f32.
-        let extent = root.min.abs().max(root.max.abs()).max_element() + 3.0 * margin;
-        let scale = extent * (1.0 + 1e-6);
+        let layout = Layout::new(&tree.nodes, &tree.refs);
+        // The largest stored plane bounds the node test's rounding; a tree whose planes could
+        // not all be quantised does not cull.
+        let scale = layout
+            .largest
+            .filter(|&largest| largest <= lanes::LIMIT)
+            .unwrap_or(f64::INFINITY);
         Octree {
             root,
-            layout: Layout::new(&tree.nodes),
-            refs: tree.refs,
-            scale: if scale <= lanes::LIMIT {
-                scale
-            } else {
-                f64::INFINITY
-            },
+            layout,
+            scale,
             kernel: Kernel::detect(),
             params,
             stats: tree.stats,
@@ -192,10 +191,10 @@ impl Octree {
         self.params
     }
 
-    /// Bytes of the octree's own arrays (nodes, leaf records and references, not the
-    /// primitives).
+    /// Bytes of the octree's own arrays (nodes, and the leaves' counts and references; not
+    /// the primitives).
     pub fn bytes(&self) -> usize {
-        self.layout.bytes() + self.refs.len() * 4
+        self.layout.bytes()
     }
 
     /// The nearest hit with `0 < t <= t_max`, exactly the hit [`super::brute_force`] finds.
@@ -257,7 +256,6 @@ impl Octree {
         let ray = Lanes::new(origin, dir + DVec3::ZERO, self.scale);
         traverse::run(
             &self.layout,
-            &self.refs,
             self.kernel,
             &ray,
             t_max,

@@ -59,7 +59,8 @@ fn scene(rng: &mut Rng) -> Scene {
 
 /// Does the ray enter lane `lane`'s box with `0 <= t <= limit`, by the f64 slab test?
 fn enters(node: &Wide, lane: usize, origin: DVec3, dir: DVec3, limit: f64) -> bool {
-    let plane = |row: usize| f64::from(node.planes[row][lane]);
+    let planes = node.bounds(lane);
+    let plane = |row: usize| f64::from(planes[row]);
     let lane_box = Aabb::new(
         DVec3::new(plane(0), plane(1), plane(2)),
         DVec3::new(plane(3), plane(4), plane(5)),
@@ -79,7 +80,7 @@ impl Observer for Audit<'_> {
     fn tested(&mut self, node: usize, hit: u32, t_best: f32) {
         let wide = &self.layout.nodes[node];
         for lane in 0..8 {
-            if wide.children[lane] == Wide::EMPTY || hit & (1 << lane) != 0 {
+            if wide.occupancy() & (1 << lane) == 0 || hit & (1 << lane) != 0 {
                 continue;
             }
             self.culled += 1;
@@ -143,7 +144,6 @@ fn no_kernel_culls_a_lane_the_exact_slab_test_enters() {
             let lanes = Lanes::new(origin, dir, octree.scale);
             traverse::run(
                 &octree.layout,
-                &octree.refs,
                 kernel,
                 &lanes,
                 f64::INFINITY,
@@ -170,24 +170,22 @@ fn no_kernel_culls_a_lane_the_exact_slab_test_enters() {
     }
 }
 
-/// A node whose lane 0 holds the box [0.2, 0.8]³.
-fn one_box() -> Wide {
-    let mut node = Wide::VACANT;
-    for axis in 0..3 {
-        node.planes[axis][0] = 0.2;
-        node.planes[axis + 3][0] = 0.8;
-    }
-    node.children[0] = 0;
-    node
+/// A node whose lane 0 holds the box [0.2, 0.8]³, and the planes it stores (rounded outward).
+fn one_box() -> (Wide, [f64; 6]) {
+    let mut lanes = [None; 8];
+    lanes[0] = Some(([0.2, 0.2, 0.2, 0.8, 0.8, 0.8], 0));
+    let (node, _) = Wide::new(&lanes);
+    let stored = node.bounds(0).map(f64::from);
+    (node, stored)
 }
 
 #[test]
 fn a_ray_in_a_box_plane_keeps_the_other_bounds() {
-    let node = one_box();
-    let (lo, hi) = (f64::from(0.2f32), f64::from(0.8f32));
+    let (node, stored) = one_box();
+    let (lo, hi, y) = (stored[0], stored[3], stored[1]);
     for kernel in kernels() {
-        // In the box's lower y plane, along +x from x = -5: enters at x = 0.2, leaves at 0.8.
-        let ray = Lanes::new(DVec3::new(-5.0, lo, 0.5), DVec3::X, 1.0);
+        // In the box's lower y plane, along +x from x = -5: enters at x = lo, leaves at hi.
+        let ray = Lanes::new(DVec3::new(-5.0, y, 0.5), DVec3::X, 1.0);
         let t = test(kernel, &node, &ray, f32::INFINITY);
         assert_eq!(t.hit & 1, 1, "{kernel:?}");
         let (enter, exit) = (f64::from(t.enter[0]), f64::from(t.exit[0]));
@@ -197,7 +195,7 @@ fn a_ray_in_a_box_plane_keeps_the_other_bounds() {
         );
         assert!((exit - (hi + 5.0)).abs() < 1e-5, "{kernel:?}: exit {exit}");
         // Just outside the plane, or ending before the box: culled.
-        let below = Lanes::new(DVec3::new(-5.0, lo - 1e-6, 0.5), DVec3::X, 1.0);
+        let below = Lanes::new(DVec3::new(-5.0, y - 1e-6, 0.5), DVec3::X, 1.0);
         assert_eq!(test(kernel, &node, &below, f32::INFINITY).hit & 1, 0);
         assert_eq!(test(kernel, &node, &ray, 5.1).hit & 1, 0);
     }

@@ -28,7 +28,7 @@ static ORDER: [[u8; 256]; 8] = {
     order
 };
 
-/// At most eight entries wait per level, and the top node adds one level (a power of two, so
+/// At most eight entries wait per level, with a level to spare (a power of two, so
 /// that masking the index keeps it in bounds without a check).
 const STACK: usize = (8 * (DEPTH_CAP as usize + 2)).next_power_of_two();
 
@@ -50,7 +50,6 @@ impl Observer for Unobserved {
 /// [`super::Octree::traverse`].
 pub(super) fn run<F, O>(
     layout: &Layout,
-    refs: &[u32],
     kernel: Kernel,
     ray: &Lanes,
     limit: f64,
@@ -63,8 +62,8 @@ pub(super) fn run<F, O>(
     match kernel {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `Kernel::Avx2` is only chosen where `Kernel::available` said so.
-        Kernel::Avx2 => unsafe { run_avx2(layout, refs, ray, limit, visit, observer) },
-        _ => run_with::<false, F, O>(layout, refs, ray, limit, visit, observer),
+        Kernel::Avx2 => unsafe { run_avx2(layout, ray, limit, visit, observer) },
+        _ => run_with::<false, F, O>(layout, ray, limit, visit, observer),
     }
 }
 
@@ -74,18 +73,12 @@ pub(super) fn run<F, O>(
 /// The CPU must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn run_avx2<F, O>(
-    layout: &Layout,
-    refs: &[u32],
-    ray: &Lanes,
-    limit: f64,
-    visit: F,
-    observer: &mut O,
-) where
+unsafe fn run_avx2<F, O>(layout: &Layout, ray: &Lanes, limit: f64, visit: F, observer: &mut O)
+where
     F: FnMut(&[u32], f64, f64) -> f64,
     O: Observer,
 {
-    run_with::<true, F, O>(layout, refs, ray, limit, visit, observer)
+    run_with::<true, F, O>(layout, ray, limit, visit, observer)
 }
 
 /// The traversal: test a node's eight lanes, push the hit children far to near with their
@@ -95,7 +88,6 @@ unsafe fn run_avx2<F, O>(
 #[inline(always)]
 fn run_with<const AVX2: bool, F, O>(
     layout: &Layout,
-    refs: &[u32],
     ray: &Lanes,
     mut limit: f64,
     mut visit: F,
@@ -104,11 +96,14 @@ fn run_with<const AVX2: bool, F, O>(
     F: FnMut(&[u32], f64, f64) -> f64,
     O: Observer,
 {
+    if layout.nodes.is_empty() {
+        return;
+    }
+    let mut node = 0;
     let mut t_best = f32_above(limit);
     // Uninitialised: only entries below `top`, each written before, are read.
     let mut stack = [MaybeUninit::<(u32, f32, f32)>::uninit(); STACK];
     let mut top = 0;
-    let mut node = 0usize;
     loop {
         let wide: &Wide = &layout.nodes[node];
         let tested = if AVX2 {
@@ -155,8 +150,7 @@ fn run_with<const AVX2: bool, F, O>(
                 node = child as usize;
                 break;
             }
-            let [first, count] = layout.leaves[(child & !LEAF) as usize];
-            let leaf = &refs[first as usize..(first + count) as usize];
+            let leaf = layout.leaf(child);
             limit = limit.min(visit(leaf, f64::from(enter), f64::from(exit)));
             t_best = f32_above(limit);
         }

@@ -1,21 +1,118 @@
-//! The traversed layout: eight-wide nodes holding their children's occupied boxes as f32
-//! planes, one lane per octant, laid out depth first.
+//! The traversed layout: eight-wide nodes holding their children's occupied boxes as
+//! quantised planes, one lane per octant, laid out depth first, and the leaves' references.
+//!
+//! # Quantised planes
+//! A node stores, per axis, a frame: a step `m · 2^e` (`m` an integer from 8 to 15) and an
+//! origin `k · step`, and each child's box as one byte per plane, `q`, standing for the plane
+//! `(k + q) · step`. The build rounds every f32 plane outward onto that grid, checking each
+//! rounding in exact arithmetic, so a child's stored box contains its occupied box. The frame
+//! keeps `(|k| + 255) · m < 2²⁴`: then `q · step` and `(k + q) · step` are exact in f32, and a
+//! kernel decodes a plane exactly (one multiply-add) before the conservative slab test of
+//! [`super::lanes`], whose rounding bound therefore holds as for any f32 plane. The price is
+//! a slightly looser box: a plane moves outward by less than one step, about 1/230 of the
+//! node's box (or 2⁻¹⁹ of its coordinates' magnitude, which keeps `k` small).
 
 use super::build::{Node, INTERIOR};
 
-/// A child reference with this bit set names a leaf (an index into [`Layout::leaves`]);
-/// otherwise it names a node.
+/// A child reference with this bit set names a leaf (the index in [`Layout::refs`] of its
+/// reference count, followed by its references); otherwise it names a node.
 pub(super) const LEAF: u32 = 1 << 31;
 
-/// An interior cell: the occupied boxes of its eight children as planes (rows `lo x, lo y,
-/// lo z, hi x, hi y, hi z`, one lane per octant, rounded outward) and their references. A lane
-/// without a child holds the inverted box `[f32::MAX, -f32::MAX]` and reference
-/// [`Wide::EMPTY`].
+/// Planes beyond this magnitude are not quantised: the octree then does not cull (see
+/// [`super::lanes::LIMIT`]).
+const RANGE: f64 = super::lanes::LIMIT;
+
+/// An interior cell: per axis the quantisation frame, its children's occupied boxes as
+/// quantised planes (rows `lo x, lo y, lo z, hi x, hi y, hi z`, one lane per octant, rounded
+/// outward) and their references. A lane without a child has the inverted box `lo = 255, hi =
+/// 0` and reference [`Wide::EMPTY`].
 #[derive(Debug, Clone, Copy)]
-#[repr(C, align(32))]
+#[repr(C, align(8))]
 pub(super) struct Wide {
-    pub planes: [[f32; 8]; 6],
+    /// Per axis, the plane of `q = 0`: `k · step`.
+    pub origin: [f32; 3],
+    /// Per axis, the distance between neighbouring planes.
+    pub step: [f32; 3],
+    pub planes: [[u8; 8]; 6],
     pub children: [u32; 8],
+}
+
+/// The quantisation frame of one axis: planes `(k + q) · step` for `q = 0..=255`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Frame {
+    k: f64,
+    step: f64,
+}
+
+impl Frame {
+    /// The frame for planes within `[lo, hi]`, or `None` when they are not finite or beyond
+    /// [`RANGE`].
+    fn new(lo: f64, hi: f64) -> Option<Frame> {
+        let magnitude = lo.abs().max(hi.abs());
+        if !(magnitude.is_finite() && magnitude <= RANGE && lo <= hi) {
+            return None;
+        }
+        // 254 steps across (one more absorbs flooring the origin), at least 2⁻¹⁹ of the
+        // magnitude (so |k| <= 2¹⁹ + 1) and far from f32's subnormals.
+        let need = ((hi - lo) / 254.0)
+            .max(magnitude / (1u64 << 19) as f64)
+            .max(RANGE.recip());
+        let mut step = step_at_least(need);
+        loop {
+            let k = floor_multiple(lo, step);
+            if (k + 255.0) * step >= hi {
+                return Some(Frame { k, step });
+            }
+            step = step_at_least(step * (1.0 + 1.0 / 16.0));
+        }
+    }
+
+    /// The byte of a lower plane `lo`: the largest `q` with `(k + q) · step <= lo`.
+    fn below(&self, lo: f32) -> u8 {
+        (floor_multiple(f64::from(lo), self.step) - self.k).clamp(0.0, 255.0) as u8
+    }
+
+    /// The byte of an upper plane `hi`: the smallest `q` with `(k + q) · step >= hi`.
+    fn above(&self, hi: f32) -> u8 {
+        (-floor_multiple(-f64::from(hi), self.step) - self.k).clamp(0.0, 255.0) as u8
+    }
+}
+
+/// The smallest `m · 2^e >= x` with `m` an integer from 8 to 15 (`x` positive and normal).
+fn step_at_least(x: f64) -> f64 {
+    let unit = 2f64.powi(x.log2().floor() as i32 - 3);
+    let mut m = (x / unit).ceil();
+    // `log2` may be off by one near powers of two: bring `m` into 8..=15.
+    let mut unit = unit;
+    while m > 15.0 {
+        unit *= 2.0;
+        m = (x / unit).ceil();
+    }
+    while m < 8.0 {
+        unit /= 2.0;
+        m = (x / unit).ceil();
+    }
+    m * unit
+}
+
+/// The largest integer `k` with `k · step <= x`, checked exactly (`k · step` is exact in f64
+/// for the frames above).
+fn floor_multiple(x: f64, step: f64) -> f64 {
+    let mut k = (x / step).floor();
+    while k * step > x {
+        k -= 1.0;
+    }
+    while (k + 1.0) * step <= x {
+        k += 1.0;
+    }
+    k
+}
+
+/// The lanes that hold a child: `(lane, f32 box, reference)`.
+fn occupied(
+    lanes: &[Option<([f32; 6], u32)>; 8],
+) -> impl Iterator<Item = (usize, [f32; 6], u32)> + '_ {
+    (0..8).filter_map(|lane| lanes[lane].map(|(bounds, child)| (lane, bounds, child)))
 }
 
 impl Wide {
@@ -23,77 +120,219 @@ impl Wide {
     pub const EMPTY: u32 = u32::MAX;
 
     /// A node without children.
-    pub const VACANT: Wide = {
-        let lo = [f32::MAX; 8];
-        let hi = [-f32::MAX; 8];
-        Wide {
-            planes: [lo, lo, lo, hi, hi, hi],
-            children: [Wide::EMPTY; 8],
-        }
+    const VACANT: Wide = Wide {
+        origin: [0.0; 3],
+        step: [1.0; 3],
+        planes: [[255; 8], [255; 8], [255; 8], [0; 8], [0; 8], [0; 8]],
+        children: [Wide::EMPTY; 8],
     };
 
+    /// A node holding, per lane, a child's f32 occupied box (rows as in `planes`) and
+    /// reference. Also returns the largest magnitude of a plane it stores, or `None` when the
+    /// boxes cannot be quantised (planes not finite or beyond [`RANGE`]); the node then holds
+    /// the right references, but boxes no kernel may cull with.
+    pub fn new(lanes: &[Option<([f32; 6], u32)>; 8]) -> (Wide, Option<f64>) {
+        let mut node = Wide::VACANT;
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for (lane, bounds, child) in occupied(lanes) {
+            node.children[lane] = child;
+            for axis in 0..3 {
+                lo[axis] = lo[axis].min(f64::from(bounds[axis]));
+                hi[axis] = hi[axis].max(f64::from(bounds[axis + 3]));
+            }
+        }
+        let mut quantised = true;
+        for axis in 0..3 {
+            let Some(frame) = Frame::new(lo[axis], hi[axis]) else {
+                quantised = false;
+                continue;
+            };
+            node.origin[axis] = (frame.k * frame.step) as f32;
+            node.step[axis] = frame.step as f32;
+            for (lane, bounds, _) in occupied(lanes) {
+                node.planes[axis][lane] = frame.below(bounds[axis]);
+                node.planes[axis + 3][lane] = frame.above(bounds[axis + 3]);
+            }
+        }
+        let largest = occupied(lanes)
+            .flat_map(|(lane, _, _)| node.bounds(lane))
+            .fold(0.0f64, |l, plane| l.max(f64::from(plane.abs())));
+        (node, quantised.then_some(largest))
+    }
+
     /// Bit `i` set when lane `i` holds a child.
+    #[inline(always)]
     pub fn occupancy(&self) -> u32 {
         (0..8).fold(0, |m, i| {
             m | u32::from(self.children[i] != Wide::EMPTY) << i
         })
     }
 
-    /// Puts a child with occupied box `bounds` in `lane`; planes beyond the f32 range are
-    /// clamped to it (the octree then never culls; see [`super::lanes`]).
-    fn set(&mut self, lane: usize, bounds: &[f32; 6], child: u32) {
-        for (row, &plane) in bounds.iter().enumerate() {
-            self.planes[row][lane] = plane.clamp(-f32::MAX, f32::MAX);
-        }
-        self.children[lane] = child;
+    /// The plane that byte `q` stands for on `axis` (exact in f32).
+    pub fn plane(&self, axis: usize, q: u8) -> f32 {
+        f32::from(q).mul_add(self.step[axis], self.origin[axis])
+    }
+
+    /// Lane `lane`'s stored box, decoded: rows as in `planes`.
+    pub fn bounds(&self, lane: usize) -> [f32; 6] {
+        std::array::from_fn(|row| self.plane(row % 3, self.planes[row][lane]))
     }
 }
 
-/// The traversed arrays: node 0 is a top node whose lane 0 holds the root cell (the root's own
-/// occupied box is tested like any child's); leaves are `(first reference, count)`.
+/// The traversed arrays: the nodes, node 0 the root (none for an empty tree), and each leaf as
+/// its reference count followed by its references, in `refs`.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Layout {
     pub nodes: Vec<Wide>,
-    pub leaves: Vec<[u32; 2]>,
+    pub refs: Vec<u32>,
+    /// The largest magnitude of any stored plane, or `None` when some node's boxes could not
+    /// be quantised.
+    pub largest: Option<f64>,
 }
 
 impl Layout {
-    /// Converts built cells (node 0 the root) into eight-wide nodes, depth first: a node's
-    /// first interior child follows it directly.
-    pub fn new(cells: &[Node]) -> Layout {
+    /// Converts built cells (node 0 the root) and their references into eight-wide nodes,
+    /// depth first: a node's first interior child follows it directly. An interior root's own
+    /// occupied box is not stored (its children's lie within it).
+    pub fn new(cells: &[Node], refs: &[u32]) -> Layout {
         let mut layout = Layout {
-            nodes: vec![Wide::VACANT],
-            leaves: Vec::new(),
+            nodes: Vec::new(),
+            refs: Vec::new(),
+            largest: Some(0.0),
         };
-        if cells[0].count != 0 {
-            let root = layout.place(cells, 0);
-            layout.nodes[0].set(0, &cells[0].bounds, root);
+        if cells[0].count & INTERIOR != 0 {
+            layout.place(cells, refs, 0);
+        } else if cells[0].count != 0 {
+            // A root leaf waits in lane 0 of a node of its own.
+            layout.nodes.push(Wide::VACANT);
+            let mut lanes = [None; 8];
+            lanes[0] = Some((cells[0].bounds, layout.place(cells, refs, 0)));
+            layout.nodes[0] = layout.wide(&lanes);
         }
         layout
     }
 
     /// Places cell `index` and everything below it; returns its reference.
-    fn place(&mut self, cells: &[Node], index: usize) -> u32 {
+    fn place(&mut self, cells: &[Node], refs: &[u32], index: usize) -> u32 {
         let cell = cells[index];
         if cell.count & INTERIOR == 0 {
-            self.leaves.push([cell.first, cell.count]);
-            return LEAF | (self.leaves.len() - 1) as u32;
+            let at = self.refs.len();
+            let first = cell.first as usize;
+            self.refs.push(cell.count);
+            self.refs
+                .extend_from_slice(&refs[first..first + cell.count as usize]);
+            return LEAF | at as u32;
         }
         let at = self.nodes.len();
         self.nodes.push(Wide::VACANT);
+        let mut lanes = [None; 8];
         let mut next = cell.first as usize;
-        for lane in 0..8 {
+        for (lane, slot) in lanes.iter_mut().enumerate() {
             if cell.count & (1 << lane) != 0 {
-                let child = self.place(cells, next);
-                self.nodes[at].set(lane, &cells[next].bounds, child);
+                *slot = Some((cells[next].bounds, self.place(cells, refs, next)));
                 next += 1;
             }
         }
+        self.nodes[at] = self.wide(&lanes);
         at as u32
     }
 
-    /// Bytes of the nodes and leaf records.
+    /// The node for `lanes`, its largest plane folded into [`Layout::largest`].
+    fn wide(&mut self, lanes: &[Option<([f32; 6], u32)>; 8]) -> Wide {
+        let (node, largest) = Wide::new(lanes);
+        self.largest = self.largest.zip(largest).map(|(a, b)| a.max(b));
+        node
+    }
+
+    /// The leaf that child reference `child` (with [`LEAF`] set) names: its references.
+    #[inline(always)]
+    pub fn leaf(&self, child: u32) -> &[u32] {
+        let at = (child & !LEAF) as usize;
+        let count = self.refs[at] as usize;
+        &self.refs[at + 1..at + 1 + count]
+    }
+
+    /// Bytes of the nodes and the leaves' counts and references.
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * size_of::<Wide>() + self.leaves.len() * size_of::<[u32; 2]>()
+        self.nodes.len() * size_of::<Wide>() + self.refs.len() * size_of::<u32>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (xorshift) of f32 values of varied magnitude.
+    fn values(seed: u64, n: usize) -> Vec<f32> {
+        let mut x = seed;
+        (0..n)
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                let mantissa = (x >> 40) as f32 / (1u64 << 24) as f32 - 0.5;
+                mantissa * 2f32.powi((x % 60) as i32 - 30)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn stored_boxes_contain_the_given_ones_and_are_at_most_a_step_wider() {
+        let v = values(0x5eed_1234, 6000);
+        for chunk in v.chunks_exact(48) {
+            let mut lanes = [None; 8];
+            for (lane, slot) in lanes.iter_mut().enumerate().filter(|(i, _)| i % 3 != 1) {
+                let c = &chunk[lane * 6..lane * 6 + 6];
+                let bounds = std::array::from_fn(|row| {
+                    let (a, b) = (c[row % 3], c[row % 3 + 3]);
+                    if row < 3 {
+                        a.min(b)
+                    } else {
+                        a.max(b)
+                    }
+                });
+                *slot = Some((bounds, lane as u32));
+            }
+            let (node, largest) = Wide::new(&lanes);
+            let largest = largest.expect("finite planes are quantised");
+            assert_eq!(node.occupancy(), 0b0110_1101);
+            for (lane, bounds, child) in occupied(&lanes) {
+                assert_eq!(node.children[lane], child);
+                let stored = node.bounds(lane);
+                for axis in 0..3 {
+                    let step = f64::from(node.step[axis]);
+                    let (lo, hi) = (f64::from(stored[axis]), f64::from(stored[axis + 3]));
+                    let (want_lo, want_hi) = (f64::from(bounds[axis]), f64::from(bounds[axis + 3]));
+                    assert!(
+                        lo <= want_lo && want_lo - lo < step,
+                        "axis {axis}: {lo} {bounds:?}"
+                    );
+                    assert!(
+                        hi >= want_hi && hi - want_hi < step,
+                        "axis {axis}: {hi} {bounds:?}"
+                    );
+                    assert!(lo.abs().max(hi.abs()) <= largest);
+                    // Exact decoding: each plane is an integer number of steps.
+                    assert_eq!((lo / step).fract(), 0.0, "{lo} / {step}");
+                    assert_eq!((hi / step).fract(), 0.0, "{hi} / {step}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn boxes_on_the_grid_are_stored_exactly_and_huge_ones_not_at_all() {
+        let mut lanes = [None; 8];
+        // Extents of 254 steps of a power of two (2⁻⁹, 2⁻⁸), ends on that grid; a flat axis.
+        let on_grid = [0.25, -0.5, 0.5, 0.74609375, 0.4921875, 0.5];
+        lanes[3] = Some((on_grid, 7));
+        let (node, largest) = Wide::new(&lanes);
+        assert_eq!(node.bounds(3), on_grid);
+        assert_eq!(node.occupancy(), 1 << 3);
+        assert!(largest.is_some());
+        lanes[5] = Some(([0.0, 0.0, 0.0, 1e31, 1.0, 1.0], 8));
+        let (node, largest) = Wide::new(&lanes);
+        assert_eq!(largest, None);
+        assert_eq!(node.occupancy(), 1 << 3 | 1 << 5);
     }
 }
