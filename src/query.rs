@@ -5,7 +5,7 @@
 //! With `t_min = 0` the nearest hit is exactly [`crate::render::Tracer::trace`]'s (the same
 //! search), so buffers filled from it are bit-identical to the command line's rays mode.
 
-use crate::accel::{test_primitive, Hit, Octree, PrimitiveSet};
+use crate::accel::{test_primitive, Hit, Octree, PrimitiveSet, PACKET};
 use crate::geometry::Ray;
 use crate::render::RaySource;
 use crate::scene::{Crossing, EdgeRule, Scene};
@@ -82,6 +82,35 @@ impl<'a> Query<'a> {
             best.map_or(t_max, |b| b.t)
         });
         best
+    }
+
+    /// [`Query::nearest`] for [`PACKET`] rays traced together (see [`Octree::intersect_packet`]):
+    /// the same answers, or `None` when they cannot go as one packet (a range not starting at
+    /// 0, an untraceable ray, directions in different octants or with a zero component).
+    pub fn nearest_packet(
+        &self,
+        rays: &[Ray; PACKET],
+        ranges: &[(f64, f64); PACKET],
+    ) -> Option<[Option<Crossing>; PACKET]> {
+        let plain = |(ray, &(t_min, t_max)): (&Ray, &(f64, f64))| {
+            t_min == 0.0 && traceable(ray, t_min, t_max)
+        };
+        if !rays.iter().zip(ranges).all(plain) {
+            return None;
+        }
+        let origins = rays.each_ref().map(|ray| ray.origin - self.scene.anchor);
+        let dirs = rays.each_ref().map(|ray| ray.dir);
+        let t_max = ranges.map(|(_, t_max)| t_max);
+        let hits = self
+            .octree
+            .intersect_packet(self.scene, &origins, &dirs, &t_max)?;
+        Some(hits.map(|hit| {
+            hit.map(|hit| Crossing {
+                t: hit.t,
+                top: hit.prim,
+                inner: None,
+            })
+        }))
     }
 
     /// Whether the ray has any crossing with `t_min < t <= t_max` (and `t > 0`): exactly

@@ -11,7 +11,7 @@ use crate::geometry::Aabb;
 use glam::DVec3;
 
 pub use bvh::{Bvh, BvhKind, BvhStats};
-pub use octree::{Octree, OctreeParams, OctreeStats};
+pub use octree::{Octree, OctreeParams, OctreeStats, PACKET};
 
 /// A ray prepared for tracing: world origin and direction plus whatever the primitive set
 /// precomputes per ray (`R`, for instance the watertight triangle frame).

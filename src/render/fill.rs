@@ -217,26 +217,20 @@ where
             eye,
             forward,
         };
-        let mut refused = None;
-        let hits: Vec<Option<Crossing>> = (block.start..n.min(block.start + BLOCK))
-            .map(|i| {
-                let (t_min, t_max) = (rays.range)(i);
-                let ray = rays.source.ray(i);
-                let hit = tracer.nearest(&ray, t_min, t_max);
-                if hit.is_none()
-                    && rays.refuse_untraceable
-                    && refused.is_none()
-                    && !traceable(&ray, t_min, t_max)
-                {
-                    refused = Some(i);
-                }
-                hit
-            })
-            .collect();
+        let indices = block.start..n.min(block.start + BLOCK);
+        let ray_list: Vec<Ray> = indices.clone().map(|i| rays.source.ray(i)).collect();
+        let ranges: Vec<(f64, f64)> = indices.clone().map(|i| (rays.range)(i)).collect();
+        let hits = tracer.nearest_all(&ray_list, &ranges);
+        let refused = rays.refuse_untraceable.then(|| {
+            let each = indices.zip(&ray_list).zip(&ranges).zip(&hits);
+            each.filter(|(_, hit)| hit.is_none())
+                .find(|(((_, ray), &(t_min, t_max)), _)| !traceable(ray, t_min, t_max))
+                .map(|(((i, _), _), _)| i)
+        });
         for (slot, &aov) in slots.iter_mut().zip(aovs) {
             block.fill(aov, slot, &hits);
         }
-        refused
+        refused.flatten()
     };
     let mut blocks = blocks.into_iter().enumerate().peekable();
     while blocks.peek().is_some() {

@@ -7,7 +7,7 @@ mod fill;
 
 pub use fill::{trace, Buffers, Column, Rays};
 
-use crate::accel::{prepare_ray, Bvh, BvhKind, Hit, Octree, OctreeParams};
+use crate::accel::{prepare_ray, Bvh, BvhKind, Hit, Octree, OctreeParams, PACKET};
 use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::query::Query;
@@ -311,6 +311,27 @@ impl<'a> Tracer<'a> {
                 })
             }
         }
+    }
+
+    /// [`Tracer::nearest`] for every ray of `rays` with its range in `ranges`: with the octree,
+    /// runs of [`PACKET`] rays that can go together are traced as packets (the same answers,
+    /// fewer node visits for coherent rays such as a camera's), the others one by one.
+    pub fn nearest_all(&self, rays: &[Ray], ranges: &[(f64, f64)]) -> Vec<Option<Crossing>> {
+        let mut hits = Vec::with_capacity(rays.len());
+        let one_by_one = |hits: &mut Vec<_>, rays: &[Ray], ranges: &[(f64, f64)]| {
+            let each = rays.iter().zip(ranges);
+            hits.extend(each.map(|(ray, &(t_min, t_max))| self.nearest(ray, t_min, t_max)));
+        };
+        let (packets, rest) = rays.as_chunks::<PACKET>();
+        let (packet_ranges, rest_ranges) = ranges.as_chunks::<PACKET>();
+        for (packet, range) in packets.iter().zip(packet_ranges) {
+            match self.query().and_then(|q| q.nearest_packet(packet, range)) {
+                Some(found) => hits.extend(found),
+                None => one_by_one(&mut hits, packet, range),
+            }
+        }
+        one_by_one(&mut hits, rest, rest_ranges);
+        hits
     }
 
     /// The queries beyond the nearest hit ([`Query`]), which need the octree.

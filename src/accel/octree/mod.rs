@@ -42,6 +42,11 @@
 //! bits of its direction), which for an octree's equal halves is exact; the hit ones wait on a
 //! fixed stack with their entry parameters, nearest on top.
 //!
+//! Rays in runs of eight whose directions share an octant (a camera's neighbouring pixels) can
+//! also go as one packet (module `packet`, [`Octree::intersect_packet`]): a node is fetched
+//! once for the eight, each child's box is tested against all eight rays in one SIMD test,
+//! and the rays share the stack; every ray still gets exactly its own answer.
+//!
 //! The lecture's boundary trap: a primitive stored in an early cell can be hit beyond that cell's
 //! exit while a nearer primitive waits in a later cell. The traversal therefore never stops at
 //! the first hit: it keeps the best `t` and skips only cells whose entry lies beyond it. A hit
@@ -52,6 +57,7 @@
 mod arena;
 mod build;
 mod lanes;
+mod packet;
 mod traverse;
 mod wide;
 
@@ -61,6 +67,8 @@ use build::{cube_around, Builder};
 use glam::DVec3;
 pub use lanes::Kernel;
 use lanes::Lanes;
+use packet::Bundle;
+pub use packet::WIDTH as PACKET;
 use serde::Serialize;
 use traverse::Unobserved;
 use wide::Layout;
@@ -236,6 +244,42 @@ impl Octree {
             best.map_or(t_max, |b| b.t)
         });
         best
+    }
+
+    /// [`Octree::intersect_ray`] for [`PACKET`] rays at once, traversing the octree together
+    /// (module `packet`): each ray's answer is the one it gets alone. `None` when the rays
+    /// cannot go as one packet: their directions' signs differ, or some direction has a zero
+    /// component (the caller then traces them one by one).
+    pub fn intersect_packet<P: PrimitiveSet>(
+        &self,
+        set: &P,
+        local_origins: &[DVec3; PACKET],
+        dirs: &[DVec3; PACKET],
+        t_max: &[f64; PACKET],
+    ) -> Option<[Option<Hit>; PACKET]> {
+        let bundle = Bundle::new(local_origins, dirs, self.scale)?;
+        let mut best: [Option<Hit>; PACKET] = [None; PACKET];
+        let mut prepared: [Option<PreparedRay<P::RayData>>; PACKET] = [const { None }; PACKET];
+        let mut tested = [Mailbox::default(); PACKET];
+        let all = (1u32 << PACKET) - 1;
+        packet::run(
+            &self.layout,
+            self.kernel,
+            &bundle,
+            all,
+            *t_max,
+            |i, refs| {
+                let ray =
+                    prepared[i].get_or_insert_with(|| prepare_ray(set, local_origins[i], dirs[i]));
+                for &prim in refs {
+                    if tested[i].check_in(prim) {
+                        test_primitive(set, prim, ray, t_max[i], &mut best[i]);
+                    }
+                }
+                best[i].map_or(t_max[i], |b| b.t)
+            },
+        );
+        Some(best)
     }
 
     /// Visits the non-empty leaves the ray `origin + t · dir` may reach with `0 <= t <=

@@ -1,10 +1,11 @@
 //! Unit tests of the node test: the culling audit for every kernel, and rays lying in planes.
 
 use super::lanes::{Kernel, Lanes};
+use super::packet::{Bundle, Tested};
 use super::traverse::{self, Observer};
 use super::wide::{Layout, Wide};
 use super::*;
-use crate::accel::{brute_force, prepare_ray};
+use crate::accel::{brute_force, f32_above, prepare_ray};
 use crate::scene::{Scene, SceneBuilder};
 
 /// The kernels this CPU runs.
@@ -208,5 +209,104 @@ fn test(kernel: Kernel, node: &Wide, ray: &Lanes, t_best: f32) -> super::lanes::
         // SAFETY: only kernels the CPU runs are tested.
         Kernel::Avx2 => unsafe { super::lanes::test_avx2(node, ray, t_best) },
         _ => super::lanes::test_portable(node, ray, t_best),
+    }
+}
+
+/// A packet around an adversarial ray: origins moved by up to 1% of the root, directions
+/// scaled per component by up to 2% (signs and zeros kept, so most packets can go as one).
+fn packet(rng: &mut Rng, root: &Aabb) -> ([DVec3; PACKET], [DVec3; PACKET]) {
+    let (origin, dir) = adversarial(rng, root);
+    let spread = root.size().x * 0.01;
+    let origins = std::array::from_fn(|_| origin + rng.point(-spread, spread));
+    let dirs = std::array::from_fn(|_| dir * (DVec3::ONE + rng.point(0.0, 0.02)));
+    (origins, dirs)
+}
+
+#[test]
+fn every_ray_of_a_packet_gets_its_brute_force_answer() {
+    let mut rng = Rng(0x9ac_4e75);
+    let scene = scene(&mut rng);
+    let octree = Octree::build(&scene, OctreeParams::default());
+    for kernel in kernels() {
+        let octree = octree.clone().with_kernel(kernel).unwrap();
+        let (mut packets, mut hits) = (0, 0);
+        for _ in 0..3000 {
+            let (origins, dirs) = packet(&mut rng, &octree.root());
+            let t_max = [f64::INFINITY; PACKET];
+            let Some(found) = octree.intersect_packet(&scene, &origins, &dirs, &t_max) else {
+                continue;
+            };
+            packets += 1;
+            for i in 0..PACKET {
+                let ray = prepare_ray(&scene, origins[i], dirs[i]);
+                assert_eq!(found[i], brute_force(&scene, &ray), "{kernel:?}: ray {i}");
+                hits += usize::from(found[i].is_some());
+            }
+        }
+        assert!(
+            packets > 1000 && hits > 2000,
+            "{kernel:?}: {packets} packets, {hits} hits"
+        );
+    }
+}
+
+#[test]
+fn rays_in_different_octants_or_along_an_axis_do_not_form_a_packet() {
+    let scene = scene(&mut Rng(7));
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let origins = [DVec3::splat(-20.0); PACKET];
+    let t_max = [f64::INFINITY; PACKET];
+    let mut dirs = [DVec3::ONE; PACKET];
+    assert!(octree
+        .intersect_packet(&scene, &origins, &dirs, &t_max)
+        .is_some());
+    dirs[5].y = -1.0;
+    assert!(octree
+        .intersect_packet(&scene, &origins, &dirs, &t_max)
+        .is_none());
+    dirs[5].y = 0.0;
+    assert!(octree
+        .intersect_packet(&scene, &origins, &dirs, &t_max)
+        .is_none());
+}
+
+#[test]
+fn no_packet_kernel_culls_a_ray_the_exact_slab_test_lets_in() {
+    let mut rng = Rng(0xa0d17);
+    let scene = scene(&mut rng);
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let nodes = &octree.layout.nodes;
+    for kernel in kernels() {
+        let mut culled = 0;
+        for _ in 0..400 {
+            let (origins, dirs) = packet(&mut rng, &octree.root());
+            let Some(bundle) = Bundle::new(&origins, &dirs, octree.scale) else {
+                continue;
+            };
+            for _ in 0..20 {
+                let node = &nodes[(rng.next() % nodes.len() as u64) as usize];
+                let limit = rng.pick(&[f64::INFINITY, 30.0, 5.0]);
+                let t_best = [f32_above(limit); PACKET];
+                let mut tested = Tested::default();
+                match kernel {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: only kernels the CPU runs are tested.
+                    Kernel::Avx2 => unsafe { bundle.test_avx2(node, &t_best, &mut tested) },
+                    _ => bundle.test_portable(node, &t_best, &mut tested),
+                }
+                for lane in (0..8).filter(|lane| node.occupancy() & (1 << lane) != 0) {
+                    for i in (0..PACKET).filter(|i| tested.hit[lane] & (1 << i) == 0) {
+                        culled += 1;
+                        assert!(
+                            !enters(node, lane, origins[i], dirs[i], f64::from(t_best[i])),
+                            "{kernel:?}: lane {lane} culled for {:?} + t {:?}",
+                            origins[i],
+                            dirs[i]
+                        );
+                    }
+                }
+            }
+        }
+        assert!(culled > 20_000, "{kernel:?}: {culled} culled");
     }
 }

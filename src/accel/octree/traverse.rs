@@ -30,7 +30,7 @@ static ORDER: [[u8; 256]; 8] = {
 
 /// At most eight entries wait per level, with a level to spare (a power of two, so
 /// that masking the index keeps it in bounds without a check).
-const STACK: usize = (8 * (DEPTH_CAP as usize + 2)).next_power_of_two();
+pub(super) const STACK: usize = (8 * (DEPTH_CAP as usize + 2)).next_power_of_two();
 
 /// What a traversal reports besides leaves: used by the culling audit in tests.
 pub(super) trait Observer {

@@ -1,0 +1,265 @@
+//! Packets: eight rays whose directions share an octant traverse the octree together.
+//!
+//! Each node is fetched once for the packet, and each of its children is tested against all
+//! eight rays at once (SIMD across the rays, where a single ray's test is SIMD across the
+//! children). A child is pushed with the rays that enter it and their entry parameters; a
+//! popped child goes on with those of its rays whose entry does not lie beyond their own best
+//! hit, and a leaf is handed to each such ray in turn.
+//!
+//! Every ray gets exactly its single-ray answer: its slab parameters are computed from the
+//! same exactly decoded planes with the same conservative set-up ([`Lanes`], whose rounding
+//! bound covers a multiply and an add as well as an FMA), so a child that holds a ray's hit is
+//! never culled for it; the shared front-to-back order is exact for every direction in the
+//! octant; and the boundary-trap rule is applied per ray.
+
+use super::lanes::{Kernel, Lanes};
+use super::traverse::STACK;
+use super::wide::{Layout, Wide, LEAF};
+use crate::accel::f32_above;
+use glam::DVec3;
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
+use std::mem::MaybeUninit;
+
+/// Rays in a packet.
+pub const WIDTH: usize = 8;
+
+/// Eight rays set up for the packet test: per axis, one value per ray.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Bundle {
+    r: [[f32; WIDTH]; 3],
+    c_near: [[f32; WIDTH]; 3],
+    c_far: [[f32; WIDTH]; 3],
+    /// Per axis: the near plane is the box's upper one (the directions are negative).
+    flip: [bool; 3],
+    /// The shared octant (see [`Lanes::octant`]).
+    octant: usize,
+}
+
+impl Bundle {
+    /// The rays `origins[i] + t · dirs[i]` as one packet in a tree whose planes are at most
+    /// `scale` in magnitude, or `None` when their directions lie in different octants or some
+    /// ray needs the single-ray test's special cases (a direction component of zero, or a tree
+    /// that does not cull).
+    #[inline]
+    pub fn new(origins: &[DVec3; WIDTH], dirs: &[DVec3; WIDTH], scale: f64) -> Option<Bundle> {
+        let mut bundle = Bundle {
+            r: [[0.0; WIDTH]; 3],
+            c_near: [[0.0; WIDTH]; 3],
+            c_far: [[0.0; WIDTH]; 3],
+            flip: [false; 3],
+            octant: 0,
+        };
+        for i in 0..WIDTH {
+            let ray = Lanes::new(origins[i], dirs[i] + DVec3::ZERO, scale);
+            if i == 0 {
+                (bundle.flip, bundle.octant) = (ray.flip, ray.octant);
+            }
+            if ray.octant != bundle.octant || ray.parallel || ray.open {
+                return None;
+            }
+            for axis in 0..3 {
+                bundle.r[axis][i] = ray.r[axis];
+                bundle.c_near[axis][i] = ray.c_near[axis];
+                bundle.c_far[axis][i] = ray.c_far[axis];
+            }
+        }
+        Some(bundle)
+    }
+
+    /// The portable packet test: for every lane of `node`, the rays (bit `i` for ray `i`)
+    /// that enter its box before their `t_best`, and their entry parameters.
+    #[inline(always)]
+    pub(super) fn test_portable(&self, node: &Wide, t_best: &[f32; WIDTH], out: &mut Tested) {
+        out.hit = [0; 8];
+        let occupancy = node.occupancy();
+        for lane in (0..8).filter(|lane| occupancy & (1 << lane) != 0) {
+            let mut enter = [0.0f32; WIDTH];
+            let mut exit = *t_best;
+            for axis in 0..3 {
+                let (lo, hi) = (node.planes[axis][lane], node.planes[axis + 3][lane]);
+                let (near, far) = if self.flip[axis] { (hi, lo) } else { (lo, hi) };
+                let (near, far) = (node.plane(axis, near), node.plane(axis, far));
+                let (r, c_near, c_far) = (&self.r[axis], &self.c_near[axis], &self.c_far[axis]);
+                for i in 0..WIDTH {
+                    let n = near * r[i] + c_near[i];
+                    let f = far * r[i] + c_far[i];
+                    enter[i] = if n > enter[i] { n } else { enter[i] };
+                    exit[i] = if f < exit[i] { f } else { exit[i] };
+                }
+            }
+            out.hit[lane] = (0..WIDTH).fold(0, |m, i| m | u32::from(enter[i] <= exit[i]) << i);
+            out.enter[lane] = enter;
+        }
+    }
+
+    /// The AVX2 packet test: the node's planes decoded once, then per lane one FMA per plane
+    /// row across the eight rays.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    pub(super) unsafe fn test_avx2(&self, node: &Wide, t_best: &[f32; WIDTH], out: &mut Tested) {
+        let mut decoded = [[0.0f32; 8]; 6];
+        for (row, out) in decoded.iter_mut().enumerate() {
+            let axis = row % 3;
+            // SAFETY: a row is eight bytes, the size of the unaligned load.
+            let bytes = unsafe { _mm_loadl_epi64(node.planes[row].as_ptr().cast()) };
+            let q = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
+            let step = _mm256_set1_ps(node.step[axis]);
+            let plane = _mm256_fmadd_ps(q, step, _mm256_set1_ps(node.origin[axis]));
+            // SAFETY: `out` is eight f32.
+            unsafe { _mm256_storeu_ps(out.as_mut_ptr(), plane) };
+        }
+        // SAFETY: each row is eight f32.
+        let load = |row: &[f32; WIDTH]| unsafe { _mm256_loadu_ps(row.as_ptr()) };
+        let r = self.r.each_ref().map(load);
+        let c_near = self.c_near.each_ref().map(load);
+        let c_far = self.c_far.each_ref().map(load);
+        let t_best = load(t_best);
+        out.hit = [0; 8];
+        let mut occupancy = node.occupancy();
+        while occupancy != 0 {
+            let lane = occupancy.trailing_zeros() as usize;
+            occupancy &= occupancy - 1;
+            let mut enter = _mm256_setzero_ps();
+            let mut exit = t_best;
+            for axis in 0..3 {
+                let (lo, hi) = (decoded[axis][lane], decoded[axis + 3][lane]);
+                let (near, far) = if self.flip[axis] { (hi, lo) } else { (lo, hi) };
+                let n = _mm256_fmadd_ps(_mm256_set1_ps(near), r[axis], c_near[axis]);
+                let f = _mm256_fmadd_ps(_mm256_set1_ps(far), r[axis], c_far[axis]);
+                enter = _mm256_max_ps(enter, n);
+                exit = _mm256_min_ps(exit, f);
+            }
+            out.hit[lane] = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32;
+            // SAFETY: `out.enter[lane]` is eight f32.
+            unsafe { _mm256_storeu_ps(out.enter[lane].as_mut_ptr(), enter) };
+        }
+    }
+}
+
+/// The result of a packet test, per lane of the node: the rays that enter its box, and
+/// their entry parameters.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Tested {
+    pub hit: [u32; 8],
+    pub enter: [[f32; WIDTH]; 8],
+}
+
+/// A child waiting on the stack: its reference, the rays that enter it, their entries.
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    child: u32,
+    rays: u32,
+    enter: [f32; WIDTH],
+}
+
+/// Visits, for each ray `i` of `bundle` in `rays` (a bit mask), the leaves it may reach before
+/// `limits[i]`, front to back; `visit(i, refs)` gets the leaf's primitive indices and returns
+/// ray `i`'s new limit (its best hit so far).
+pub(super) fn run<F>(
+    layout: &Layout,
+    kernel: Kernel,
+    bundle: &Bundle,
+    rays: u32,
+    limits: [f64; WIDTH],
+    visit: F,
+) where
+    F: FnMut(usize, &[u32]) -> f64,
+{
+    match kernel {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Kernel::Avx2` is only chosen where `Kernel::available` said so.
+        Kernel::Avx2 => unsafe { run_avx2(layout, bundle, rays, limits, visit) },
+        _ => run_with::<false, F>(layout, bundle, rays, limits, visit),
+    }
+}
+
+/// [`run_with`] compiled for AVX2 and FMA, so that the eight rays' loops use eight-wide
+/// registers.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn run_avx2<F>(layout: &Layout, bundle: &Bundle, rays: u32, limits: [f64; WIDTH], visit: F)
+where
+    F: FnMut(usize, &[u32]) -> f64,
+{
+    run_with::<true, F>(layout, bundle, rays, limits, visit)
+}
+
+/// The packet traversal (see the module docs).
+#[inline(always)]
+fn run_with<const AVX2: bool, F>(
+    layout: &Layout,
+    bundle: &Bundle,
+    rays: u32,
+    mut limits: [f64; WIDTH],
+    mut visit: F,
+) where
+    F: FnMut(usize, &[u32]) -> f64,
+{
+    if layout.nodes.is_empty() || rays == 0 {
+        return;
+    }
+    let mut t_best = limits.map(f32_above);
+    // Uninitialised: only entries below `top`, each written before, are read.
+    let mut stack = [MaybeUninit::<Entry>::uninit(); STACK];
+    let mut top = 0;
+    let (mut node, mut live) = (0usize, rays);
+    let mut tested = Tested::default();
+    loop {
+        let wide: &Wide = &layout.nodes[node];
+        if AVX2 {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: only reached through `run_avx2`.
+            unsafe {
+                bundle.test_avx2(wide, &t_best, &mut tested)
+            }
+        } else {
+            bundle.test_portable(wide, &t_best, &mut tested)
+        }
+        // Far to near, so the nearest child is popped first.
+        for j in (0..8).rev() {
+            let lane = j ^ bundle.octant;
+            let hit = tested.hit[lane] & live;
+            if hit != 0 {
+                stack[top & (STACK - 1)].write(Entry {
+                    child: wide.children[lane],
+                    rays: hit,
+                    enter: tested.enter[lane],
+                });
+                top += 1;
+            }
+        }
+        loop {
+            if top == 0 {
+                return;
+            }
+            top -= 1;
+            // SAFETY: entry `top` was written by the push that raised `top` above it.
+            let entry = unsafe { stack[top & (STACK - 1)].assume_init() };
+            let within = (0..WIDTH).fold(0, |m, i| m | u32::from(entry.enter[i] <= t_best[i]) << i);
+            let rays = entry.rays & within;
+            if rays == 0 {
+                continue;
+            }
+            if entry.child & LEAF == 0 {
+                (node, live) = (entry.child as usize, rays);
+                break;
+            }
+            let leaf = layout.leaf(entry.child);
+            let mut each = rays;
+            while each != 0 {
+                let i = each.trailing_zeros() as usize;
+                each &= each - 1;
+                limits[i] = limits[i].min(visit(i, leaf));
+                t_best[i] = f32_above(limits[i]);
+            }
+        }
+    }
+}
