@@ -64,10 +64,10 @@ impl Kernel {
 pub(super) const LIMIT: f64 = (1u128 << 100) as f64;
 
 /// The unit roundoff of f32, `2⁻²⁴`.
-const UNIT: f64 = 1.0 / 16777216.0;
+pub(super) const UNIT: f64 = 1.0 / 16777216.0;
 
 /// The absolute part of the rounding bound, `2⁻¹²⁰`: far above the subnormal spacing.
-const TINY: f64 = 1.0 / (1u128 << 120) as f64;
+pub(super) const TINY: f64 = 1.0 / (1u128 << 120) as f64;
 
 /// A ray prepared for the node test.
 #[derive(Debug, Clone, Copy)]

@@ -67,7 +67,6 @@ use build::{cube_around, Builder};
 use glam::DVec3;
 pub use lanes::Kernel;
 use lanes::Lanes;
-use packet::Bundle;
 pub use packet::WIDTH as PACKET;
 use serde::Serialize;
 use traverse::Unobserved;
@@ -257,16 +256,15 @@ impl Octree {
         dirs: &[DVec3; PACKET],
         t_max: &[f64; PACKET],
     ) -> Option<[Option<Hit>; PACKET]> {
-        let bundle = Bundle::new(local_origins, dirs, self.scale)?;
         let mut best: [Option<Hit>; PACKET] = [None; PACKET];
         let mut prepared: [Option<PreparedRay<P::RayData>>; PACKET] = [const { None }; PACKET];
         let mut tested = [Mailbox::default(); PACKET];
-        let all = (1u32 << PACKET) - 1;
-        packet::run(
+        let packed = packet::run(
             &self.layout,
             self.kernel,
-            &bundle,
-            all,
+            local_origins,
+            dirs,
+            self.scale,
             *t_max,
             |i, refs| {
                 let ray =
@@ -279,7 +277,7 @@ impl Octree {
                 best[i].map_or(t_max[i], |b| b.t)
             },
         );
-        Some(best)
+        packed.then_some(best)
     }
 
     /// Visits the non-empty leaves the ray `origin + t · dir` may reach with `0 <= t <=

@@ -7,12 +7,12 @@
 //! hit, and a leaf is handed to each such ray in turn.
 //!
 //! Every ray gets exactly its single-ray answer: its slab parameters are computed from the
-//! same exactly decoded planes with the same conservative set-up ([`Lanes`], whose rounding
+//! same exactly decoded planes with the same conservative set-up ([`super::lanes`], whose rounding
 //! bound covers a multiply and an add as well as an FMA), so a child that holds a ray's hit is
 //! never culled for it; the shared front-to-back order is exact for every direction in the
 //! octant; and the boundary-trap rule is applied per ray.
 
-use super::lanes::{Kernel, Lanes};
+use super::lanes::{Kernel, LIMIT, TINY, UNIT};
 use super::traverse::STACK;
 use super::wide::{Layout, Wide, LEAF};
 use crate::accel::f32_above;
@@ -32,16 +32,17 @@ pub(super) struct Bundle {
     c_far: [[f32; WIDTH]; 3],
     /// Per axis: the near plane is the box's upper one (the directions are negative).
     flip: [bool; 3],
-    /// The shared octant (see [`Lanes::octant`]).
+    /// The shared octant: bit `a` set when the directions are negative on axis `a`.
     octant: usize,
 }
 
 impl Bundle {
     /// The rays `origins[i] + t · dirs[i]` as one packet in a tree whose planes are at most
     /// `scale` in magnitude, or `None` when their directions lie in different octants or some
-    /// ray needs the single-ray test's special cases (a direction component of zero, or a tree
-    /// that does not cull).
-    #[inline]
+    /// ray needs the single-ray test's special cases (an axis that cannot cull, such as a
+    /// direction component of zero). Each ray's values are `Lanes::new`'s, by the same
+    /// operations, computed axis by axis over the eight rays so that they vectorise.
+    #[inline(always)]
     pub fn new(origins: &[DVec3; WIDTH], dirs: &[DVec3; WIDTH], scale: f64) -> Option<Bundle> {
         let mut bundle = Bundle {
             r: [[0.0; WIDTH]; 3],
@@ -50,19 +51,26 @@ impl Bundle {
             flip: [false; 3],
             octant: 0,
         };
-        for i in 0..WIDTH {
-            let ray = Lanes::new(origins[i], dirs[i] + DVec3::ZERO, scale);
-            if i == 0 {
-                (bundle.flip, bundle.octant) = (ray.flip, ray.octant);
+        for axis in 0..3 {
+            let (mut culls, mut negative) = (true, 0u32);
+            for i in 0..WIDTH {
+                let (o, d) = (origins[i][axis], dirs[i][axis] + 0.0);
+                let r = 1.0 / d;
+                let s = (scale + o.abs()) * r.abs();
+                let eps = s * (10.0 * UNIT) + TINY;
+                let c = -o * r;
+                // False for d = 0 (s is then infinite or NaN) and for NaN.
+                culls &= s <= LIMIT && r.abs() >= 1.0 / LIMIT;
+                negative |= u32::from(d < 0.0) << i;
+                bundle.r[axis][i] = r as f32;
+                bundle.c_near[axis][i] = (c - eps) as f32;
+                bundle.c_far[axis][i] = (c + eps) as f32;
             }
-            if ray.octant != bundle.octant || ray.parallel || ray.open {
+            if !culls || (negative != 0 && negative != (1 << WIDTH) - 1) {
                 return None;
             }
-            for axis in 0..3 {
-                bundle.r[axis][i] = ray.r[axis];
-                bundle.c_near[axis][i] = ray.c_near[axis];
-                bundle.c_far[axis][i] = ray.c_far[axis];
-            }
+            bundle.flip[axis] = negative != 0;
+            bundle.octant |= usize::from(negative != 0) << axis;
         }
         Some(bundle)
     }
@@ -157,26 +165,34 @@ struct Entry {
     enter: [f32; WIDTH],
 }
 
-/// Visits, for each ray `i` of `bundle` in `rays` (a bit mask), the leaves it may reach before
-/// `limits[i]`, front to back; `visit(i, refs)` gets the leaf's primitive indices and returns
-/// ray `i`'s new limit (its best hit so far).
+/// Visits, for each ray `origins[i] + t · dirs[i]` of a packet, the leaves it may reach before
+/// `limits[i]`, front to back, in a tree whose planes are at most `scale` in magnitude;
+/// `visit(i, refs)` gets the leaf's primitive indices and returns ray `i`'s new limit (its best
+/// hit so far). Returns false, having visited nothing, when the rays cannot go as one packet
+/// ([`Bundle::new`]).
 pub(super) fn run<F>(
     layout: &Layout,
     kernel: Kernel,
-    bundle: &Bundle,
-    rays: u32,
+    origins: &[DVec3; WIDTH],
+    dirs: &[DVec3; WIDTH],
+    scale: f64,
     limits: [f64; WIDTH],
     visit: F,
-) where
+) -> bool
+where
     F: FnMut(usize, &[u32]) -> f64,
 {
+    let rays = (origins, dirs, scale);
     match kernel {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `Kernel::Avx2` is only chosen where `Kernel::available` said so.
-        Kernel::Avx2 => unsafe { run_avx2(layout, bundle, rays, limits, visit) },
-        _ => run_with::<false, F>(layout, bundle, rays, limits, visit),
+        Kernel::Avx2 => unsafe { run_avx2(layout, rays, limits, visit) },
+        _ => run_with::<false, F>(layout, rays, limits, visit),
     }
 }
+
+/// A packet's origins, directions and the tree's plane magnitude, as [`run`] takes them.
+type Rays<'r> = (&'r [DVec3; WIDTH], &'r [DVec3; WIDTH], f64);
 
 /// [`run_with`] compiled for AVX2 and FMA, so that the eight rays' loops use eight-wide
 /// registers.
@@ -185,32 +201,35 @@ pub(super) fn run<F>(
 /// The CPU must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn run_avx2<F>(layout: &Layout, bundle: &Bundle, rays: u32, limits: [f64; WIDTH], visit: F)
+unsafe fn run_avx2<F>(layout: &Layout, rays: Rays, limits: [f64; WIDTH], visit: F) -> bool
 where
     F: FnMut(usize, &[u32]) -> f64,
 {
-    run_with::<true, F>(layout, bundle, rays, limits, visit)
+    run_with::<true, F>(layout, rays, limits, visit)
 }
 
 /// The packet traversal (see the module docs).
 #[inline(always)]
 fn run_with<const AVX2: bool, F>(
     layout: &Layout,
-    bundle: &Bundle,
-    rays: u32,
+    (origins, dirs, scale): Rays,
     mut limits: [f64; WIDTH],
     mut visit: F,
-) where
+) -> bool
+where
     F: FnMut(usize, &[u32]) -> f64,
 {
-    if layout.nodes.is_empty() || rays == 0 {
-        return;
+    let Some(bundle) = Bundle::new(origins, dirs, scale) else {
+        return false;
+    };
+    if layout.nodes.is_empty() {
+        return true;
     }
     let mut t_best = limits.map(f32_above);
     // Uninitialised: only entries below `top`, each written before, are read.
     let mut stack = [MaybeUninit::<Entry>::uninit(); STACK];
     let mut top = 0;
-    let (mut node, mut live) = (0usize, rays);
+    let (mut node, mut live) = (0usize, (1u32 << WIDTH) - 1);
     let mut tested = Tested::default();
     loop {
         let wide: &Wide = &layout.nodes[node];
@@ -238,7 +257,7 @@ fn run_with<const AVX2: bool, F>(
         }
         loop {
             if top == 0 {
-                return;
+                return true;
             }
             top -= 1;
             // SAFETY: entry `top` was written by the push that raised `top` above it.
