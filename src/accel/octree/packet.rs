@@ -12,8 +12,8 @@
 //! never culled for it; the shared front-to-back order is exact for every direction in the
 //! octant; and the boundary-trap rule is applied per ray.
 
-use super::lanes::{Kernel, LIMIT, TINY, UNIT};
-use super::traverse::STACK;
+use super::lanes::{Kernel, Lanes, LIMIT, TINY, UNIT};
+use super::traverse::{self, Unobserved, STACK};
 use super::wide::{Layout, Wide, LEAF};
 use crate::accel::f32_above;
 use glam::DVec3;
@@ -23,6 +23,9 @@ use std::mem::MaybeUninit;
 
 /// Rays in a packet.
 pub const WIDTH: usize = 8;
+
+/// A node reached by this many rays of a packet or fewer is traversed by each ray alone.
+const ALONE: u32 = 1;
 
 /// Eight rays set up for the packet test: per axis, one value per ray.
 #[derive(Debug, Clone, Copy)]
@@ -265,6 +268,27 @@ where
             let within = (0..WIDTH).fold(0, |m, i| m | u32::from(entry.enter[i] <= t_best[i]) << i);
             let rays = entry.rays & within;
             if rays == 0 {
+                continue;
+            }
+            if entry.child & LEAF == 0 && rays.count_ones() <= ALONE {
+                // Rays left (nearly) alone go on by themselves: one node test per node and
+                // ray, not one per child.
+                let mut each = rays;
+                while each != 0 {
+                    let i = each.trailing_zeros() as usize;
+                    each &= each - 1;
+                    let ray = Lanes::new(origins[i], dirs[i] + DVec3::ZERO, scale);
+                    let (start, before) = (entry.child as usize, limits[i]);
+                    let mut limit = before;
+                    let alone = |refs: &[u32], _, _| {
+                        limit = limit.min(visit(i, refs));
+                        limit
+                    };
+                    let observer = &mut Unobserved;
+                    traverse::from_node::<AVX2, _, _>(layout, start, &ray, before, alone, observer);
+                    limits[i] = limit;
+                    t_best[i] = f32_above(limit);
+                }
                 continue;
             }
             if entry.child & LEAF == 0 {

@@ -89,6 +89,24 @@ where
 fn run_with<const AVX2: bool, F, O>(
     layout: &Layout,
     ray: &Lanes,
+    limit: f64,
+    visit: F,
+    observer: &mut O,
+) where
+    F: FnMut(&[u32], f64, f64) -> f64,
+    O: Observer,
+{
+    if !layout.nodes.is_empty() {
+        from_node::<AVX2, F, O>(layout, 0, ray, limit, visit, observer);
+    }
+}
+
+/// [`run_with`] from node `start` on (and below it only).
+#[inline(always)]
+pub(super) fn from_node<const AVX2: bool, F, O>(
+    layout: &Layout,
+    start: usize,
+    ray: &Lanes,
     mut limit: f64,
     mut visit: F,
     observer: &mut O,
@@ -96,10 +114,7 @@ fn run_with<const AVX2: bool, F, O>(
     F: FnMut(&[u32], f64, f64) -> f64,
     O: Observer,
 {
-    if layout.nodes.is_empty() {
-        return;
-    }
-    let mut node = 0;
+    let mut node = start;
     let mut t_best = f32_above(limit);
     // Uninitialised: only entries below `top`, each written before, are read.
     let mut stack = [MaybeUninit::<(u32, f32, f32)>::uninit(); STACK];
