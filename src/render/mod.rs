@@ -324,8 +324,15 @@ impl<'a> Tracer<'a> {
         };
         let (packets, rest) = rays.as_chunks::<PACKET>();
         let (packet_ranges, rest_ranges) = ranges.as_chunks::<PACKET>();
+        // Directions' signs first: incoherent rays stop here, before any set-up.
+        let octant = |ray: &Ray| ray.dir.cmplt(DVec3::ZERO).bitmask();
         for (packet, range) in packets.iter().zip(packet_ranges) {
-            match self.query().and_then(|q| q.nearest_packet(packet, range)) {
+            let first = octant(&packet[0]);
+            let coherent = packet.iter().all(|ray| octant(ray) == first);
+            match coherent
+                .then(|| self.query()?.nearest_packet(packet, range))
+                .flatten()
+            {
                 Some(found) => hits.extend(found),
                 None => one_by_one(&mut hits, packet, range),
             }
