@@ -18,7 +18,7 @@ trap 'rm -rf "$work"' EXIT
 rays=$((512 * 512))
 for scene in "${scenes[@]}"; do
   for accel in octree bvh; do
-    valgrind --tool=callgrind --toggle-collect='raycast::render::Tracer::trace*' \
+    valgrind --tool=callgrind --toggle-collect='raycast::render::Tracer::nearest*' \
       --callgrind-out-file="$work/cg.out" "$raycast" "$scene" --width 512 --height 512 \
       --threads 1 --quiet --format npy --aov depth --accel "$accel" --out "$work/out" >/dev/null 2>&1
     callgrind_annotate --inclusive=yes "$work/cg.out" > "$work/cg.txt" 2>/dev/null
@@ -26,7 +26,10 @@ for scene in "${scenes[@]}"; do
     # Inclusive counts of the first (outermost) entry of each function.
     count() { grep -m1 "$1" "$work/cg.txt" | awk '{gsub(",", "", $1); print $1}'; }
     tests=$(count 'triangle::WatertightRay::intersect$\|triangle::WatertightRay::intersect \[')
-    cells=$(count 'octree::traverse::run \[' || true)
+    # Single-ray and packet traversal (AVX2 kernels; the packets' single-ray tail is inlined).
+    single=$(count 'octree::traverse::run_avx2 \[' || true)
+    packets=$(count 'octree::packet::run_avx2 \[' || true)
+    cells=$(( ${single:-0} + ${packets:-0} ))
     awk -v s="$(basename "$scene")" -v a="$accel" -v t="$total" -v p="${tests:-0}" -v c="${cells:-0}" -v n=$rays 'BEGIN {
       printf "%s %s: %.0f instructions/ray; triangle tests %.0f (%.1f%%)", s, a, t/n, p/n, 100*p/t
       if (c > 0) printf "; octree cells excluding tests %.0f (%.1f%%)", (c-p)/n, 100*(c-p)/t

@@ -317,11 +317,11 @@ impl<'a> Tracer<'a> {
     /// runs of [`PACKET`] rays that can go together are traced as packets (the same answers,
     /// fewer node visits for coherent rays such as a camera's), the others one by one.
     pub fn nearest_all(&self, rays: &[Ray], ranges: &[(f64, f64)]) -> Vec<Option<Crossing>> {
-        let mut hits = Vec::with_capacity(rays.len());
-        let one_by_one = |hits: &mut Vec<_>, rays: &[Ray], ranges: &[(f64, f64)]| {
-            let each = rays.iter().zip(ranges);
-            hits.extend(each.map(|(ray, &(t_min, t_max))| self.nearest(ray, t_min, t_max)));
+        let one = |(ray, &(t_min, t_max)): (&Ray, &(f64, f64))| self.nearest(ray, t_min, t_max);
+        let Some(query) = self.query() else {
+            return rays.iter().zip(ranges).map(one).collect();
         };
+        let mut hits = Vec::with_capacity(rays.len());
         let (packets, rest) = rays.as_chunks::<PACKET>();
         let (packet_ranges, rest_ranges) = ranges.as_chunks::<PACKET>();
         // Directions' signs first: incoherent rays stop here, before any set-up.
@@ -329,15 +329,12 @@ impl<'a> Tracer<'a> {
         for (packet, range) in packets.iter().zip(packet_ranges) {
             let first = octant(&packet[0]);
             let coherent = packet.iter().all(|ray| octant(ray) == first);
-            match coherent
-                .then(|| self.query()?.nearest_packet(packet, range))
-                .flatten()
-            {
-                Some(found) => hits.extend(found),
-                None => one_by_one(&mut hits, packet, range),
+            match coherent.then(|| query.nearest_packet(packet, range)) {
+                Some(Some(found)) => hits.extend(found),
+                _ => hits.extend(packet.iter().zip(range).map(one)),
             }
         }
-        one_by_one(&mut hits, rest, rest_ranges);
+        hits.extend(rest.iter().zip(rest_ranges).map(one));
         hits
     }
 
