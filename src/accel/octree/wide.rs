@@ -98,7 +98,10 @@ fn step_at_least(x: f64) -> f64 {
 /// The largest integer `k` with `k · step <= x`, checked exactly (`k · step` is exact in f64
 /// for the frames above).
 fn floor_multiple(x: f64, step: f64) -> f64 {
-    let mut k = (x / step).floor();
+    // The quotient is below 2²¹ in magnitude here: truncating through an integer is a floor
+    // up to one, and the checks below settle that one (`floor` is a library call without
+    // SSE4.1).
+    let mut k = (x / step) as i64 as f64;
     while k * step > x {
         k -= 1.0;
     }
@@ -168,9 +171,11 @@ impl Wide {
         })
     }
 
-    /// The plane that byte `q` stands for on `axis` (exact in f32).
+    /// The plane that byte `q` stands for on `axis`: the product and the sum are both exact
+    /// in f32 (see the module docs), so no fused multiply-add is needed.
+    #[inline(always)]
     pub fn plane(&self, axis: usize, q: u8) -> f32 {
-        f32::from(q).mul_add(self.step[axis], self.origin[axis])
+        f32::from(q) * self.step[axis] + self.origin[axis]
     }
 
     /// Lane `lane`'s stored box, decoded: rows as in `planes`.
@@ -195,9 +200,11 @@ impl Layout {
     /// depth first: a node's first interior child follows it directly. An interior root's own
     /// occupied box is not stored (its children's lie within it).
     pub fn new(cells: &[Node], refs: &[u32]) -> Layout {
+        let interior = cells.iter().filter(|c| c.count & INTERIOR != 0).count();
         let mut layout = Layout {
-            nodes: Vec::new(),
-            refs: Vec::new(),
+            nodes: Vec::with_capacity(interior.max(1)),
+            // Each leaf's references and its count.
+            refs: Vec::with_capacity(refs.len() + cells.len() - interior),
             largest: Some(0.0),
         };
         if cells[0].count & INTERIOR != 0 {
