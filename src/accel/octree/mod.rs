@@ -309,21 +309,21 @@ impl Octree {
 
 /// The primitives a ray tested last, so that one referenced by several leaves along the ray
 /// is tested once. Skipping a repeat cannot change the answer: its test gives the same result,
-/// already folded into the best hit (kept even beyond the leaf that found it).
+/// already folded into the best hit (kept even beyond the leaf that found it). Direct-mapped:
+/// a primitive has one slot, by its index, so a look-up is one comparison; two primitives
+/// sharing a slot only cost a repeated test.
 #[derive(Debug, Clone, Copy)]
 struct Mailbox {
     slots: [u32; MAILBOX],
-    next: usize,
 }
 
-/// Primitives a [`Mailbox`] remembers.
-const MAILBOX: usize = 16;
+/// Slots of a [`Mailbox`] (a power of two).
+const MAILBOX: usize = 32;
 
 impl Default for Mailbox {
     fn default() -> Mailbox {
         Mailbox {
             slots: [u32::MAX; MAILBOX],
-            next: 0,
         }
     }
 }
@@ -332,12 +332,10 @@ impl Mailbox {
     /// Whether `prim` is new to the ray (then it is remembered).
     #[inline(always)]
     fn check_in(&mut self, prim: u32) -> bool {
-        if self.slots.contains(&prim) {
-            return false;
-        }
-        self.slots[self.next % MAILBOX] = prim;
-        self.next += 1;
-        true
+        let slot = &mut self.slots[prim as usize % MAILBOX];
+        let new = *slot != prim;
+        *slot = prim;
+        new
     }
 }
 
