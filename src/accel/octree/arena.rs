@@ -70,7 +70,7 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
         if builder.may_split(refs.len(), weight, depth) {
             builder.masks(cell, refs, &mut self.masks);
             let counts = octant_counts(&self.masks);
-            if builder.pays(refs, weight, &self.masks, &counts) {
+            if builder.pays(depth, refs, weight, &self.masks, &counts) {
                 let level = depth as usize;
                 if self.levels.len() <= level {
                     self.levels.resize_with(level + 1, Children::default);
