@@ -14,7 +14,7 @@ const PARALLEL_REFS: usize = 8192;
 
 /// What one more reference (of weight 1) must save for a split to pay, in primitive tests per
 /// ray through the root (see the module docs). Measured on the OpenChessSet's board
-/// (reports/octree_profile.md): 1e-6 halves its references for 1 % more trace instructions
+/// (reports/octree_profile.md): 1e-6 halves its references for under 1 % more trace instructions
 /// and leaves the bunny's and the helmet's octrees as they were.
 const DUPLICATION_COST: f64 = 1e-6;
 
