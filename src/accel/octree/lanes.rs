@@ -3,9 +3,9 @@
 //! # Why an f32 test cannot lose a hit
 //! A lane's slab parameter on an axis with direction component `d ≠ 0` is `t = (P - o) · r`
 //! with `r = 1/d`, computed as `P · r₃₂ + c` (one FMA, or a multiply and an add), where `P` is
-//! the f32 plane (decoded exactly from its byte, see `super::wide`), `r₃₂` is `r` rounded to f32 and `c` is `-o · r` moved by `ε` (down for the
-//! near plane, up for the far plane), then rounded to f32. With `u = 2⁻²⁴`, `B` the largest
-//! coordinate magnitude of any plane and `s = (B + |o|) · |r|`, the roundings of `r₃₂`, of the
+//! the f32 plane (decoded exactly from its byte, see `super::wide`), `r₃₂` is `r` rounded to
+//! f32 and `c` is `-o · r` moved by `ε` (down for the near plane, up for the far plane), then
+//! rounded to f32. With `u = 2⁻²⁴`, `B` the largest coordinate magnitude of any stored plane and `s = (B + |o|) · |r|`, the roundings of `r₃₂`, of the
 //! product and of the sum together move the result by less than `4u · s`, and rounding `c`
 //! (at most `s + ε` in magnitude) by less than `1.01u · s`, plus `2⁻¹⁴⁹` per rounding in the
 //! subnormal range; so with `ε = 10u · s + 2⁻¹²⁰` the computed near parameter is below the

@@ -17,8 +17,8 @@
 //! triangle) although few rays ever enter them. So a split must also save, per ray through
 //! the root (a ray enters a cell at depth `d` with probability `4^-d`), at least
 //! `DUPLICATION_COST` (1e-6) tests for each reference weight it adds:
-//! `4^-d · (leaf − split) ≥ 1e-6 · (Σ_children w_child − w)`. A cell is also kept whole when one of its
-//! children would hold every one of its references while others hold copies of some (the
+//! `4^-d · (leaf − split) ≥ 1e-6 · (Σ_children w_child − w)`. A cell is also kept whole when
+//! one of its children would hold every one of its references while others hold copies of some (the
 //! triangles around a shared vertex, say): no split can separate them there, and without this
 //! rule the cost model alone keeps splitting such cells to the depth cap. (When all references
 //! fall into one child and no other, the split goes ahead: it only shrinks the cell around
