@@ -48,11 +48,7 @@ impl<'a> Query<'a> {
             let hit = self
                 .octree
                 .intersect_ray(self.scene, local, ray.dir, t_max)?;
-            return Some(Crossing {
-                t: hit.t,
-                top: hit.prim,
-                inner: None,
-            });
+            return Some(hit.into());
         }
         let prepared = crate::accel::prepare_ray(self.scene, local, ray.dir);
         let mut best: Option<Crossing> = None;
@@ -104,13 +100,7 @@ impl<'a> Query<'a> {
         let hits = self
             .octree
             .intersect_packet(self.scene, &origins, &dirs, &t_max)?;
-        Some(hits.map(|hit| {
-            hit.map(|hit| Crossing {
-                t: hit.t,
-                top: hit.prim,
-                inner: None,
-            })
-        }))
+        Some(hits.map(|hit| hit.map(Crossing::from)))
     }
 
     /// Whether the ray has any crossing with `t_min < t <= t_max` (and `t > 0`): exactly

@@ -303,12 +303,8 @@ impl<'a> Tracer<'a> {
                 }
                 let local = ray.origin - self.scene.anchor;
                 let prepared = prepare_ray(self.scene, local, ray.dir);
-                let hit = bvh.intersect(self.scene, &prepared, t_max)?;
-                Some(Crossing {
-                    t: hit.t,
-                    top: hit.prim,
-                    inner: None,
-                })
+                bvh.intersect(self.scene, &prepared, t_max)
+                    .map(Crossing::from)
             }
         }
     }

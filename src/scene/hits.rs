@@ -7,7 +7,7 @@
 //! triangle's number in the mesh, so that no later search has to find it again.
 
 use super::{PartKind, Scene, SceneRay, Top};
-use crate::accel::PreparedRay;
+use crate::accel::{Hit, PreparedRay};
 use crate::geometry::triangle::WatertightRay;
 use glam::DVec3;
 
@@ -20,6 +20,17 @@ pub struct Crossing {
     pub top: u32,
     /// For an instance, the triangle's index in its mesh; `None` otherwise, or when not known.
     pub inner: Option<u32>,
+}
+
+impl From<Hit> for Crossing {
+    /// The crossing of a nearest hit (no instance triangle recorded).
+    fn from(hit: Hit) -> Crossing {
+        Crossing {
+            t: hit.t,
+            top: hit.prim,
+            inner: None,
+        }
+    }
 }
 
 /// How a triangle counts a ray through one of its edges or vertices.

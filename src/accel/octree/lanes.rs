@@ -5,9 +5,10 @@
 //! with `r = 1/d`, computed as `P · r₃₂ + c` (one FMA, or a multiply and an add), where `P` is
 //! the f32 plane (decoded exactly from its byte, see `super::wide`), `r₃₂` is `r` rounded to
 //! f32 and `c` is `-o · r` moved by `ε` (down for the near plane, up for the far plane), then
-//! rounded to f32. With `u = 2⁻²⁴`, `B` the largest coordinate magnitude of any stored plane and `s = (B + |o|) · |r|`, the roundings of `r₃₂`, of the
-//! product and of the sum together move the result by less than `4u · s`, and rounding `c`
-//! (at most `s + ε` in magnitude) by less than `1.01u · s`, plus `2⁻¹⁴⁹` per rounding in the
+//! rounded to f32. With `u = 2⁻²⁴`, `B` the largest coordinate magnitude of any stored plane
+//! and `s = (B + |o|) · |r|`, the roundings of `r₃₂`, of the product and of the sum together
+//! move the result by less than `4u · s`, and rounding `c` (at most `s + ε` in magnitude) by
+//! less than `1.01u · s`, plus `2⁻¹⁴⁹` per rounding in the
 //! subnormal range; so with `ε = 10u · s + 2⁻¹²⁰` the computed near parameter is below the
 //! exact one and the computed far parameter above it. `ε` grows with `|o|`: a far origin gets
 //! the slack its own rounding needs.
@@ -92,7 +93,8 @@ pub(super) struct Lanes {
 
 impl Lanes {
     /// Set-up for `origin + t · dir` in a tree whose planes are at most `scale` in magnitude
-    /// (`scale` infinite: no axis culls). `dir` must have no -0.0 component.
+    /// (`scale` infinite: no axis culls). `dir` must have no -0.0 component. The packet
+    /// set-up (`packet::Bundle::new`) repeats these operations per axis and must stay the same.
     pub fn new(origin: DVec3, dir: DVec3, scale: f64) -> Lanes {
         let r = dir.recip();
         let s = (DVec3::splat(scale) + origin.abs()) * r.abs();
@@ -204,30 +206,23 @@ pub(super) fn test_portable(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
 #[target_feature(enable = "avx2,fma")]
 #[inline]
 pub(super) unsafe fn test_avx2(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
-    let planes = |row: usize, axis: usize| {
-        // SAFETY: a row is eight bytes, the size of the unaligned load.
-        let bytes = unsafe { _mm_loadl_epi64(node.planes[row].as_ptr().cast()) };
-        let q = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
-        let step = _mm256_set1_ps(node.step[axis]);
-        _mm256_fmadd_ps(q, step, _mm256_set1_ps(node.origin[axis]))
-    };
+    // SAFETY: this function's own requirement.
+    let planes = |row: usize| unsafe { node.row_avx2(row) };
     let mut enter = _mm256_setzero_ps();
     let mut exit = _mm256_set1_ps(t_best);
     for axis in 0..3 {
         let (near, far) = rows(ray, axis);
         let r = _mm256_set1_ps(ray.r[axis]);
-        let n = _mm256_fmadd_ps(planes(near, axis), r, _mm256_set1_ps(ray.c_near[axis]));
-        let f = _mm256_fmadd_ps(planes(far, axis), r, _mm256_set1_ps(ray.c_far[axis]));
+        let n = _mm256_fmadd_ps(planes(near), r, _mm256_set1_ps(ray.c_near[axis]));
+        let f = _mm256_fmadd_ps(planes(far), r, _mm256_set1_ps(ray.c_far[axis]));
         enter = _mm256_max_ps(enter, n);
         exit = _mm256_min_ps(exit, f);
     }
     let mut hit = _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit);
     if ray.parallel {
         for axis in 0..3 {
-            let lo =
-                _mm256_cmp_ps::<_CMP_LE_OQ>(planes(axis, axis), _mm256_set1_ps(ray.o_hi[axis]));
-            let hi =
-                _mm256_cmp_ps::<_CMP_GE_OQ>(planes(axis + 3, axis), _mm256_set1_ps(ray.o_lo[axis]));
+            let lo = _mm256_cmp_ps::<_CMP_LE_OQ>(planes(axis), _mm256_set1_ps(ray.o_hi[axis]));
+            let hi = _mm256_cmp_ps::<_CMP_GE_OQ>(planes(axis + 3), _mm256_set1_ps(ray.o_lo[axis]));
             hit = _mm256_and_ps(hit, _mm256_and_ps(lo, hi));
         }
     }

@@ -13,6 +13,8 @@
 //! node's box (or 2⁻¹⁹ of its coordinates' magnitude, which keeps `k` small).
 
 use super::build::{Node, INTERIOR};
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
 
 /// A child reference with this bit set names a leaf (the index in [`Layout::refs`] of its
 /// reference count, followed by its references); otherwise it names a node.
@@ -176,6 +178,25 @@ impl Wide {
     #[inline(always)]
     pub fn plane(&self, axis: usize, q: u8) -> f32 {
         f32::from(q) * self.step[axis] + self.origin[axis]
+    }
+
+    /// Plane row `row` (as in `planes`), decoded for the eight lanes at once: one FMA, exact.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    pub unsafe fn row_avx2(&self, row: usize) -> __m256 {
+        let axis = row % 3;
+        // SAFETY: a row is eight bytes, the size of the unaligned load.
+        let bytes = unsafe { _mm_loadl_epi64(self.planes[row].as_ptr().cast()) };
+        let q = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
+        _mm256_fmadd_ps(
+            q,
+            _mm256_set1_ps(self.step[axis]),
+            _mm256_set1_ps(self.origin[axis]),
+        )
     }
 
     /// Lane `lane`'s stored box, decoded: rows as in `planes`.
