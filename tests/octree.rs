@@ -4,7 +4,9 @@
 mod common;
 use common::*;
 use glam::DVec3;
-use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams, PreparedRay, PrimitiveSet};
+use raycast::accel::{
+    brute_force, prepare_ray, Octree, OctreeParams, PreparedRay, PrimitiveSet, PACKET,
+};
 use raycast::geometry::Aabb;
 use raycast::quadric::{Quadric, QuadricSpec};
 use raycast::scene::{Scene, SceneBuilder, SceneRay};
@@ -194,6 +196,9 @@ impl PrimitiveSet for Weighed<'_> {
     fn intersect(&self, index: usize, ray: &PreparedRay<SceneRay>, t_max: f64) -> Option<f64> {
         self.scene.intersect(index, ray, t_max)
     }
+    // Packets test one ray at a time (the trait's default).
+    type PacketData = ();
+    fn prepare_packet(&self, _rays: &[PreparedRay<SceneRay>; PACKET]) {}
 }
 
 /// Quadrics weigh [`Quadric::TEST_COST`] triangle tests: their cells split into more, smaller
@@ -222,6 +227,50 @@ fn costlier_primitives_split_into_smaller_leaves() {
         let dir = rng.direction();
         assert_same_as_brute_force(&scene, &weighed, origin, dir);
     }
+}
+
+/// A set without a packet test of its own (the trait's default: one ray at a time) traced in
+/// packets gets every ray's brute-force answer, as the scene's own packet test does, over
+/// triangles and quadrics.
+#[test]
+fn packets_match_brute_force_with_and_without_a_set_packet_test() {
+    let mut rng = Rng(0x5eed_0006);
+    let scene = random_scene(&mut rng, 500, 40, DVec3::ZERO);
+    let weighed = Weighed {
+        scene: &scene,
+        cost: 1.0,
+    };
+    let by_default = Octree::build(&weighed, OctreeParams::default());
+    let own = Octree::build(&scene, OctreeParams::default());
+    let (mut packets, mut hits) = (0, 0);
+    for _ in 0..1500 {
+        let (origin, dir) = (rng.point(-14.0, 14.0), rng.direction());
+        let origins: [DVec3; PACKET] = std::array::from_fn(|_| origin + rng.point(-0.3, 0.3));
+        let dirs: [DVec3; PACKET] = std::array::from_fn(|_| dir + rng.point(-0.02, 0.02));
+        let locals = origins.map(|o| o - scene.anchor);
+        let t_max = [f64::INFINITY; PACKET];
+        let found = [
+            by_default.intersect_packet(&weighed, &locals, &dirs, &t_max),
+            own.intersect_packet(&scene, &locals, &dirs, &t_max),
+        ];
+        let [Some(default), Some(own)] = found else {
+            continue;
+        };
+        packets += 1;
+        for i in 0..PACKET {
+            let expected = brute_force(&scene, &prepare_ray(&scene, locals[i], dirs[i]));
+            assert_eq!(
+                (default[i], own[i]),
+                (expected, expected),
+                "ray {i} of a packet"
+            );
+            hits += usize::from(expected.is_some());
+        }
+    }
+    assert!(
+        packets > 1000 && hits > 2000,
+        "{packets} packets, {hits} hits"
+    );
 }
 
 /// A cell holding one reference is never split, however much it weighs: splitting cannot

@@ -89,6 +89,58 @@ pub trait PrimitiveSet: Sync {
 
     /// Parameter `t` of the nearest hit of primitive `index` with `0 < t <= t_max`.
     fn intersect(&self, index: usize, ray: &PreparedRay<Self::RayData>, t_max: f64) -> Option<f64>;
+
+    /// Per-packet data computed once by [`PrimitiveSet::prepare_packet`].
+    type PacketData;
+
+    /// Per-packet precomputation for [`PACKET`] rays prepared by [`prepare_ray`].
+    fn prepare_packet(&self, rays: &[PreparedRay<Self::RayData>; PACKET]) -> Self::PacketData;
+
+    /// [`PrimitiveSet::intersect`] of primitive `index` with the rays `active` of a packet (bit
+    /// `i` for ray `i`), each with its own `t_max`: writes each hit's `t` into `ts` and returns
+    /// the rays hit. The answers are exactly those of one `intersect` per ray, which is what
+    /// the default does ([`intersect_each`]).
+    fn intersect_packet(
+        &self,
+        index: usize,
+        rays: &[PreparedRay<Self::RayData>; PACKET],
+        _packet: &Self::PacketData,
+        active: u32,
+        t_max: &[f64; PACKET],
+        ts: &mut [f64; PACKET],
+    ) -> u32 {
+        intersect_each(self, index, rays, active, t_max, ts)
+    }
+}
+
+/// [`PrimitiveSet::intersect_packet`] by one [`PrimitiveSet::intersect`] per active ray.
+#[inline(always)]
+pub fn intersect_each<P: PrimitiveSet + ?Sized>(
+    set: &P,
+    index: usize,
+    rays: &[PreparedRay<P::RayData>; PACKET],
+    active: u32,
+    t_max: &[f64; PACKET],
+    ts: &mut [f64; PACKET],
+) -> u32 {
+    let mut hits = 0;
+    for i in set_bits(active) {
+        if let Some(t) = set.intersect(index, &rays[i], t_max[i]) {
+            ts[i] = t;
+            hits |= 1 << i;
+        }
+    }
+    hits
+}
+
+/// The indices of the set bits of `mask`, lowest first.
+#[inline(always)]
+pub(crate) fn set_bits(mut mask: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        let i = (mask != 0).then(|| mask.trailing_zeros() as usize)?;
+        mask &= mask - 1;
+        Some(i)
+    })
 }
 
 /// The largest f32 not above `x` (-inf below the f32 range; NaN stays NaN).

@@ -1,9 +1,11 @@
-//! Geometric building blocks: boxes, rays, the triangle tests and the triangle/box tests.
+//! Geometric building blocks: boxes, rays, the triangle tests (one ray, and a packet's
+//! pre-filter) and the triangle/box tests.
 
 mod aabb;
 mod ray;
 pub mod triangle;
 pub mod triangle_box;
+pub mod triangle_packet;
 
 pub use aabb::Aabb;
 pub use ray::Ray;

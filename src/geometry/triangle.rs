@@ -11,9 +11,9 @@ use glam::DVec3;
 /// onto the +z axis.
 #[derive(Debug, Clone, Copy)]
 pub struct WatertightRay {
-    origin: DVec3,
-    axes: [usize; 3],
-    shear: DVec3,
+    pub(super) origin: DVec3,
+    pub(super) axes: [usize; 3],
+    pub(super) shear: DVec3,
 }
 
 impl WatertightRay {

@@ -9,9 +9,10 @@
 //! triangle test fetches three indices and three vertices instead of one 36-byte record; the
 //! branch on the storage kind is the same for every triangle of a mesh, so it predicts well.
 
-use crate::accel::{PreparedRay, PrimitiveSet};
+use crate::accel::{intersect_each, set_bits, PreparedRay, PrimitiveSet, PACKET};
 use crate::geometry::triangle::{self, WatertightRay};
 use crate::geometry::triangle_box;
+use crate::geometry::triangle_packet::WatertightPacket;
 use crate::geometry::Aabb;
 use glam::{DAffine3, DVec3, Vec3};
 use std::collections::HashMap;
@@ -246,6 +247,35 @@ impl MeshSet {
         ray.intersect(&self.mesh.triangle(i), t_max)
     }
 
+    /// [`PrimitiveSet::intersect_packet`] for triangle `i` and the rays `active` of a packet,
+    /// `ray(i)` being ray `i` prepared in the mesh frame: the packet's pre-filter (for two
+    /// rays or more), then the single-ray test for the rays it keeps.
+    #[inline(always)]
+    pub fn intersect_triangle_packet<'r>(
+        &self,
+        i: usize,
+        packet: &WatertightPacket,
+        ray: impl Fn(usize) -> &'r WatertightRay,
+        active: u32,
+        (t_max, ts): (&[f64; PACKET], &mut [f64; PACKET]),
+    ) -> u32 {
+        let tri = self.mesh.triangle(i);
+        // A lone ray goes straight to its own test: the filter costs more than it saves.
+        let candidates = if active.is_power_of_two() {
+            active
+        } else {
+            packet.candidates(&tri, active)
+        };
+        let mut hits = 0;
+        for lane in set_bits(candidates) {
+            if let Some(t) = ray(lane).intersect(&tri, t_max[lane]) {
+                ts[lane] = t;
+                hits |= 1 << lane;
+            }
+        }
+        hits
+    }
+
     /// Unit normal of triangle `i` from its winding, mapped to the world by `to_world` (the
     /// cofactor matrix keeps it perpendicular and, with the winding flip of a mirroring
     /// placement, on the front side); `None` for a degenerate triangle.
@@ -289,5 +319,29 @@ impl PrimitiveSet for MeshSet {
 
     fn intersect(&self, index: usize, ray: &PreparedRay<WatertightRay>, t_max: f64) -> Option<f64> {
         self.intersect_triangle(index, &ray.extra, t_max)
+    }
+
+    type PacketData = Option<WatertightPacket>;
+
+    fn prepare_packet(&self, rays: &[PreparedRay<WatertightRay>; PACKET]) -> Self::PacketData {
+        WatertightPacket::new(|i| &rays[i].extra)
+    }
+
+    fn intersect_packet(
+        &self,
+        index: usize,
+        rays: &[PreparedRay<WatertightRay>; PACKET],
+        packet: &Self::PacketData,
+        active: u32,
+        t_max: &[f64; PACKET],
+        ts: &mut [f64; PACKET],
+    ) -> u32 {
+        match packet {
+            Some(packet) => {
+                let ray = |i: usize| &rays[i].extra;
+                self.intersect_triangle_packet(index, packet, ray, active, (t_max, ts))
+            }
+            None => intersect_each(self, index, rays, active, t_max, ts),
+        }
     }
 }

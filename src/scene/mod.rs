@@ -30,9 +30,10 @@ pub use hits::{Crossing, EdgeRule};
 pub use instance::{Instance, StoredMesh};
 pub use mesh::{Mesh, MeshSet, Positions};
 
-use crate::accel::{octants_by_overlap, Hit, PreparedRay, PrimitiveSet};
+use crate::accel::{intersect_each, octants_by_overlap, Hit, PreparedRay, PrimitiveSet, PACKET};
 use crate::camera::Camera;
 use crate::geometry::triangle::WatertightRay;
+use crate::geometry::triangle_packet::WatertightPacket;
 use crate::geometry::Aabb;
 use crate::quadric::Quadric;
 use glam::DVec3;
@@ -423,6 +424,33 @@ impl PrimitiveSet for Scene {
                 .intersect_triangle(index, &ray.extra.triangle, t_max)
         } else {
             self.intersect_other(index, ray, t_max)
+        }
+    }
+
+    type PacketData = Option<WatertightPacket>;
+
+    fn prepare_packet(&self, rays: &[PreparedRay<SceneRay>; PACKET]) -> Self::PacketData {
+        WatertightPacket::new(|i| &rays[i].extra.triangle)
+    }
+
+    /// The world's triangles through the packet pre-filter; instances and quadrics one ray
+    /// at a time.
+    #[inline(always)]
+    fn intersect_packet(
+        &self,
+        index: usize,
+        rays: &[PreparedRay<SceneRay>; PACKET],
+        packet: &Self::PacketData,
+        active: u32,
+        t_max: &[f64; PACKET],
+        ts: &mut [f64; PACKET],
+    ) -> u32 {
+        match packet {
+            Some(packet) if index < self.world.mesh.len() => {
+                let ray = |i: usize| &rays[i].extra.triangle;
+                (self.world).intersect_triangle_packet(index, packet, ray, active, (t_max, ts))
+            }
+            _ => intersect_each(self, index, rays, active, t_max, ts),
         }
     }
 }

@@ -67,7 +67,7 @@ mod packet;
 mod traverse;
 mod wide;
 
-use super::{prepare_ray, test_primitive, Hit, PreparedRay, PrimitiveSet};
+use super::{prepare_ray, set_bits, test_primitive, Hit, PreparedRay, PrimitiveSet};
 use crate::geometry::Aabb;
 use build::{cube_around, Builder};
 use glam::DVec3;
@@ -263,8 +263,9 @@ impl Octree {
         t_max: &[f64; PACKET],
     ) -> Option<[Option<Hit>; PACKET]> {
         let mut best: [Option<Hit>; PACKET] = [None; PACKET];
-        let mut prepared: [Option<PreparedRay<P::RayData>>; PACKET] = [const { None }; PACKET];
-        let mut tested = [Mailbox::default(); PACKET];
+        let mut prepared = None;
+        let mut tested = PacketMailbox::default();
+        let mut ts = [0.0; PACKET];
         let packed = packet::run(
             &self.layout,
             self.kernel,
@@ -272,15 +273,34 @@ impl Octree {
             dirs,
             self.scale,
             *t_max,
-            |i, refs| {
-                let ray =
-                    prepared[i].get_or_insert_with(|| prepare_ray(set, local_origins[i], dirs[i]));
+            |rays, refs, limits| {
+                let (prepared, packet) = prepared.get_or_insert_with(|| {
+                    let prepared =
+                        std::array::from_fn(|i| prepare_ray(set, local_origins[i], dirs[i]));
+                    let packet = set.prepare_packet(&prepared);
+                    (prepared, packet)
+                });
                 for &prim in refs {
-                    if tested[i].check_in(prim) {
-                        test_primitive(set, prim, ray, t_max[i], &mut best[i]);
+                    let active = tested.check_in(prim, rays);
+                    if active == 0 {
+                        continue;
+                    }
+                    let hits = set.intersect_packet(
+                        prim as usize,
+                        prepared,
+                        packet,
+                        active,
+                        limits,
+                        &mut ts,
+                    );
+                    for i in set_bits(hits) {
+                        let hit = Hit { t: ts[i], prim };
+                        if hit.beats(&best[i]) {
+                            best[i] = Some(hit);
+                            limits[i] = hit.t;
+                        }
                     }
                 }
-                best[i].map_or(t_max[i], |b| b.t)
             },
         );
         packed.then_some(best)
@@ -341,6 +361,37 @@ impl Mailbox {
         let slot = &mut self.slots[prim as usize % MAILBOX];
         let new = *slot != prim;
         *slot = prim;
+        new
+    }
+}
+
+/// [`Mailbox`] for the rays of a packet: per slot, a primitive and the rays it has been
+/// tested with.
+#[derive(Debug, Clone, Copy)]
+struct PacketMailbox {
+    slots: [(u32, u32); MAILBOX],
+}
+
+impl Default for PacketMailbox {
+    fn default() -> PacketMailbox {
+        PacketMailbox {
+            slots: [(u32::MAX, 0); MAILBOX],
+        }
+    }
+}
+
+impl PacketMailbox {
+    /// Which of `rays` (bit `i` for ray `i`) `prim` is new to (then it is remembered with
+    /// them).
+    #[inline(always)]
+    fn check_in(&mut self, prim: u32, rays: u32) -> u32 {
+        let slot = &mut self.slots[prim as usize % MAILBOX];
+        if slot.0 != prim {
+            *slot = (prim, rays);
+            return rays;
+        }
+        let new = rays & !slot.1;
+        slot.1 |= rays;
         new
     }
 }

@@ -15,7 +15,7 @@
 use super::lanes::{Kernel, Lanes, LIMIT, TINY, UNIT};
 use super::traverse::{self, Unobserved, STACK};
 use super::wide::{Layout, Wide, LEAF};
-use crate::accel::f32_above;
+use crate::accel::{f32_above, set_bits as bits};
 use glam::DVec3;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -149,16 +149,6 @@ pub(super) struct Tested {
     pub enter: [[f32; WIDTH]; 8],
 }
 
-/// The indices of the set bits of `mask`, lowest first.
-#[inline(always)]
-fn bits(mut mask: u32) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        let i = (mask != 0).then(|| mask.trailing_zeros() as usize)?;
-        mask &= mask - 1;
-        Some(i)
-    })
-}
-
 /// A child waiting on the stack: its reference, the rays that enter it, their entries.
 #[derive(Debug, Clone, Copy)]
 struct Entry {
@@ -169,9 +159,10 @@ struct Entry {
 
 /// Visits, for each ray `origins[i] + t · dirs[i]` of a packet, the leaves it may reach before
 /// `limits[i]`, front to back, in a tree whose planes are at most `scale` in magnitude;
-/// `visit(i, refs)` gets the leaf's primitive indices and returns ray `i`'s new limit (its best
-/// hit so far). Returns false, having visited nothing, when the rays cannot go as one packet
-/// ([`Bundle::new`]).
+/// `visit(rays, refs, limits)` gets the rays that reach the leaf (bit `i` for ray `i`), the
+/// leaf's primitive indices and the rays' limits, and lowers the limits of those rays to their
+/// best hits so far. Returns false, having visited nothing, when the rays cannot go as one
+/// packet ([`Bundle::new`]).
 pub(super) fn run<F>(
     layout: &Layout,
     kernel: Kernel,
@@ -182,7 +173,7 @@ pub(super) fn run<F>(
     visit: F,
 ) -> bool
 where
-    F: FnMut(usize, &[u32]) -> f64,
+    F: FnMut(u32, &[u32], &mut [f64; WIDTH]),
 {
     let rays = (origins, dirs, scale);
     match kernel {
@@ -205,7 +196,7 @@ type Rays<'r> = (&'r [DVec3; WIDTH], &'r [DVec3; WIDTH], f64);
 #[target_feature(enable = "avx2,fma")]
 unsafe fn run_avx2<F>(layout: &Layout, rays: Rays, limits: [f64; WIDTH], visit: F) -> bool
 where
-    F: FnMut(usize, &[u32]) -> f64,
+    F: FnMut(u32, &[u32], &mut [f64; WIDTH]),
 {
     run_with::<true, F>(layout, rays, limits, visit)
 }
@@ -219,7 +210,7 @@ fn run_with<const AVX2: bool, F>(
     mut visit: F,
 ) -> bool
 where
-    F: FnMut(usize, &[u32]) -> f64,
+    F: FnMut(u32, &[u32], &mut [f64; WIDTH]),
 {
     let Some(bundle) = Bundle::new(origins, dirs, scale) else {
         return false;
@@ -277,20 +268,18 @@ where
                 // A ray left alone goes on by itself: one node test per node, not per child.
                 let i = rays.trailing_zeros() as usize;
                 let ray = Lanes::new(origins[i], dirs[i] + DVec3::ZERO, scale);
-                let mut limit = limits[i];
+                let limit = limits[i];
                 let alone = |refs: &[u32], _, _| {
-                    limit = limit.min(visit(i, refs));
-                    limit
+                    visit(rays, refs, &mut limits);
+                    limits[i]
                 };
                 let (start, observer) = (entry.child as usize, &mut Unobserved);
-                traverse::from_node::<AVX2, _, _>(layout, start, &ray, limits[i], alone, observer);
-                limits[i] = limit;
-                t_best[i] = f32_above(limit);
+                traverse::from_node::<AVX2, _, _>(layout, start, &ray, limit, alone, observer);
+                t_best[i] = f32_above(limits[i]);
                 continue;
             }
-            let leaf = layout.leaf(entry.child);
+            visit(rays, layout.leaf(entry.child), &mut limits);
             for i in bits(rays) {
-                limits[i] = limits[i].min(visit(i, leaf));
                 t_best[i] = f32_above(limits[i]);
             }
         }

@@ -1,0 +1,159 @@
+use super::*;
+
+/// A small deterministic generator (xorshift), so that failures reproduce.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+
+    fn point(&mut self, size: f64) -> DVec3 {
+        DVec3::new(
+            self.uniform(-size, size),
+            self.uniform(-size, size),
+            self.uniform(-size, size),
+        )
+    }
+}
+
+/// The packet's kernels on this CPU: the detected one and the portable one.
+fn kernels(packet: WatertightPacket) -> [WatertightPacket; 2] {
+    [packet, packet.portable()]
+}
+
+/// The point of `tri` with barycentric weights `w` (summing to 1).
+fn at(tri: &[DVec3; 3], w: [f64; 3]) -> DVec3 {
+    tri[0] * w[0] + tri[1] * w[1] + tri[2] * w[2]
+}
+
+/// Rays aimed from near one origin at points of a triangle's plane well inside it must be
+/// kept, and rays aimed at points well outside it refused (their lines miss the triangle by
+/// far more than rounding); the analysis, not the single-ray test, says which is which.
+/// Scales from 1e-6 to 1e6 and origins up to a thousand sizes away.
+#[test]
+fn the_filter_keeps_rays_through_the_triangle_and_refuses_rays_beside_it() {
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let (mut packets, mut refused) = (0, 0);
+    for round in 0..4000 {
+        let size = 10f64.powi(round % 13 - 6);
+        let tri = [0; 3].map(|_| rng.point(size));
+        let normal = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+        if normal.length() < 1e-3 * size * size {
+            continue;
+        }
+        let origin = at(&tri, [1.0 / 3.0; 3])
+            + normal.normalize() * size * rng.uniform(0.5, 1000.0)
+            + rng.point(size);
+        let mut inside = 0u32;
+        let targets: [DVec3; PACKET] = std::array::from_fn(|i| {
+            let (a, b) = (rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+            let w = [a, b, 1.0 - a - b];
+            let min = w.iter().copied().fold(f64::INFINITY, f64::min);
+            if min >= 0.05 {
+                inside |= 1 << i;
+            }
+            // Kept only when clearly inside or clearly outside.
+            if min > -0.05 && min < 0.05 {
+                at(&tri, [1.0 / 3.0; 3])
+            } else {
+                at(&tri, w)
+            }
+        });
+        let centre = at(&tri, [1.0 / 3.0; 3]);
+        inside |= targets
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| **t == centre)
+            .fold(0, |m, (i, _)| m | 1 << i);
+        let origins: [DVec3; PACKET] = std::array::from_fn(|_| origin + rng.point(1e-3 * size));
+        let rays: [WatertightRay; PACKET] =
+            std::array::from_fn(|i| WatertightRay::new(origins[i], targets[i] - origins[i]));
+        let Some(packet) = WatertightPacket::new(|i| &rays[i]) else {
+            continue;
+        };
+        packets += 1;
+        for packet in kernels(packet) {
+            let kept = packet.candidates(&tri, 0xff);
+            assert_eq!(
+                kept & inside,
+                inside,
+                "round {round}: a ray through the triangle refused"
+            );
+            assert_eq!(
+                kept & !inside,
+                0,
+                "round {round}: a ray beside the triangle kept"
+            );
+            assert_eq!(packet.candidates(&tri, 0b1010_0101), kept & 0b1010_0101);
+        }
+        refused += (!inside & 0xff).count_ones();
+    }
+    assert!(
+        packets > 3000 && refused > 10000,
+        "{packets} packets, {refused} refusals"
+    );
+}
+
+/// Whatever the geometry (shared edges and vertices, rays along a triangle's plane, far
+/// origins, subnormal and huge coordinates), every ray the single-ray test hits is kept, and
+/// the kernels agree bit for bit.
+#[test]
+fn no_ray_the_single_ray_test_hits_is_refused() {
+    let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+    let (mut hits, mut tests) = (0, 0);
+    for round in 0..50000 {
+        let scale = [1.0, 1e-300, 1e300, 1e-160, 3.0][round % 5];
+        let corner = [rng.point(1.0), rng.point(1.0), rng.point(1.0)];
+        // Triangles from a small set of corners share edges and vertices exactly.
+        let pick = |r: &mut Rng| corner[(r.next() * 3.0) as usize % 3] * scale;
+        let tri = [pick(&mut rng), rng.point(1.0) * scale, pick(&mut rng)];
+        let origin = rng.point(4.0) * scale;
+        let base = tri[0] + (tri[1] - tri[0]) * rng.uniform(0.0, 1.0) - origin;
+        let rays: [WatertightRay; PACKET] = std::array::from_fn(|i| {
+            let target = match i {
+                // Through a vertex, along an edge, and in the plane of the triangle.
+                0 => tri[0] - origin,
+                1 => tri[1] - tri[0],
+                _ => base + (tri[2] - tri[1]) * rng.uniform(-0.1, 0.1),
+            };
+            WatertightRay::new(origin, target)
+        });
+        let Some(packet) = WatertightPacket::new(|i| &rays[i]) else {
+            continue;
+        };
+        let expected = (0..PACKET)
+            .filter(|&i| rays[i].intersect(&tri, f64::INFINITY).is_some())
+            .fold(0u32, |m, i| m | 1 << i);
+        let [fast, portable] = kernels(packet).map(|p| p.candidates(&tri, 0xff));
+        assert_eq!(fast, portable, "round {round}: the kernels disagree");
+        assert_eq!(fast & expected, expected, "round {round}: a hit refused");
+        hits += expected.count_ones();
+        tests += 1;
+    }
+    assert!(tests > 4000 && hits > 6000, "{tests} packets, {hits} hits");
+}
+
+#[test]
+fn rays_with_different_dominant_axes_do_not_form_a_packet() {
+    let rays: [WatertightRay; PACKET] = std::array::from_fn(|i| {
+        let dir = if i == 5 {
+            DVec3::new(1.0, 0.2, 0.1)
+        } else {
+            DVec3::new(0.1, 0.2, 1.0)
+        };
+        WatertightRay::new(DVec3::ZERO, dir)
+    });
+    assert!(WatertightPacket::new(|i| &rays[i]).is_none());
+    let same: [WatertightRay; PACKET] = std::array::from_fn(|i| {
+        WatertightRay::new(DVec3::ZERO, DVec3::new(0.1, 0.2, 1.0 + i as f64))
+    });
+    assert!(WatertightPacket::new(|i| &same[i]).is_some());
+}
