@@ -11,7 +11,7 @@ mod common;
 
 use common::{cast, cast_one, fixture, load, ray, Rng};
 use glam::{DMat4, DQuat, DVec3};
-use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams};
+use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams, PACKET};
 use raycast::import::{self, LoadOptions};
 use raycast::scene::{Mesh, Scene, SceneBuilder};
 use std::sync::Arc;
@@ -390,6 +390,42 @@ fn instanced_octree_equals_brute_force_exactly() {
         hits += usize::from(expected.is_some());
     }
     assert!(hits > 500, "{hits}");
+}
+
+/// Packets of eight rays aimed at one copy (through the scene's octree together, and into
+/// the instance's own octree together when four or more of them reach it) get exactly the
+/// brute-force answers.
+#[test]
+fn instanced_packets_equal_brute_force_exactly() {
+    let mut rng = Rng(6);
+    let local = f32_mesh(&mut rng);
+    let worlds = placements(&mut rng, 40, DVec3::ZERO);
+    let (scene, _) = instanced_and_flat(&local, &worlds);
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let (mut packets, mut hits) = (0, 0);
+    for k in 0..1500 {
+        let origin = rng.point(-40.0, 40.0);
+        let centre = rng.point(-1.0, 1.0);
+        let world = worlds[k % worlds.len()];
+        let dirs: [DVec3; PACKET] =
+            std::array::from_fn(|_| world.transform_point3(centre + rng.point(-0.2, 0.2)) - origin);
+        let origins = [origin - scene.anchor; PACKET];
+        let Some(found) =
+            octree.intersect_packet(&scene, &origins, &dirs, &[f64::INFINITY; PACKET])
+        else {
+            continue;
+        };
+        packets += 1;
+        for i in 0..PACKET {
+            let expected = brute_force(&scene, &prepare_ray(&scene, origins[i], dirs[i]));
+            assert_eq!(found[i], expected, "ray {i} of packet {k}");
+            hits += usize::from(expected.is_some());
+        }
+    }
+    assert!(
+        packets > 1000 && hits > 3000,
+        "{packets} packets, {hits} hits"
+    );
 }
 
 #[test]

@@ -186,6 +186,10 @@ impl RaySource for PinholeView {
         )
     }
 
+    fn row_width(&self) -> Option<usize> {
+        Some(self.width)
+    }
+
     fn view_axis(&self) -> Option<(DVec3, DVec3)> {
         let forward = self
             .to_world

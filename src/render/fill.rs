@@ -1,6 +1,7 @@
 //! The per-ray outputs (AOVs) of a trace, computed in the same parallel pass as the nearest-hit
-//! search: each task finds the hits of a block of 1,024 rays and at once fills the block's part
-//! of every output column, while the block is in cache; no array of hits for all rays is kept.
+//! search: each task finds the hits of a block of rays (1,024, or whole pairs of an image's
+//! rows, traced in tiles of 4 × 2 pixels) and at once fills the block's part of every output
+//! column, while the block is in cache; no array of hits for all rays is kept.
 //! The command line's buffers and the Python package's `cast` and `render` are all made by
 //! [`trace`], so they share this loop.
 
@@ -31,12 +32,12 @@ impl Column {
         }
     }
 
-    /// The column cut into blocks of `BLOCK` rays.
-    fn blocks(&mut self) -> Box<dyn Iterator<Item = Slot<'_>> + '_> {
+    /// The column cut into blocks of `len` rays.
+    fn blocks(&mut self, len: usize) -> Box<dyn Iterator<Item = Slot<'_>> + '_> {
         match self {
-            Column::Float(v) => Box::new(v.chunks_mut(BLOCK).map(Slot::Float)),
-            Column::Vector(v) => Box::new(v.as_chunks_mut().0.chunks_mut(BLOCK).map(Slot::Vector)),
-            Column::Index(v) => Box::new(v.chunks_mut(BLOCK).map(Slot::Index)),
+            Column::Float(v) => Box::new(v.chunks_mut(len).map(Slot::Float)),
+            Column::Vector(v) => Box::new(v.as_chunks_mut().0.chunks_mut(len).map(Slot::Vector)),
+            Column::Index(v) => Box::new(v.chunks_mut(len).map(Slot::Index)),
         }
     }
 }
@@ -162,8 +163,27 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
     }
 }
 
-/// Rays per parallel task.
+/// Rays per parallel task (at least; an image's blocks are whole pairs of rows).
 const BLOCK: usize = 1024;
+
+/// The rays of a block in the order they are traced: for an image `width` pixels wide
+/// (blocks starting at an even row), tiles of 4 × 2 pixels, left to right along each pair of
+/// rows, so that each packet of eight neighbouring rays is a tile; `None` to keep the order.
+fn tile_order(len: usize, width: Option<usize>) -> Option<Vec<usize>> {
+    let width = width.filter(|&w| w >= TILE)?;
+    let mut order = Vec::with_capacity(len);
+    for pair in (0..len).step_by(2 * width) {
+        for x in (0..width).step_by(TILE) {
+            for row in [pair, pair + width] {
+                order.extend((row + x..row + (x + TILE).min(width)).filter(|&i| i < len));
+            }
+        }
+    }
+    Some(order)
+}
+
+/// The width of a tile of [`tile_order`] (its height is two rows).
+const TILE: usize = 4;
 
 /// Tasks between two progress reports (64 Ki rays).
 const BLOCKS_PER_REPORT: usize = 64;
@@ -197,10 +217,12 @@ where
     R: Fn(usize) -> (f64, f64) + Sync,
 {
     let n = rays.source.len();
+    let width = rays.source.row_width();
+    let block_len = width.map_or(BLOCK, |w| BLOCK.div_ceil(2 * w) * 2 * w);
     let mut columns: Vec<(Aov, Column)> = aovs.iter().map(|&a| (a, Column::new(a, n))).collect();
-    let mut blocks: Vec<Vec<Slot>> = (0..n.div_ceil(BLOCK)).map(|_| Vec::new()).collect();
+    let mut blocks: Vec<Vec<Slot>> = (0..n.div_ceil(block_len)).map(|_| Vec::new()).collect();
     for (_, column) in &mut columns {
-        for (block, slot) in blocks.iter_mut().zip(column.blocks()) {
+        for (block, slot) in blocks.iter_mut().zip(column.blocks(block_len)) {
             block.push(slot);
         }
     }
@@ -213,20 +235,33 @@ where
         let block = Block {
             tracer,
             source: rays.source,
-            start: b * BLOCK,
+            start: b * block_len,
             eye,
             forward,
         };
-        let indices = block.start..n.min(block.start + BLOCK);
-        let ray_list: Vec<Ray> = indices.clone().map(|i| rays.source.ray(i)).collect();
-        let ranges: Vec<(f64, f64)> = indices.clone().map(|i| (rays.range)(i)).collect();
-        let hits = tracer.nearest_all(&ray_list, &ranges);
+        let len = block_len.min(n - block.start);
+        let order = tile_order(len, width);
+        let indices: Vec<usize> = match &order {
+            Some(order) => order.iter().map(|&j| block.start + j).collect(),
+            None => (block.start..block.start + len).collect(),
+        };
+        let ray_list: Vec<Ray> = indices.iter().map(|&i| rays.source.ray(i)).collect();
+        let ranges: Vec<(f64, f64)> = indices.iter().map(|&i| (rays.range)(i)).collect();
+        let mut hits = tracer.nearest_all(&ray_list, &ranges);
         let refused = rays.refuse_untraceable.then(|| {
-            let each = indices.zip(&ray_list).zip(&ranges).zip(&hits);
+            let each = indices.iter().zip(&ray_list).zip(&ranges).zip(&hits);
             each.filter(|(_, hit)| hit.is_none())
-                .find(|(((_, ray), &(t_min, t_max)), _)| !traceable(ray, t_min, t_max))
-                .map(|(((i, _), _), _)| i)
+                .filter(|(((_, ray), &(t_min, t_max)), _)| !traceable(ray, t_min, t_max))
+                .map(|(((&i, _), _), _)| i)
+                .min()
         });
+        if let Some(order) = order {
+            let mut in_place = vec![None; len];
+            for (j, hit) in order.into_iter().zip(hits) {
+                in_place[j] = hit;
+            }
+            hits = in_place;
+        }
         for (slot, &aov) in slots.iter_mut().zip(aovs) {
             block.fill(aov, slot, &hits);
         }
@@ -235,7 +270,7 @@ where
     let mut blocks = blocks.into_iter().enumerate().peekable();
     while blocks.peek().is_some() {
         let group: Vec<_> = blocks.by_ref().take(BLOCKS_PER_REPORT).collect();
-        let end = group.last().map_or(0, |(b, _)| n.min((b + 1) * BLOCK));
+        let end = group.last().map_or(0, |(b, _)| n.min((b + 1) * block_len));
         let refused = group
             .into_par_iter()
             .filter_map(|(b, mut slots)| fill(b, &mut slots))
@@ -246,4 +281,43 @@ where
         progress(end);
     }
     Ok(Buffers { columns })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every ray of a block is traced exactly once, and (for widths that are a multiple of
+    /// the tile's) each run of eight rays is a 4 × 2 tile of neighbouring pixels.
+    #[test]
+    fn tile_order_is_a_permutation_of_whole_tiles() {
+        for (len, width) in [
+            (2048, 1024),
+            (1200, 100),
+            (1000, 7),
+            (12, 4),
+            (5, 4),
+            (301, 301),
+        ] {
+            let order = tile_order(len, Some(width)).unwrap();
+            let mut sorted = order.clone();
+            sorted.sort_unstable();
+            assert_eq!(
+                sorted,
+                (0..len).collect::<Vec<_>>(),
+                "{len} rays, width {width}"
+            );
+            if width % TILE == 0 && len % (2 * width) == 0 {
+                for tile in order.chunks(8) {
+                    let (x, y) = (tile[0] % width, tile[0] / width);
+                    let expected: Vec<usize> = (0..8)
+                        .map(|k| (y + k / TILE) * width + x + k % TILE)
+                        .collect();
+                    assert_eq!(tile, expected.as_slice(), "width {width}");
+                }
+            }
+        }
+        assert_eq!(tile_order(100, None), None);
+        assert_eq!(tile_order(100, Some(3)), None);
+    }
 }

@@ -97,6 +97,12 @@ pub trait RaySource: Sync {
     fn view_axis(&self) -> Option<(DVec3, DVec3)> {
         None
     }
+    /// Rays per image row, for a source whose rays are an image's pixels in row-major order:
+    /// the trace then groups them in small tiles, which neighbouring rays share more of the
+    /// octree than rows do. `None` (the default) keeps the source's order.
+    fn row_width(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// A camera image: one ray per pixel, row-major from the top row.
@@ -140,6 +146,9 @@ impl RaySource for CameraView {
     }
     fn view_axis(&self) -> Option<(DVec3, DVec3)> {
         Some((self.camera.eye(), self.camera.forward()))
+    }
+    fn row_width(&self) -> Option<usize> {
+        Some(self.width)
     }
 }
 

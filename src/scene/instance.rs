@@ -5,7 +5,7 @@
 //! frames), and the watertight test runs against the vertices as stored.
 
 use super::mesh::MeshSet;
-use crate::accel::{Hit, Octree, OctreeParams, PreparedRay};
+use crate::accel::{Hit, Octree, OctreeParams, PreparedRay, PACKET};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Aabb;
 use glam::{DAffine3, DMat4, DVec3};
@@ -103,17 +103,56 @@ impl Instance {
         dir: DVec3,
         t_max: f64,
     ) -> Option<Hit> {
+        let ray = self.local_ray(stored, origin, dir);
+        stored.octree().intersect(&stored.set, &ray, t_max)
+    }
+
+    /// [`Instance::intersect`] for the rays `active` (bit `i` for ray `i`) of a packet, with
+    /// world origins and directions, traced through the mesh's octree together: each ray
+    /// gets exactly its [`Instance::intersect`] answer. `None` when their directions in the
+    /// mesh frame cannot go as one packet ([`Octree::intersect_packet`]).
+    pub fn intersect_packet(
+        &self,
+        stored: &StoredMesh,
+        rays: [(DVec3, DVec3); PACKET],
+        active: u32,
+        t_max: &[f64; PACKET],
+    ) -> Option<[Option<Hit>; PACKET]> {
+        // The rays not taking part stand in for the first one that does, with a limit of -inf.
+        let first = active.trailing_zeros() as usize;
+        let (origin, dir) = rays[first];
+        let stand_in = self.local_ray(stored, origin, dir);
+        let mut limits = [f64::NEG_INFINITY; PACKET];
+        let mut local = [stand_in; PACKET];
+        for i in (first + 1..PACKET).filter(|i| active & (1 << i) != 0) {
+            let (origin, dir) = rays[i];
+            local[i] = self.local_ray(stored, origin, dir);
+        }
+        for i in (0..PACKET).filter(|i| active & (1 << i) != 0) {
+            limits[i] = t_max[i];
+        }
+        stored
+            .octree()
+            .intersect_prepared_packet(&stored.set, &local, &limits)
+    }
+
+    /// The world ray `origin + t · dir` in the mesh frame, prepared for its octree.
+    fn local_ray(
+        &self,
+        stored: &StoredMesh,
+        origin: DVec3,
+        dir: DVec3,
+    ) -> PreparedRay<WatertightRay> {
         // origin - translation first: near the instance that difference is exact or small, so
         // the mesh-frame origin keeps the digits of the ray's offset from the instance rather
         // than those of its distance from the world origin (same operation count as
         // transform_point3)
         let o = self.to_local.matrix3 * (origin - self.to_world.translation);
         let d = self.to_local.transform_vector3(dir) + DVec3::ZERO;
-        let ray = PreparedRay {
+        PreparedRay {
             local_origin: o - stored.set.anchor,
             dir: d,
             extra: WatertightRay::new(o, d),
-        };
-        stored.octree().intersect(&stored.set, &ray, t_max)
+        }
     }
 }

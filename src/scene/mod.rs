@@ -433,8 +433,8 @@ impl PrimitiveSet for Scene {
         WatertightPacket::new(|i| &rays[i].extra.triangle)
     }
 
-    /// The world's triangles through the packet pre-filter; instances and quadrics one ray
-    /// at a time.
+    /// The world's triangles through the packet pre-filter, instances as packets through
+    /// their own octrees, quadrics one ray at a time.
     #[inline(always)]
     fn intersect_packet(
         &self,
@@ -450,7 +450,7 @@ impl PrimitiveSet for Scene {
                 let ray = |i: usize| &rays[i].extra.triangle;
                 (self.world).intersect_triangle_packet(index, packet, ray, active, (t_max, ts))
             }
-            _ => intersect_each(self, index, rays, active, t_max, ts),
+            _ => self.intersect_other_packet(index, rays, active, t_max, ts),
         }
     }
 }
@@ -478,6 +478,36 @@ impl Scene {
             }
             Top::Quadric(q) => self.quadrics[q].intersect(origin, ray.dir, t_max),
         }
+    }
+
+    /// [`PrimitiveSet::intersect_packet`] for what the packet pre-filter does not take: an
+    /// instance traced by four rays or more goes through its octree as a packet (with fewer,
+    /// setting up the packet costs more than it saves); the rest one ray at a time.
+    #[inline(never)]
+    fn intersect_other_packet(
+        &self,
+        index: usize,
+        rays: &[PreparedRay<SceneRay>; PACKET],
+        active: u32,
+        t_max: &[f64; PACKET],
+        ts: &mut [f64; PACKET],
+    ) -> u32 {
+        if let (Top::Instance(k), true) = (self.top(index), active.count_ones() >= 4) {
+            let instance = &self.instances[k];
+            let stored = &self.meshes[instance.mesh as usize];
+            let world = rays.map(|ray| (ray.extra.world_origin, ray.dir));
+            if let Some(hits) = instance.intersect_packet(stored, world, active, t_max) {
+                let mut hit_rays = 0;
+                for (i, hit) in hits.iter().enumerate() {
+                    if let Some(hit) = hit.filter(|_| active & (1 << i) != 0) {
+                        ts[i] = hit.t;
+                        hit_rays |= 1 << i;
+                    }
+                }
+                return hit_rays;
+            }
+        }
+        intersect_each(self, index, rays, active, t_max, ts)
     }
 }
 

@@ -262,8 +262,35 @@ impl Octree {
         dirs: &[DVec3; PACKET],
         t_max: &[f64; PACKET],
     ) -> Option<[Option<Hit>; PACKET]> {
+        self.intersect_packet_with(set, local_origins, dirs, t_max, None)
+    }
+
+    /// [`Octree::intersect_packet`] for rays already prepared (their `local_origin` and `dir`
+    /// are traversed); a ray with a `t_max` of -inf takes no part.
+    pub fn intersect_prepared_packet<P: PrimitiveSet>(
+        &self,
+        set: &P,
+        rays: &[PreparedRay<P::RayData>; PACKET],
+        t_max: &[f64; PACKET],
+    ) -> Option<[Option<Hit>; PACKET]> {
+        let local_origins = rays.map(|ray| ray.local_origin);
+        let dirs = rays.map(|ray| ray.dir);
+        self.intersect_packet_with(set, &local_origins, &dirs, t_max, Some(rays))
+    }
+
+    /// [`Octree::intersect_packet`], with the rays prepared for the primitive tests as `given`,
+    /// or else by [`prepare_ray`] when the first of them reaches a leaf.
+    fn intersect_packet_with<P: PrimitiveSet>(
+        &self,
+        set: &P,
+        local_origins: &[DVec3; PACKET],
+        dirs: &[DVec3; PACKET],
+        t_max: &[f64; PACKET],
+        given: Option<&[PreparedRay<P::RayData>; PACKET]>,
+    ) -> Option<[Option<Hit>; PACKET]> {
         let mut best: [Option<Hit>; PACKET] = [None; PACKET];
-        let mut prepared = None;
+        let mut own = None;
+        let mut packet_data = None;
         let mut tested = PacketMailbox::default();
         let mut ts = [0.0; PACKET];
         let packed = packet::run(
@@ -274,12 +301,12 @@ impl Octree {
             self.scale,
             *t_max,
             |rays, refs, limits| {
-                let (prepared, packet) = prepared.get_or_insert_with(|| {
-                    let prepared =
-                        std::array::from_fn(|i| prepare_ray(set, local_origins[i], dirs[i]));
-                    let packet = set.prepare_packet(&prepared);
-                    (prepared, packet)
+                let prepared = given.unwrap_or_else(|| {
+                    own.get_or_insert_with(|| {
+                        std::array::from_fn(|i| prepare_ray(set, local_origins[i], dirs[i]))
+                    })
                 });
+                let packet = packet_data.get_or_insert_with(|| set.prepare_packet(prepared));
                 for &prim in refs {
                     let active = tested.check_in(prim, rays);
                     if active == 0 {
