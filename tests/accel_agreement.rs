@@ -32,7 +32,14 @@ fn check(
 ) -> Option<Hit> {
     let ray = prepare_ray(scene, origin - scene.anchor, dir);
     let expected = brute_force(scene, &ray);
-    let mut found = vec![("octree", octree.intersect(scene, &ray, f64::INFINITY))];
+    let mut found = vec![
+        ("octree", octree.intersect(scene, &ray, f64::INFINITY)),
+        // The tracer's path: lazy set-up, mailbox, primitives tested in groups.
+        (
+            "octree ray",
+            octree.intersect_ray(scene, ray.local_origin, ray.dir, f64::INFINITY),
+        ),
+    ];
     for bvh in bvhs {
         let name = match bvh.stats().kind {
             BvhKind::Bvh2 => "bvh2",

@@ -90,6 +90,20 @@ pub trait PrimitiveSet: Sync {
     /// Parameter `t` of the nearest hit of primitive `index` with `0 < t <= t_max`.
     fn intersect(&self, index: usize, ray: &PreparedRay<Self::RayData>, t_max: f64) -> Option<f64>;
 
+    /// [`PrimitiveSet::intersect`] of the primitives `indices` (at most [`GROUP`]) with one
+    /// ray, each with `0 < t <= t_max`: writes the `t` of a hit with `indices[k]` into `ts[k]`
+    /// and returns the hit ones (bit `k`). The answers are exactly those of one `intersect`
+    /// per primitive, which is what the default does.
+    fn intersect_group(
+        &self,
+        indices: &[u32],
+        ray: &PreparedRay<Self::RayData>,
+        t_max: f64,
+        ts: &mut [f64; GROUP],
+    ) -> u32 {
+        intersect_one_by_one(self, indices, ray, t_max, ts)
+    }
+
     /// Per-packet data computed once by [`PrimitiveSet::prepare_packet`].
     type PacketData;
 
@@ -111,6 +125,28 @@ pub trait PrimitiveSet: Sync {
     ) -> u32 {
         intersect_each(self, index, rays, active, t_max, ts)
     }
+}
+
+/// Primitives tested together by [`PrimitiveSet::intersect_group`].
+pub const GROUP: usize = 4;
+
+/// [`PrimitiveSet::intersect_group`] by one [`PrimitiveSet::intersect`] per primitive.
+#[inline(always)]
+pub fn intersect_one_by_one<P: PrimitiveSet + ?Sized>(
+    set: &P,
+    indices: &[u32],
+    ray: &PreparedRay<P::RayData>,
+    t_max: f64,
+    ts: &mut [f64; GROUP],
+) -> u32 {
+    let mut hits = 0;
+    for (k, &index) in indices.iter().enumerate() {
+        if let Some(t) = set.intersect(index as usize, ray, t_max) {
+            ts[k] = t;
+            hits |= 1 << k;
+        }
+    }
+    hits
 }
 
 /// [`PrimitiveSet::intersect_packet`] by one [`PrimitiveSet::intersect`] per active ray.

@@ -1,17 +1,17 @@
-//! The watertight triangle test's first step for a packet of rays at once: which rays of the
-//! packet the edge functions of a triangle leave in question.
+//! The watertight triangle test's first step, four at a time: for a packet of rays, which rays
+//! the edge functions of one triangle leave in question ([`WatertightPacket::candidates`]);
+//! for one ray, which of four triangles ([`WatertightRay::candidates`]).
 //!
-//! [`WatertightPacket::candidates`] computes, for every ray, the sheared vertices and the edge
-//! functions of a triangle by exactly the operations of [`WatertightRay::intersect`] (separate
-//! multiplies and subtracts: Rust never fuses them, and neither does the AVX2 kernel here), so
-//! its values are the single-ray test's, bit for bit. It drops a ray exactly when the
-//! single-ray test would stop on the same values (edge functions of both signs, or a zero
-//! determinant); the rays it keeps go through [`WatertightRay::intersect`], which decides. A
-//! packet's answers are therefore the single-ray test's, whichever kernel runs.
+//! Both compute the sheared vertices and the edge functions by exactly the operations of
+//! [`WatertightRay::intersect`] (separate multiplies and subtracts: Rust never fuses them, and
+//! neither does the AVX2 kernel here), so their values are the single-ray test's, bit for bit.
+//! They drop a (ray, triangle) pair exactly when the single-ray test would stop on the same
+//! values (edge functions of both signs, or a zero determinant); the pairs they keep go
+//! through [`WatertightRay::intersect`], which decides. The answers are therefore the
+//! single-ray test's, whichever kernel runs.
 //!
-//! Most (ray, triangle) pairs a leaf offers are refused on the signs alone, so the packet test
-//! spends one vertex fetch per triangle and about forty instructions per four rays where the
-//! single-ray test spends a fetch and some sixty instructions per ray.
+//! Most pairs a leaf offers are refused on the signs alone: the filter spends about forty
+//! instructions per four pairs where the single-ray test spends some sixty per pair.
 
 use super::triangle::WatertightRay;
 use crate::accel::PACKET;
@@ -84,26 +84,13 @@ impl WatertightPacket {
     fn candidates_portable(&self, tri: &[DVec3; 3], active: u32) -> u32 {
         let [kx, ky, kz] = self.axes;
         let tri = tri.map(|v| [v[kx], v[ky], v[kz]]);
-        let mut kept = 0;
-        for i in (0..PACKET).filter(|&i| active & (1 << i) != 0) {
-            let sheared = |v: &[f64; 3]| {
-                let p = [0, 1, 2].map(|k| v[k] - self.origin[k][i]);
-                (
-                    p[0] - self.shear[0][i] * p[2],
-                    p[1] - self.shear[1][i] * p[2],
-                )
-            };
-            let [(ax, ay), (bx, by), (cx, cy)] = tri.each_ref().map(sheared);
-            let u = cx * by - cy * bx;
-            let v = ax * cy - ay * cx;
-            let w = bx * ay - by * ax;
-            let negative = u < 0.0 || v < 0.0 || w < 0.0;
-            let positive = u > 0.0 || v > 0.0 || w > 0.0;
-            if !(negative && positive) && u + v + w != 0.0 {
-                kept |= 1 << i;
-            }
-        }
-        kept
+        let lanes = (0..PACKET).filter(|&i| active & (1 << i) != 0);
+        lanes
+            .filter(|&i| {
+                let origin = [0, 1, 2].map(|k| self.origin[k][i]);
+                kept(&tri, origin, [self.shear[0][i], self.shear[1][i]])
+            })
+            .fold(0, |mask, i| mask | 1 << i)
     }
 
     /// [`WatertightPacket::candidates`] four rays at a time in AVX2 registers, one instance
@@ -136,66 +123,159 @@ impl WatertightPacket {
         tri: &[DVec3; 3],
         active: u32,
     ) -> u32 {
-        let permute = |v: &DVec3| [v[KX], v[KY], v[KZ]];
-        let tri = [permute(&tri[0]), permute(&tri[1]), permute(&tri[2])];
+        let vertex = |v: &DVec3| {
+            let c = |k| _mm256_set1_pd(v[k]);
+            [c(KX), c(KY), c(KZ)]
+        };
+        let vertices = [vertex(&tri[0]), vertex(&tri[1]), vertex(&tri[2])];
         let mut kept = 0;
         for quad in 0..PACKET / 4 {
             let rays = (active >> (4 * quad)) & 0xf;
             if rays != 0 {
-                kept |= (self.quad_avx2(&tri, quad) & rays) << (4 * quad);
+                // SAFETY: `4 * quad + 4 <= PACKET`: four f64 within each row.
+                let load =
+                    |row: &[f64; PACKET]| unsafe { _mm256_loadu_pd(row.as_ptr().add(4 * quad)) };
+                let origin = [
+                    load(&self.origin[0]),
+                    load(&self.origin[1]),
+                    load(&self.origin[2]),
+                ];
+                let shear = [load(&self.shear[0]), load(&self.shear[1])];
+                kept |= (kept_avx2(&vertices, &origin, &shear) & rays) << (4 * quad);
             }
         }
         kept
     }
+}
 
-    /// The rays `4 · quad ..` `4 · quad + 3` (bits 0 to 3) that the edge functions of `tri`
-    /// (permuted axes) leave in question.
+impl WatertightRay {
+    /// Of the triangles `tris[i]` with bit `i` of `active` set, those
+    /// [`WatertightRay::intersect`] may find a hit with: all but those its edge functions
+    /// already refuse (four triangles per AVX2 register, exactly as
+    /// [`WatertightPacket::candidates`] takes four rays).
+    pub fn candidates(&self, tris: &[[DVec3; 3]; 4], active: u32) -> u32 {
+        #[cfg(target_arch = "x86_64")]
+        if avx2_available() {
+            // SAFETY: the CPU has AVX2.
+            return unsafe { self.candidates_avx2(tris, active) };
+        }
+        self.candidates_portable(tris, active)
+    }
+
+    /// [`WatertightRay::candidates`] one triangle after the other.
+    fn candidates_portable(&self, tris: &[[DVec3; 3]; 4], active: u32) -> u32 {
+        let [kx, ky, kz] = self.axes;
+        let origin = [self.origin[kx], self.origin[ky], self.origin[kz]];
+        let shear = [self.shear.x, self.shear.y];
+        (0..4)
+            .filter(|&i| active & (1 << i) != 0)
+            .filter(|&i| kept(&tris[i].map(|v| [v[kx], v[ky], v[kz]]), origin, shear))
+            .fold(0, |mask, i| mask | 1 << i)
+    }
+
+    /// [`WatertightRay::candidates`] in one AVX2 register per coordinate, one instance per
+    /// axis permutation.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn candidates_avx2(&self, tris: &[[DVec3; 3]; 4], active: u32) -> u32 {
+        match self.axes {
+            [1, 2, 0] => self.avx2_in::<1, 2, 0>(tris, active),
+            [2, 1, 0] => self.avx2_in::<2, 1, 0>(tris, active),
+            [2, 0, 1] => self.avx2_in::<2, 0, 1>(tris, active),
+            [0, 2, 1] => self.avx2_in::<0, 2, 1>(tris, active),
+            [0, 1, 2] => self.avx2_in::<0, 1, 2>(tris, active),
+            _ => self.avx2_in::<1, 0, 2>(tris, active),
+        }
+    }
+
+    /// [`WatertightRay::candidates_avx2`] for the axis permutation `[KX, KY, KZ]`.
     ///
     /// # Safety
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn quad_avx2(&self, tri: &[[f64; 3]; 3], quad: usize) -> u32 {
-        let lane = 4 * quad;
-        // SAFETY: `lane + 4 <= PACKET`: four f64 within each row.
-        let load = |row: &[f64; PACKET]| unsafe { _mm256_loadu_pd(row.as_ptr().add(lane)) };
-        let (ox, oy, oz) = (
-            load(&self.origin[0]),
-            load(&self.origin[1]),
-            load(&self.origin[2]),
-        );
-        let (sx, sy) = (load(&self.shear[0]), load(&self.shear[1]));
-        let sheared = |v: &[f64; 3]| {
-            let px = _mm256_sub_pd(_mm256_set1_pd(v[0]), ox);
-            let py = _mm256_sub_pd(_mm256_set1_pd(v[1]), oy);
-            let pz = _mm256_sub_pd(_mm256_set1_pd(v[2]), oz);
-            (
-                _mm256_sub_pd(px, _mm256_mul_pd(sx, pz)),
-                _mm256_sub_pd(py, _mm256_mul_pd(sy, pz)),
-            )
+    unsafe fn avx2_in<const KX: usize, const KY: usize, const KZ: usize>(
+        &self,
+        tris: &[[DVec3; 3]; 4],
+        active: u32,
+    ) -> u32 {
+        // Coordinate `k` of vertex `j` of the four triangles, lane `i` for triangle `i`.
+        let gather = |j: usize, k: usize| {
+            _mm256_set_pd(tris[3][j][k], tris[2][j][k], tris[1][j][k], tris[0][j][k])
         };
-        let (ax, ay) = sheared(&tri[0]);
-        let (bx, by) = sheared(&tri[1]);
-        let (cx, cy) = sheared(&tri[2]);
-        let edge = |p, q, r, s| _mm256_sub_pd(_mm256_mul_pd(p, q), _mm256_mul_pd(r, s));
-        let (u, v, w) = (
-            edge(cx, by, cy, bx),
-            edge(ax, cy, ay, cx),
-            edge(bx, ay, by, ax),
-        );
-        let zero = _mm256_setzero_pd();
-        let below = |f| _mm256_cmp_pd::<_CMP_LT_OQ>(f, zero);
-        let above = |f| _mm256_cmp_pd::<_CMP_GT_OQ>(f, zero);
-        let negative = _mm256_or_pd(_mm256_or_pd(below(u), below(v)), below(w));
-        let positive = _mm256_or_pd(_mm256_or_pd(above(u), above(v)), above(w));
-        let det = _mm256_add_pd(_mm256_add_pd(u, v), w);
-        let refused = _mm256_or_pd(
-            _mm256_and_pd(negative, positive),
-            _mm256_cmp_pd::<_CMP_EQ_OQ>(det, zero),
-        );
-        !(_mm256_movemask_pd(refused) as u32) & 0xf
+        let vertex = |j| [gather(j, KX), gather(j, KY), gather(j, KZ)];
+        let vertices = [vertex(0), vertex(1), vertex(2)];
+        let o = |k| _mm256_set1_pd(self.origin[k]);
+        let origin = [o(KX), o(KY), o(KZ)];
+        let shear = [_mm256_set1_pd(self.shear.x), _mm256_set1_pd(self.shear.y)];
+        kept_avx2(&vertices, &origin, &shear) & active
     }
+}
+
+/// Whether the single-ray test goes on with the triangle `tri` (permuted axes) for the ray with
+/// origin `origin` (permuted axes) and shear `shear`: false when its edge functions have both
+/// signs or sum to zero. The operations of [`WatertightRay::intersect`], one by one.
+#[inline(always)]
+fn kept(tri: &[[f64; 3]; 3], origin: [f64; 3], shear: [f64; 2]) -> bool {
+    let sheared = |v: &[f64; 3]| {
+        let p = [0, 1, 2].map(|k| v[k] - origin[k]);
+        (p[0] - shear[0] * p[2], p[1] - shear[1] * p[2])
+    };
+    let [(ax, ay), (bx, by), (cx, cy)] = tri.each_ref().map(sheared);
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let negative = u < 0.0 || v < 0.0 || w < 0.0;
+    let positive = u > 0.0 || v > 0.0 || w > 0.0;
+    !(negative && positive) && u + v + w != 0.0
+}
+
+/// [`kept`] for four lanes (bits 0 to 3 of the result): per lane a triangle's vertices
+/// `vertices[j][k]` (vertex `j`, permuted coordinate `k`), a ray's `origin` and `shear`.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn kept_avx2(
+    vertices: &[[__m256d; 3]; 3],
+    origin: &[__m256d; 3],
+    shear: &[__m256d; 2],
+) -> u32 {
+    let sheared = |v: &[__m256d; 3]| {
+        let px = _mm256_sub_pd(v[0], origin[0]);
+        let py = _mm256_sub_pd(v[1], origin[1]);
+        let pz = _mm256_sub_pd(v[2], origin[2]);
+        (
+            _mm256_sub_pd(px, _mm256_mul_pd(shear[0], pz)),
+            _mm256_sub_pd(py, _mm256_mul_pd(shear[1], pz)),
+        )
+    };
+    let (ax, ay) = sheared(&vertices[0]);
+    let (bx, by) = sheared(&vertices[1]);
+    let (cx, cy) = sheared(&vertices[2]);
+    let edge = |p, q, r, s| _mm256_sub_pd(_mm256_mul_pd(p, q), _mm256_mul_pd(r, s));
+    let (u, v, w) = (
+        edge(cx, by, cy, bx),
+        edge(ax, cy, ay, cx),
+        edge(bx, ay, by, ax),
+    );
+    let zero = _mm256_setzero_pd();
+    let below = |f| _mm256_cmp_pd::<_CMP_LT_OQ>(f, zero);
+    let above = |f| _mm256_cmp_pd::<_CMP_GT_OQ>(f, zero);
+    let negative = _mm256_or_pd(_mm256_or_pd(below(u), below(v)), below(w));
+    let positive = _mm256_or_pd(_mm256_or_pd(above(u), above(v)), above(w));
+    let det = _mm256_add_pd(_mm256_add_pd(u, v), w);
+    let refused = _mm256_or_pd(
+        _mm256_and_pd(negative, positive),
+        _mm256_cmp_pd::<_CMP_EQ_OQ>(det, zero),
+    );
+    !(_mm256_movemask_pd(refused) as u32) & 0xf
 }
 
 /// True when this CPU runs the AVX2 kernel.

@@ -9,7 +9,7 @@
 //! triangle test fetches three indices and three vertices instead of one 36-byte record; the
 //! branch on the storage kind is the same for every triangle of a mesh, so it predicts well.
 
-use crate::accel::{intersect_each, set_bits, PreparedRay, PrimitiveSet, PACKET};
+use crate::accel::{intersect_each, set_bits, PreparedRay, PrimitiveSet, GROUP, PACKET};
 use crate::geometry::triangle::{self, WatertightRay};
 use crate::geometry::triangle_box;
 use crate::geometry::triangle_packet::WatertightPacket;
@@ -276,6 +276,40 @@ impl MeshSet {
         hits
     }
 
+    /// [`PrimitiveSet::intersect_group`] for the triangles `indices` and one ray prepared in
+    /// the mesh frame: the four-triangle pre-filter (for two triangles or more), then the
+    /// single-ray test for the triangles it keeps.
+    #[inline(always)]
+    pub fn intersect_triangles(
+        &self,
+        indices: &[u32],
+        ray: &WatertightRay,
+        t_max: f64,
+        ts: &mut [f64; GROUP],
+    ) -> u32 {
+        let Some(last) = indices.len().checked_sub(1) else {
+            return 0;
+        };
+        if last == 0 {
+            let t = self.intersect_triangle(indices[0] as usize, ray, t_max);
+            ts[0] = t.unwrap_or(0.0);
+            return u32::from(t.is_some());
+        }
+        // The lanes left over in a group of fewer than four hold its first triangle.
+        let mut tris = [self.mesh.triangle(indices[0] as usize); GROUP];
+        for (tri, &i) in tris.iter_mut().zip(indices).skip(1) {
+            *tri = self.mesh.triangle(i as usize);
+        }
+        let mut hits = 0;
+        for k in set_bits(ray.candidates(&tris, (1 << indices.len()) - 1)) {
+            if let Some(t) = ray.intersect(&tris[k], t_max) {
+                ts[k] = t;
+                hits |= 1 << k;
+            }
+        }
+        hits
+    }
+
     /// Unit normal of triangle `i` from its winding, mapped to the world by `to_world` (the
     /// cofactor matrix keeps it perpendicular and, with the winding flip of a mirroring
     /// placement, on the front side); `None` for a degenerate triangle.
@@ -319,6 +353,16 @@ impl PrimitiveSet for MeshSet {
 
     fn intersect(&self, index: usize, ray: &PreparedRay<WatertightRay>, t_max: f64) -> Option<f64> {
         self.intersect_triangle(index, &ray.extra, t_max)
+    }
+
+    fn intersect_group(
+        &self,
+        indices: &[u32],
+        ray: &PreparedRay<WatertightRay>,
+        t_max: f64,
+        ts: &mut [f64; GROUP],
+    ) -> u32 {
+        self.intersect_triangles(indices, &ray.extra, t_max, ts)
     }
 
     type PacketData = Option<WatertightPacket>;

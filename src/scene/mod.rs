@@ -30,7 +30,10 @@ pub use hits::{Crossing, EdgeRule};
 pub use instance::{Instance, StoredMesh};
 pub use mesh::{Mesh, MeshSet, Positions};
 
-use crate::accel::{intersect_each, octants_by_overlap, Hit, PreparedRay, PrimitiveSet, PACKET};
+use crate::accel::{
+    intersect_each, intersect_one_by_one, octants_by_overlap, Hit, PreparedRay, PrimitiveSet,
+    GROUP, PACKET,
+};
 use crate::camera::Camera;
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::triangle_packet::WatertightPacket;
@@ -425,6 +428,23 @@ impl PrimitiveSet for Scene {
         } else {
             self.intersect_other(index, ray, t_max)
         }
+    }
+
+    /// The world's triangles through the four-triangle pre-filter; a group holding anything
+    /// else one primitive at a time.
+    #[inline(always)]
+    fn intersect_group(
+        &self,
+        indices: &[u32],
+        ray: &PreparedRay<SceneRay>,
+        t_max: f64,
+        ts: &mut [f64; GROUP],
+    ) -> u32 {
+        let triangles = self.world.mesh.len();
+        if indices.iter().all(|&i| (i as usize) < triangles) {
+            return (self.world).intersect_triangles(indices, &ray.extra.triangle, t_max, ts);
+        }
+        intersect_one_by_one(self, indices, ray, t_max, ts)
     }
 
     type PacketData = Option<WatertightPacket>;

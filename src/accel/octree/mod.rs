@@ -67,7 +67,7 @@ mod packet;
 mod traverse;
 mod wide;
 
-use super::{prepare_ray, set_bits, test_primitive, Hit, PreparedRay, PrimitiveSet};
+use super::{prepare_ray, set_bits, test_primitive, Hit, PreparedRay, PrimitiveSet, GROUP};
 use crate::geometry::Aabb;
 use build::{cube_around, Builder};
 use glam::DVec3;
@@ -241,11 +241,14 @@ impl Octree {
         let mut tested = Mailbox::default();
         self.traverse(local_origin, dir, t_max, |refs, _, _| {
             let ray = prepared.get_or_insert_with(|| prepare_ray(set, local_origin, dir));
-            for &prim in refs {
-                if tested.check_in(prim) {
-                    test_primitive(set, prim, ray, t_max, &mut best);
-                }
-            }
+            test_leaf(
+                set,
+                refs,
+                |prim| tested.check_in(prim),
+                ray,
+                t_max,
+                &mut best,
+            );
             best.map_or(t_max, |b| b.t)
         });
         best
@@ -306,6 +309,14 @@ impl Octree {
                         std::array::from_fn(|i| prepare_ray(set, local_origins[i], dirs[i]))
                     })
                 });
+                if rays.is_power_of_two() {
+                    // A ray alone: its primitives in groups, as in `intersect_ray`.
+                    let i = rays.trailing_zeros() as usize;
+                    let new = |prim| tested.check_in(prim, rays) != 0;
+                    test_leaf(set, refs, new, &prepared[i], t_max[i], &mut best[i]);
+                    limits[i] = best[i].map_or(t_max[i], |b| b.t);
+                    return;
+                }
                 let packet = packet_data.get_or_insert_with(|| set.prepare_packet(prepared));
                 for &prim in refs {
                     let active = tested.check_in(prim, rays);
@@ -389,6 +400,59 @@ impl Mailbox {
         let new = *slot != prim;
         *slot = prim;
         new
+    }
+}
+
+/// Tests the primitives of a leaf, `refs`, that `new` says the ray has not met yet against
+/// `ray`, [`GROUP`] at a time ([`test_group`]).
+#[inline(always)]
+fn test_leaf<P: PrimitiveSet>(
+    set: &P,
+    refs: &[u32],
+    mut new: impl FnMut(u32) -> bool,
+    ray: &PreparedRay<P::RayData>,
+    t_max: f64,
+    best: &mut Option<Hit>,
+) {
+    let mut group = [0; GROUP];
+    let mut len = 0;
+    for &prim in refs {
+        if new(prim) {
+            group[len] = prim;
+            len += 1;
+            if len == GROUP {
+                test_group(set, &group, ray, t_max, best);
+                len = 0;
+            }
+        }
+    }
+    test_group(set, &group[..len], ray, t_max, best);
+}
+
+/// Tests the primitives `group` against `ray` ([`PrimitiveSet::intersect_group`]) and keeps in
+/// `best` the hit that beats the others and the one there (see [`Hit::beats`]): the same
+/// answer as testing them one after the other.
+#[inline(always)]
+fn test_group<P: PrimitiveSet>(
+    set: &P,
+    group: &[u32],
+    ray: &PreparedRay<P::RayData>,
+    t_max: f64,
+    best: &mut Option<Hit>,
+) {
+    if group.is_empty() {
+        return;
+    }
+    let mut ts = [0.0; GROUP];
+    let bound = best.map_or(t_max, |b| b.t);
+    for k in set_bits(set.intersect_group(group, ray, bound, &mut ts)) {
+        let hit = Hit {
+            t: ts[k],
+            prim: group[k],
+        };
+        if hit.beats(best) {
+            *best = Some(hit);
+        }
     }
 }
 

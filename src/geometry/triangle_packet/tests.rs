@@ -157,3 +157,102 @@ fn rays_with_different_dominant_axes_do_not_form_a_packet() {
     });
     assert!(WatertightPacket::new(|i| &same[i]).is_some());
 }
+
+/// One ray against four triangles built around it: a triangle with a point of the ray well
+/// inside it (all barycentric weights 0.05 or more, by construction) must be kept, one whose
+/// plane the ray meets well outside it (a weight of -0.05 or less) refused; only the `active`
+/// triangles are considered. Scales from 1e-6 to 1e6.
+#[test]
+fn the_group_filter_keeps_triangles_the_ray_crosses_and_refuses_the_others() {
+    let mut rng = Rng(0x51_7cc1_b727_220a);
+    let (mut groups, mut refused) = (0, 0);
+    for round in 0..4000 {
+        let size = 10f64.powi(round % 13 - 6);
+        let origin = rng.point(10.0 * size);
+        let dir = rng.point(1.0);
+        let ray = WatertightRay::new(origin, dir);
+        let mut crossed = 0u32;
+        let tris: [[DVec3; 3]; 4] = std::array::from_fn(|k| {
+            let point = origin + dir * rng.uniform(0.5, 20.0) * size;
+            let inside = rng.next() < 0.5;
+            let (a, b) = if inside {
+                (rng.uniform(0.05, 0.45), rng.uniform(0.05, 0.45))
+            } else {
+                (rng.uniform(-1.0, -0.05), rng.uniform(0.05, 0.9))
+            };
+            let w = [a, b, 1.0 - a - b];
+            crossed |= u32::from(inside) << k;
+            let (v0, v1) = (point + rng.point(size), point + rng.point(size));
+            let v2 = (point - v0 * w[0] - v1 * w[1]) / w[2];
+            [v0, v1, v2]
+        });
+        // Keep the rounds whose triangles the ray meets at a clear angle.
+        let steep = tris.iter().all(|t| {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]);
+            n.normalize().dot(dir.normalize()).abs() > 0.05
+        });
+        if !steep {
+            continue;
+        }
+        groups += 1;
+        let active = 1 + (round as u32 % 15);
+        for kept in [
+            ray.candidates(&tris, active),
+            ray.candidates_portable(&tris, active),
+        ] {
+            assert_eq!(kept, crossed & active, "round {round}");
+        }
+        refused += (!crossed & active).count_ones();
+    }
+    assert!(
+        groups > 2000 && refused > 2000,
+        "{groups} groups, {refused} refusals"
+    );
+}
+
+/// Whatever the geometry (triangles sharing edges and vertices, rays through a vertex or along
+/// a plane, subnormal and huge coordinates), every triangle of a group the single-ray test
+/// hits is kept, and the kernels agree bit for bit.
+#[test]
+fn no_triangle_the_single_ray_test_hits_is_refused() {
+    let mut rng = Rng(0x3c6e_f372_fe94_f82b);
+    let mut hits = 0;
+    for round in 0..40000 {
+        let scale = [1.0, 1e-300, 1e300, 1e-160, 3.0][round % 5];
+        let corner = [
+            rng.point(1.0),
+            rng.point(1.0),
+            rng.point(1.0),
+            rng.point(1.0),
+        ];
+        let pick = |r: &mut Rng| corner[(r.next() * 4.0) as usize % 4] * scale;
+        let tris: [[DVec3; 3]; 4] =
+            std::array::from_fn(|_| [pick(&mut rng), pick(&mut rng), rng.point(1.0) * scale]);
+        let origin = rng.point(4.0) * scale;
+        let dir = match round % 3 {
+            0 => corner[round % 4] * scale - origin,
+            1 => tris[0][1] - tris[0][0],
+            _ => (corner[0] + corner[1]) * 0.5 * scale - origin,
+        };
+        let ray = WatertightRay::new(origin, dir);
+        let active = 1 + (round as u32 % 15);
+        let expected = (0..4)
+            .filter(|&k| active & (1 << k) != 0)
+            .filter(|&k| ray.intersect(&tris[k], f64::INFINITY).is_some())
+            .fold(0u32, |m, k| m | 1 << k);
+        let fast = ray.candidates(&tris, active);
+        assert_eq!(
+            fast,
+            ray.candidates_portable(&tris, active),
+            "round {round}"
+        );
+        assert_eq!(fast & expected, expected, "round {round}: a hit refused");
+        assert_eq!(
+            fast & !active,
+            0,
+            "round {round}: an inactive triangle kept"
+        );
+        hits += expected.count_ones();
+    }
+    assert!(hits > 6000, "{hits} hits");
+}
