@@ -67,7 +67,7 @@ mod packet;
 mod traverse;
 mod wide;
 
-use super::{prepare_ray, set_bits, test_primitive, Hit, PreparedRay, PrimitiveSet, GROUP};
+use super::{prepare_ray, set_bits, Hit, PreparedRay, PrimitiveSet, GROUP};
 use crate::geometry::Aabb;
 use build::{cube_around, Builder};
 use glam::DVec3;
@@ -218,10 +218,9 @@ impl Octree {
         t_max: f64,
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
+        let mut tested = Mailbox::default();
         self.traverse(ray.local_origin, ray.dir, t_max, |refs, _, _| {
-            for &prim in refs {
-                test_primitive(set, prim, ray, t_max, &mut best);
-            }
+            test_leaf(set, refs, |prim| tested.check_in(prim), ray, t_max, &mut best);
             best.map_or(t_max, |b| b.t)
         });
         best
