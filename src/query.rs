@@ -88,10 +88,7 @@ impl<'a> Query<'a> {
         rays: &[Ray; PACKET],
         ranges: &[(f64, f64); PACKET],
     ) -> Option<[Option<Crossing>; PACKET]> {
-        let plain = |(ray, &(t_min, t_max)): (&Ray, &(f64, f64))| {
-            t_min == 0.0 && traceable(ray, t_min, t_max)
-        };
-        if !rays.iter().zip(ranges).all(plain) {
+        if !plain_packet(rays, ranges) {
             return None;
         }
         let origins = rays.each_ref().map(|ray| ray.origin - self.scene.anchor);
@@ -245,6 +242,20 @@ pub fn traceable(ray: &Ray, t_min: f64, t_max: f64) -> bool {
     ray.is_valid() && t_min >= 0.0 && !t_max.is_nan()
 }
 
+/// True when every ray of a packet is [`traceable`] over its range and the range starts at 0:
+/// the same conditions, folded without a branch per ray (`x - x` is 0 exactly for a finite
+/// `x` and NaN otherwise, so the sum is 0 exactly when every coordinate is finite).
+fn plain_packet(rays: &[Ray; PACKET], ranges: &[(f64, f64); PACKET]) -> bool {
+    let mut finite = 0.0;
+    let mut plain = true;
+    for (ray, &(t_min, t_max)) in rays.iter().zip(ranges) {
+        let (o, d) = (ray.origin, ray.dir);
+        finite += (o - o).element_sum() + (d - d).element_sum();
+        plain &= (t_min == 0.0) & !t_max.is_nan() & d.cmpne(DVec3::ZERO).any();
+    }
+    plain && finite == 0.0
+}
+
 /// Directions of the parity rays of [`Query::contains`]: no axis, diagonal or simple ratio,
 /// so that rays from points on a grid do not run along the faces or edges of axis-aligned or
 /// regularly tessellated models.
@@ -253,3 +264,60 @@ const PARITY_DIRECTIONS: [[f64; 3]; 3] = [
     [-0.83, 0.269, -0.487],
     [0.233, -0.911, 0.341],
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`plain_packet`] agrees with its definition (every ray traceable, every range from 0)
+    /// on packets with one odd ray: infinite or NaN coordinates, zero directions, odd ranges.
+    #[test]
+    fn plain_packet_is_traceable_with_ranges_from_zero() {
+        let odd = [
+            0.0,
+            -0.0,
+            1e-310,
+            f64::MAX,
+            f64::INFINITY,
+            -f64::INFINITY,
+            f64::NAN,
+        ];
+        let base = Ray::new(DVec3::new(1.0, 2.0, 3.0), DVec3::new(0.5, -0.25, 1.0));
+        let (mut plain, mut refused) = (0, 0);
+        for (slot, &x) in (0..6).flat_map(|slot| odd.iter().map(move |x| (slot, x))) {
+            for (t_min, t_max) in [
+                (0.0, f64::INFINITY),
+                (-0.0, 2.0),
+                (0.5, 2.0),
+                (0.0, f64::NAN),
+            ] {
+                let mut ray = base;
+                if slot < 3 {
+                    ray.origin[slot] = x;
+                } else {
+                    ray.dir = DVec3::ZERO;
+                    ray.dir[slot - 3] = x;
+                }
+                let mut rays = [base; PACKET];
+                rays[5] = ray;
+                let mut ranges = [(0.0, 1.0); PACKET];
+                ranges[5] = (t_min, t_max);
+                let each = rays.iter().zip(&ranges);
+                let expected = each
+                    .clone()
+                    .all(|(r, &(lo, hi))| lo == 0.0 && traceable(r, lo, hi));
+                assert_eq!(
+                    plain_packet(&rays, &ranges),
+                    expected,
+                    "{ray:?} {t_min} {t_max}"
+                );
+                plain += usize::from(expected);
+                refused += usize::from(!expected);
+            }
+        }
+        assert!(
+            plain > 10 && refused > 100,
+            "{plain} plain, {refused} refused"
+        );
+    }
+}

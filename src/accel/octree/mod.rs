@@ -220,7 +220,14 @@ impl Octree {
         let mut best: Option<Hit> = None;
         let mut tested = Mailbox::default();
         self.traverse(ray.local_origin, ray.dir, t_max, |refs, _, _| {
-            test_leaf(set, refs, |prim| tested.check_in(prim), ray, t_max, &mut best);
+            test_leaf(
+                set,
+                refs,
+                |prim| tested.check_in(prim),
+                ray,
+                t_max,
+                &mut best,
+            );
             best.map_or(t_max, |b| b.t)
         });
         best

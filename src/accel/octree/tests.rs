@@ -5,7 +5,7 @@ use super::packet::{Bundle, Tested};
 use super::traverse::{self, Observer};
 use super::wide::{Layout, Wide};
 use super::*;
-use crate::accel::{brute_force, f32_above, prepare_ray};
+use crate::accel::{brute_force, f32_above, prepare_ray, test_primitive};
 use crate::scene::{Scene, SceneBuilder};
 
 /// The kernels this CPU runs.
