@@ -243,14 +243,14 @@ pub fn traceable(ray: &Ray, t_min: f64, t_max: f64) -> bool {
 }
 
 /// True when every ray of a packet is [`traceable`] over its range and the range starts at 0:
-/// the same conditions, folded without a branch per ray (`x - x` is 0 exactly for a finite
-/// `x` and NaN otherwise, so the sum is 0 exactly when every coordinate is finite).
+/// the same conditions, folded without a branch per ray (`x · 0` is ±0 for a finite `x` and
+/// NaN otherwise, so the sum is zero exactly when every coordinate is finite).
 fn plain_packet(rays: &[Ray; PACKET], ranges: &[(f64, f64); PACKET]) -> bool {
     let mut finite = 0.0;
     let mut plain = true;
     for (ray, &(t_min, t_max)) in rays.iter().zip(ranges) {
         let (o, d) = (ray.origin, ray.dir);
-        finite += (o - o).element_sum() + (d - d).element_sum();
+        finite += (o * 0.0).element_sum() + (d * 0.0).element_sum();
         plain &= (t_min == 0.0) & !t_max.is_nan() & d.cmpne(DVec3::ZERO).any();
     }
     plain && finite == 0.0
