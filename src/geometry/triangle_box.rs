@@ -39,16 +39,25 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
         // No plane cuts it: clipping would keep the triangle as it is.
         return Some(bounds);
     }
-    // Two polygons, clipped alternately one into the other.
-    let mut pair = [Polygon::new(), Polygon::new()];
-    let mut current = 0;
+    // Two polygons, clipped alternately one into the other: `from` holds the current one.
+    let (mut a, mut b) = (Polygon::new(), Polygon::new());
     for v in tri {
-        pair[0].push(*v);
+        a.push(*v);
     }
-    clip_slab::<0>(&mut pair, &mut current, cell);
-    clip_slab::<1>(&mut pair, &mut current, cell);
-    clip_slab::<2>(&mut pair, &mut current, cell);
-    let polygon = &pair[current];
+    let mut clipping = Clipping {
+        from: &mut a,
+        to: &mut b,
+        clipped: false,
+    };
+    // Until a plane cuts the triangle, the polygon is the triangle, and whether a plane
+    // keeps all of it is whether its bounds lie on the inner side (`c - plane >= 0` exactly
+    // when `c >= plane`).
+    let (lo, hi) = (cell.min.to_array(), cell.max.to_array());
+    let (min, max) = (bounds.min.to_array(), bounds.max.to_array());
+    clipping.slab::<0>(lo[0], hi[0], min[0] >= lo[0], max[0] <= hi[0]);
+    clipping.slab::<1>(lo[1], hi[1], min[1] >= lo[1], max[1] <= hi[1]);
+    clipping.slab::<2>(lo[2], hi[2], min[2] >= lo[2], max[2] <= hi[2]);
+    let polygon = clipping.from;
     let bounds = if polygon.overflowed {
         bounds.common(*cell)
     } else {
@@ -57,14 +66,32 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
     bounds.filter(|b| !b.is_empty())
 }
 
-/// Clips polygon `pair[*current]` to the slab of `cell` on axis `AXIS`, one face after the
-/// other, each into the other polygon of the pair; `current` follows the result.
-fn clip_slab<const AXIS: usize>(pair: &mut [Polygon; 2], current: &mut usize, cell: &Aabb) {
-    for (plane, side) in [(cell.min[AXIS], 1.0), (cell.max[AXIS], -1.0)] {
-        let [a, b] = pair;
-        let (from, to) = if *current == 0 { (a, b) } else { (b, a) };
-        if from.clip_into::<AXIS>(plane, side, to) {
-            *current ^= 1;
+/// The two polygons of [`clipped_bounds`]: `from` the current one, `to` the one the next
+/// plane clips it into; `clipped` once a plane has cut the triangle.
+struct Clipping<'p> {
+    from: &'p mut Polygon,
+    to: &'p mut Polygon,
+    clipped: bool,
+}
+
+impl Clipping<'_> {
+    /// Clips the current polygon to the slab `[lo, hi]` on axis `AXIS`, the lower face first;
+    /// `keeps_lo` and `keeps_hi` say whether the triangle lies on the inner side of each face
+    /// (looked at only while no plane has cut it).
+    fn slab<const AXIS: usize>(&mut self, lo: f64, hi: f64, keeps_lo: bool, keeps_hi: bool) {
+        self.plane::<AXIS, false>(lo, keeps_lo);
+        self.plane::<AXIS, true>(hi, keeps_hi);
+    }
+
+    /// Clips the current polygon to the inner side of the face `plane` (the upper face of the
+    /// slab when `UPPER`), unless the triangle, not cut yet, lies on that side (`keeps`).
+    fn plane<const AXIS: usize, const UPPER: bool>(&mut self, plane: f64, keeps: bool) {
+        if !self.clipped && keeps {
+            return;
+        }
+        if self.from.clip_into::<AXIS, UPPER>(plane, self.to) {
+            std::mem::swap(&mut self.from, &mut self.to);
+            self.clipped = true;
         }
     }
 }
@@ -102,12 +129,24 @@ impl Polygon {
         &self.vertices[..self.len]
     }
 
-    /// Writes into `out` the part with `side · (p[AXIS] - plane) >= 0` (crossing points sit
-    /// exactly on the plane) and returns true, or returns false when that part is the whole
-    /// polygon (or it overflowed), leaving `out` as it is.
-    fn clip_into<const AXIS: usize>(&self, plane: f64, side: f64, out: &mut Polygon) -> bool {
+    /// Writes into `out` the part on the inner side of the face `plane` of axis `AXIS` (`p -
+    /// plane >= 0` for a lower face, `<= 0` for an upper face: crossing points sit exactly
+    /// on the plane) and returns true, or returns false when that part is the whole polygon (or
+    /// it overflowed), leaving `out` as it is.
+    fn clip_into<const AXIS: usize, const UPPER: bool>(
+        &self,
+        plane: f64,
+        out: &mut Polygon,
+    ) -> bool {
         let coord = |p: &DVec3| p.as_ref()[AXIS];
-        let inside = |p: &DVec3| side * (coord(p) - plane) >= 0.0;
+        let inside = |p: &DVec3| {
+            let d = coord(p) - plane;
+            if UPPER {
+                d <= 0.0
+            } else {
+                d >= 0.0
+            }
+        };
         let vertices = self.vertices();
         if self.overflowed || vertices.iter().all(inside) {
             return false;
@@ -338,7 +377,7 @@ mod tests {
             polygon.push(DVec3::new((i % 2) as f64, i as f64, 0.0));
         }
         let mut clipped = Polygon::new();
-        assert!(polygon.clip_into::<0>(0.5, 1.0, &mut clipped));
+        assert!(polygon.clip_into::<0, false>(0.5, &mut clipped));
         assert!(clipped.overflowed);
     }
 
