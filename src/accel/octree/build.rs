@@ -281,25 +281,18 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     /// The box the primitives `refs` occupy inside `cell`: their parts inside the cell grown
     /// by the margin, bounded and grown by the margin again. A primitive whose bounds within
     /// the grown cell already lie inside the box so far is not clipped: its part there lies
-    /// inside those bounds, so it cannot add to the box. Nor is one whose bounds lie inside
-    /// the grown cell: it is whole there, and its part's bounds are its bounds.
+    /// inside those bounds, so it cannot add to the box.
     pub fn occupied(&self, cell: &Aabb, refs: &[u32]) -> Aabb {
         let grown = cell.expanded(self.margin);
         let mut occupied = Aabb::EMPTY;
         for &prim in refs {
-            let bounds = self.bounds[prim as usize];
-            let Some(within) = bounds.common(grown) else {
+            let Some(within) = self.bounds[prim as usize].common(grown) else {
                 continue;
             };
             if occupied.holds(&within) {
                 continue;
             }
-            let part = if within == bounds {
-                Some(bounds)
-            } else {
-                self.set.clipped_bounds(prim as usize, &grown)
-            };
-            if let Some(part) = part {
+            if let Some(part) = self.set.clipped_bounds(prim as usize, &grown) {
                 occupied = occupied.union(part);
             }
         }
