@@ -47,16 +47,10 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
     let mut clipping = Clipping {
         from: &mut a,
         to: &mut b,
-        clipped: false,
     };
-    // Until a plane cuts the triangle, the polygon is the triangle, and whether a plane
-    // keeps all of it is whether its bounds lie on the inner side (`c - plane >= 0` exactly
-    // when `c >= plane`).
-    let (lo, hi) = (cell.min.to_array(), cell.max.to_array());
-    let (min, max) = (bounds.min.to_array(), bounds.max.to_array());
-    clipping.slab::<0>(lo[0], hi[0], min[0] >= lo[0], max[0] <= hi[0]);
-    clipping.slab::<1>(lo[1], hi[1], min[1] >= lo[1], max[1] <= hi[1]);
-    clipping.slab::<2>(lo[2], hi[2], min[2] >= lo[2], max[2] <= hi[2]);
+    clipping.slab::<0>(cell.min.x, cell.max.x);
+    clipping.slab::<1>(cell.min.y, cell.max.y);
+    clipping.slab::<2>(cell.min.z, cell.max.z);
     let polygon = clipping.from;
     let bounds = if polygon.overflowed {
         bounds.common(*cell)
@@ -67,31 +61,24 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
 }
 
 /// The two polygons of [`clipped_bounds`]: `from` the current one, `to` the one the next
-/// plane clips it into; `clipped` once a plane has cut the triangle.
+/// plane clips it into.
 struct Clipping<'p> {
     from: &'p mut Polygon,
     to: &'p mut Polygon,
-    clipped: bool,
 }
 
 impl Clipping<'_> {
-    /// Clips the current polygon to the slab `[lo, hi]` on axis `AXIS`, the lower face first;
-    /// `keeps_lo` and `keeps_hi` say whether the triangle lies on the inner side of each face
-    /// (looked at only while no plane has cut it).
-    fn slab<const AXIS: usize>(&mut self, lo: f64, hi: f64, keeps_lo: bool, keeps_hi: bool) {
-        self.plane::<AXIS, false>(lo, keeps_lo);
-        self.plane::<AXIS, true>(hi, keeps_hi);
+    /// Clips the current polygon to the slab `[lo, hi]` on axis `AXIS`, the lower face first.
+    fn slab<const AXIS: usize>(&mut self, lo: f64, hi: f64) {
+        self.plane::<AXIS, false>(lo);
+        self.plane::<AXIS, true>(hi);
     }
 
     /// Clips the current polygon to the inner side of the face `plane` (the upper face of the
-    /// slab when `UPPER`), unless the triangle, not cut yet, lies on that side (`keeps`).
-    fn plane<const AXIS: usize, const UPPER: bool>(&mut self, plane: f64, keeps: bool) {
-        if !self.clipped && keeps {
-            return;
-        }
+    /// slab when `UPPER`).
+    fn plane<const AXIS: usize, const UPPER: bool>(&mut self, plane: f64) {
         if self.from.clip_into::<AXIS, UPPER>(plane, self.to) {
             std::mem::swap(&mut self.from, &mut self.to);
-            self.clipped = true;
         }
     }
 }
