@@ -307,13 +307,12 @@ impl Witness {
     /// cell, the octants on the side of each midplane that `p` is on, and on both sides
     /// where `p` lies within `slack` of the midplane.
     fn octants(&self, p: DVec3) -> u8 {
-        if !p.abs().cmple(self.outer).all() {
-            return 0;
-        }
+        // Without a branch on the first test (its outcome is not predictable).
+        let inside = u8::from(p.abs().cmple(self.outer).all()).wrapping_neg();
         let axis = |a: usize, x: f64| {
             ALLOWED[a][usize::from(x <= self.slack) | usize::from(x >= -self.slack) << 1]
         };
-        axis(0, p.x) & axis(1, p.y) & axis(2, p.z)
+        inside & axis(0, p.x) & axis(1, p.y) & axis(2, p.z)
     }
 
     /// The shrunk octants holding a point where an edge of the triangle `v` (relative to the
