@@ -39,16 +39,19 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
         // No plane cuts it: clipping would keep the triangle as it is.
         return Some(bounds);
     }
-    // Two polygons, clipped alternately one into the other.
-    let mut pair = [Polygon::new(), Polygon::new()];
-    let mut current = 0;
+    // Two polygons, clipped alternately one into the other: `from` holds the current one.
+    let (mut a, mut b) = (Polygon::new(), Polygon::new());
     for v in tri {
-        pair[0].push(*v);
+        a.push(*v);
     }
-    clip_slab::<0>(&mut pair, &mut current, cell);
-    clip_slab::<1>(&mut pair, &mut current, cell);
-    clip_slab::<2>(&mut pair, &mut current, cell);
-    let polygon = &pair[current];
+    let mut clipping = Clipping {
+        from: &mut a,
+        to: &mut b,
+    };
+    clipping.slab::<0>(cell.min.x, cell.max.x);
+    clipping.slab::<1>(cell.min.y, cell.max.y);
+    clipping.slab::<2>(cell.min.z, cell.max.z);
+    let polygon = clipping.from;
     let bounds = if polygon.overflowed {
         bounds.common(*cell)
     } else {
@@ -57,14 +60,25 @@ pub fn clipped_bounds(tri: &[DVec3; 3], cell: &Aabb) -> Option<Aabb> {
     bounds.filter(|b| !b.is_empty())
 }
 
-/// Clips polygon `pair[*current]` to the slab of `cell` on axis `AXIS`, one face after the
-/// other, each into the other polygon of the pair; `current` follows the result.
-fn clip_slab<const AXIS: usize>(pair: &mut [Polygon; 2], current: &mut usize, cell: &Aabb) {
-    for (plane, side) in [(cell.min[AXIS], 1.0), (cell.max[AXIS], -1.0)] {
-        let [a, b] = pair;
-        let (from, to) = if *current == 0 { (a, b) } else { (b, a) };
-        if from.clip_into::<AXIS>(plane, side, to) {
-            *current ^= 1;
+/// The two polygons of [`clipped_bounds`]: `from` the current one, `to` the one the next
+/// plane clips it into.
+struct Clipping<'p> {
+    from: &'p mut Polygon,
+    to: &'p mut Polygon,
+}
+
+impl Clipping<'_> {
+    /// Clips the current polygon to the slab `[lo, hi]` on axis `AXIS`, the lower face first.
+    fn slab<const AXIS: usize>(&mut self, lo: f64, hi: f64) {
+        self.plane::<AXIS, false>(lo);
+        self.plane::<AXIS, true>(hi);
+    }
+
+    /// Clips the current polygon to the inner side of the face `plane` (the upper face of the
+    /// slab when `UPPER`).
+    fn plane<const AXIS: usize, const UPPER: bool>(&mut self, plane: f64) {
+        if self.from.clip_into::<AXIS, UPPER>(plane, self.to) {
+            std::mem::swap(&mut self.from, &mut self.to);
         }
     }
 }
@@ -102,12 +116,24 @@ impl Polygon {
         &self.vertices[..self.len]
     }
 
-    /// Writes into `out` the part with `side · (p[AXIS] - plane) >= 0` (crossing points sit
-    /// exactly on the plane) and returns true, or returns false when that part is the whole
-    /// polygon (or it overflowed), leaving `out` as it is.
-    fn clip_into<const AXIS: usize>(&self, plane: f64, side: f64, out: &mut Polygon) -> bool {
+    /// Writes into `out` the part on the inner side of the face `plane` of axis `AXIS` (`p -
+    /// plane >= 0` for a lower face, `<= 0` for an upper face: crossing points sit exactly
+    /// on the plane) and returns true, or returns false when that part is the whole polygon (or
+    /// it overflowed), leaving `out` as it is.
+    fn clip_into<const AXIS: usize, const UPPER: bool>(
+        &self,
+        plane: f64,
+        out: &mut Polygon,
+    ) -> bool {
         let coord = |p: &DVec3| p.as_ref()[AXIS];
-        let inside = |p: &DVec3| side * (coord(p) - plane) >= 0.0;
+        let inside = |p: &DVec3| {
+            let d = coord(p) - plane;
+            if UPPER {
+                d <= 0.0
+            } else {
+                d >= 0.0
+            }
+        };
         let vertices = self.vertices();
         if self.overflowed || vertices.iter().all(inside) {
             return false;
@@ -157,8 +183,8 @@ pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64, candidates: u8) -
     let mask = candidates & box_axes_mask(lo, hi, quarter, half);
     // Octants holding a point of the triangle well inside (`witness`) touch it: only the
     // others are still in question.
-    let witness = witness_half(&v, half, margin);
-    let vertices = witness.map_or(0, |inner| vertices_inside(&v, quarter, inner));
+    let witness = Witness::new(&v, quarter, half, margin);
+    let vertices = witness.map_or(0, |w| v.iter().fold(0, |m, &p| m | w.octants(p)));
     let mut test = OctantTest {
         v,
         quarter,
@@ -166,10 +192,13 @@ pub fn octant_mask(tri: &[DVec3; 3], cell: &Aabb, margin: f64, candidates: u8) -
         mask,
         open: mask & !vertices,
     };
-    let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
-    if let Some(inner) = witness.filter(|_| test.open != 0) {
-        test.open &= !crossings_inside(&v, quarter, inner);
+    if let Some(w) = witness.filter(|_| test.open != 0) {
+        test.open &= !w.crossings(&v);
     }
+    if test.open == 0 {
+        return test.mask;
+    }
+    let edges = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
     test.axis(edges[0].cross(edges[1]));
     for e in edges {
         for axis in DVec3::AXES {
@@ -244,69 +273,87 @@ fn extent([a, b, c]: [f64; 3]) -> (f64, f64) {
 /// Axes with no component above this in magnitude are tested in full by [`octant_mask`].
 const TINY_AXIS: f64 = 1e-200;
 
-/// The half-size of the octants shrunk by `margin / 2`, or `None` when that is too little
-/// to stand for the rounding of the separating-axis test. A point of the triangle inside an
-/// octant shrunk so (spanning `±quarter ± inner` about the cell centre) cannot be separated
-/// from it by [`octant_mask`]'s test: on an axis `a` the point lies `margin / 2 · |a|₁`
-/// inside the octant's projection, while the test's rounding is a few ulps of `|a|₁` times
-/// the largest coordinate, kept below 2⁻⁴⁰ of it here (and axes below [`TINY_AXIS`], where
-/// products may underflow, are tested in full).
-fn witness_half(v: &[DVec3; 3], half: DVec3, margin: f64) -> Option<DVec3> {
-    let slack = 0.5 * margin;
-    let scale = v
-        .iter()
-        .fold(half.max_element(), |m, p| m.max(p.abs().max_element()));
-    (slack > 0.0 && slack >= scale * TWO_TO_MINUS_40).then(|| half - DVec3::splat(slack))
+/// The octants shrunk by `slack = margin / 2` on every side (spanning `±quarter ± inner`
+/// about the cell centre, `inner = quarter + slack`), in which a point of the triangle
+/// witnesses that the triangle touches the octant. A point inside an octant shrunk so cannot
+/// be separated from it by [`octant_mask`]'s test: on an axis `a` the point lies `slack ·
+/// |a|₁` inside the octant's projection, while the test's rounding is a few ulps of `|a|₁`
+/// times the largest coordinate, kept below 2⁻⁴⁰ of it here (and axes below [`TINY_AXIS`],
+/// where products may underflow, are tested in full). The look at a point has its own
+/// rounding, a few ulps of the cell's size, which that slack also covers.
+#[derive(Clone, Copy)]
+struct Witness {
+    /// The shrunk octants' outer faces: `2 quarter + slack` from the centre.
+    outer: DVec3,
+    slack: f64,
 }
 
-/// The octants (spanning `±quarter ± inner` about the cell centre) holding one of the
-/// vertices `v` (relative to the centre).
-fn vertices_inside(v: &[DVec3; 3], quarter: DVec3, inner: DVec3) -> u8 {
-    // A vertex beyond every octant is passed over without classifying it (a vertex the
-    // rounding of this first look passes over only leaves its octant to the axes).
-    let outer = quarter + inner;
-    v.iter()
-        .filter(|p| p.abs().cmple(outer).all())
-        .fold(0, |m, &p| m | box_axes_mask(p, p, quarter, inner))
-}
-
-/// The octants (spanning `±quarter ± inner` about the cell centre) holding a point where an
-/// edge of the triangle `v` (relative to the centre) crosses one of the cell's midplanes. The
-/// point is placed exactly on the midplane, which lies inside both octants it separates, and
-/// its other coordinates carry a few ulps of rounding, as a vertex's projections do.
-fn crossings_inside(v: &[DVec3; 3], quarter: DVec3, inner: DVec3) -> u8 {
-    let below = v.map(negative_axes);
-    let mut mask = 0;
-    for j in 0..3 {
-        let k = (j + 1) % 3;
-        let (p, q) = (v[j], v[k]);
-        // The midplanes that the edge from p to q crosses.
-        let mut crossed = below[j] ^ below[k];
-        while crossed != 0 {
-            let a = crossed.trailing_zeros() as usize;
-            crossed &= crossed - 1;
-            let mut x = p + (q - p) * (p[a] / (p[a] - q[a]));
-            x[a] = 0.0;
-            mask |= box_axes_mask(x, x, quarter, inner);
-        }
+impl Witness {
+    /// The witness octants for the triangle `v` (relative to the centre), or `None` when the
+    /// margin is too little to stand for the rounding of the separating-axis test.
+    fn new(v: &[DVec3; 3], quarter: DVec3, half: DVec3, margin: f64) -> Option<Witness> {
+        let slack = 0.5 * margin;
+        let scale = v
+            .iter()
+            .fold(half.max_element(), |m, p| m.max(p.abs().max_element()));
+        let inner = half - DVec3::splat(slack);
+        (slack > 0.0 && slack >= scale * TWO_TO_MINUS_40).then(|| Witness {
+            outer: quarter + inner,
+            slack,
+        })
     }
-    mask
+
+    /// The shrunk octants holding the point `p` (relative to the centre): inside the shrunk
+    /// cell, the octants on the side of each midplane that `p` is on, and on both sides
+    /// where `p` lies within `slack` of the midplane.
+    fn octants(&self, p: DVec3) -> u8 {
+        // Without a branch on the first test (its outcome is not predictable).
+        let inside = u8::from(p.abs().cmple(self.outer).all()).wrapping_neg();
+        let axis = |a: usize, x: f64| {
+            ALLOWED[a][usize::from(x <= self.slack) | usize::from(x >= -self.slack) << 1]
+        };
+        inside & axis(0, p.x) & axis(1, p.y) & axis(2, p.z)
+    }
+
+    /// The shrunk octants holding a point where an edge of the triangle `v` (relative to the
+    /// centre) crosses one of the cell's midplanes. The point is placed exactly on the
+    /// midplane, which lies inside both octants it separates, and its other coordinates carry
+    /// a few ulps of rounding, as a vertex's projections do.
+    fn crossings(&self, v: &[DVec3; 3]) -> u8 {
+        let below = v.map(negative_axes);
+        let mut mask = 0;
+        for j in 0..3 {
+            let k = (j + 1) % 3;
+            let (p, q) = (v[j], v[k]);
+            // The midplanes that the edge from p to q crosses.
+            let mut crossed = below[j] ^ below[k];
+            while crossed != 0 {
+                let a = crossed.trailing_zeros() as usize;
+                crossed &= crossed - 1;
+                let mut x = p + (q - p) * (p[a] / (p[a] - q[a]));
+                x[a] = 0.0;
+                mask |= self.octants(x);
+            }
+        }
+        mask
+    }
 }
 
 /// 2⁻⁴⁰.
 const TWO_TO_MINUS_40: f64 = 1.0 / (1u64 << 40) as f64;
 
+/// By the bits (lower side touched, upper side touched) of axis a, the octants allowed: those
+/// on the upper side of axis a have bit a set.
+const ALLOWED: [[u8; 4]; 3] = [
+    [0, 0b0101_0101, 0b1010_1010, 0xff],
+    [0, 0b0011_0011, 0b1100_1100, 0xff],
+    [0, 0b0000_1111, 0b1111_0000, 0xff],
+];
+
 /// The octants that the box `[lo, hi]` (relative to the cell centre) touches: octant `i`
 /// spans `[c - half, c + half]` with `c = ±quarter` on each axis, so each
 /// axis decides its lower and upper octants with one pair of comparisons.
 fn box_axes_mask(lo: DVec3, hi: DVec3, quarter: DVec3, half: DVec3) -> u8 {
-    // By the bits (lower side touched, upper side touched) of axis a, the octants allowed:
-    // those on the upper side of axis a have bit a set.
-    const ALLOWED: [[u8; 4]; 3] = [
-        [0, 0b0101_0101, 0b1010_1010, 0xff],
-        [0, 0b0011_0011, 0b1100_1100, 0xff],
-        [0, 0b0000_1111, 0b1111_0000, 0xff],
-    ];
     // One axis: `x - (-q)` is `x + q` exactly.
     let axis = |a: usize, lo: f64, hi: f64, q: f64, r: f64| {
         let low = (lo + q <= r) & (hi + q >= -r);
@@ -338,7 +385,7 @@ mod tests {
             polygon.push(DVec3::new((i % 2) as f64, i as f64, 0.0));
         }
         let mut clipped = Polygon::new();
-        assert!(polygon.clip_into::<0>(0.5, 1.0, &mut clipped));
+        assert!(polygon.clip_into::<0, false>(0.5, &mut clipped));
         assert!(clipped.overflowed);
     }
 

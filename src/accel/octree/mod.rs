@@ -74,6 +74,7 @@ use glam::DVec3;
 pub use lanes::Kernel;
 use lanes::Lanes;
 pub use packet::WIDTH as PACKET;
+use rayon::prelude::*;
 use serde::Serialize;
 use traverse::Unobserved;
 use wide::Layout;
@@ -142,7 +143,10 @@ impl Octree {
             max_depth: params.max_depth.min(DEPTH_CAP),
             ..params
         };
-        let bounds: Vec<Aabb> = (0..set.len()).map(|i| set.bounds(i)).collect();
+        let bounds: Vec<Aabb> = (0..set.len())
+            .into_par_iter()
+            .map(|i| set.bounds(i))
+            .collect();
         let finite = bounds
             .iter()
             .filter(|b| b.min.is_finite() && b.max.is_finite())
@@ -151,6 +155,7 @@ impl Octree {
         let margin = root.size().x * 1e-9;
         // Only a set with a primitive that does not cost 1 keeps a cost per primitive.
         let costs = (0..set.len())
+            .into_par_iter()
             .any(|i| set.cost(i) != 1.0)
             .then(|| (0..set.len()).map(|i| set.cost(i)).collect());
         let builder = Builder {

@@ -13,6 +13,7 @@
 //! node's box (or 2⁻¹⁹ of its coordinates' magnitude, which keeps `k` small).
 
 use super::build::{Node, INTERIOR};
+use rayon::prelude::*;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
@@ -219,57 +220,60 @@ pub(super) struct Layout {
 impl Layout {
     /// Converts built cells (node 0 the root) and their references into eight-wide nodes,
     /// depth first: a node's first interior child follows it directly. An interior root's own
-    /// occupied box is not stored (its children's lie within it).
+    /// occupied box is not stored (its children's lie within it). The order is fixed in one
+    /// pass; the nodes themselves (quantising their children's boxes) are then made in
+    /// parallel.
     pub fn new(cells: &[Node], refs: &[u32]) -> Layout {
         let interior = cells.iter().filter(|c| c.count & INTERIOR != 0).count();
-        let mut layout = Layout {
-            nodes: Vec::with_capacity(interior.max(1)),
+        let mut order = Order {
+            cells,
+            refs,
+            nodes: Vec::with_capacity(interior),
             // Each leaf's references and its count.
-            refs: Vec::with_capacity(refs.len() + cells.len() - interior),
-            largest: Some(0.0),
+            leaves: Vec::with_capacity(refs.len() + cells.len() - interior),
         };
         if cells[0].count & INTERIOR != 0 {
-            layout.place(cells, refs, 0);
+            order.place(0);
         } else if cells[0].count != 0 {
             // A root leaf waits in lane 0 of a node of its own.
-            layout.nodes.push(Wide::VACANT);
             let mut lanes = [None; 8];
-            lanes[0] = Some((cells[0].bounds, layout.place(cells, refs, 0)));
-            layout.nodes[0] = layout.wide(&lanes);
+            lanes[0] = Some((cells[0].bounds, order.place(0)));
+            let mut layout = Layout {
+                nodes: Vec::new(),
+                refs: order.leaves,
+                largest: Some(0.0),
+            };
+            let node = layout.wide(&lanes);
+            layout.nodes.push(node);
+            return layout;
+        }
+        let (nodes, largest): (Vec<Wide>, Vec<Option<f64>>) = order
+            .nodes
+            .par_iter()
+            .with_min_len(64)
+            .map(|&(cell, children)| Wide::new(&lanes(cells, cell, &children)))
+            .unzip();
+        let mut layout = Layout {
+            nodes,
+            refs: order.leaves,
+            largest: Some(0.0),
+        };
+        for node in largest {
+            layout.fold_largest(node);
         }
         layout
-    }
-
-    /// Places cell `index` and everything below it; returns its reference.
-    fn place(&mut self, cells: &[Node], refs: &[u32], index: usize) -> u32 {
-        let cell = cells[index];
-        if cell.count & INTERIOR == 0 {
-            let at = self.refs.len();
-            let first = cell.first as usize;
-            self.refs.push(cell.count);
-            self.refs
-                .extend_from_slice(&refs[first..first + cell.count as usize]);
-            return LEAF | at as u32;
-        }
-        let at = self.nodes.len();
-        self.nodes.push(Wide::VACANT);
-        let mut lanes = [None; 8];
-        let mut next = cell.first as usize;
-        for (lane, slot) in lanes.iter_mut().enumerate() {
-            if cell.count & (1 << lane) != 0 {
-                *slot = Some((cells[next].bounds, self.place(cells, refs, next)));
-                next += 1;
-            }
-        }
-        self.nodes[at] = self.wide(&lanes);
-        at as u32
     }
 
     /// The node for `lanes`, its largest plane folded into [`Layout::largest`].
     fn wide(&mut self, lanes: &[Option<([f32; 6], u32)>; 8]) -> Wide {
         let (node, largest) = Wide::new(lanes);
-        self.largest = self.largest.zip(largest).map(|(a, b)| a.max(b));
+        self.fold_largest(largest);
         node
+    }
+
+    /// Folds a node's largest plane (`None`: not quantised) into [`Layout::largest`].
+    fn fold_largest(&mut self, largest: Option<f64>) {
+        self.largest = self.largest.zip(largest).map(|(a, b)| a.max(b));
     }
 
     /// The leaf that child reference `child` (with [`LEAF`] set) names: its references.
@@ -284,6 +288,55 @@ impl Layout {
     pub fn bytes(&self) -> usize {
         self.nodes.len() * size_of::<Wide>() + self.refs.len() * size_of::<u32>()
     }
+}
+
+/// The depth-first order of [`Layout::new`]: per node, the interior cell it is made from and
+/// its children's references; the leaves' counts and references as laid out.
+struct Order<'c> {
+    cells: &'c [Node],
+    refs: &'c [u32],
+    nodes: Vec<(usize, [u32; 8])>,
+    leaves: Vec<u32>,
+}
+
+impl Order<'_> {
+    /// Places cell `index` and everything below it; returns its reference.
+    fn place(&mut self, index: usize) -> u32 {
+        let cell = self.cells[index];
+        if cell.count & INTERIOR == 0 {
+            let at = self.leaves.len();
+            let first = cell.first as usize;
+            self.leaves.push(cell.count);
+            self.leaves
+                .extend_from_slice(&self.refs[first..first + cell.count as usize]);
+            return LEAF | at as u32;
+        }
+        let at = self.nodes.len();
+        self.nodes.push((index, [Wide::EMPTY; 8]));
+        let mut next = cell.first as usize;
+        for lane in 0..8 {
+            if cell.count & (1 << lane) != 0 {
+                self.nodes[at].1[lane] = self.place(next);
+                next += 1;
+            }
+        }
+        at as u32
+    }
+}
+
+/// The lanes of the node made from interior cell `index`: its non-empty children's boxes
+/// (stored after each other from `first`, in octant order) with their references `children`.
+fn lanes(cells: &[Node], index: usize, children: &[u32; 8]) -> [Option<([f32; 6], u32)>; 8] {
+    let cell = cells[index];
+    let mut lanes = [None; 8];
+    let mut next = cell.first as usize;
+    for (lane, slot) in lanes.iter_mut().enumerate() {
+        if cell.count & (1 << lane) != 0 {
+            *slot = Some((cells[next].bounds, children[lane]));
+            next += 1;
+        }
+    }
+    lanes
 }
 
 #[cfg(test)]
