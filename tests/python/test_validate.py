@@ -455,3 +455,19 @@ def test_compressed_files_use_the_reference_decode_next_to_them():
     assert any("helmet.draco-eb.plain.glb" in n for n in ref.notes)
     with pytest.raises(validate.SkipScene):  # Draco without a reference decode
         validate.load_reference(FIXTURES / "compressed" / "knight.draco-optional.glb")
+
+
+def test_bench_rays_in_tiles_are_4x2_pixel_tiles():
+    # The bench's coherent rays go in the CLI's tile order: each run of eight rows is the
+    # 4 x 2 block of pixels (x..x+3, y..y+1), pixels identified by their row-major index.
+    from raycast_tools.rays import in_tiles
+
+    side = 8
+    index = np.arange(side * side, dtype=np.float32)
+    rays = np.repeat(index[:, None], 6, axis=1)
+    tiled = in_tiles(rays, side)[:, 0].astype(int)
+    assert sorted(tiled) == list(range(side * side))
+    for k, tile in enumerate(tiled.reshape(-1, 8)):
+        y, x = 2 * (k // (side // 4)), 4 * (k % (side // 4))
+        assert list(tile) == [(y + r) * side + x + c for r in (0, 1) for c in range(4)]
+    assert np.array_equal(in_tiles(rays[:36], 6), rays[:36])

@@ -26,7 +26,7 @@ from .cli import prog
 from .gltf_writer import UNSIGNED_INT, Gltf
 from .machine import machine as machine_base
 from .paths import RELEASE, ROOT
-from .rays import pinhole_rays, random_rays
+from .rays import in_tiles, pinhole_rays, random_rays
 from .runner import raycast_info
 
 BUNNY = ROOT / "fixtures/assets/stanford-bunny.obj"
@@ -452,7 +452,7 @@ def main(argv=None):
             info = raycast_info(RELEASE, path)
             lo, hi = bounds_of(info)
             rays = {"coherent": tmp / f"{key}_cam.npy"}
-            np.save(rays["coherent"], pinhole_rays(lo, hi, cam_side))
+            np.save(rays["coherent"], in_tiles(pinhole_rays(lo, hi, cam_side), cam_side))
             if group == "scenes":
                 rays["incoherent"] = tmp / f"{key}_rnd.npy"
                 np.save(rays["incoherent"], random_rays(lo, hi, n_random, rng))
@@ -589,7 +589,8 @@ def report(r):
         *([f"Skipped: {', '.join(r['missing'])}.", ""] if r.get("missing") else []),
         *skipped_peers(r),
         "Method: one process per scene for the Rust backends (benches/trace.rs) and one for the "
-        "Python peers, on the same float32 rays (`coherent` = pinhole camera, one ray per pixel; "
+        "Python peers, on the same float32 rays (`coherent` = pinhole camera, one ray per pixel, "
+        "in 4 × 2 pixel tiles: the order the CLI traces a camera in, given to every method; "
         "`incoherent` = origins uniform in the scene box, directions uniform). Warm-up run, then "
         "the median of several; builds likewise (one build without warm-up for scenes of 1M "
         "triangles and more). Rust tracing goes through the CLI's `render` path with `--aov depth` "

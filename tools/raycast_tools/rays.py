@@ -147,6 +147,16 @@ def pinhole_rays(lo, hi, side):
     return look_at_rays(eye, target, FOV_DEGREES, side)
 
 
+def in_tiles(rays, side):
+    """A side x side image's rays (row-major rows) reordered into 4 x 2 pixel tiles, left to
+    right along each pair of rows: the order the CLI traces a camera's pixels in, so that each
+    run of eight rays is a tile. Rows unchanged when side is not a multiple of 4."""
+    if side % 4:
+        return rays
+    tiles = rays.reshape(side // 2, 2, side // 4, 4, rays.shape[-1])
+    return tiles.transpose(0, 2, 1, 3, 4).reshape(rays.shape)
+
+
 def random_rays(lo, hi, count, rng):
     """Origins uniform in the box [lo, hi], directions uniform on the sphere: float32 rows
     origin|unit direction (the bench's incoherent rays)."""

@@ -51,7 +51,10 @@
 //! Rays in runs of eight whose directions share an octant (a camera's neighbouring pixels) can
 //! also go as one packet (module `packet`, [`Octree::intersect_packet`]): a node is fetched
 //! once for the eight, each child's box is tested against all eight rays in one SIMD test,
-//! and the rays share the stack; every ray still gets exactly its own answer.
+//! and the rays share the stack; in a leaf, each primitive is tested against the packet's rays
+//! that reach it together ([`PrimitiveSet::intersect_packet`]). A ray alone tests a leaf's
+//! primitives four at a time ([`PrimitiveSet::intersect_group`]). Every ray still gets exactly
+//! its own answer.
 //!
 //! The lecture's boundary trap: a primitive stored in an early cell can be hit beyond that cell's
 //! exit while a nearer primitive waits in a later cell. The traversal therefore never stops at
