@@ -103,8 +103,23 @@ impl Instance {
         dir: DVec3,
         t_max: f64,
     ) -> Option<Hit> {
+        if !self.may_reach(origin, dir, t_max) {
+            return None;
+        }
         let ray = self.local_ray(stored, origin, dir);
         stored.octree().intersect(&stored.set, &ray, t_max)
+    }
+
+    /// Whether the world ray `origin + t · dir` may meet the instance with `0 <= t <= t_max`:
+    /// a slab test against the bounds grown by `1e-9 · (their size + the origin's distance
+    /// from their centre)`. Every hit lies in the bounds (up to the rounding they are padded
+    /// for), and the margin is some six orders of magnitude above the rounding of the slab
+    /// parameters, so no hit is passed over: the instance's octree and its set-up are skipped
+    /// only for rays that cannot reach it before their best hit so far.
+    pub fn may_reach(&self, origin: DVec3, dir: DVec3, t_max: f64) -> bool {
+        let offset = (origin - self.bounds.center()).abs().max_element();
+        let margin = 1e-9 * (self.bounds.size().max_element() + offset);
+        self.bounds.expanded(margin).ray_enters(origin, dir, t_max)
     }
 
     /// [`Instance::intersect`] for the rays `active` (bit `i` for ray `i`) of a packet, with
@@ -154,5 +169,78 @@ impl Instance {
             dir: d,
             extra: WatertightRay::new(o, d),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::mesh::Mesh;
+    use glam::DQuat;
+    use std::sync::Arc;
+
+    /// A small deterministic generator (xorshift).
+    struct Rng(u64);
+
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+
+        fn point(&mut self, size: f64) -> DVec3 {
+            DVec3::new(self.next(), self.next(), self.next()) * (2.0 * size) - DVec3::splat(size)
+        }
+    }
+
+    /// Every hit the instance's own octree finds for a world ray (the test without the
+    /// pre-test) lies where [`Instance::may_reach`] lets the ray through with `t_max` the hit's
+    /// `t`: placements rotated, scaled from 1e-3 to 1e3 and moved up to 1e6 away, rays aimed
+    /// at the copy's triangles; and rays aimed away are refused, so the test can fail.
+    #[test]
+    fn the_bounds_pre_test_lets_every_hit_through() {
+        let mut rng = Rng(0x0dd_ba11);
+        let tris: Vec<[DVec3; 3]> = (0..60)
+            .map(|_| {
+                let c = rng.point(1.0);
+                [c + rng.point(0.2), c + rng.point(0.2), c + rng.point(0.2)]
+            })
+            .collect();
+        let set = MeshSet {
+            mesh: Arc::new(Mesh::from_soup(&tris)),
+            anchor: DVec3::ZERO,
+        };
+        let stored = StoredMesh::new(set, OctreeParams::default());
+        let (mut hits, mut refused) = (0, 0);
+        for round in 0..400 {
+            let scale = 10f64.powi(round % 7 - 3);
+            let rotation = DQuat::from_axis_angle(rng.point(1.0).normalize(), 6.0 * rng.next());
+            let place = rng.point(10f64.powi(round % 7)) * scale;
+            let world = DMat4::from_scale_rotation_translation(
+                DVec3::new(1.0 + rng.next(), 1.0 + rng.next(), 1.0 + rng.next()) * scale,
+                rotation,
+                place,
+            );
+            let instance = Instance::new(0, &stored, &world, 0).unwrap();
+            for _ in 0..10 {
+                let tri = tris[(rng.next() * tris.len() as f64) as usize % tris.len()];
+                let target = world.transform_point3((tri[0] + tri[1] + tri[2]) / 3.0);
+                let origin = target + rng.point(5.0 * scale);
+                let dir = target - origin;
+                let ray = instance.local_ray(&stored, origin, dir);
+                if let Some(hit) = stored.octree().intersect(&stored.set, &ray, f64::INFINITY) {
+                    assert!(instance.may_reach(origin, dir, hit.t), "round {round}");
+                    hits += 1;
+                }
+                let away = instance.bounds.center() - origin;
+                refused += usize::from(!instance.may_reach(origin, -away, f64::INFINITY));
+            }
+        }
+        assert!(
+            hits > 3000 && refused > 3000,
+            "{hits} hits, {refused} refused"
+        );
     }
 }

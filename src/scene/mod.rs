@@ -31,8 +31,8 @@ pub use instance::{Instance, StoredMesh};
 pub use mesh::{Mesh, MeshSet, Positions};
 
 use crate::accel::{
-    intersect_each, intersect_one_by_one, octants_by_overlap, Hit, PreparedRay, PrimitiveSet,
-    GROUP, PACKET,
+    intersect_each, intersect_one_by_one, octants_by_overlap, set_bits, Hit, PreparedRay,
+    PrimitiveSet, GROUP, PACKET,
 };
 use crate::camera::Camera;
 use crate::geometry::triangle::WatertightRay;
@@ -512,8 +512,16 @@ impl Scene {
         t_max: &[f64; PACKET],
         ts: &mut [f64; PACKET],
     ) -> u32 {
-        if let (Top::Instance(k), true) = (self.top(index), active.count_ones() >= 4) {
+        if let Top::Instance(k) = self.top(index) {
             let instance = &self.instances[k];
+            let reach = |&i: &usize| {
+                let ray = &rays[i];
+                instance.may_reach(ray.extra.world_origin, ray.dir, t_max[i])
+            };
+            let active = set_bits(active).filter(reach).fold(0u32, |m, i| m | 1 << i);
+            if active.count_ones() < 4 {
+                return intersect_each(self, index, rays, active, t_max, ts);
+            }
             let stored = &self.meshes[instance.mesh as usize];
             let world = rays.map(|ray| (ray.extra.world_origin, ray.dir));
             if let Some(hits) = instance.intersect_packet(stored, world, active, t_max) {
