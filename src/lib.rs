@@ -21,3 +21,5 @@ pub mod job;
 pub mod output;
 pub mod query;
 pub mod render;
+#[cfg(test)]
+mod test_rng;

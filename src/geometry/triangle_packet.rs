@@ -14,6 +14,7 @@
 //! instructions per four pairs where the single-ray test spends some sixty per pair.
 
 use super::triangle::WatertightRay;
+use crate::accel::octree::Kernel;
 use crate::accel::PACKET;
 use glam::DVec3;
 #[cfg(target_arch = "x86_64")]
@@ -43,7 +44,7 @@ impl WatertightPacket {
             axes,
             origin: [[0.0; PACKET]; 3],
             shear: [[0.0; PACKET]; 2],
-            avx2: avx2_available(),
+            avx2: Kernel::Avx2.available(),
         };
         for i in 0..PACKET {
             let ray = ray(i);
@@ -154,8 +155,11 @@ impl WatertightRay {
     /// already refuse (four triangles per AVX2 register, exactly as
     /// [`WatertightPacket::candidates`] takes four rays).
     pub fn candidates(&self, tris: &[[DVec3; 3]; 4], active: u32) -> u32 {
+        // AVX2 alone, checked here rather than through `Kernel::Avx2.available()` (which also
+        // asks for FMA): this runs once per group of four, and the second check cost about 8
+        // instructions per incoherent ray.
         #[cfg(target_arch = "x86_64")]
-        if avx2_available() {
+        if is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2.
             return unsafe { self.candidates_avx2(tris, active) };
         }
@@ -276,14 +280,6 @@ unsafe fn kept_avx2(
         _mm256_cmp_pd::<_CMP_EQ_OQ>(det, zero),
     );
     !(_mm256_movemask_pd(refused) as u32) & 0xf
-}
-
-/// True when this CPU runs the AVX2 kernel.
-fn avx2_available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return is_x86_feature_detected!("avx2");
-    #[cfg(not(target_arch = "x86_64"))]
-    return false;
 }
 
 #[cfg(test)]

@@ -5,11 +5,16 @@
 //! frames), and the watertight test runs against the vertices as stored.
 
 use super::mesh::MeshSet;
-use crate::accel::{Hit, Octree, OctreeParams, PreparedRay, PACKET};
+use crate::accel::{set_bits, Hit, Octree, OctreeParams, PreparedRay, PACKET};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Aabb;
 use glam::{DAffine3, DMat4, DVec3};
 use std::sync::OnceLock;
+
+/// Rays of a packet reaching an instance from which they go through its octree as a packet:
+/// with fewer, setting the packet up costs more than it saves (measured on instanced bunnies:
+/// from two rays, +6 % instructions at 256²).
+const PACKET_FROM: usize = 4;
 
 /// A mesh stored once, with the octree over its triangles in its own frame. The octree is
 /// built on first use ([`StoredMesh::octree`]), so that reading a scene (`raycast info`,
@@ -106,6 +111,11 @@ impl Instance {
         if !self.may_reach(origin, dir, t_max) {
             return None;
         }
+        self.trace(stored, origin, dir, t_max)
+    }
+
+    /// [`Instance::intersect`] for a ray [`Instance::may_reach`] has let through.
+    fn trace(&self, stored: &StoredMesh, origin: DVec3, dir: DVec3, t_max: f64) -> Option<Hit> {
         let ray = self.local_ray(stored, origin, dir);
         stored.octree().intersect(&stored.set, &ray, t_max)
     }
@@ -123,10 +133,34 @@ impl Instance {
     }
 
     /// [`Instance::intersect`] for the rays `active` (bit `i` for ray `i`) of a packet, with
-    /// world origins and directions, traced through the mesh's octree together: each ray
-    /// gets exactly its [`Instance::intersect`] answer. `None` when their directions in the
-    /// mesh frame cannot go as one packet ([`Octree::intersect_packet`]).
+    /// world origins and directions: each ray gets exactly its [`Instance::intersect`] answer
+    /// (`None` for the rays not in `active`). The rays [`Instance::may_reach`] lets through go
+    /// through the mesh's octree together when there are [`PACKET_FROM`] of them or more and
+    /// their directions in the mesh frame can go as one packet, else one by one.
     pub fn intersect_packet(
+        &self,
+        stored: &StoredMesh,
+        rays: [(DVec3, DVec3); PACKET],
+        active: u32,
+        t_max: &[f64; PACKET],
+    ) -> [Option<Hit>; PACKET] {
+        let reach = |&i: &usize| self.may_reach(rays[i].0, rays[i].1, t_max[i]);
+        let active = set_bits(active).filter(reach).fold(0u32, |m, i| m | 1 << i);
+        if active.count_ones() as usize >= PACKET_FROM {
+            if let Some(hits) = self.trace_packet(stored, rays, active, t_max) {
+                return hits;
+            }
+        }
+        let mut hits = [None; PACKET];
+        for i in set_bits(active) {
+            hits[i] = self.trace(stored, rays[i].0, rays[i].1, t_max[i]);
+        }
+        hits
+    }
+
+    /// The rays `active` (at least one) through the mesh's octree as one packet, or `None`
+    /// when they cannot go as one ([`Octree::intersect_packet`]).
+    fn trace_packet(
         &self,
         stored: &StoredMesh,
         rays: [(DVec3, DVec3); PACKET],
@@ -139,11 +173,11 @@ impl Instance {
         let stand_in = self.local_ray(stored, origin, dir);
         let mut limits = [f64::NEG_INFINITY; PACKET];
         let mut local = [stand_in; PACKET];
-        for i in (first + 1..PACKET).filter(|i| active & (1 << i) != 0) {
+        for i in set_bits(active) {
             let (origin, dir) = rays[i];
-            local[i] = self.local_ray(stored, origin, dir);
-        }
-        for i in (0..PACKET).filter(|i| active & (1 << i) != 0) {
+            if i != first {
+                local[i] = self.local_ray(stored, origin, dir);
+            }
             limits[i] = t_max[i];
         }
         stored
@@ -176,24 +210,9 @@ impl Instance {
 mod tests {
     use super::*;
     use crate::scene::mesh::Mesh;
+    use crate::test_rng::Rng;
     use glam::DQuat;
     use std::sync::Arc;
-
-    /// A small deterministic generator (xorshift).
-    struct Rng(u64);
-
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-
-        fn point(&mut self, size: f64) -> DVec3 {
-            DVec3::new(self.next(), self.next(), self.next()) * (2.0 * size) - DVec3::splat(size)
-        }
-    }
 
     /// Every hit the instance's own octree finds for a world ray (the test without the
     /// pre-test) lies where [`Instance::may_reach`] lets the ray through with `t_max` the hit's
@@ -204,8 +223,12 @@ mod tests {
         let mut rng = Rng(0x0dd_ba11);
         let tris: Vec<[DVec3; 3]> = (0..60)
             .map(|_| {
-                let c = rng.point(1.0);
-                [c + rng.point(0.2), c + rng.point(0.2), c + rng.point(0.2)]
+                let c = rng.point(-1.0, 1.0);
+                [
+                    c + rng.point(-0.2, 0.2),
+                    c + rng.point(-0.2, 0.2),
+                    c + rng.point(-0.2, 0.2),
+                ]
             })
             .collect();
         let set = MeshSet {
@@ -216,18 +239,28 @@ mod tests {
         let (mut hits, mut refused) = (0, 0);
         for round in 0..400 {
             let scale = 10f64.powi(round % 7 - 3);
-            let rotation = DQuat::from_axis_angle(rng.point(1.0).normalize(), 6.0 * rng.next());
-            let place = rng.point(10f64.powi(round % 7)) * scale;
+            let rotation = DQuat::from_axis_angle(
+                rng.point(-1.0, 1.0).normalize(),
+                6.0 * rng.uniform(0.0, 1.0),
+            );
+            let place = {
+                let reach = 10f64.powi(round % 7);
+                rng.point(-reach, reach)
+            } * scale;
             let world = DMat4::from_scale_rotation_translation(
-                DVec3::new(1.0 + rng.next(), 1.0 + rng.next(), 1.0 + rng.next()) * scale,
+                DVec3::new(
+                    1.0 + rng.uniform(0.0, 1.0),
+                    1.0 + rng.uniform(0.0, 1.0),
+                    1.0 + rng.uniform(0.0, 1.0),
+                ) * scale,
                 rotation,
                 place,
             );
             let instance = Instance::new(0, &stored, &world, 0).unwrap();
             for _ in 0..10 {
-                let tri = tris[(rng.next() * tris.len() as f64) as usize % tris.len()];
+                let tri = tris[(rng.uniform(0.0, 1.0) * tris.len() as f64) as usize % tris.len()];
                 let target = world.transform_point3((tri[0] + tri[1] + tri[2]) / 3.0);
-                let origin = target + rng.point(5.0 * scale);
+                let origin = target + rng.point(-5.0 * scale, 5.0 * scale);
                 let dir = target - origin;
                 let ray = instance.local_ray(&stored, origin, dir);
                 if let Some(hit) = stored.octree().intersect(&stored.set, &ray, f64::INFINITY) {

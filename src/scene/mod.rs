@@ -31,8 +31,8 @@ pub use instance::{Instance, StoredMesh};
 pub use mesh::{Mesh, MeshSet, Positions};
 
 use crate::accel::{
-    intersect_each, intersect_one_by_one, octants_by_overlap, set_bits, Hit, PreparedRay,
-    PrimitiveSet, GROUP, PACKET,
+    intersect_each, intersect_one_by_one, octants_by_overlap, Hit, PreparedRay, PrimitiveSet,
+    GROUP, PACKET,
 };
 use crate::camera::Camera;
 use crate::geometry::triangle::WatertightRay;
@@ -500,9 +500,8 @@ impl Scene {
         }
     }
 
-    /// [`PrimitiveSet::intersect_packet`] for what the packet pre-filter does not take: an
-    /// instance traced by four rays or more goes through its octree as a packet (with fewer,
-    /// setting up the packet costs more than it saves); the rest one ray at a time.
+    /// [`PrimitiveSet::intersect_packet`] for what the packet pre-filter does not take:
+    /// instances through [`Instance::intersect_packet`], the rest one ray at a time.
     #[inline(never)]
     fn intersect_other_packet(
         &self,
@@ -512,30 +511,21 @@ impl Scene {
         t_max: &[f64; PACKET],
         ts: &mut [f64; PACKET],
     ) -> u32 {
-        if let Top::Instance(k) = self.top(index) {
-            let instance = &self.instances[k];
-            let reach = |&i: &usize| {
-                let ray = &rays[i];
-                instance.may_reach(ray.extra.world_origin, ray.dir, t_max[i])
-            };
-            let active = set_bits(active).filter(reach).fold(0u32, |m, i| m | 1 << i);
-            if active.count_ones() < 4 {
-                return intersect_each(self, index, rays, active, t_max, ts);
-            }
-            let stored = &self.meshes[instance.mesh as usize];
-            let world = rays.map(|ray| (ray.extra.world_origin, ray.dir));
-            if let Some(hits) = instance.intersect_packet(stored, world, active, t_max) {
-                let mut hit_rays = 0;
-                for (i, hit) in hits.iter().enumerate() {
-                    if let Some(hit) = hit.filter(|_| active & (1 << i) != 0) {
-                        ts[i] = hit.t;
-                        hit_rays |= 1 << i;
-                    }
-                }
-                return hit_rays;
+        let Top::Instance(k) = self.top(index) else {
+            return intersect_each(self, index, rays, active, t_max, ts);
+        };
+        let instance = &self.instances[k];
+        let stored = &self.meshes[instance.mesh as usize];
+        let world = rays.map(|ray| (ray.extra.world_origin, ray.dir));
+        let hits = instance.intersect_packet(stored, world, active, t_max);
+        let mut hit_rays = 0;
+        for (i, hit) in hits.iter().enumerate() {
+            if let Some(hit) = hit {
+                ts[i] = hit.t;
+                hit_rays |= 1 << i;
             }
         }
-        intersect_each(self, index, rays, active, t_max, ts)
+        hit_rays
     }
 }
 

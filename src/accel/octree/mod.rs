@@ -225,20 +225,7 @@ impl Octree {
         ray: &PreparedRay<P::RayData>,
         t_max: f64,
     ) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        let mut tested = Mailbox::default();
-        self.traverse(ray.local_origin, ray.dir, t_max, |refs, _, _| {
-            test_leaf(
-                set,
-                refs,
-                |prim| tested.check_in(prim),
-                ray,
-                t_max,
-                &mut best,
-            );
-            best.map_or(t_max, |b| b.t)
-        });
-        best
+        self.intersect_with(set, ray.local_origin, ray.dir, t_max, Some(ray))
     }
 
     /// [`Octree::intersect`] for the ray `local_origin + t · dir`, prepared for the primitive
@@ -250,19 +237,27 @@ impl Octree {
         dir: DVec3,
         t_max: f64,
     ) -> Option<Hit> {
+        self.intersect_with(set, local_origin, dir, t_max, None)
+    }
+
+    /// [`Octree::intersect`], with the ray prepared for the primitive tests as `given`, or
+    /// else by [`prepare_ray`] when it first reaches a leaf.
+    fn intersect_with<P: PrimitiveSet>(
+        &self,
+        set: &P,
+        local_origin: DVec3,
+        dir: DVec3,
+        t_max: f64,
+        given: Option<&PreparedRay<P::RayData>>,
+    ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
-        let mut prepared = None;
+        let mut own = None;
         let mut tested = Mailbox::default();
         self.traverse(local_origin, dir, t_max, |refs, _, _| {
-            let ray = prepared.get_or_insert_with(|| prepare_ray(set, local_origin, dir));
-            test_leaf(
-                set,
-                refs,
-                |prim| tested.check_in(prim),
-                ray,
-                t_max,
-                &mut best,
-            );
+            let ray = given
+                .unwrap_or_else(|| own.get_or_insert_with(|| prepare_ray(set, local_origin, dir)));
+            let new = |prim| tested.check_in(prim);
+            test_leaf(set, refs, new, ray, t_max, &mut best);
             best.map_or(t_max, |b| b.t)
         });
         best

@@ -7,6 +7,7 @@ use super::wide::{Layout, Wide};
 use super::*;
 use crate::accel::{brute_force, f32_above, prepare_ray, test_primitive};
 use crate::scene::{Scene, SceneBuilder};
+use crate::test_rng::Rng;
 
 /// The kernels this CPU runs.
 fn kernels() -> Vec<Kernel> {
@@ -14,31 +15,6 @@ fn kernels() -> Vec<Kernel> {
         .into_iter()
         .filter(|k| k.available())
         .collect()
-}
-
-/// A small deterministic generator (xorshift).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn point(&mut self, lo: f64, hi: f64) -> DVec3 {
-        DVec3::new(
-            self.uniform(lo, hi),
-            self.uniform(lo, hi),
-            self.uniform(lo, hi),
-        )
-    }
-    fn pick<T: Copy>(&mut self, items: &[T]) -> T {
-        items[(self.next() % items.len() as u64) as usize]
-    }
 }
 
 /// Random small triangles in [-8, 8]³, with some lying in the root's midplanes.

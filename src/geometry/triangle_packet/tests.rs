@@ -1,28 +1,5 @@
 use super::*;
-
-/// A small deterministic generator (xorshift), so that failures reproduce.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-
-    fn point(&mut self, size: f64) -> DVec3 {
-        DVec3::new(
-            self.uniform(-size, size),
-            self.uniform(-size, size),
-            self.uniform(-size, size),
-        )
-    }
-}
+use crate::test_rng::Rng;
 
 /// The packet's kernels on this CPU: the detected one and the portable one.
 fn kernels(packet: WatertightPacket) -> [WatertightPacket; 2] {
@@ -44,14 +21,14 @@ fn the_filter_keeps_rays_through_the_triangle_and_refuses_rays_beside_it() {
     let (mut packets, mut refused) = (0, 0);
     for round in 0..4000 {
         let size = 10f64.powi(round % 13 - 6);
-        let tri = [0; 3].map(|_| rng.point(size));
+        let tri = [0; 3].map(|_| rng.point(-size, size));
         let normal = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
         if normal.length() < 1e-3 * size * size {
             continue;
         }
         let origin = at(&tri, [1.0 / 3.0; 3])
             + normal.normalize() * size * rng.uniform(0.5, 1000.0)
-            + rng.point(size);
+            + rng.point(-size, size);
         let mut inside = 0u32;
         let targets: [DVec3; PACKET] = std::array::from_fn(|i| {
             let (a, b) = (rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
@@ -73,7 +50,8 @@ fn the_filter_keeps_rays_through_the_triangle_and_refuses_rays_beside_it() {
             .enumerate()
             .filter(|(_, t)| **t == centre)
             .fold(0, |m, (i, _)| m | 1 << i);
-        let origins: [DVec3; PACKET] = std::array::from_fn(|_| origin + rng.point(1e-3 * size));
+        let origins: [DVec3; PACKET] =
+            std::array::from_fn(|_| origin + rng.point(-(1e-3 * size), 1e-3 * size));
         let rays: [WatertightRay; PACKET] =
             std::array::from_fn(|i| WatertightRay::new(origins[i], targets[i] - origins[i]));
         let Some(packet) = WatertightPacket::new(|i| &rays[i]) else {
@@ -111,11 +89,15 @@ fn no_ray_the_single_ray_test_hits_is_refused() {
     let (mut hits, mut tests) = (0, 0);
     for round in 0..50000 {
         let scale = [1.0, 1e-300, 1e300, 1e-160, 3.0][round % 5];
-        let corner = [rng.point(1.0), rng.point(1.0), rng.point(1.0)];
+        let corner = [
+            rng.point(-1.0, 1.0),
+            rng.point(-1.0, 1.0),
+            rng.point(-1.0, 1.0),
+        ];
         // Triangles from a small set of corners share edges and vertices exactly.
-        let pick = |r: &mut Rng| corner[(r.next() * 3.0) as usize % 3] * scale;
-        let tri = [pick(&mut rng), rng.point(1.0) * scale, pick(&mut rng)];
-        let origin = rng.point(4.0) * scale;
+        let pick = |r: &mut Rng| corner[(r.uniform(0.0, 1.0) * 3.0) as usize % 3] * scale;
+        let tri = [pick(&mut rng), rng.point(-1.0, 1.0) * scale, pick(&mut rng)];
+        let origin = rng.point(-4.0, 4.0) * scale;
         let base = tri[0] + (tri[1] - tri[0]) * rng.uniform(0.0, 1.0) - origin;
         let rays: [WatertightRay; PACKET] = std::array::from_fn(|i| {
             let target = match i {
@@ -168,13 +150,13 @@ fn the_group_filter_keeps_triangles_the_ray_crosses_and_refuses_the_others() {
     let (mut groups, mut refused) = (0, 0);
     for round in 0..4000 {
         let size = 10f64.powi(round % 13 - 6);
-        let origin = rng.point(10.0 * size);
-        let dir = rng.point(1.0);
+        let origin = rng.point(-(10.0 * size), 10.0 * size);
+        let dir = rng.point(-1.0, 1.0);
         let ray = WatertightRay::new(origin, dir);
         let mut crossed = 0u32;
         let tris: [[DVec3; 3]; 4] = std::array::from_fn(|k| {
             let point = origin + dir * rng.uniform(0.5, 20.0) * size;
-            let inside = rng.next() < 0.5;
+            let inside = rng.uniform(0.0, 1.0) < 0.5;
             let (a, b) = if inside {
                 (rng.uniform(0.05, 0.45), rng.uniform(0.05, 0.45))
             } else {
@@ -182,7 +164,10 @@ fn the_group_filter_keeps_triangles_the_ray_crosses_and_refuses_the_others() {
             };
             let w = [a, b, 1.0 - a - b];
             crossed |= u32::from(inside) << k;
-            let (v0, v1) = (point + rng.point(size), point + rng.point(size));
+            let (v0, v1) = (
+                point + rng.point(-size, size),
+                point + rng.point(-size, size),
+            );
             let v2 = (point - v0 * w[0] - v1 * w[1]) / w[2];
             [v0, v1, v2]
         });
@@ -220,15 +205,15 @@ fn no_triangle_the_single_ray_test_hits_is_refused() {
     for round in 0..40000 {
         let scale = [1.0, 1e-300, 1e300, 1e-160, 3.0][round % 5];
         let corner = [
-            rng.point(1.0),
-            rng.point(1.0),
-            rng.point(1.0),
-            rng.point(1.0),
+            rng.point(-1.0, 1.0),
+            rng.point(-1.0, 1.0),
+            rng.point(-1.0, 1.0),
+            rng.point(-1.0, 1.0),
         ];
-        let pick = |r: &mut Rng| corner[(r.next() * 4.0) as usize % 4] * scale;
+        let pick = |r: &mut Rng| corner[(r.uniform(0.0, 1.0) * 4.0) as usize % 4] * scale;
         let tris: [[DVec3; 3]; 4] =
-            std::array::from_fn(|_| [pick(&mut rng), pick(&mut rng), rng.point(1.0) * scale]);
-        let origin = rng.point(4.0) * scale;
+            std::array::from_fn(|_| [pick(&mut rng), pick(&mut rng), rng.point(-1.0, 1.0) * scale]);
+        let origin = rng.point(-4.0, 4.0) * scale;
         let dir = match round % 3 {
             0 => corner[round % 4] * scale - origin,
             1 => tris[0][1] - tris[0][0],
