@@ -1,14 +1,16 @@
-//! Geometric building blocks: boxes, rays, the triangle tests (one ray, and a packet's
+//! Geometric building blocks: boxes, rays, the bounds pre-test, the triangle tests (one ray, and a packet's
 //! pre-filter) and the triangle/box tests.
 
 mod aabb;
 mod ray;
+mod reach;
 pub mod triangle;
 pub mod triangle_box;
 pub mod triangle_packet;
 
 pub use aabb::Aabb;
 pub use ray::Ray;
+pub use reach::ReachBox;
 
 /// A triangle in the plane z = 0 around the origin, for the unit tests of [`triangle`] and
 /// [`triangle_box`].

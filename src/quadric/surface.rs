@@ -1,5 +1,6 @@
 //! A quadric placed in world space: intersection, normals, bounds and classification.
 
+use crate::geometry::ReachBox;
 use glam::{DMat3, DMat4, DVec3, DVec4};
 
 use super::eigen::is_definite;
@@ -45,11 +46,8 @@ pub struct Quadric {
     local_anchor: DVec3,
     /// Clip box in local coordinates, widened by [`CLIP_TOLERANCE`].
     clip: Option<[DVec3; 2]>,
-    /// Conservative world AABB of the clipped surface.
-    bounds: [DVec3; 2],
-    /// The centre of `bounds` and its largest side, for the bounds pre-test's margin.
-    bounds_centre: DVec3,
-    bounds_extent: f64,
+    /// Conservative world AABB of the clipped surface, for the bounds pre-test.
+    reach: ReachBox,
     /// Affine type, from the world-space coefficients.
     kind: QuadricKind,
 }
@@ -86,18 +84,14 @@ impl Quadric {
             to_local,
             local_anchor,
             clip: spec.bounds.map(widen_clip_box),
-            bounds: [anchor, anchor],
-            bounds_centre: anchor,
-            bounds_extent: 0.0,
+            reach: ReachBox::new(anchor, anchor),
             kind: QuadricKind::Empty,
         };
         let clip_world = quadric
             .clip
             .map(|b| quadric.world_box_of_local_box(b, linear));
-        quadric.bounds = quadric.clipped_bounds(clip_world, is_definite(spec.q).then_some(linear));
-        let [min, max] = quadric.bounds;
-        quadric.bounds_centre = (min + max) * 0.5;
-        quadric.bounds_extent = (max - min).max_element();
+        let [min, max] = quadric.clipped_bounds(clip_world, is_definite(spec.q).then_some(linear));
+        quadric.reach = ReachBox::new(min, max);
         let length = clip_world.map_or(0.0, |[min, max]| 0.5 * (max - min).length());
         quadric.kind = classify(quadric.world.q, quadric.world.p, quadric.world.r, length);
         Ok(quadric)
@@ -106,7 +100,7 @@ impl Quadric {
     /// Conservative world-space AABB `[min, max]` of the clipped surface; tight (to rounding)
     /// for an unclipped ellipsoid. Always finite; a single point for an empty surface.
     pub fn bounds(&self) -> [DVec3; 2] {
-        self.bounds
+        [self.reach.min, self.reach.max]
     }
 
     /// The world anchor point the coefficients are expressed about.
@@ -126,29 +120,10 @@ impl Quadric {
         self.intersect_exact(origin, dir, t_max)
     }
 
-    /// False only when `origin + t·dir` for `0 <= t <= t_max` stays outside the bounds grown by
-    /// `1e-9 · (box size + the origin's distance from the box centre)`; `inv_dir` is
-    /// `dir.recip()`. Every hit the exact test can return lies inside the bounds, and the
-    /// margin is some six orders of magnitude above the rounding of the slab parameters, so no
-    /// hit is ever rejected. On an axis with `dir = 0` the parameters are infinite, of opposite
-    /// signs when the origin lies inside the slab and of the same sign when outside. `0 · ∞`,
-    /// NaN, arises only for an origin exactly on a grown face with `dir = 0` on that axis: the
-    /// ray then stays outside the bounds, so either answer is right.
+    /// The bounds pre-test ([`ReachBox::may_reach`]); `inv_dir` is `dir.recip()`.
     #[inline]
     pub(super) fn may_reach_bounds(&self, origin: DVec3, inv_dir: DVec3, t_max: f64) -> bool {
-        // Plain comparisons (`f64::max` spends instructions on NaN rules): a NaN candidate
-        // compares false and is passed over, as in `f64::max`; no other operand is NaN.
-        let larger = |a: f64, b: f64| if b > a { b } else { a };
-        let smaller = |a: f64, b: f64| if b < a { b } else { a };
-        let [min, max] = self.bounds;
-        let offset = (origin - self.bounds_centre).abs();
-        let margin = 1e-9 * (self.bounds_extent + larger(larger(offset.x, offset.y), offset.z));
-        let a = (min - DVec3::splat(margin) - origin) * inv_dir;
-        let b = (max + DVec3::splat(margin) - origin) * inv_dir;
-        let (near, far) = (a.min(b), a.max(b));
-        let enter = larger(larger(larger(0.0, near.x), near.y), near.z);
-        let exit = smaller(smaller(smaller(t_max, far.x), far.y), far.z);
-        enter <= exit
+        self.reach.may_reach(origin, inv_dir, t_max)
     }
 
     /// Every `t` with `t_min < t <= t_max` where `origin + t·dir` lies on the surface inside
@@ -208,8 +183,8 @@ impl Quadric {
     /// false only if the box misses [`Quadric::bounds`] or the quadric's value has one strict
     /// sign over the whole box (interval arithmetic, padded for rounding).
     pub fn may_overlap_box(&self, min: DVec3, max: DVec3) -> bool {
-        let lo = min.max(self.bounds[0]);
-        let hi = max.min(self.bounds[1]);
+        let lo = min.max(self.reach.min);
+        let hi = max.min(self.reach.max);
         if lo.cmpgt(hi).any() {
             return false;
         }

@@ -7,7 +7,7 @@
 use super::mesh::MeshSet;
 use crate::accel::{set_bits, Hit, Octree, OctreeParams, PreparedRay, PACKET};
 use crate::geometry::triangle::WatertightRay;
-use crate::geometry::Aabb;
+use crate::geometry::{Aabb, ReachBox};
 use glam::{DAffine3, DMat4, DVec3};
 use std::sync::OnceLock;
 
@@ -68,6 +68,8 @@ pub struct Instance {
     pub bounds: Aabb,
     /// The scene part it draws.
     pub part: u32,
+    /// `bounds`, for the pre-test.
+    reach: ReachBox,
 }
 
 impl Instance {
@@ -88,13 +90,14 @@ impl Instance {
         }
         let local = stored.set.mesh.bounds();
         let bounds = Aabb::from_points(local.corners().map(|c| to_world.transform_point3(c)));
-        let reach = bounds.min.abs().max(bounds.max.abs()).max_element();
+        let bounds = bounds.expanded(1e-12 * bounds.min.abs().max(bounds.max.abs()).max_element());
         Some(Instance {
             mesh,
             to_world,
             to_local,
-            bounds: bounds.expanded(1e-12 * reach),
+            bounds,
             part,
+            reach: ReachBox::new(bounds.min, bounds.max),
         })
     }
 
@@ -121,15 +124,11 @@ impl Instance {
     }
 
     /// Whether the world ray `origin + t · dir` may meet the instance with `0 <= t <= t_max`:
-    /// a slab test against the bounds grown by `1e-9 · (their size + the origin's distance
-    /// from their centre)`. Every hit lies in the bounds (up to the rounding they are padded
-    /// for), and the margin is some six orders of magnitude above the rounding of the slab
-    /// parameters, so no hit is passed over: the instance's octree and its set-up are skipped
-    /// only for rays that cannot reach it before their best hit so far.
+    /// the bounds pre-test ([`ReachBox::may_reach`]). Every hit lies in the bounds (up to the
+    /// rounding they are padded for), so no hit is passed over: the instance's octree and its
+    /// set-up are skipped only for rays that cannot reach it before their best hit so far.
     pub fn may_reach(&self, origin: DVec3, dir: DVec3, t_max: f64) -> bool {
-        let offset = (origin - self.bounds.center()).abs().max_element();
-        let margin = 1e-9 * (self.bounds.size().max_element() + offset);
-        self.bounds.expanded(margin).ray_enters(origin, dir, t_max)
+        self.reach.may_reach(origin, dir.recip(), t_max)
     }
 
     /// [`Instance::intersect`] for the rays `active` (bit `i` for ray `i`) of a packet, with
@@ -144,8 +143,7 @@ impl Instance {
         active: u32,
         t_max: &[f64; PACKET],
     ) -> [Option<Hit>; PACKET] {
-        let reach = |&i: &usize| self.may_reach(rays[i].0, rays[i].1, t_max[i]);
-        let active = set_bits(active).filter(reach).fold(0u32, |m, i| m | 1 << i);
+        let active = self.reach.reaching(&rays, active, t_max);
         if active.count_ones() as usize >= PACKET_FROM {
             if let Some(hits) = self.trace_packet(stored, rays, active, t_max) {
                 return hits;
