@@ -138,18 +138,25 @@ pub(super) fn from_node<const AVX2: bool, F, O>(
             tested.hit
         };
         observer.tested(node, hit, t_best);
-        // Far to near, so the nearest child is popped first.
+        // Far to near, so the nearest child is popped first; or, when it is a cell, entered
+        // at once: it was just found entered before `t_best`, all its pop would check.
         let mut order = u32::from(ORDER[ray.octant & 7][hit as usize & 0xFF]);
+        let mut nearest_cell = None;
         while order != 0 {
             let j = 31 - order.leading_zeros() as usize;
             order &= !(1 << j);
             let lane = (j ^ ray.octant) & 7;
-            stack[top & (STACK - 1)].write((
-                wide.children[lane],
-                tested.enter[lane],
-                tested.exit[lane],
-            ));
+            let child = wide.children[lane];
+            if order == 0 && child & LEAF == 0 {
+                nearest_cell = Some(child as usize);
+                break;
+            }
+            stack[top & (STACK - 1)].write((child, tested.enter[lane], tested.exit[lane]));
             top += 1;
+        }
+        if let Some(cell) = nearest_cell {
+            node = cell;
+            continue;
         }
         loop {
             if top == 0 {
