@@ -13,24 +13,21 @@ pub fn check(
     options: &CheckOptions,
     f: &mut Findings,
 ) -> bool {
-    let Ok(text) = std::str::from_utf8(bytes) else {
-        let line = bytes
-            .iter()
-            .take(
-                std::str::from_utf8(bytes)
-                    .err()
-                    .map_or(0, |e| e.valid_up_to()),
-            )
-            .filter(|&&b| b == b'\n')
-            .count()
-            + 1;
-        f.error(
-            "OBJ_NOT_TEXT",
-            format!("line {line}"),
-            "the file is not UTF-8 text",
-        );
-        return false;
+    let text = match crate::import::obj::text(bytes) {
+        Ok(text) => text,
+        Err(line) => {
+            f.error(
+                "OBJ_NOT_TEXT",
+                format!("line {line}"),
+                "the file is not UTF-8 text",
+            );
+            return false;
+        }
     };
+    if let Err(why) = crate::import::obj::check_statements(text) {
+        f.error("OBJ_NO_STATEMENT", "", why);
+        return false;
+    }
     let base = path.parent().unwrap_or(Path::new("."));
     let mut vertices = 0usize;
     let mut faces = 0usize;

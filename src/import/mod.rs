@@ -46,7 +46,7 @@ pub fn load_bytes(bytes: Vec<u8>, name: &Path, options: &LoadOptions) -> Result<
     sniff::check_head(name, &bytes, &extension)?;
     let mut scene = match extension.as_str() {
         "gltf" | "glb" => gltf::load_bytes(bytes, name, options),
-        "obj" => obj::load_reader(&mut bytes.as_slice(), name),
+        "obj" => obj::load_bytes(&bytes, name),
         "usda" | "usdc" | "usd" | "usdz" => Err(Error::in_file(
             name,
             "USD scenes load from a file, not from bytes (the USD reader resolves layers by path)",

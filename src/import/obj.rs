@@ -1,6 +1,10 @@
 //! Wavefront OBJ through `tobj`: polygons triangulated, one object per OBJ object or group.
 //! Coordinates are read as f64 (tobj's `use_f64`), so the file's decimal numbers keep the
 //! digits an f64 holds; each object is an indexed mesh in world coordinates.
+//!
+//! `tobj` skips lines it does not know, as the format allows (exporters write their own
+//! statements), so before it runs the text is checked to be OBJ at all: UTF-8 (see [`text`]),
+//! with at least one line that is an OBJ statement if it has any (see [`check_statements`]).
 
 use crate::error::{Error, Result};
 use crate::scene::{Mesh, Scene, SceneBuilder};
@@ -8,23 +12,85 @@ use glam::{DMat4, DVec3};
 use std::path::Path;
 use std::sync::Arc;
 
+/// The keywords of the OBJ format (Wavefront's specification: vertex data, free-form curve
+/// and surface attributes and bodies, elements, connectivity, grouping, display and render
+/// attributes, and the superseded and general statements).
+const STATEMENTS: &[&str] = &[
+    "v",
+    "vt",
+    "vn",
+    "vp",
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "p",
+    "l",
+    "f",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "g",
+    "s",
+    "mg",
+    "o",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "lod",
+    "usemtl",
+    "mtllib",
+    "shadow_obj",
+    "trace_obj",
+    "ctech",
+    "stech",
+    "maplib",
+    "usemap",
+    "call",
+    "csh",
+    "bsp",
+    "bzp",
+    "cdc",
+    "cdp",
+    "res",
+];
+
+/// Characters of a foreign line quoted in a message.
+const QUOTED_CHARS: usize = 24;
+
 /// Loads an OBJ file. Materials are not read.
 pub fn load(path: &Path) -> Result<Scene> {
-    let file = std::fs::File::open(path).map_err(|e| super::read_error(path, e))?;
-    load_reader(&mut std::io::BufReader::new(file), path)
+    let bytes = std::fs::read(path).map_err(|e| super::read_error(path, e))?;
+    load_bytes(&bytes, path)
 }
 
-/// Loads OBJ text from `reader`; `path` names it in messages and in the scene.
-pub fn load_reader(reader: &mut impl std::io::BufRead, path: &Path) -> Result<Scene> {
+/// Loads OBJ `bytes`; `path` names them in messages and in the scene. Refuses bytes that are
+/// not UTF-8 text and text in which no line is an OBJ statement.
+pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
+    let text = text(bytes).map_err(|line| {
+        Error::in_file(
+            path,
+            format!("line {line}: not UTF-8 text: this is no OBJ file (binary data?)"),
+        )
+    })?;
+    check_statements(text).map_err(|e| Error::in_file(path, e))?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _materials) =
-        tobj::load_obj_buf(reader, &options, |_| Err(tobj::LoadError::OpenFileFailed))
-            .map_err(|e| Error::in_file(path, format!("not a valid OBJ file: {e}")))?;
+    let (models, _materials) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| Error::in_file(path, format!("not a valid OBJ file: {e}")))?;
     let mut builder = SceneBuilder::new();
     for (index, model) in models.iter().enumerate() {
         let mesh = model_mesh(&model.mesh)
@@ -41,6 +107,57 @@ pub fn load_reader(reader: &mut impl std::io::BufRead, path: &Path) -> Result<Sc
         builder.warn("the file holds no faces");
     }
     Ok(builder.finish(path.to_path_buf()))
+}
+
+/// The bytes as text, or the number (from 1) of the first line that is not UTF-8.
+pub fn text(bytes: &[u8]) -> std::result::Result<&str, usize> {
+    std::str::from_utf8(bytes).map_err(|e| {
+        let valid = &bytes[..e.valid_up_to()];
+        valid.iter().filter(|&&b| b == b'\n').count() + 1
+    })
+}
+
+/// Refuses text that has lines but none of them an OBJ statement, quoting the first line
+/// that is not one. Blank lines and `#` comments are neither, so an empty file or one of
+/// comments only passes (an empty scene).
+///
+/// The rule is deliberately loose: a file with statements of its own among OBJ ones loads
+/// (tobj skips them, as the format allows), while text with nothing of OBJ in it (another
+/// format, random bytes) is refused instead of rendering an empty scene.
+pub fn check_statements(text: &str) -> std::result::Result<(), String> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut foreign = None;
+    for (n, line) in text.lines().enumerate() {
+        let content = line.split('#').next().unwrap_or("").trim();
+        let Some(keyword) = content.split_whitespace().next() else {
+            continue;
+        };
+        if STATEMENTS.contains(&keyword) {
+            return Ok(());
+        }
+        foreign.get_or_insert((n + 1, content));
+    }
+    match foreign {
+        Some((line, content)) => Err(format!(
+            "line {line}: '{}' is not an OBJ statement, and no line of the file is one",
+            quoted(content)
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The start of a foreign line, for a message: at most [`QUOTED_CHARS`] characters, control
+/// characters escaped.
+fn quoted(line: &str) -> String {
+    let mut out: String = line
+        .chars()
+        .take(QUOTED_CHARS)
+        .flat_map(char::escape_debug)
+        .collect();
+    if line.chars().nth(QUOTED_CHARS).is_some() {
+        out.push('…');
+    }
+    out
 }
 
 /// The indexed mesh of one OBJ model, with every index and coordinate checked.
@@ -70,4 +187,42 @@ fn model_mesh(mesh: &tobj::Mesh) -> std::result::Result<Mesh, String> {
         .map(|f| [f[0], f[1], f[2]])
         .collect();
     Mesh::new(positions, triangles).ok_or_else(|| "invalid mesh".to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_with_no_obj_statement_is_refused() {
+        let garbage =
+            "# made by hand\n\naGVsbG8gd29ybGQsIHRoaXMgaXMgbm90IGFuIE9CSg==\nc29tZSBtb3Jl\n";
+        assert_eq!(
+            check_statements(garbage).unwrap_err(),
+            "line 3: 'aGVsbG8gd29ybGQsIHRoaXMg…' is not an OBJ statement, and no line of the file is one"
+        );
+        assert!(check_statements("\t\x01 tab\n")
+            .unwrap_err()
+            .contains(r"'\u{1} tab'"));
+    }
+
+    #[test]
+    fn foreign_statements_beside_obj_ones_pass() {
+        for text in [
+            "vc 1 0 0\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+            "\u{feff}v 0 0 0\n",
+            "exporter-note hello\n# comment\nmtllib a.mtl\n",
+            "",
+            "# only a comment\n\n",
+        ] {
+            assert_eq!(check_statements(text), Ok(()), "{text:?}");
+        }
+    }
+
+    #[test]
+    fn the_first_line_that_is_not_utf8_is_named() {
+        assert_eq!(text(b"v 0 0 0\n"), Ok("v 0 0 0\n"));
+        assert_eq!(text(b"v 0 0 0\nv 1 \xff 0\n"), Err(2));
+        assert_eq!(text(b"\xc3"), Err(1));
+    }
 }

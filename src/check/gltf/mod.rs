@@ -5,8 +5,8 @@
 //! buffer problems into the findings, the walker below adds the validator's rules working on
 //! the raw JSON (so one bad property does not hide the others), and the scene is built from
 //! the same document by the importer's own code ([`scene::build`]). So `check` and the
-//! renderer agree on what loads, by construction. The `gltf` crate's reference validation
-//! runs beside it where the crate can read the file.
+//! renderer agree on what loads, by construction. The layer's whole-document rules (asset
+//! version, unresolved references: [`layer::integrity`]) are the importer's too.
 //!
 //! Codes are the Khronos glTF-Validator's where the meaning is the same.
 
@@ -89,8 +89,8 @@ pub fn check(
     };
     doc.load_buffers(&resources, None, &mut sink);
     doc.decode_views(&mut sink);
+    layer::integrity::check(&doc, &mut sink);
     let too_large = sink.too_large;
-    crate_validation(&doc, f);
     let mut walker = Walker {
         doc: &doc,
         root: doc.root(),
@@ -119,76 +119,6 @@ pub fn check(
     // The importer's verdict keeps the layer's code, so a reader of the report need not
     // match message strings.
     Some(built.map_err(|e| crate::Error::in_file(path, format!("{} {e}", e.code))))
-}
-
-/// Runs the `gltf` crate's reference validation where the crate can read the file (it
-/// refuses some valid files; the walker covers what it would have said about them).
-fn crate_validation(doc: &Document, f: &mut Findings) {
-    use gltf::json::validation::{Error as VError, Validate};
-    let Ok(root) = serde_json::from_slice::<gltf::json::Root>(doc.json_text()) else {
-        return;
-    };
-    let dangling = dangling_positions(&root);
-    if !dangling.is_empty() {
-        for pointer in dangling {
-            f.error(
-                "UNRESOLVED_REFERENCE",
-                pointer,
-                "refers to an accessor that does not exist",
-            );
-        }
-        return;
-    }
-    let mut found = Vec::new();
-    root.validate(&root, gltf::json::Path::new, &mut |path, error| {
-        found.push((path().to_string(), error));
-    });
-    for (path, error) in found {
-        let pointer = json_pointer(&path);
-        match error {
-            VError::IndexOutOfBounds => f.error(
-                "UNRESOLVED_REFERENCE",
-                pointer,
-                "refers to an object that does not exist",
-            ),
-            VError::Invalid => f.warn("VALUE_NOT_IN_LIST", pointer, "invalid value"),
-            VError::Oversize => f.error("VALUE_NOT_IN_RANGE", pointer, "value too large"),
-            // The crate asks for properties the specification leaves optional; the walker
-            // checks the required ones itself.
-            VError::Missing | VError::Unsupported => {}
-        }
-    }
-}
-
-/// JSON pointers of POSITION attributes that name an accessor the file does not have. The
-/// `gltf` crate's validation panics on them, so they are checked before it runs.
-fn dangling_positions(root: &gltf::json::Root) -> Vec<String> {
-    let mut found = Vec::new();
-    for (m, mesh) in root.meshes.iter().enumerate() {
-        for (p, primitive) in mesh.primitives.iter().enumerate() {
-            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
-            if let Some(index) = primitive.attributes.get(&position) {
-                if index.value() >= root.accessors.len() {
-                    found.push(format!("/meshes/{m}/primitives/{p}/attributes/POSITION"));
-                }
-            }
-        }
-    }
-    found
-}
-
-/// `meshes[0].primitives[1].indices` -> `/meshes/0/primitives/1/indices`.
-fn json_pointer(path: &str) -> String {
-    let mut out = String::new();
-    for part in path.split(['.', '[']) {
-        let part = part.trim_end_matches(']');
-        if part.is_empty() {
-            continue;
-        }
-        out.push('/');
-        out.push_str(&part.replace('~', "~0").replace('/', "~1"));
-    }
-    out
 }
 
 /// A number for a message: plain when short, in scientific notation when plain would be
@@ -224,7 +154,6 @@ impl<'a> Walker<'a, '_> {
 
     fn run(&mut self) {
         self.schema();
-        self.asset();
         self.extension_lists();
         self.buffers();
         self.buffer_views();
@@ -284,15 +213,6 @@ impl<'a> Walker<'a, '_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn pointers() {
-        assert_eq!(
-            json_pointer("meshes[0].primitives[1].indices"),
-            "/meshes/0/primitives/1/indices"
-        );
-        assert_eq!(json_pointer("scene"), "/scene");
-    }
 
     #[test]
     fn long_numbers_are_readable() {

@@ -1,5 +1,6 @@
 //! Shape rules that need no meaning: collection types, empty arrays, required properties,
-//! integer properties, extension objects and lists, and the asset version.
+//! integer properties, extension objects and lists (the asset version is the document
+//! layer's rule: [`crate::import::gltf::integrity`]).
 
 use super::{readable, Walker};
 use crate::import::gltf::can_honour_required;
@@ -72,18 +73,6 @@ impl Walker<'_, '_> {
         }
         let declared: HashSet<&str> = self.doc.extension_names("extensionsUsed").collect();
         self.tree_object(self.root, "", &declared);
-        match self.root.get("asset") {
-            None => self.f.error(
-                "UNDEFINED_PROPERTY",
-                "/asset",
-                "the asset property is missing",
-            ),
-            Some(asset) if !asset.is_object() => {
-                self.f
-                    .error("TYPE_MISMATCH", "/asset", "expected an object")
-            }
-            Some(asset) => self.required(asset, "/asset", &["version"]),
-        }
         let required: &[(&str, &[&str])] = &[
             ("accessors", &["componentType", "count", "type"]),
             ("animations", &["channels", "samplers"]),
@@ -228,63 +217,6 @@ impl Walker<'_, '_> {
                 }
                 self.tree(ext, &ext_at, declared);
             }
-        }
-    }
-
-    pub(super) fn asset(&mut self) {
-        let Some(asset) = self.root.get("asset") else {
-            return;
-        };
-        let parse = |v: Option<&Value>| -> Option<Option<(u64, u64)>> {
-            let v = v?;
-            Some(v.as_str().and_then(|t| {
-                let (a, b) = t.split_once('.')?;
-                let ok = |s: &str| !s.is_empty() && s.bytes().all(|c| c.is_ascii_digit());
-                if !(ok(a) && ok(b)) {
-                    return None;
-                }
-                Some((a.parse().ok()?, b.parse().ok()?))
-            }))
-        };
-        let version = match parse(asset.get("version")) {
-            None => None,
-            Some(None) => {
-                self.f.error(
-                    "PATTERN_MISMATCH",
-                    "/asset/version",
-                    "the version must look like MAJOR.MINOR",
-                );
-                None
-            }
-            Some(Some(v)) => Some(v),
-        };
-        if let Some((major, minor)) = version {
-            if major != 2 {
-                self.f.error(
-                    "UNKNOWN_ASSET_MAJOR_VERSION",
-                    "/asset/version",
-                    format!("glTF {major}.{minor} is not glTF 2"),
-                );
-            } else if minor > 0 {
-                self.f.warn(
-                    "UNKNOWN_ASSET_MINOR_VERSION",
-                    "/asset/version",
-                    format!("glTF 2.{minor} is newer than 2.0"),
-                );
-            }
-        }
-        match (parse(asset.get("minVersion")), version) {
-            (Some(None), _) => self.f.error(
-                "PATTERN_MISMATCH",
-                "/asset/minVersion",
-                "minVersion must look like MAJOR.MINOR",
-            ),
-            (Some(Some(min)), Some(version)) if min > version => self.f.error(
-                "ASSET_MIN_VERSION_GREATER_THAN_VERSION",
-                "/asset/minVersion",
-                "minVersion is greater than version",
-            ),
-            _ => {}
         }
     }
 

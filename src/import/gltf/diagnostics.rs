@@ -142,6 +142,22 @@ impl Sink for FailFast {
     }
 }
 
+/// Passes errors on to another sink and drops warnings and infos: the importer runs rules
+/// shared with `raycast check` for their errors only.
+pub struct ErrorsOnly<'s>(pub &'s mut dyn Sink);
+
+impl Sink for ErrorsOnly<'_> {
+    fn push(&mut self, diagnostic: Diagnostic) {
+        if diagnostic.severity == Severity::Error {
+            self.0.push(diagnostic);
+        }
+    }
+
+    fn stopped(&self) -> bool {
+        self.0.stopped()
+    }
+}
+
 /// Drops everything (for reads whose failure the caller reports in its own words).
 #[derive(Debug, Default)]
 pub struct Ignore;

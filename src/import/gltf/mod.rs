@@ -10,8 +10,11 @@
 //! `RAYCAST_quadric` extension — so textures, images, samplers, materials, animations, skins
 //! and extensions used but not required cannot stop a render. (The `gltf` crate's JSON model
 //! refuses valid files: integers written as `1.0`, textures without `source`, accessors
-//! without `bufferView`; `check` still runs its reference validation where it can.) Only the
-//! buffers the geometry reads are loaded, under the path rule of [`crate::import::paths`].
+//! without `bufferView`.) What does stop it anywhere in the document is what makes it no
+//! glTF 2.0 document at all ([`integrity`]): a missing or ill-formed `asset.version`, and
+//! references to objects that do not exist (checked by the `gltf` crate's validation where
+//! it can read the file). Only the buffers the geometry reads are loaded, under the path
+//! rule of [`crate::import::paths`].
 //!
 //! Compressed data (Draco, meshopt) and GPU instancing enter through the seams of [`decode`].
 
@@ -22,12 +25,13 @@ pub mod diagnostics;
 pub mod document;
 pub mod draco;
 pub mod instancing;
+pub mod integrity;
 pub mod mesh;
 pub mod meshopt;
 pub mod node;
 pub mod scene;
 
-pub use diagnostics::{Diagnostic, FailFast, Severity, Sink};
+pub use diagnostics::{Diagnostic, ErrorsOnly, FailFast, Severity, Sink};
 pub use document::Document;
 
 use super::paths::folder_of;
@@ -105,6 +109,9 @@ pub fn load_bytes(bytes: Vec<u8>, path: &Path, options: &LoadOptions) -> Result<
         (None, None) => return Err(Error::in_file(path, "not a glTF file")),
     };
     check_required_extensions(&doc, &mut sink);
+    if sink.error.is_none() {
+        integrity::check(&doc, &mut ErrorsOnly(&mut sink));
+    }
     let base = folder_of(path);
     let root = options.root.clone().unwrap_or_else(|| base.clone());
     let resources = buffers::Resources {
