@@ -213,6 +213,100 @@ fn bad_inputs_fail_cleanly_naming_the_file() {
     assert!(!out.exists(), "failed runs leave no output folder");
 }
 
+/// Documents broken anywhere, also where the render never reads (tinygltf's malformed files:
+/// a dangling index under an image, an empty `asset.version`), and text that is not OBJ stop
+/// `render` and `info` with one line naming the file, the place and the problem; nothing is
+/// written. The expected places and indices are read off the files by hand.
+#[test]
+fn broken_documents_stop_before_any_output() {
+    let dir = temp_dir("broken-documents");
+    std::fs::create_dir_all(&dir).unwrap();
+    let not_obj = dir.join("not_obj.obj");
+    std::fs::write(
+        &not_obj,
+        "# base64, not OBJ\naGVsbG8gd29ybGQsIG5vdCBhbiBPQko=\nbW9yZQ==\n",
+    )
+    .unwrap();
+    let binary = dir.join("binary.obj");
+    std::fs::write(&binary, b"v 0 0 0\n\x89PNG\r\n\x1a\n\xff\xfe\n").unwrap();
+    let cases = [
+        (
+            fixture("malformed/invalid-buffer-index.gltf"),
+            "/bufferViews/1/buffer: refers to 1, which does not exist",
+        ),
+        (
+            fixture("malformed/invalid-buffer-view-index.gltf"),
+            "/accessors/0/bufferView: refers to 1, which does not exist",
+        ),
+        (
+            fixture("malformed/invalid-primitive-indices.gltf"),
+            "/accessors/0/bufferView: refers to 1, which does not exist",
+        ),
+        (
+            fixture("malformed/issue-416.gltf"),
+            "/asset/version: \"\" is not a version: it must look like \"MAJOR.MINOR\"",
+        ),
+        (
+            not_obj,
+            "line 2: 'aGVsbG8gd29ybGQsIG5vdCBh…' is not an OBJ statement, and no line of the file is one",
+        ),
+        (
+            binary,
+            "line 2: not UTF-8 text: this is no OBJ file (binary data?)",
+        ),
+    ];
+    let out = dir.join("out");
+    for (file, message) in cases {
+        let expected = format!("raycast: error: {}: {message}\n", file.display());
+        let render = [arg(&file), "--aov", "depth", "--out", arg(&out)];
+        let info = ["info", arg(&file)];
+        for args in [&render[..], &info[..]] {
+            let result = raycast(args);
+            assert_eq!(result.status.code(), Some(1), "{args:?}");
+            assert_eq!(
+                String::from_utf8_lossy(&result.stderr),
+                expected,
+                "{args:?}"
+            );
+        }
+        assert!(!out.exists(), "{}: no output is written", file.display());
+    }
+}
+
+/// Unusual but valid documents keep rendering: tinygltf's issue-492 file (a skin and three
+/// nodes, no mesh: an empty scene, with the warning), its issue-440 file (a GLB whose BIN
+/// chunk is read correctly: one triangle), and an OBJ with a statement of its own (`vc`)
+/// before its geometry and a byte-order mark.
+#[test]
+fn unusual_but_valid_documents_still_render() {
+    let dir = temp_dir("unusual-documents");
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = dir.join("extended.obj");
+    std::fs::write(
+        &obj,
+        "\u{feff}# exporter extension first\nvc 1 0 0\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let cases = [
+        (fixture("malformed/issue-492.glb"), 0),
+        (fixture("malformed/zero-sized-bin-chunk-issue-440.glb"), 1),
+        (obj, 1),
+    ];
+    for (n, (file, triangles)) in cases.into_iter().enumerate() {
+        let out = dir.join(format!("out{n}"));
+        let result = raycast_ok(&[arg(&file), "--aov", "depth", "--out", arg(&out)]);
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        let sidecar = std::fs::read(out.join("raycast.json")).unwrap();
+        let json: serde_json::Value = serde_json::from_slice(&sidecar).unwrap();
+        assert_eq!(json["stats"]["triangles"], triangles, "{}", file.display());
+        assert_eq!(
+            stderr.contains("warning: the scene holds no triangles or quadrics"),
+            triangles == 0,
+            "{stderr}"
+        );
+    }
+}
+
 #[test]
 fn an_input_is_never_overwritten() {
     let dir = temp_dir("protect");

@@ -375,3 +375,75 @@ fn real_assets_load_with_their_triangle_counts() {
         assert_eq!(load(file).triangle_count(), triangles, "{file}");
     }
 }
+
+/// The glTF files of the Khronos glTF-Validator suite (`fixtures/gltf-validator/`), each with
+/// the validator's verdict: the codes and JSON pointers of its errors.
+fn validator_suite() -> Vec<(std::path::PathBuf, Vec<(String, String)>)> {
+    let mut files = Vec::new();
+    let mut folders = vec![fixture("gltf-validator")];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.to_string_lossy();
+            if path.is_dir() {
+                folders.push(path);
+            } else if name.ends_with(".gltf") || name.ends_with(".glb") {
+                let report = std::fs::read_to_string(format!("{name}.report.json")).unwrap();
+                let report: serde_json::Value = serde_json::from_str(&report).unwrap();
+                let errors = report["issues"]["messages"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .filter(|m| m["severity"] == 0)
+                    .map(|m| {
+                        let text = |key: &str| m[key].as_str().unwrap_or("").to_string();
+                        (text("code"), text("pointer"))
+                    })
+                    .collect();
+                files.push((path, errors));
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+/// The render's importer (not `check`) against the validator: every file it finds no error
+/// in loads, and every file it calls broken as a whole (a reference to an object that does
+/// not exist, anywhere, or a bad `asset.version`) is refused with an error that names the
+/// file and one of the validator's pointers.
+#[test]
+fn importer_agrees_with_the_validator_on_clean_and_dangling_documents() {
+    let fatal = |(code, pointer): &(String, String)| {
+        code == "UNRESOLVED_REFERENCE"
+            || code == "UNKNOWN_ASSET_MAJOR_VERSION"
+            || pointer.starts_with("/asset")
+    };
+    let (mut clean, mut refused) = (0, 0);
+    for (path, errors) in validator_suite() {
+        let loaded = import::load(&path, &LoadOptions::default());
+        if errors.is_empty() {
+            assert!(
+                loaded.is_ok(),
+                "{}: {}",
+                path.display(),
+                loaded.unwrap_err()
+            );
+            clean += 1;
+        } else if errors.iter().any(fatal) {
+            let e = loaded
+                .err()
+                .unwrap_or_else(|| panic!("{} loads", path.display()));
+            let line = e.to_string();
+            assert!(line.starts_with(&path.display().to_string()), "{line}");
+            assert!(
+                // Our pointer is the validator's, or (a missing property) below it.
+                errors.iter().any(|(_, p)| line.contains(&format!(": {p}"))),
+                "{line}: none of {errors:?}"
+            );
+            refused += 1;
+        }
+    }
+    assert_eq!(clean, 73, "validator-clean files in the suite");
+    assert!(refused >= 30, "only {refused} broken documents");
+}

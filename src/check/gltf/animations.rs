@@ -14,14 +14,8 @@ impl Walker<'_, '_> {
             for (c, channel) in array(anim, "channels").iter().enumerate() {
                 let at = format!("/animations/{a}/channels/{c}");
                 let target = channel.get("target");
+                // A node that does not exist is the document layer's rule.
                 let node = target.and_then(|t| index_of(t, "node"));
-                if let Some(bad) = node.filter(|&k| k >= nodes.len()) {
-                    self.f.error(
-                        "UNRESOLVED_REFERENCE",
-                        format!("{at}/target/node"),
-                        format!("node {bad} does not exist"),
-                    );
-                }
                 if let Some(bad) = index_of(channel, "sampler").filter(|&k| k >= samplers.len()) {
                     self.f.error(
                         "UNRESOLVED_REFERENCE",

@@ -8,13 +8,32 @@
 //! the geometry the importer reads is checked where it is read.
 
 use super::diagnostics::Sink;
-use super::document::{escape, Document};
+use super::document::{array, escape, index_of, Document};
 use serde_json::Value;
 
 /// Reports the asset rules and every unresolved reference of `doc`.
 pub fn check(doc: &Document, sink: &mut dyn Sink) {
     asset(doc, sink);
     references(doc, sink);
+    animation_targets(doc, sink);
+}
+
+/// Animation channels whose target node does not exist (the `gltf` crate's validation does
+/// not look at them).
+fn animation_targets(doc: &Document, sink: &mut dyn Sink) {
+    let nodes = doc.list("nodes").len();
+    for (a, anim) in doc.list("animations").iter().enumerate() {
+        for (c, channel) in array(anim, "channels").iter().enumerate() {
+            let node = channel.get("target").and_then(|t| index_of(t, "node"));
+            if let Some(bad) = node.filter(|&k| k >= nodes) {
+                sink.error(
+                    "UNRESOLVED_REFERENCE",
+                    format!("/animations/{a}/channels/{c}/target/node"),
+                    format!("refers to node {bad}, which does not exist"),
+                );
+            }
+        }
+    }
 }
 
 /// `asset` and its `version` (`MAJOR.MINOR`, major 2) and `minVersion`.
@@ -167,6 +186,13 @@ fn json_pointer(path: &str) -> String {
         if part.is_empty() {
             continue;
         }
+        // The crate names morph target attributes by its field names.
+        let part = match part {
+            "positions" => "POSITION",
+            "normals" => "NORMAL",
+            "tangents" => "TANGENT",
+            other => other,
+        };
         out.push('/');
         out.push_str(&escape(part));
     }
@@ -192,6 +218,10 @@ mod tests {
             "/meshes/0/primitives/1/indices"
         );
         assert_eq!(json_pointer("scene"), "/scene");
+        assert_eq!(
+            json_pointer("meshes[0].primitives[0].targets[1].positions"),
+            "/meshes/0/primitives/0/targets/1/POSITION"
+        );
     }
 
     #[test]
