@@ -219,16 +219,16 @@ fn bad_inputs_fail_cleanly_naming_the_file() {
 /// written. The expected places and indices are read off the files by hand.
 #[test]
 fn broken_documents_stop_before_any_output() {
-    let dir = temp_dir("broken-documents");
-    std::fs::create_dir_all(&dir).unwrap();
-    let not_obj = dir.join("not_obj.obj");
-    std::fs::write(
-        &not_obj,
+    let not_obj = temp_file(
+        "not-obj",
+        "not_obj.obj",
         "# base64, not OBJ\naGVsbG8gd29ybGQsIG5vdCBhbiBPQko=\nbW9yZQ==\n",
-    )
-    .unwrap();
-    let binary = dir.join("binary.obj");
-    std::fs::write(&binary, b"v 0 0 0\n\x89PNG\r\n\x1a\n\xff\xfe\n").unwrap();
+    );
+    let binary = temp_file(
+        "binary-obj",
+        "binary.obj",
+        b"v 0 0 0\n\x89PNG\r\n\x1a\n\xff\xfe\n",
+    );
     let cases = [
         (
             fixture("malformed/invalid-buffer-index.gltf"),
@@ -255,7 +255,7 @@ fn broken_documents_stop_before_any_output() {
             "line 2: not UTF-8 text: this is no OBJ file (binary data?)",
         ),
     ];
-    let out = dir.join("out");
+    let out = temp_dir("broken-documents");
     for (file, message) in cases {
         let expected = format!("raycast: error: {}: {message}\n", file.display());
         let render = [arg(&file), "--aov", "depth", "--out", arg(&out)];
@@ -279,21 +279,18 @@ fn broken_documents_stop_before_any_output() {
 /// before its geometry and a byte-order mark.
 #[test]
 fn unusual_but_valid_documents_still_render() {
-    let dir = temp_dir("unusual-documents");
-    std::fs::create_dir_all(&dir).unwrap();
-    let obj = dir.join("extended.obj");
-    std::fs::write(
-        &obj,
+    let obj = temp_file(
+        "extended-obj",
+        "extended.obj",
         "\u{feff}# exporter extension first\nvc 1 0 0\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
-    )
-    .unwrap();
+    );
     let cases = [
         (fixture("malformed/issue-492.glb"), 0),
         (fixture("malformed/zero-sized-bin-chunk-issue-440.glb"), 1),
         (obj, 1),
     ];
     for (n, (file, triangles)) in cases.into_iter().enumerate() {
-        let out = dir.join(format!("out{n}"));
+        let out = temp_dir(&format!("unusual-{n}"));
         let result = raycast_ok(&[arg(&file), "--aov", "depth", "--out", arg(&out)]);
         let stderr = String::from_utf8_lossy(&result.stderr);
         let sidecar = std::fs::read(out.join("raycast.json")).unwrap();

@@ -312,6 +312,16 @@ pub fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// Writes `contents` as file `name` in a fresh temporary folder for test `test`; returns its
+/// path.
+pub fn temp_file(test: &str, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
+    let dir = temp_dir(test);
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, contents).unwrap();
+    path
+}
+
 /// A path as a command-line argument.
 pub fn arg(p: &std::path::Path) -> &str {
     p.to_str().unwrap()
