@@ -44,15 +44,26 @@ impl Bundle {
     /// operations, computed axis by axis over the eight rays so that they vectorise. (One
     /// per-axis function shared by both was measured: the single-ray set-up then no longer
     /// vectorised, +6 % instructions per incoherent ray; so the two keep their own loops.)
-    #[inline(always)]
+    #[cfg(test)]
     pub fn new(origins: &[DVec3; WIDTH], dirs: &[DVec3; WIDTH], scale: f64) -> Option<Bundle> {
-        let mut bundle = Bundle {
-            r: [[0.0; WIDTH]; 3],
-            c_near: [[0.0; WIDTH]; 3],
-            c_far: [[0.0; WIDTH]; 3],
-            flip: [false; 3],
-            octant: 0,
-        };
+        let mut bundle = Bundle::EMPTY;
+        bundle.set(origins, dirs, scale).then_some(bundle)
+    }
+
+    /// No rays: [`Bundle::set`] fills it.
+    const EMPTY: Bundle = Bundle {
+        r: [[0.0; WIDTH]; 3],
+        c_near: [[0.0; WIDTH]; 3],
+        c_far: [[0.0; WIDTH]; 3],
+        flip: [false; 3],
+        octant: 0,
+    };
+
+    /// [`Bundle::new`] in place (a returned bundle was copied twice, some 130 instructions a
+    /// packet): false when the rays cannot go as one packet.
+    #[inline(always)]
+    fn set(&mut self, origins: &[DVec3; WIDTH], dirs: &[DVec3; WIDTH], scale: f64) -> bool {
+        let bundle = self;
         for axis in 0..3 {
             let (mut culls, mut negative) = (true, 0u32);
             for i in 0..WIDTH {
@@ -69,12 +80,12 @@ impl Bundle {
                 bundle.c_far[axis][i] = (c + eps) as f32;
             }
             if !culls || (negative != 0 && negative != (1 << WIDTH) - 1) {
-                return None;
+                return false;
             }
             bundle.flip[axis] = negative != 0;
             bundle.octant |= usize::from(negative != 0) << axis;
         }
-        Some(bundle)
+        true
     }
 
     /// The portable packet test: for every lane of `node`, the rays (bit `i` for ray `i`)
@@ -162,7 +173,7 @@ struct Entry {
 /// `visit(rays, refs, limits)` gets the rays that reach the leaf (bit `i` for ray `i`), the
 /// leaf's primitive indices and the rays' limits, and lowers the limits of those rays to their
 /// best hits so far. Returns false, having visited nothing, when the rays cannot go as one
-/// packet ([`Bundle::new`]).
+/// packet ([`Bundle::set`]).
 pub(super) fn run<F>(
     layout: &Layout,
     kernel: Kernel,
@@ -212,9 +223,10 @@ fn run_with<const AVX2: bool, F>(
 where
     F: FnMut(u32, &[u32], &mut [f64; WIDTH]),
 {
-    let Some(bundle) = Bundle::new(origins, dirs, scale) else {
+    let mut bundle = Bundle::EMPTY;
+    if !bundle.set(origins, dirs, scale) {
         return false;
-    };
+    }
     if layout.nodes.is_empty() {
         return true;
     }
