@@ -1,7 +1,7 @@
 """End to end: a 1024x1024 depth render from the file, raycast's command line against Open3D
 and trimesh + Embree doing the same from Python.
 
-    python -m raycast_tools end-to-end [--side 1024] [--runs 3] [--out reports/end_to_end.md]
+    python -m raycast_tools end-to-end [--side 1024] [--runs 3] [--out FILE (default: the repository's reports/end_to_end.md)]
 
 Every method is a fresh process that reads the scene file, builds its acceleration structure,
 casts one ray per pixel of the same pinhole camera (the bench's diagonal view, 40 degrees) and
@@ -28,7 +28,7 @@ import numpy as np
 from .bench import BUNNY, CHESS, HELMET, OPEN3D_MISSING
 from .cli import prog
 from .machine import machine
-from .paths import raycast_or_exit
+from .paths import ROOT, raycast_or_exit
 from .rays import FOV_DEGREES, framing, look_at_rays
 from .runner import raycast_info
 
@@ -209,7 +209,7 @@ def main(argv=None):
     ap.add_argument("--side", type=int, default=1024, help="image side in pixels (default 1024)")
     ap.add_argument("--runs", type=int, default=3, help="runs per method (default 3)")
     ap.add_argument("--raycast", help="raycast binary (default: target/release/raycast)")
-    ap.add_argument("--out", type=Path, default=Path("reports/end_to_end.md"))
+    ap.add_argument("--out", type=Path, default=ROOT / "reports/end_to_end.md")
     args = ap.parse_args(argv)
     exe = raycast_or_exit(args.raycast, "end-to-end")
     scenes = [("bunny (OBJ)", BUNNY, PEERS), ("DamagedHelmet (GLB)", HELMET, PEERS)]
