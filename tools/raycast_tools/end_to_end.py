@@ -1,7 +1,9 @@
 """End to end: a 1024x1024 depth render from the file, raycast's command line against Open3D
 and trimesh + Embree doing the same from Python.
 
-    python -m raycast_tools end-to-end [--side 1024] [--runs 3] [--out FILE (default: the repository's reports/end_to_end.md)]
+    python -m raycast_tools end-to-end [--side 1024] [--runs 3] [--out FILE]
+
+The report goes to the repository's reports/end_to_end.md unless --out says otherwise.
 
 Every method is a fresh process that reads the scene file, builds its acceleration structure,
 casts one ray per pixel of the same pinhole camera (the bench's diagonal view, 40 degrees) and
