@@ -138,8 +138,9 @@ pub(super) fn from_node<const AVX2: bool, F, O>(
             tested.hit
         };
         observer.tested(node, hit, t_best);
-        // Far to near, so the nearest child is popped first; or, when it is a cell, entered
-        // at once: it was just found entered before `t_best`, all its pop would check.
+        // Far to near, so the nearest child is popped first; or rather taken at once (a cell
+        // entered, a leaf visited): it was just found entered before `t_best`, all its pop
+        // would check.
         let mut order = u32::from(ORDER[ray.octant & 7][hit as usize & 0xFF]);
         let mut nearest_cell = None;
         while order != 0 {
@@ -147,11 +148,18 @@ pub(super) fn from_node<const AVX2: bool, F, O>(
             order &= !(1 << j);
             let lane = (j ^ ray.octant) & 7;
             let child = wide.children[lane];
-            if order == 0 && child & LEAF == 0 {
-                nearest_cell = Some(child as usize);
+            let (enter, exit) = (tested.enter[lane], tested.exit[lane]);
+            if order == 0 {
+                if child & LEAF == 0 {
+                    nearest_cell = Some(child as usize);
+                } else {
+                    let leaf = layout.leaf(child);
+                    limit = limit.min(visit(leaf, f64::from(enter), f64::from(exit)));
+                    t_best = f32_above(limit);
+                }
                 break;
             }
-            stack[top & (STACK - 1)].write((child, tested.enter[lane], tested.exit[lane]));
+            stack[top & (STACK - 1)].write((child, enter, exit));
             top += 1;
         }
         if let Some(cell) = nearest_cell {
