@@ -2,28 +2,26 @@
 //! primitive's exact test (or an instance's set-up and octree) for rays that cannot reach its
 //! bounds, and never for a ray that can.
 
+use super::Aabb;
 use crate::accel::PACKET;
 use glam::DVec3;
 
 /// A primitive's world bounds, with what the pre-test's margin needs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ReachBox {
-    /// Lower corner.
-    pub min: DVec3,
-    /// Upper corner.
-    pub max: DVec3,
+    /// The bounds.
+    pub bounds: Aabb,
     centre: DVec3,
     extent: f64,
 }
 
 impl ReachBox {
-    /// The box from `min` to `max` (finite, `min <= max`).
-    pub fn new(min: DVec3, max: DVec3) -> ReachBox {
+    /// The pre-test for `bounds` (finite, `min <= max`).
+    pub fn new(bounds: Aabb) -> ReachBox {
         ReachBox {
-            min,
-            max,
-            centre: (min + max) * 0.5,
-            extent: (max - min).max_element(),
+            bounds,
+            centre: bounds.center(),
+            extent: bounds.size().max_element(),
         }
     }
 
@@ -44,8 +42,8 @@ impl ReachBox {
         let smaller = |a: f64, b: f64| if b < a { b } else { a };
         let offset = (origin - self.centre).abs();
         let margin = 1e-9 * (self.extent + larger(larger(offset.x, offset.y), offset.z));
-        let a = (self.min - DVec3::splat(margin) - origin) * inv_dir;
-        let b = (self.max + DVec3::splat(margin) - origin) * inv_dir;
+        let a = (self.bounds.min - DVec3::splat(margin) - origin) * inv_dir;
+        let b = (self.bounds.max + DVec3::splat(margin) - origin) * inv_dir;
         let (near, far) = (a.min(b), a.max(b));
         let enter = larger(larger(larger(0.0, near.x), near.y), near.z);
         let exit = smaller(smaller(smaller(t_max, far.x), far.y), far.z);
@@ -87,7 +85,7 @@ mod tests {
             let scale = 10f64.powi(round % 9 - 4);
             let centre = rng.point(-1e3, 1e3) * scale;
             let half = (rng.point(0.0, 1.0) + DVec3::splat(1e-3)) * scale;
-            let reach = ReachBox::new(centre - half, centre + half);
+            let reach = ReachBox::new(Aabb::new(centre - half, centre + half));
             let target = centre + half * rng.point(-1.0, 1.0);
             let origin = target + rng.point(-10.0, 10.0) * scale;
             let dir = target - origin;

@@ -1,6 +1,6 @@
 //! A quadric placed in world space: intersection, normals, bounds and classification.
 
-use crate::geometry::ReachBox;
+use crate::geometry::{Aabb, ReachBox};
 use glam::{DMat3, DMat4, DVec3, DVec4};
 
 use super::eigen::is_definite;
@@ -84,14 +84,14 @@ impl Quadric {
             to_local,
             local_anchor,
             clip: spec.bounds.map(widen_clip_box),
-            reach: ReachBox::new(anchor, anchor),
+            reach: ReachBox::new(Aabb::new(anchor, anchor)),
             kind: QuadricKind::Empty,
         };
         let clip_world = quadric
             .clip
             .map(|b| quadric.world_box_of_local_box(b, linear));
         let [min, max] = quadric.clipped_bounds(clip_world, is_definite(spec.q).then_some(linear));
-        quadric.reach = ReachBox::new(min, max);
+        quadric.reach = ReachBox::new(Aabb::new(min, max));
         let length = clip_world.map_or(0.0, |[min, max]| 0.5 * (max - min).length());
         quadric.kind = classify(quadric.world.q, quadric.world.p, quadric.world.r, length);
         Ok(quadric)
@@ -100,7 +100,7 @@ impl Quadric {
     /// Conservative world-space AABB `[min, max]` of the clipped surface; tight (to rounding)
     /// for an unclipped ellipsoid. Always finite; a single point for an empty surface.
     pub fn bounds(&self) -> [DVec3; 2] {
-        [self.reach.min, self.reach.max]
+        [self.reach.bounds.min, self.reach.bounds.max]
     }
 
     /// The world anchor point the coefficients are expressed about.
@@ -183,8 +183,8 @@ impl Quadric {
     /// false only if the box misses [`Quadric::bounds`] or the quadric's value has one strict
     /// sign over the whole box (interval arithmetic, padded for rounding).
     pub fn may_overlap_box(&self, min: DVec3, max: DVec3) -> bool {
-        let lo = min.max(self.reach.min);
-        let hi = max.min(self.reach.max);
+        let lo = min.max(self.reach.bounds.min);
+        let hi = max.min(self.reach.bounds.max);
         if lo.cmpgt(hi).any() {
             return false;
         }

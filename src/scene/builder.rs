@@ -181,7 +181,7 @@ impl SceneBuilder {
             parts,
         } = layout;
         let bounds = points.iter().copied().fold(Aabb::EMPTY, Aabb::grow);
-        let bounds = instances.iter().fold(bounds, |b, i| b.union(i.bounds));
+        let bounds = instances.iter().fold(bounds, |b, i| b.union(i.bounds()));
         let bounds = quadrics.iter().fold(bounds, |b, q| {
             let [min, max] = q.bounds();
             b.union(Aabb::new(min, max))

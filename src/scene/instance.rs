@@ -64,11 +64,10 @@ pub struct Instance {
     pub to_world: DAffine3,
     /// World to mesh frame.
     pub to_local: DAffine3,
-    /// World bounds (the mesh bounds' corners placed, padded for their rounding).
-    pub bounds: Aabb,
     /// The scene part it draws.
     pub part: u32,
-    /// `bounds`, for the pre-test.
+    /// World bounds (the mesh bounds' corners placed, padded for their rounding), for the
+    /// pre-test.
     reach: ReachBox,
 }
 
@@ -95,10 +94,14 @@ impl Instance {
             mesh,
             to_world,
             to_local,
-            bounds,
             part,
-            reach: ReachBox::new(bounds.min, bounds.max),
+            reach: ReachBox::new(bounds),
         })
+    }
+
+    /// World bounds (the mesh bounds' corners placed, padded for their rounding).
+    pub fn bounds(&self) -> Aabb {
+        self.reach.bounds
     }
 
     /// The nearest hit with `0 < t <= t_max` of the world ray `origin + t · dir`: its `t`
@@ -265,7 +268,7 @@ mod tests {
                     assert!(instance.may_reach(origin, dir, hit.t), "round {round}");
                     hits += 1;
                 }
-                let away = instance.bounds.center() - origin;
+                let away = instance.bounds().center() - origin;
                 refused += usize::from(!instance.may_reach(origin, -away, f64::INFINITY));
             }
         }

@@ -366,7 +366,7 @@ impl PrimitiveSet for Scene {
     fn bounds(&self, index: usize) -> Aabb {
         match self.top(index) {
             Top::Triangle(i) => self.world.bounds(i),
-            Top::Instance(k) => self.instances[k].bounds.translated(self.anchor),
+            Top::Instance(k) => self.instances[k].bounds().translated(self.anchor),
             Top::Quadric(q) => {
                 let [min, max] = self.quadrics[q].bounds();
                 Aabb::new(min, max).translated(self.anchor)

@@ -142,29 +142,27 @@ pub(super) fn from_node<const AVX2: bool, F, O>(
         // entered, a leaf visited): it was just found entered before `t_best`, all its pop
         // would check.
         let mut order = u32::from(ORDER[ray.octant & 7][hit as usize & 0xFF]);
-        let mut nearest_cell = None;
-        while order != 0 {
-            let j = 31 - order.leading_zeros() as usize;
-            order &= !(1 << j);
-            let lane = (j ^ ray.octant) & 7;
-            let child = wide.children[lane];
-            let (enter, exit) = (tested.enter[lane], tested.exit[lane]);
-            if order == 0 {
-                if child & LEAF == 0 {
-                    nearest_cell = Some(child as usize);
-                } else {
-                    let leaf = layout.leaf(child);
-                    limit = limit.min(visit(leaf, f64::from(enter), f64::from(exit)));
-                    t_best = f32_above(limit);
-                }
-                break;
-            }
-            stack[top & (STACK - 1)].write((child, enter, exit));
+        let lane = |order: u32| ((31 - order.leading_zeros() as usize) ^ ray.octant) & 7;
+        while order.count_ones() > 1 {
+            let far = lane(order);
+            order &= !(1 << (31 - order.leading_zeros()));
+            stack[top & (STACK - 1)].write((
+                wide.children[far],
+                tested.enter[far],
+                tested.exit[far],
+            ));
             top += 1;
         }
-        if let Some(cell) = nearest_cell {
-            node = cell;
-            continue;
+        if order != 0 {
+            let near = lane(order);
+            let child = wide.children[near];
+            if child & LEAF == 0 {
+                node = child as usize;
+                continue;
+            }
+            let (enter, exit) = (tested.enter[near], tested.exit[near]);
+            limit = limit.min(visit(layout.leaf(child), f64::from(enter), f64::from(exit)));
+            t_best = f32_above(limit);
         }
         loop {
             if top == 0 {
