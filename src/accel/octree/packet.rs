@@ -88,6 +88,68 @@ impl Bundle {
         true
     }
 
+    /// [`Bundle::set`] four rays per AVX2 register. Its operations are the scalar loop's, one
+    /// by one (IEEE division, products, sums and the rounding to f32 give the same bits in
+    /// either unit; nothing is fused), so the values are the same bit for bit.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn set_avx2(
+        &mut self,
+        origins: &[DVec3; WIDTH],
+        dirs: &[DVec3; WIDTH],
+        scale: f64,
+    ) -> bool {
+        let zero = _mm256_setzero_pd();
+        let sign = _mm256_set1_pd(-0.0);
+        let abs = |x| _mm256_andnot_pd(sign, x);
+        let all = (1u32 << WIDTH) - 1;
+        for axis in 0..3 {
+            let (mut culls, mut negative) = (0u32, 0u32);
+            for half in 0..WIDTH / 4 {
+                let at = 4 * half;
+                let gather = |v: &[DVec3; WIDTH]| {
+                    _mm256_set_pd(
+                        v[at + 3][axis],
+                        v[at + 2][axis],
+                        v[at + 1][axis],
+                        v[at][axis],
+                    )
+                };
+                let (o, d) = (gather(origins), _mm256_add_pd(gather(dirs), zero));
+                let r = _mm256_div_pd(_mm256_set1_pd(1.0), d);
+                let s = _mm256_mul_pd(_mm256_add_pd(_mm256_set1_pd(scale), abs(o)), abs(r));
+                let eps = _mm256_add_pd(
+                    _mm256_mul_pd(s, _mm256_set1_pd(10.0 * UNIT)),
+                    _mm256_set1_pd(TINY),
+                );
+                let c = _mm256_mul_pd(_mm256_xor_pd(o, sign), r);
+                let cull = _mm256_and_pd(
+                    _mm256_cmp_pd::<_CMP_LE_OQ>(s, _mm256_set1_pd(LIMIT)),
+                    _mm256_cmp_pd::<_CMP_GE_OQ>(abs(r), _mm256_set1_pd(1.0 / LIMIT)),
+                );
+                culls |= (_mm256_movemask_pd(cull) as u32) << at;
+                negative |= (_mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(d, zero)) as u32) << at;
+                let store = |row: &mut [f32; WIDTH], x| {
+                    // SAFETY: `at + 4 <= WIDTH`: four f32 within the row.
+                    unsafe { _mm_storeu_ps(row.as_mut_ptr().add(at), _mm256_cvtpd_ps(x)) }
+                };
+                store(&mut self.r[axis], r);
+                store(&mut self.c_near[axis], _mm256_sub_pd(c, eps));
+                store(&mut self.c_far[axis], _mm256_add_pd(c, eps));
+            }
+            if culls != all || (negative != 0 && negative != all) {
+                return false;
+            }
+            self.flip[axis] = negative != 0;
+            self.octant |= usize::from(negative != 0) << axis;
+        }
+        true
+    }
+
     /// The portable packet test: for every lane of `node`, the rays (bit `i` for ray `i`)
     /// that enter its box before their `t_best`, and their entry parameters.
     #[inline(always)]
@@ -113,8 +175,8 @@ impl Bundle {
         }
     }
 
-    /// The AVX2 packet test: the node's planes decoded once, then per lane one FMA per plane
-    /// row across the eight rays.
+    /// The AVX2 packet test: the node's planes decoded once, near and far per axis, then per
+    /// lane one FMA per plane row across the eight rays.
     ///
     /// # Safety
     /// The CPU must support AVX2 and FMA.
@@ -122,10 +184,16 @@ impl Bundle {
     #[target_feature(enable = "avx2,fma")]
     #[inline]
     pub(super) unsafe fn test_avx2(&self, node: &Wide, t_best: &[f32; WIDTH], out: &mut Tested) {
-        let mut decoded = [[0.0f32; 8]; 6];
-        for (row, out) in decoded.iter_mut().enumerate() {
-            // SAFETY: `out` is eight f32; the CPU requirement is this function's own.
-            unsafe { _mm256_storeu_ps(out.as_mut_ptr(), node.row_avx2(row)) };
+        let (mut near, mut far) = ([[0.0f32; 8]; 3], [[0.0f32; 8]; 3]);
+        for axis in 0..3 {
+            // SAFETY: the CPU requirement is this function's own.
+            let (lo, hi) = unsafe { (node.row_avx2(axis), node.row_avx2(axis + 3)) };
+            let (n, f) = if self.flip[axis] { (hi, lo) } else { (lo, hi) };
+            // SAFETY: each row is eight f32.
+            unsafe {
+                _mm256_storeu_ps(near[axis].as_mut_ptr(), n);
+                _mm256_storeu_ps(far[axis].as_mut_ptr(), f);
+            }
         }
         // SAFETY: each row is eight f32.
         let load = |row: &[f32; WIDTH]| unsafe { _mm256_loadu_ps(row.as_ptr()) };
@@ -138,10 +206,10 @@ impl Bundle {
             let mut enter = _mm256_setzero_ps();
             let mut exit = t_best;
             for axis in 0..3 {
-                let (lo, hi) = (decoded[axis][lane], decoded[axis + 3][lane]);
-                let (near, far) = if self.flip[axis] { (hi, lo) } else { (lo, hi) };
-                let n = _mm256_fmadd_ps(_mm256_set1_ps(near), r[axis], c_near[axis]);
-                let f = _mm256_fmadd_ps(_mm256_set1_ps(far), r[axis], c_far[axis]);
+                let n = _mm256_broadcast_ss(&near[axis][lane]);
+                let f = _mm256_broadcast_ss(&far[axis][lane]);
+                let n = _mm256_fmadd_ps(n, r[axis], c_near[axis]);
+                let f = _mm256_fmadd_ps(f, r[axis], c_far[axis]);
                 enter = _mm256_max_ps(enter, n);
                 exit = _mm256_min_ps(exit, f);
             }
@@ -224,7 +292,18 @@ where
     F: FnMut(u32, &[u32], &mut [f64; WIDTH]),
 {
     let mut bundle = Bundle::EMPTY;
-    if !bundle.set(origins, dirs, scale) {
+    let set = if AVX2 {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: only reached through `run_avx2`.
+        unsafe {
+            bundle.set_avx2(origins, dirs, scale)
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        unreachable!()
+    } else {
+        bundle.set(origins, dirs, scale)
+    };
+    if !set {
         return false;
     }
     if layout.nodes.is_empty() {
@@ -295,5 +374,61 @@ where
                 t_best[i] = f32_above(limits[i]);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_rng::Rng;
+
+    /// A direction component that is zero, signed zero, subnormal, tiny or ordinary.
+    fn component(rng: &mut Rng) -> f64 {
+        let special = [0.0, -0.0, 5e-324, -1e-310, 1e-41, 1e-20, -1e-300, 1e300];
+        if rng.next().is_multiple_of(5) {
+            rng.pick(&special)
+        } else {
+            rng.uniform(-1.0, 1.0)
+        }
+    }
+
+    #[test]
+    fn the_avx2_set_up_gives_the_scalar_set_up_bit_for_bit() {
+        if !Kernel::Avx2.available() {
+            return;
+        }
+        let bits = |b: &Bundle| {
+            let rows = [b.r, b.c_near, b.c_far].map(|axes| axes.map(|row| row.map(f32::to_bits)));
+            (rows, b.flip, b.octant)
+        };
+        let mut rng = Rng(0xb0d1e);
+        let (mut packets, mut refused) = (0, 0);
+        for n in 0..20_000 {
+            let scale = rng.pick(&[1.0, 16.0, 3e5, 1e30, f64::INFINITY]);
+            let far = 10f64.powf(rng.uniform(-3.0, 12.0));
+            let dir = DVec3::new(
+                component(&mut rng),
+                component(&mut rng),
+                component(&mut rng),
+            );
+            let origins: [DVec3; WIDTH] = std::array::from_fn(|_| rng.point(-far, far));
+            let mut dirs: [DVec3; WIDTH] =
+                std::array::from_fn(|_| dir * (DVec3::ONE + rng.point(0.0, 0.02)));
+            if n % 7 == 0 {
+                // One ray in another octant.
+                dirs[n % WIDTH].y = -dirs[n % WIDTH].y;
+            }
+            let (mut scalar, mut avx2) = (Bundle::EMPTY, Bundle::EMPTY);
+            let formed = scalar.set(&origins, &dirs, scale);
+            // SAFETY: the CPU has AVX2 (checked above).
+            assert_eq!(formed, unsafe { avx2.set_avx2(&origins, &dirs, scale) });
+            if formed {
+                assert_eq!(bits(&scalar), bits(&avx2), "{origins:?} {dirs:?} {scale}");
+                packets += 1;
+            } else {
+                refused += 1;
+            }
+        }
+        assert!(packets > 5_000 && refused > 2_000, "{packets} {refused}");
     }
 }
