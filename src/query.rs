@@ -80,24 +80,32 @@ impl<'a> Query<'a> {
         best
     }
 
-    /// [`Query::nearest`] for [`PACKET`] rays traced together (see [`Octree::intersect_packet`]):
-    /// the same answers, or `None` when they cannot go as one packet (a range not starting at
-    /// 0, an untraceable ray, directions in different octants or with a zero component).
+    /// [`Query::nearest`] for [`PACKET`] rays traced together (see [`Octree::intersect_packet`]),
+    /// the answers written into `found`: the same answers, or false, with `found` untouched,
+    /// when they cannot go as one packet (a range not starting at 0, an untraceable ray,
+    /// directions in different octants or with a zero component).
     pub fn nearest_packet(
         &self,
         rays: &[Ray; PACKET],
         ranges: &[(f64, f64); PACKET],
-    ) -> Option<[Option<Crossing>; PACKET]> {
-        if !plain_packet(rays, ranges) {
-            return None;
+        found: &mut [Option<Crossing>; PACKET],
+    ) -> bool {
+        if !plain_packet(ranges) {
+            return false;
         }
         let origins = rays.each_ref().map(|ray| ray.origin - self.scene.anchor);
         let dirs = rays.each_ref().map(|ray| ray.dir);
         let t_max = ranges.map(|(_, t_max)| t_max);
-        let hits = self
+        let mut hits = [None; PACKET];
+        let packed = self
             .octree
-            .intersect_packet(self.scene, &origins, &dirs, &t_max)?;
-        Some(hits.map(|hit| hit.map(Crossing::from)))
+            .intersect_packet_into(self.scene, &origins, &dirs, &t_max, &mut hits);
+        if packed {
+            for (found, hit) in found.iter_mut().zip(hits) {
+                *found = hit.map(Crossing::from);
+            }
+        }
+        packed
     }
 
     /// Whether the ray has any crossing with `t_min < t <= t_max` (and `t > 0`): exactly
@@ -242,18 +250,14 @@ pub fn traceable(ray: &Ray, t_min: f64, t_max: f64) -> bool {
     ray.is_valid() && t_min >= 0.0 && !t_max.is_nan()
 }
 
-/// True when every ray of a packet is [`traceable`] over its range and the range starts at 0:
-/// the same conditions, folded without a branch per ray (`x · 0` is ±0 for a finite `x` and
-/// NaN otherwise, so the sum is zero exactly when every coordinate is finite).
-fn plain_packet(rays: &[Ray; PACKET], ranges: &[(f64, f64); PACKET]) -> bool {
-    let mut finite = 0.0;
-    let mut plain = true;
-    for (ray, &(t_min, t_max)) in rays.iter().zip(ranges) {
-        let (o, d) = (ray.origin, ray.dir);
-        finite += (o * 0.0).element_sum() + (d * 0.0).element_sum();
-        plain &= (t_min == 0.0) & !t_max.is_nan() & d.cmpne(DVec3::ZERO).any();
-    }
-    plain && finite == 0.0
+/// True when every range of a packet starts at 0 and has a limit that is not NaN. The rays
+/// themselves need no check here: the packet set-up refuses a packet in which some ray has an
+/// origin or a direction that is not finite, or a zero direction component (see
+/// `Bundle::set`), and such a ray then goes through [`Query::nearest`], which refuses it.
+fn plain_packet(ranges: &[(f64, f64); PACKET]) -> bool {
+    ranges.iter().fold(true, |plain, &(t_min, t_max)| {
+        plain & (t_min == 0.0) & !t_max.is_nan()
+    })
 }
 
 /// Directions of the parity rays of [`Query::contains`]: no axis, diagonal or simple ratio,
@@ -269,10 +273,24 @@ const PARITY_DIRECTIONS: [[f64; 3]; 3] = [
 mod tests {
     use super::*;
 
-    /// [`plain_packet`] agrees with its definition (every ray traceable, every range from 0)
-    /// on packets with one odd ray: infinite or NaN coordinates, zero directions, odd ranges.
+    /// A packet forms only when every ray is traceable over its range and the range starts at
+    /// 0 (one odd ray among seven plain ones: infinite or NaN coordinates, zero or subnormal
+    /// direction components, odd ranges), and then gives each ray its own answer.
     #[test]
-    fn plain_packet_is_traceable_with_ranges_from_zero() {
+    fn a_packet_forms_only_of_traceable_rays_with_ranges_from_zero() {
+        let mut builder = crate::scene::SceneBuilder::new();
+        let triangle = [
+            DVec3::ZERO,
+            DVec3::new(4.0, 0.0, 0.0),
+            DVec3::new(0.0, 4.0, 0.0),
+        ];
+        builder.add_mesh("t".into(), "test".into(), vec![triangle]);
+        let scene = builder.finish("one triangle".into());
+        let octree = Octree::build(&scene, crate::accel::OctreeParams::default());
+        let query = Query {
+            scene: &scene,
+            octree: &octree,
+        };
         let odd = [
             0.0,
             -0.0,
@@ -282,42 +300,41 @@ mod tests {
             -f64::INFINITY,
             f64::NAN,
         ];
-        let base = Ray::new(DVec3::new(1.0, 2.0, 3.0), DVec3::new(0.5, -0.25, 1.0));
-        let (mut plain, mut refused) = (0, 0);
+        let base = Ray::new(DVec3::new(1.0, 1.0, 3.0), DVec3::new(0.05, 0.025, -1.0));
+        let (mut packed, mut refused) = (0, 0);
         for (slot, &x) in (0..6).flat_map(|slot| odd.iter().map(move |x| (slot, x))) {
             for (t_min, t_max) in [
                 (0.0, f64::INFINITY),
-                (-0.0, 2.0),
-                (0.5, 2.0),
+                (-0.0, 5.0),
+                (0.5, 5.0),
                 (0.0, f64::NAN),
             ] {
                 let mut ray = base;
                 if slot < 3 {
                     ray.origin[slot] = x;
                 } else {
-                    ray.dir = DVec3::ZERO;
                     ray.dir[slot - 3] = x;
                 }
                 let mut rays = [base; PACKET];
                 rays[5] = ray;
-                let mut ranges = [(0.0, 1.0); PACKET];
+                let mut ranges = [(0.0, 5.0); PACKET];
                 ranges[5] = (t_min, t_max);
-                let each = rays.iter().zip(&ranges);
-                let expected = each
-                    .clone()
-                    .all(|(r, &(lo, hi))| lo == 0.0 && traceable(r, lo, hi));
-                assert_eq!(
-                    plain_packet(&rays, &ranges),
-                    expected,
-                    "{ray:?} {t_min} {t_max}"
-                );
-                plain += usize::from(expected);
-                refused += usize::from(!expected);
+                let plain = t_min == 0.0 && traceable(&ray, t_min, t_max);
+                let mut found = [None; PACKET];
+                if query.nearest_packet(&rays, &ranges, &mut found) {
+                    assert!(plain, "{ray:?} {t_min} {t_max} went as a packet");
+                    for ((ray, &(t_min, t_max)), found) in rays.iter().zip(&ranges).zip(found) {
+                        assert_eq!(found, query.nearest(ray, t_min, t_max), "{ray:?}");
+                    }
+                    packed += 1;
+                } else {
+                    refused += 1;
+                }
             }
         }
         assert!(
-            plain > 10 && refused > 100,
-            "{plain} plain, {refused} refused"
+            packed > 10 && refused > 100,
+            "{packed} packed, {refused} refused"
         );
     }
 }

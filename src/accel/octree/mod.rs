@@ -274,7 +274,24 @@ impl Octree {
         dirs: &[DVec3; PACKET],
         t_max: &[f64; PACKET],
     ) -> Option<[Option<Hit>; PACKET]> {
-        self.intersect_packet_with(set, local_origins, dirs, t_max, None)
+        let mut best = [None; PACKET];
+        self.intersect_packet_into(set, local_origins, dirs, t_max, &mut best)
+            .then_some(best)
+    }
+
+    /// [`Octree::intersect_packet`] into `best` (all `None` on entry): false, with `best`
+    /// untouched, when the rays cannot go as one packet. Spares the caller the copies of a
+    /// returned array.
+    #[inline]
+    pub fn intersect_packet_into<P: PrimitiveSet>(
+        &self,
+        set: &P,
+        local_origins: &[DVec3; PACKET],
+        dirs: &[DVec3; PACKET],
+        t_max: &[f64; PACKET],
+        best: &mut [Option<Hit>; PACKET],
+    ) -> bool {
+        self.intersect_packet_with(set, local_origins, dirs, t_max, None, best)
     }
 
     /// [`Octree::intersect_packet`] for rays already prepared (their `local_origin` and `dir`
@@ -287,11 +304,13 @@ impl Octree {
     ) -> Option<[Option<Hit>; PACKET]> {
         let local_origins = rays.map(|ray| ray.local_origin);
         let dirs = rays.map(|ray| ray.dir);
-        self.intersect_packet_with(set, &local_origins, &dirs, t_max, Some(rays))
+        let mut best = [None; PACKET];
+        self.intersect_packet_with(set, &local_origins, &dirs, t_max, Some(rays), &mut best)
+            .then_some(best)
     }
 
-    /// [`Octree::intersect_packet`], with the rays prepared for the primitive tests as `given`,
-    /// or else by [`prepare_ray`] when the first of them reaches a leaf.
+    /// [`Octree::intersect_packet_into`], with the rays prepared for the primitive tests as
+    /// `given`, or else by [`prepare_ray`] when the first of them reaches a leaf.
     fn intersect_packet_with<P: PrimitiveSet>(
         &self,
         set: &P,
@@ -299,13 +318,13 @@ impl Octree {
         dirs: &[DVec3; PACKET],
         t_max: &[f64; PACKET],
         given: Option<&[PreparedRay<P::RayData>; PACKET]>,
-    ) -> Option<[Option<Hit>; PACKET]> {
-        let mut best: [Option<Hit>; PACKET] = [None; PACKET];
+        best: &mut [Option<Hit>; PACKET],
+    ) -> bool {
         let mut own = None;
         let mut packet_data = None;
         let mut tested = PacketMailbox::default();
         let mut ts = [0.0; PACKET];
-        let packed = packet::run(
+        packet::run(
             &self.layout,
             self.kernel,
             local_origins,
@@ -349,8 +368,7 @@ impl Octree {
                     }
                 }
             },
-        );
-        packed.then_some(best)
+        )
     }
 
     /// Visits the non-empty leaves the ray `origin + t · dir` may reach with `0 <= t <=
