@@ -334,13 +334,16 @@ impl<'a> Tracer<'a> {
         for (packet, range) in packets.iter().zip(packet_ranges) {
             let first = octant(&packet[0]);
             let coherent = packet.iter().all(|ray| octant(ray) == first);
-            let start = hits.len();
-            hits.resize(start + PACKET, None);
-            let found = hits[start..].as_mut_array().expect("PACKET slots");
-            if !(coherent && query.nearest_packet(packet, range, found)) {
+            if coherent {
+                let start = hits.len();
+                hits.resize(start + PACKET, None);
+                let found = hits[start..].as_mut_array().expect("PACKET slots");
+                if query.nearest_packet(packet, range, found) {
+                    continue;
+                }
                 hits.truncate(start);
-                hits.extend(packet.iter().zip(range).map(one));
             }
+            hits.extend(packet.iter().zip(range).map(one));
         }
         hits.extend(rest.iter().zip(rest_ranges).map(one));
         hits
