@@ -471,3 +471,24 @@ def test_bench_rays_in_tiles_are_4x2_pixel_tiles():
         y, x = 2 * (k // (side // 4)), 4 * (k % (side // 4))
         assert list(tile) == [(y + r) * side + x + c for r in (0, 1) for c in range(4)]
     assert np.array_equal(in_tiles(rays[:36], 6), rays[:36])
+
+
+def test_bench_rounds_merge_into_medians():
+    # Three rounds of one backend: times 2, 1 and 4 s for 1e6 rays give the median 2 s and
+    # 0.5 Mrays/s; every round's runs are kept; names and counts come through unchanged.
+    from raycast_tools.bench import merge_rounds
+
+    def round_(t, build):
+        trace = {"rays": "coherent", "count": 1_000_000, "median_s": t, "runs_s": [t, t + 1]}
+        trace["mrays_per_s"] = 1.0 / t
+        return {"backends": [{"backend": "octree", "build_s": build, "traces": [trace]}]}
+
+    merged = merge_rounds([round_(2.0, 0.3), round_(1.0, 0.1), round_(4.0, 0.2)])
+    (backend,) = merged["backends"]
+    assert backend["backend"] == "octree"
+    assert backend["build_s"] == 0.2
+    (trace,) = backend["traces"]
+    assert trace["median_s"] == 2.0
+    assert trace["mrays_per_s"] == 0.5
+    assert trace["runs_s"] == [2.0, 3.0, 1.0, 2.0, 4.0, 5.0]
+    assert trace["rays"] == "coherent" and trace["count"] == 1_000_000

@@ -368,6 +368,29 @@ def run_peers(spec, tmp):
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+def merge_rounds(rounds):
+    """One result from several rounds of the same runs (run_rust's or run_peers' output): a
+    median_s or build_s becomes the median over the rounds, runs_s lists every round's runs,
+    mrays_per_s follows the median; everything else is the first round's."""
+    first = rounds[0]
+    if isinstance(first, dict):
+        out = {}
+        for key, value in first.items():
+            if key in ("median_s", "build_s") and isinstance(value, (int, float)):
+                out[key] = float(np.median([r[key] for r in rounds]))
+            elif key == "runs_s":
+                out[key] = [x for r in rounds for x in r[key]]
+            else:
+                out[key] = merge_rounds([r[key] for r in rounds])
+        if "median_s" in out and "count" in out and out["median_s"] > 0:
+            out["mrays_per_s"] = out["count"] / out["median_s"] / 1e6
+        return out
+    same_shape = all(isinstance(r, list) and len(r) == len(first) for r in rounds)
+    if isinstance(first, list) and same_shape:
+        return [merge_rounds(list(items)) for items in zip(*rounds)]
+    return first
+
+
 def machine():
     """machine.machine() and the Rust compiler's version."""
     rustc = subprocess.run(["rustc", "--version"], capture_output=True, text=True).stdout.strip()
@@ -379,6 +402,14 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="smaller ray sets, fewer runs and scenes")
     ap.add_argument("--big", action="store_true", help="add the 20M-triangle scene (slow)")
     ap.add_argument("--out", default=str(ROOT / "reports/bench.md"))
+    ap.add_argument(
+        "--rounds",
+        type=int,
+        default=1,
+        help="run each scene's Rust process and peer process this many times, alternating, "
+        "and report medians over the rounds (both sides then see the same phases of a "
+        "shared machine)",
+    )
     ap.add_argument("--peer-worker", help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.peer_worker:
@@ -445,7 +476,14 @@ def main(argv=None):
         write_gltf(path, bunny[:n], [(np.zeros(3), 1.0)])
         sweep.append((f"patch{n}", f"bunny patch {n}", path, bunny[:n]))
 
-    results = {"machine": machine(), "quick": quick, "scenes": [], "sweep": [], "missing": missing}
+    results = {
+        "machine": machine(),
+        "quick": quick,
+        "rounds": max(1, a.rounds),
+        "scenes": [],
+        "sweep": [],
+        "missing": missing,
+    }
     for group, items in (("scenes", scenes), ("sweep", sweep)):
         for key, title, path, tris in items:
             t0 = time.time()
@@ -467,22 +505,27 @@ def main(argv=None):
             ]
             if key in ("bunny", "mixed"):
                 args += ["--aov-compare", "coherent"]
-            rust = run_rust(exe, path, rays, args)
-            peers = None
+            peer_spec = None
             if tris is not None:
                 tri_path = tmp / f"{key}_tris.npy"
                 np.save(tri_path, tris.astype(np.float32))
-                peers = run_peers(
-                    {
-                        "triangles": str(tri_path),
-                        "rays": {k: str(v) for k, v in rays.items()},
-                        "threads": threads if group == "scenes" else [1],
-                        "runs": 1 if big else runs,
-                        "f64_rays": (200 if quick else 1000) if group == "scenes" else 0,
-                        "f64_max_triangles": 100_000,
-                    },
-                    tmp,
-                )
+                peer_spec = {
+                    "triangles": str(tri_path),
+                    "rays": {k: str(v) for k, v in rays.items()},
+                    "threads": threads if group == "scenes" else [1],
+                    "runs": 1 if big else runs,
+                    "f64_rays": (200 if quick else 1000) if group == "scenes" else 0,
+                    "f64_max_triangles": 100_000,
+                }
+            rust_rounds, peer_rounds = [], []
+            for _ in range(max(1, a.rounds)):
+                rust_rounds.append(run_rust(exe, path, rays, args))
+                if peer_spec is not None:
+                    peer_rounds.append(run_peers(peer_spec, tmp))
+            rust = merge_rounds(rust_rounds)
+            peers = None
+            if peer_rounds:
+                peers = merge_rounds(peer_rounds)
                 peers["triangles_loaded"] = int(len(tris))
             results[group].append(
                 {
@@ -578,11 +621,14 @@ def report(r):
         "# Benchmark: octree vs obvhs vs Embree",
         "",
         "Regenerate with `.venv/bin/python -m raycast_tools bench` (`--quick` for a short run, "
-        "`--big` adds the 20M-triangle scene); raw figures in `reports/bench.json`.",
+        "`--big` adds the 20M-triangle scene, `--rounds N` alternates the Rust and peer "
+        "processes N times per scene and reports medians over the rounds); raw figures in "
+        "`reports/bench.json`.",
         "",
         f"Machine: {m['nproc']} cores, {m['cpu']} ({m['mhz'] or '?'} MHz), {m['memory_gib']} GiB, "
         f"{m['rustc']}, Python {m['python']}, kernel {m['kernel']}. "
-        f"Run: {'quick' if r['quick'] else 'full'}, {r['total_s']:.0f} s. "
+        f"Run: {'quick' if r['quick'] else 'full'}, {r['total_s']:.0f} s, "
+        f"{r.get('rounds', 1)} round(s) per scene. "
         "The machine is a shared VM: two full runs an hour apart on the same triangle code "
         "differed by up to 30% in single ratios.",
         "",
