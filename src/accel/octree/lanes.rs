@@ -94,7 +94,8 @@ pub(super) struct Lanes {
 impl Lanes {
     /// Set-up for `origin + t · dir` in a tree whose planes are at most `scale` in magnitude
     /// (`scale` infinite: no axis culls). `dir` must have no -0.0 component. The packet
-    /// set-up (`packet::Bundle::new`) repeats these operations per axis and must stay the same.
+    /// set-up (`packet::Bundle::set`, and its AVX2 form four rays at a time) repeats these
+    /// operations per axis and must stay the same.
     pub fn new(origin: DVec3, dir: DVec3, scale: f64) -> Lanes {
         let r = dir.recip();
         let s = (DVec3::splat(scale) + origin.abs()) * r.abs();
