@@ -50,10 +50,18 @@ impl<'a> Query<'a> {
                 .intersect_ray(self.scene, local, ray.dir, t_max)?;
             return Some(hit.into());
         }
-        let prepared = crate::accel::prepare_ray(self.scene, local, ray.dir);
+        self.nearest_beyond(local, ray.dir, t_min, t_max)
+    }
+
+    /// [`Query::nearest`] for a range that does not start at 0, the ray's origin relative to
+    /// the scene's anchor: every crossing in the range, the nearest kept. Kept out of line so
+    /// that the common range from 0 does not pay for its set-up.
+    #[inline(never)]
+    fn nearest_beyond(&self, local: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<Crossing> {
+        let prepared = crate::accel::prepare_ray(self.scene, local, dir);
         let mut best: Option<Crossing> = None;
         let mut found = Vec::new();
-        self.octree.traverse(local, ray.dir, t_max, |refs, _, _| {
+        self.octree.traverse(local, dir, t_max, |refs, _, _| {
             let limit = best.map_or(t_max, |b| b.t);
             for &prim in refs {
                 found.clear();
