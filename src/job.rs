@@ -299,7 +299,7 @@ fn trace_all(
     job: &RenderJob,
     file: &RayFile,
     source: &(impl RaySource + ?Sized),
-    progress: impl FnMut(usize),
+    progress: impl FnMut(usize) + Send,
 ) -> Result<(Buffers, Option<HitLists>)> {
     let range = |i: usize| {
         file.ranges

@@ -11,6 +11,8 @@ use crate::query::traceable;
 use crate::scene::{Crossing, Located};
 use glam::DVec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 /// One AOV's values for every ray.
 #[derive(Debug, Clone, PartialEq)]
@@ -185,8 +187,8 @@ fn tile_order(len: usize, width: Option<usize>) -> Option<Vec<usize>> {
 /// The width of a tile of [`tile_order`] (its height is two rows).
 const TILE: usize = 4;
 
-/// Tasks between two progress reports (64 Ki rays).
-const BLOCKS_PER_REPORT: usize = 64;
+/// Rays between two progress reports.
+const REPORT: usize = 1 << 16;
 
 /// The rays of a trace: their source, each ray's `(t_min, t_max]`, and whether a ray that
 /// cannot be traced is an error. Generic, so that reading a ray and its range is inlined into
@@ -202,15 +204,16 @@ pub struct Rays<'a, S: ?Sized, R> {
 }
 
 /// Finds the nearest hit of every ray in its range ([`Tracer::nearest`]) and computes `aovs`
-/// from it, in one parallel pass over blocks of rays. `progress` is told how many rays are
-/// done after every 64 Ki rays. Returns the buffers, or the first refused ray (with
-/// [`Rays::refuse_untraceable`]); whether a ray without a hit is refused is checked with the
-/// ray at hand, not read again.
+/// from it, in one parallel pass over blocks of rays (no pause between blocks: the workers
+/// report progress themselves). `progress` is told how many rays are done, about every 64 Ki
+/// rays, with counts that only grow. Returns the buffers, or the first refused ray (with
+/// [`Rays::refuse_untraceable`]; blocks after a refused ray found so far are skipped);
+/// whether a ray without a hit is refused is checked with the ray at hand, not read again.
 pub fn trace<S, R>(
     tracer: &Tracer,
     rays: &Rays<S, R>,
     aovs: &[Aov],
-    mut progress: impl FnMut(usize),
+    progress: impl FnMut(usize) + Send,
 ) -> Result<Buffers, usize>
 where
     S: RaySource + ?Sized,
@@ -267,20 +270,39 @@ where
         }
         refused.flatten()
     };
-    let mut blocks = blocks.into_iter().enumerate().peekable();
-    while blocks.peek().is_some() {
-        let group: Vec<_> = blocks.by_ref().take(BLOCKS_PER_REPORT).collect();
-        let end = group.last().map_or(0, |(b, _)| n.min((b + 1) * block_len));
-        let refused = group
-            .into_par_iter()
-            .filter_map(|(b, mut slots)| fill(b, &mut slots))
-            .min();
-        if let Some(i) = refused {
-            return Err(i);
-        }
-        progress(end);
+    let first_refused = AtomicUsize::new(usize::MAX);
+    let done = AtomicUsize::new(0);
+    // The count last reported, and the callback: reports take turns and never go back.
+    let reported = Mutex::new((0, progress));
+    let refused = blocks
+        .into_par_iter()
+        .enumerate()
+        .filter_map(|(b, mut slots)| {
+            // A block after a refused ray cannot hold the first one.
+            if b * block_len > first_refused.load(Ordering::Relaxed) {
+                return None;
+            }
+            let refused = fill(b, &mut slots);
+            if let Some(i) = refused {
+                first_refused.fetch_min(i, Ordering::Relaxed);
+            }
+            let len = block_len.min(n - b * block_len);
+            let before = done.fetch_add(len, Ordering::Relaxed);
+            if (before + len) / REPORT != before / REPORT || before + len == n {
+                let mut reported = reported.lock().unwrap_or_else(|p| p.into_inner());
+                let now = done.load(Ordering::Relaxed);
+                if now > reported.0 {
+                    reported.0 = now;
+                    (reported.1)(now);
+                }
+            }
+            refused
+        })
+        .min();
+    match refused {
+        Some(i) => Err(i),
+        None => Ok(Buffers { columns }),
     }
-    Ok(Buffers { columns })
 }
 
 #[cfg(test)]

@@ -367,7 +367,7 @@ pub fn render(
     tracer: &Tracer,
     source: &(impl RaySource + ?Sized),
     aovs: &[Aov],
-    progress: impl FnMut(usize),
+    progress: impl FnMut(usize) + Send,
 ) -> Buffers {
     let rays = Rays {
         source,
