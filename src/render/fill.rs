@@ -308,6 +308,72 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::{Octree, OctreeParams};
+    use crate::scene::SceneBuilder;
+
+    /// 200 000 rays at a unit square, some of them untraceable, in a pool of `threads`.
+    fn trace_with_bad_rays(threads: usize, bad: &[usize]) -> (Result<Buffers, usize>, Vec<usize>) {
+        let mut builder = SceneBuilder::new();
+        let square = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        builder.add_mesh("t".into(), "test".into(), vec![square]);
+        let scene = builder.finish("square".into());
+        let octree = Octree::build(&scene, OctreeParams::default());
+        let tracer = Tracer::new(&scene, &octree);
+        let mut source: Vec<Ray> = (0..200_000)
+            .map(|i| {
+                let x = (i % 1000) as f64 / 2000.0;
+                Ray::new(DVec3::new(x, 0.1, 1.0), DVec3::NEG_Z)
+            })
+            .collect();
+        for &i in bad {
+            source[i].dir = DVec3::ZERO;
+        }
+        let rays = Rays {
+            source: &source,
+            range: |_| (0.0, f64::INFINITY),
+            refuse_untraceable: true,
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut reports = Vec::new();
+        let result = pool.install(|| trace(&tracer, &rays, &[Aov::Depth], |n| reports.push(n)));
+        (result, reports)
+    }
+
+    /// The first untraceable ray is the one reported, whatever the thread count and wherever
+    /// the others lie (blocks after a refused ray may be skipped, blocks before it may not).
+    #[test]
+    fn the_first_refused_ray_is_reported() {
+        for threads in [1, 2, 4] {
+            for bad in [&[150_001, 70_000, 199_999][..], &[5, 190_000], &[199_999]] {
+                let (result, _) = trace_with_bad_rays(threads, bad);
+                let first = bad.iter().copied().min();
+                assert_eq!(result.err(), first, "{threads} threads, bad rays {bad:?}");
+            }
+        }
+    }
+
+    /// Progress counts only grow, come about every 64 Ki rays and end at the ray count.
+    #[test]
+    fn progress_grows_to_the_ray_count() {
+        for threads in [1, 2, 4] {
+            let (result, reports) = trace_with_bad_rays(threads, &[]);
+            let buffers = result.expect("every ray is traceable");
+            let depth = buffers.floats(Aov::Depth).expect("depth buffer");
+            assert!(
+                depth.iter().all(|&d| d == 1.0),
+                "every ray hits at distance 1"
+            );
+            assert!(reports.windows(2).all(|w| w[0] < w[1]), "{reports:?}");
+            assert_eq!(reports.last(), Some(&200_000), "{reports:?}");
+            assert!(
+                (3..=8).contains(&reports.len()),
+                "{threads} threads: {reports:?}"
+            );
+        }
+    }
 
     /// Every ray of a block is traced exactly once, and (for widths that are a multiple of
     /// the tile's) each run of eight rays is a 4 × 2 tile of neighbouring pixels.
