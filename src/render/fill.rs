@@ -271,9 +271,7 @@ where
         refused.flatten()
     };
     let first_refused = AtomicUsize::new(usize::MAX);
-    let done = AtomicUsize::new(0);
-    // The count last reported, and the callback: reports take turns and never go back.
-    let reported = Mutex::new((0, progress));
+    let progress = Progress::new(n, progress);
     let refused = blocks
         .into_par_iter()
         .enumerate()
@@ -286,22 +284,48 @@ where
             if let Some(i) = refused {
                 first_refused.fetch_min(i, Ordering::Relaxed);
             }
-            let len = block_len.min(n - b * block_len);
-            let before = done.fetch_add(len, Ordering::Relaxed);
-            if (before + len) / REPORT != before / REPORT || before + len == n {
-                let mut reported = reported.lock().unwrap_or_else(|p| p.into_inner());
-                let now = done.load(Ordering::Relaxed);
-                if now > reported.0 {
-                    reported.0 = now;
-                    (reported.1)(now);
-                }
-            }
+            progress.add(block_len.min(n - b * block_len));
             refused
         })
         .min();
     match refused {
         Some(i) => Err(i),
         None => Ok(Buffers { columns }),
+    }
+}
+
+/// Progress told from the workers of a trace: the rays done, about every [`REPORT`] rays and
+/// at the end, with counts that only grow (the reports take turns).
+struct Progress<F> {
+    total: usize,
+    done: AtomicUsize,
+    /// The count last reported, and the callback.
+    reported: Mutex<(usize, F)>,
+}
+
+impl<F: FnMut(usize)> Progress<F> {
+    fn new(total: usize, report: F) -> Progress<F> {
+        Progress {
+            total,
+            done: AtomicUsize::new(0),
+            reported: Mutex::new((0, report)),
+        }
+    }
+
+    /// Counts `len` more rays done; reports when that crosses a multiple of [`REPORT`] or
+    /// completes the trace.
+    fn add(&self, len: usize) {
+        let before = self.done.fetch_add(len, Ordering::Relaxed);
+        let after = before + len;
+        if after / REPORT == before / REPORT && after != self.total {
+            return;
+        }
+        let mut reported = self.reported.lock().unwrap_or_else(|p| p.into_inner());
+        let now = self.done.load(Ordering::Relaxed);
+        if now > reported.0 {
+            reported.0 = now;
+            (reported.1)(now);
+        }
     }
 }
 
