@@ -234,15 +234,14 @@ where
         .view_axis()
         .unwrap_or((DVec3::ZERO, DVec3::ZERO));
     // Finds the block's hits, then fills each column's part, the columns one after another.
-    let fill = |b: usize, slots: &mut [Slot]| -> Option<usize> {
+    let fill = |start: usize, len: usize, slots: &mut [Slot]| -> Option<usize> {
         let block = Block {
             tracer,
             source: rays.source,
-            start: b * block_len,
+            start,
             eye,
             forward,
         };
-        let len = block_len.min(n - block.start);
         let order = tile_order(len, width);
         let indices: Vec<usize> = match &order {
             Some(order) => order.iter().map(|&j| block.start + j).collect(),
@@ -276,15 +275,17 @@ where
         .into_par_iter()
         .enumerate()
         .filter_map(|(b, mut slots)| {
+            let start = b * block_len;
             // A block after a refused ray cannot hold the first one.
-            if b * block_len > first_refused.load(Ordering::Relaxed) {
+            if start > first_refused.load(Ordering::Relaxed) {
                 return None;
             }
-            let refused = fill(b, &mut slots);
+            let len = block_len.min(n - start);
+            let refused = fill(start, len, &mut slots);
             if let Some(i) = refused {
                 first_refused.fetch_min(i, Ordering::Relaxed);
             }
-            progress.add(block_len.min(n - b * block_len));
+            progress.add(len);
             refused
         })
         .min();

@@ -476,10 +476,11 @@ def main(argv=None):
         write_gltf(path, bunny[:n], [(np.zeros(3), 1.0)])
         sweep.append((f"patch{n}", f"bunny patch {n}", path, bunny[:n]))
 
+    rounds = max(1, a.rounds)
     results = {
         "machine": machine(),
         "quick": quick,
-        "rounds": max(1, a.rounds),
+        "rounds": rounds,
         "scenes": [],
         "sweep": [],
         "missing": missing,
@@ -518,7 +519,7 @@ def main(argv=None):
                     "f64_max_triangles": 100_000,
                 }
             rust_rounds, peer_rounds = [], []
-            for _ in range(max(1, a.rounds)):
+            for _ in range(rounds):
                 rust_rounds.append(run_rust(exe, path, rays, args))
                 if peer_spec is not None:
                     peer_rounds.append(run_peers(peer_spec, tmp))
