@@ -7,6 +7,9 @@ Skips when target/release/raycast (or $RAYCAST) does not exist, or without usd-c
 """
 
 import json
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -178,3 +181,25 @@ def test_exact_fixtures_regenerate_byte_identical(tmp_path, monkeypatch):
     assert fresh == sorted(p.name for p in EXACT.iterdir() if p.name != "README.md")
     for name in fresh:
         assert (tmp_path / name).read_bytes() == (EXACT / name).read_bytes(), name
+
+
+@pytest.mark.parametrize(
+    "kernel",
+    [
+        # numpy's linear algebra on OpenBLAS's oldest x86 kernel, numpy's own SIMD dispatch
+        # limited to the baseline: the arithmetic of another CPU. (Values from BLAS or from
+        # numpy's normal draws reach the files on today's main, and differ here.)
+        {
+            "OPENBLAS_CORETYPE": "Prescott",
+            "NPY_DISABLE_CPU_FEATURES": "AVX512F AVX512CD AVX512_SKX AVX2 FMA3 F16C AVX",
+        },
+        {"OPENBLAS_CORETYPE": "Haswell"},
+    ],
+    ids=["prescott-baseline", "haswell"],
+)
+def test_exact_fixtures_regenerate_byte_identical_on_other_kernels(tmp_path, kernel):
+    env = {**os.environ, **kernel}
+    cmd = [sys.executable, "-m", "raycast_tools", "exact-fixtures", "--out", str(tmp_path)]
+    subprocess.run(cmd, env=env, check=True, capture_output=True, cwd=ROOT)
+    for path in sorted(tmp_path.iterdir()):
+        assert path.read_bytes() == (EXACT / path.name).read_bytes(), (path.name, kernel)

@@ -13,15 +13,22 @@ code with raycast (issue 12, "exact with respect to the file").
   and `inactiveIds`; and a second PointInstancer with float orientations whose prototypes
   live in an invisible scope elsewhere.
 
-Only numpy and the standard library; a seeded generator, so a rerun gives byte-identical files.
-fixtures/exact/README.md says what each holds.
+A seeded generator, so a rerun gives byte-identical files, on any CPU: the random values are
+numpy's uniform draws (integer bits scaled, the same everywhere), and every value composed from
+them is made by IEEE-rounded scalar arithmetic (+, -, *, /, sqrt) in a fixed order, or by
+mpmath (sin and cos correctly rounded). numpy's linear algebra (BLAS: the summation order and
+fused multiply-adds depend on the CPU's kernel), its SIMD-dispatched ufuncs and the platform's
+libm are not used for any value that reaches a file. fixtures/exact/README.md says what each
+holds.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
+import mpmath
 import numpy as np
 
 from .cli import prog
@@ -49,8 +56,7 @@ def blob(rng) -> tuple[np.ndarray, np.ndarray]:
         def middle(i, j):
             key = (min(i, j), max(i, j))
             if key not in mid:
-                m = verts[i] + verts[j]
-                verts.append(m / np.linalg.norm(m))
+                verts.append(unit(verts[i] + verts[j]))
                 mid[key] = len(verts) - 1
             return mid[key]
 
@@ -62,18 +68,44 @@ def blob(rng) -> tuple[np.ndarray, np.ndarray]:
     return v.astype(np.float32), np.array(faces, np.uint16)
 
 
+def unit(v) -> np.ndarray:
+    """`v` / |v|, |v| by scalar IEEE arithmetic in a fixed order (not BLAS)."""
+    comps = [float(c) for c in v]
+    length = math.sqrt(math.fsum(c * c for c in comps))
+    return np.array([c / length for c in comps])
+
+
+def sin_cos(angle: float) -> tuple[float, float]:
+    """sin and cos of `angle`, correctly rounded to double (mpmath at 120 bits, then rounded):
+    the same bits on every machine, where libm's may differ in the last place."""
+    with mpmath.workprec(120):
+        a = mpmath.mpf(angle)
+        return float(mpmath.sin(a)), float(mpmath.cos(a))
+
+
 def rotation(axis, angle) -> np.ndarray:
-    """3x3 rotation about `axis` by `angle` radians (Rodrigues)."""
-    k = np.asarray(axis, float) / np.linalg.norm(axis)
-    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + math.sin(angle) * kx + (1 - math.cos(angle)) * kx @ kx
+    """3x3 rotation about `axis` by `angle` radians (Rodrigues: I + s K + (1 - c) K², each entry
+    summed in a fixed order)."""
+    kx, ky, kz = (float(c) for c in unit(axis))
+    s, c = sin_cos(angle)
+    k = [[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]]
+    k2 = [[math.fsum(k[i][m] * k[m][j] for m in range(3)) for j in range(3)] for i in range(3)]
+    eye = [[1.0 if i == j else 0.0 for j in range(3)] for i in range(3)]
+    entry = lambda i, j: eye[i][j] + s * k[i][j] + (1 - c) * k2[i][j]  # noqa: E731
+    return np.array([[entry(i, j) for j in range(3)] for i in range(3)])
 
 
 def quaternion(axis, angle) -> list[float]:
     """glTF (x, y, z, w) unit quaternion of a rotation about `axis`."""
-    k = np.asarray(axis, float) / np.linalg.norm(axis)
-    s = math.sin(angle / 2)
-    return [float(k[0] * s), float(k[1] * s), float(k[2] * s), math.cos(angle / 2)]
+    k = unit(axis)
+    s, c = sin_cos(angle / 2)
+    return [float(k[0] * s), float(k[1] * s), float(k[2] * s), c]
+
+
+def direction(rng, n: int = 3) -> np.ndarray:
+    """A random direction (not normalised) from uniform draws: numpy's normal draws go through
+    libm's exp and log, which differ in the last place between CPUs."""
+    return rng.uniform(-1.0, 1.0, n)
 
 
 def random_trs(rng, spread: float, mirror: bool) -> dict:
@@ -83,7 +115,7 @@ def random_trs(rng, spread: float, mirror: bool) -> dict:
         scale[0] = -scale[0]
     return {
         "translation": [float(x) for x in rng.uniform(-spread, spread, 3)],
-        "rotation": quaternion(rng.normal(size=3), rng.uniform(0.2, 3.0)),
+        "rotation": quaternion(direction(rng), rng.uniform(0.2, 3.0)),
         "scale": [float(x) for x in scale],
     }
 
@@ -92,7 +124,7 @@ def random_matrix(rng, spread: float, mirror: bool) -> list[float]:
     """A column-major 4x4 node matrix T R S, in full double precision."""
     trs = random_trs(rng, spread, mirror)
     m = np.eye(4)
-    m[:3, :3] = rotation(rng.normal(size=3), rng.uniform(0.2, 3.0)) * np.array(trs["scale"])
+    m[:3, :3] = rotation(direction(rng), rng.uniform(0.2, 3.0)) * np.array(trs["scale"])
     m[:3, 3] = trs["translation"]
     return [float(x) for x in m.T.reshape(-1)]
 
@@ -191,8 +223,7 @@ def make_point_instancer() -> None:
     positions = rng.uniform(-20, 20, (n, 3)).astype(np.float32)
     quats = []
     for i in range(n):
-        q = rng.normal(size=4)
-        q /= np.linalg.norm(q)
+        q = unit(direction(rng, 4))
         # every quath is a little off unit length; some are far from it
         q *= [1.0, 0.9, 1.1, 0.8][i % 4]
         quats.append(q)
@@ -258,9 +289,17 @@ def make_point_instancer() -> None:
 
 
 def main(argv=None) -> int:
-    argparse.ArgumentParser(
+    global EXACT_DIR, FILES
+    parser = argparse.ArgumentParser(
         prog=prog("exact-fixtures"), description=__doc__.split("\n\n")[0]
-    ).parse_args(argv)
+    )
+    parser.add_argument(
+        "--out", type=Path, help="write the files to this folder instead (default fixtures/exact)"
+    )
+    args = parser.parse_args(argv)
+    if args.out is not None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        EXACT_DIR, FILES = args.out, FixtureFiles(args.out)
     make_far_field()
     make_nested_far()
     make_point_instancer()
