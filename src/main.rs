@@ -227,8 +227,8 @@ fn parse_positive(text: &str) -> Result<f64, String> {
 }
 
 fn main() -> ExitCode {
-    // Ctrl-C: remove temporary output files, then exit as a shell expects (128 + SIGINT).
-    let _ = ctrlc::set_handler(|| raycast::output::remove_partial_files_and_exit(130));
+    // SIGINT, SIGTERM, SIGHUP: remove temporary output files, then exit as a shell expects.
+    cli::signals::install();
     let cli = Cli::parse();
     let result = match cli.command {
         Some(Command::Info(args)) => info(args),

@@ -258,7 +258,7 @@ impl Files {
         let staging = match self.0.entry(dir.clone()) {
             std::collections::btree_map::Entry::Occupied(e) => e.into_mut(),
             std::collections::btree_map::Entry::Vacant(e) => {
-                e.insert(Staging::among_others(&dir).map_err(Error::as_usage)?)
+                e.insert(Staging::new(&dir).map_err(Error::as_usage)?)
             }
         };
         staging
