@@ -30,11 +30,89 @@ fn a_glb_named_obj_is_named_for_what_it_is() {
     std::fs::copy(fixture("gltf/cube.glb"), &disguised).unwrap();
     let result = raycast(&["info", arg(&disguised)]);
     assert_eq!(result.status.code(), Some(1));
+    let said = "the content is a binary glTF (GLB), not what the .obj name says";
     assert!(
-        stderr(&result).contains("model.obj: the content is a binary glTF (GLB)"),
+        stderr(&result).contains(&format!("model.obj: {said}")),
         "{}",
         stderr(&result)
     );
+    // `check` says the same words (it said "OBJ_NOT_TEXT ... not UTF-8")
+    let checked = raycast(&["check", arg(&disguised)]);
+    let stdout = String::from_utf8_lossy(&checked.stdout);
+    assert_eq!(checked.status.code(), Some(1));
+    assert!(
+        stdout.contains(&format!("FILE_TYPE_MISMATCH: {said}")),
+        "{stdout}"
+    );
+}
+
+/// Runs `raycast ARGS` under a 1.5 GB address-space limit (`ulimit -v`), so that a run that
+/// reads a 2 GiB file whole fails instead of answering.
+#[cfg(target_os = "linux")]
+fn raycast_in_1_5_gb(args: &[&str]) -> std::process::Output {
+    let mut script = format!("ulimit -v 1500000; exec '{}'", raycast_bin().display());
+    for a in args {
+        script.push_str(&format!(" '{a}'"));
+    }
+    std::process::Command::new("sh")
+        .args(["-c", &script])
+        .output()
+        .unwrap()
+}
+
+/// A 2 GiB file whose first bytes already say it is no glTF is refused from those bytes,
+/// by render, `info` and `check` alike, without reading it (it used to be read whole first:
+/// 4.5-15 s and 2.1 GB for a 2 GB file).
+#[cfg(target_os = "linux")]
+#[test]
+fn a_huge_file_is_refused_from_its_first_bytes() {
+    let dir = temp_dir("huge");
+    std::fs::create_dir_all(&dir).unwrap();
+    let sparse = |name: &str, head: &[u8]| {
+        let path = dir.join(name);
+        std::fs::write(&path, head).unwrap();
+        let file = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
+        file.set_len(2 << 30).unwrap();
+        path
+    };
+    let cases = [
+        (
+            sparse("zeros.glb", b""),
+            "the file does not start with 'glTF'",
+        ),
+        (
+            sparse("short.glb", b"glTF\x02\0\0\0\0\0\0\0"),
+            "the GLB header declares 0 bytes: no room for a chunk",
+        ),
+        (
+            sparse("zeros.gltf", b""),
+            "not valid glTF JSON: expected value at line 1 column 1",
+        ),
+    ];
+    for (path, message) in &cases {
+        for args in [vec![arg(path)], vec!["info", arg(path)]] {
+            let result = raycast_in_1_5_gb(&args);
+            assert_eq!(
+                result.status.code(),
+                Some(1),
+                "{args:?}: {}",
+                stderr(&result)
+            );
+            assert!(stderr(&result).contains(message), "{}", stderr(&result));
+        }
+    }
+    let checked = raycast_in_1_5_gb(&["check", arg(&dir)]);
+    let stdout = String::from_utf8_lossy(&checked.stdout);
+    assert_eq!(
+        checked.status.code(),
+        Some(1),
+        "{stdout}{}",
+        stderr(&checked)
+    );
+    for (_, message) in &cases {
+        assert!(stdout.contains(message), "{stdout}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

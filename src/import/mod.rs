@@ -3,7 +3,7 @@
 pub mod gltf;
 pub mod obj;
 pub mod paths;
-mod sniff;
+pub mod sniff;
 pub mod usd;
 
 use crate::error::{Error, ErrorKind, Result};
@@ -59,7 +59,7 @@ pub fn load_bytes(bytes: Vec<u8>, name: &Path, options: &LoadOptions) -> Result<
 }
 
 /// A path's extension in lower case (empty when it has none).
-fn extension_of(path: &Path) -> String {
+pub fn extension_of(path: &Path) -> String {
     path.extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)

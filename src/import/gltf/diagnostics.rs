@@ -119,6 +119,12 @@ impl dyn Sink + '_ {
     }
 }
 
+impl Sink for Vec<Diagnostic> {
+    fn push(&mut self, diagnostic: Diagnostic) {
+        Vec::push(self, diagnostic);
+    }
+}
+
 /// Keeps the first error and every warning and info; stops the reader at the first error.
 #[derive(Debug, Default)]
 pub struct FailFast {
