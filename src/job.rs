@@ -368,6 +368,11 @@ fn read_rays(path: &Path, job: &RenderJob, warnings: &mut Vec<String>) -> Result
 /// Checks what can be checked before loading (see [`run`]); returns the formats to write,
 /// merged.
 fn check_request(job: &RenderJob) -> Result<Vec<Format>> {
+    if job.out.as_deref() == Some(Path::new("-")) {
+        return Err(Error::usage(
+            "--out -: a render writes a folder of files, not standard output; name a folder",
+        ));
+    }
     let rays_mode = job.rays.is_some();
     if rays_mode && job.aovs.contains(&Aov::Z) {
         return Err(Error::usage(

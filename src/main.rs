@@ -229,7 +229,17 @@ fn parse_positive(text: &str) -> Result<f64, String> {
 fn main() -> ExitCode {
     // SIGINT, SIGTERM, SIGHUP: remove temporary output files, then exit as a shell expects.
     cli::signals::install();
-    let cli = Cli::parse();
+    let args: Vec<String> = std::env::args().collect();
+    let cli = match Cli::try_parse_from(&args) {
+        Ok(cli) => cli,
+        Err(e) => match cli::slips::explain::<Cli>(&e, &args[1..]) {
+            Some(meant) => {
+                eprintln!("raycast: error: {meant}");
+                return ExitCode::from(2);
+            }
+            None => e.exit(),
+        },
+    };
     let result = match cli.command {
         Some(Command::Info(args)) => info(args),
         Some(Command::Check(args)) => return cli::check::run(&args),
@@ -324,7 +334,11 @@ fn print_stdout(text: &str) -> raycast::Result<()> {
 fn render(args: RenderArgs) -> raycast::Result<()> {
     if let Some(threads) = args.threads {
         rayon::ThreadPoolBuilder::new()
-            .num_threads(threads as usize)
+            .num_threads(cli::threads::clamp(
+                threads as usize,
+                "--threads",
+                args.quiet,
+            ))
             .build_global()
             .map_err(|e| raycast::Error::msg(format!("cannot start {threads} threads: {e}")))?;
     }

@@ -206,3 +206,110 @@ fn usd_reader_crashes_and_hangs_end_with_one_line() {
     }
     assert!(!out.exists());
 }
+
+/// Common slips get words for what was meant (clap called each "the subcommand '…' cannot be
+/// used with '<SCENE>'"), one line, exit 2.
+#[test]
+fn common_slips_say_what_was_meant() {
+    let cube = fixture("gltf/cube.gltf");
+    let cases: [(Vec<&str>, &str); 5] = [
+        (
+            vec!["a.glb", "b.obj"],
+            "one scene per render: got 'a.glb' and 'b.obj'",
+        ),
+        (
+            vec!["--width", "8", arg(&cube), "extra"],
+            "one scene per render: got",
+        ),
+        (vec!["chek", "dir"], "did you mean 'raycast check dir'?"),
+        (vec!["ifno", "x.glb"], "did you mean 'raycast info x.glb'?"),
+        (vec![arg(&cube), "info"], "'info' goes first: raycast info"),
+    ];
+    for (args, said) in cases {
+        let result = raycast(&args);
+        assert_eq!(result.status.code(), Some(2), "{args:?}");
+        let text = stderr(&result);
+        assert!(text.contains(said), "{args:?}: {text}");
+        assert_eq!(text.lines().count(), 1, "{text}");
+    }
+}
+
+/// Invalid camera values exit 2 as the README says of invalid values, each named for what is
+/// wrong (`--up 0,0,0` was called "parallel"); `--out -` and a scene from standard input are
+/// refused in plain words.
+#[test]
+fn invalid_cameras_and_standard_streams_are_usage_errors() {
+    let cube = fixture("gltf/cube.gltf");
+    let out = temp_dir("camera-slips");
+    let look = |extra: &[&str]| {
+        let mut args = vec![arg(&cube), "--width", "8", "--out", arg(&out)];
+        args.extend(extra);
+        raycast(&args)
+    };
+    for (extra, said) in [
+        (
+            vec!["--eye", "1,1,1", "--target", "1,1,1"],
+            "eye and target are the same point",
+        ),
+        (
+            vec!["--eye", "1,1,1", "--target", "0,0,0", "--up", "0,0,0"],
+            "up vector is zero",
+        ),
+        (
+            vec!["--eye", "0,1,0", "--target", "0,0,0"],
+            "up vector is parallel to the view direction",
+        ),
+    ] {
+        let result = look(&extra);
+        assert_eq!(result.status.code(), Some(2), "{extra:?}");
+        assert!(stderr(&result).contains(said), "{}", stderr(&result));
+        assert!(!out.exists());
+    }
+    let dash = raycast(&[arg(&cube), "--out", "-"]);
+    assert_eq!(dash.status.code(), Some(2));
+    assert!(stderr(&dash).contains("not standard output; name a folder"));
+    assert!(!std::path::Path::new("-").exists());
+    let stdin = raycast(&["-"]);
+    assert!(
+        stderr(&stdin).contains("standard input is not read"),
+        "{}",
+        stderr(&stdin)
+    );
+    let piped = std::process::Command::new(raycast_bin())
+        .arg("/dev/stdin")
+        .stdin(std::process::Stdio::piped())
+        .output()
+        .unwrap();
+    assert!(
+        stderr(&piped).contains("is not a regular file"),
+        "{}",
+        stderr(&piped)
+    );
+}
+
+/// `--threads` and `check --jobs` follow one rule: 0 is refused, more than the cores is
+/// brought down to the cores with a warning.
+#[test]
+fn threads_and_jobs_follow_one_rule() {
+    let cube = fixture("gltf/cube.gltf");
+    let out = temp_dir("threads");
+    let cores = std::thread::available_parallelism().unwrap().get();
+    let many = (cores + 1).to_string();
+    for (args, flag) in [
+        (
+            vec![arg(&cube), "--width", "8", "--out", arg(&out), "--threads"],
+            "--threads",
+        ),
+        (vec!["check", arg(&cube), "--jobs"], "--jobs"),
+    ] {
+        let mut zero = args.clone();
+        zero.push("0");
+        assert_eq!(raycast(&zero).status.code(), Some(2), "{flag} 0");
+        let mut more = args.clone();
+        more.push(&many);
+        let result = raycast(&more);
+        assert!(result.status.success(), "{}", stderr(&result));
+        let said = format!("{flag} {many} is more than the {cores} cores; using {cores}");
+        assert!(stderr(&result).contains(&said), "{}", stderr(&result));
+    }
+}

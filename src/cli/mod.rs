@@ -3,3 +3,5 @@
 
 pub mod check;
 pub mod signals;
+pub mod slips;
+pub mod threads;

@@ -25,6 +25,13 @@ pub struct LoadOptions {
 /// Loads a `.gltf`, `.glb`, `.obj`, `.usda`, `.usdc`, `.usd` or `.usdz` file, choosing the
 /// importer by extension after checking that the content is that format.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
+    if path == Path::new("-") {
+        return Err(Error::in_file(
+            path,
+            "standard input is not read: give the path of a scene file (.gltf, .glb, .obj, \
+             .usda, .usdc, .usd or .usdz)",
+        ));
+    }
     let extension = extension_of(path);
     sniff::check_content(path, &extension)?;
     let mut scene = match extension.as_str() {
