@@ -313,3 +313,47 @@ fn threads_and_jobs_follow_one_rule() {
         assert!(stderr(&result).contains(&said), "{}", stderr(&result));
     }
 }
+
+/// `info --json` on several files gives one record per file, a failed file's with its error,
+/// so that results match inputs (it gave only the files that were read).
+#[test]
+fn info_json_has_a_record_for_each_file() {
+    let good = fixture("gltf/cube.gltf");
+    let bad = fixture("bad/bad_index.gltf");
+    let result = raycast(&["info", "--json", arg(&good), arg(&bad), arg(&good)]);
+    assert_eq!(result.status.code(), Some(1));
+    let records: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
+    let records = records.as_array().unwrap();
+    assert_eq!(records.len(), 3);
+    assert_eq!(records[0]["triangles"], 12);
+    assert_eq!(records[1]["scene"], arg(&bad));
+    assert!(records[1]["error"]
+        .as_str()
+        .unwrap()
+        .contains("index 99 out of range"));
+    assert!(records[1].get("triangles").is_none());
+    assert_eq!(records[2]["triangles"], 12);
+}
+
+/// A scene of many objects lists the first ones and counts the rest (501 lines for a scene
+/// of 500 cubes); `--all` and `--json` list every one.
+#[test]
+fn info_summarises_many_objects_unless_asked_for_all() {
+    let mut text = String::new();
+    for i in 0..100 {
+        text += &format!("o part{i}\nv {i} 0 0\nv {i}.5 0 0\nv {i} 1 0\nf -3 -2 -1\n");
+    }
+    let obj = temp_file("many-objects", "parts.obj", text);
+    let listed = |args: &[&str]| {
+        let out = raycast_ok(args).stdout;
+        let text = String::from_utf8_lossy(&out).into_owned();
+        text.lines().filter(|l| l.contains("  object ")).count()
+    };
+    assert_eq!(listed(&["info", arg(&obj)]), 20);
+    let summary = raycast_ok(&["info", arg(&obj)]).stdout;
+    assert!(String::from_utf8_lossy(&summary).contains("... 80 more objects (--all"));
+    assert_eq!(listed(&["info", "--all", arg(&obj)]), 100);
+    let json: serde_json::Value =
+        serde_json::from_slice(&raycast_ok(&["info", "--json", arg(&obj)]).stdout).unwrap();
+    assert_eq!(json["objects"].as_array().unwrap().len(), 100);
+}
