@@ -2,6 +2,7 @@
 
 pub mod gltf;
 pub mod obj;
+pub mod obj_text;
 pub mod paths;
 mod sniff;
 pub mod usd;
