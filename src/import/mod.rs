@@ -2,6 +2,7 @@
 
 pub mod gltf;
 pub mod obj;
+pub mod obj_text;
 pub mod paths;
 pub mod sniff;
 pub mod usd;
