@@ -78,14 +78,19 @@ impl Camera {
 
     /// The automatic camera: a perspective view (0.8 rad vertical field of view) from the
     /// front, slightly from the right and above, with `up` (+Y, or +Z for a Z-up USD stage) as
-    /// the vertical, placed so that every corner of `bounds` lies inside an image of width /
-    /// height `aspect` (a wide image of a wide scene is filled across, not just top to bottom).
-    pub fn framing_image(bounds: &Aabb, aspect: f64, up: DVec3) -> Camera {
+    /// the vertical, placed so that the projections of `points` (the scene's vertices) fill an
+    /// image of width / height `aspect` to 95 % in the axis that binds, centred in both axes:
+    /// a wide image of a wide scene is filled across, and the empty corners of a bounding box
+    /// (a chess board's air above the low pieces) take no room. `bounds` stands in when there
+    /// are no points.
+    pub fn framing_image(points: &[DVec3], bounds: &Aabb, aspect: f64, up: DVec3) -> Camera {
         let bounds = if bounds.is_empty() {
             Aabb::new(DVec3::splat(-1.0), DVec3::ONE)
         } else {
             *bounds
         };
+        let corners = bounds.corners();
+        let points = if points.is_empty() { &corners[..] } else { points };
         let centre = bounds.center();
         // The front of a Z-up scene is its -Y side (+Z of a Y-up one turned up to +Z).
         let direction = if up == DVec3::Z {
@@ -101,42 +106,23 @@ impl Camera {
             Projection::Perspective { yfov },
         )
         .expect("framing directions are never parallel to the up axis");
-        let [right, up, back] = [
+        let axes = [
             camera.to_world.x_axis,
             camera.to_world.y_axis,
             camera.to_world.z_axis,
         ]
         .map(|a| a.truncate());
-        let (ty, tx) = ((yfov * 0.5).tan(), (yfov * 0.5).tan() * aspect);
-        let (mut distance, mut nearest) = (0.0f64, 0.0f64);
-        for i in 0..8 {
-            let corner = DVec3::new(
-                if i & 1 == 0 {
-                    bounds.min.x
-                } else {
-                    bounds.max.x
-                },
-                if i & 2 == 0 {
-                    bounds.min.y
-                } else {
-                    bounds.max.y
-                },
-                if i & 4 == 0 {
-                    bounds.min.z
-                } else {
-                    bounds.max.z
-                },
-            ) - centre;
-            let (x, y, z) = (corner.dot(right), corner.dot(up), corner.dot(back));
-            distance = distance.max(z + x.abs() / tx).max(z + y.abs() / ty);
-            nearest = nearest.max(z);
-        }
+        let fill = 1.0 / 1.05;
+        let ty = (yfov * 0.5).tan() * fill;
+        let (eye, nearest) = fit_eye(points, centre, axes, [ty * aspect, ty]);
         let size = bounds.size().max_element().max(1e-9);
-        let distance = (distance * 1.05).max(nearest + 1e-3 * size);
-        camera.to_world.w_axis = (centre + back * distance).extend(1.0);
+        let [right, up, back] = axes;
+        // in front of every point by at least 1e-3 of the scene's size
+        let depth = eye[2].max(nearest + 1e-3 * size);
+        camera.to_world.w_axis = (centre + right * eye[0] + up * eye[1] + back * depth).extend(1.0);
         camera.name = "auto".into();
         camera.source = "auto (frames the whole scene)".into();
-        camera.znear = distance - nearest;
+        camera.znear = depth - nearest;
         camera
     }
 
@@ -221,4 +207,71 @@ impl Camera {
             }
         }
     }
+}
+
+/// The eye, in the camera's axes `[right, up, back]` about `origin`, from which every point
+/// lies inside a centred pyramid of half-widths `tan = [tx, ty]`, as close as that allows;
+/// and the largest `back` coordinate of a point (the nearest point's).
+///
+/// With the eye at `(e_u, e_v, e_w)`, a point `(u, v, w)` is inside when `|u − e_u| ≤ tx·(e_w
+/// − w)`, that is `e_u + tx·e_w ≥ u + tx·w` and `tx·e_w − e_u ≥ tx·w − u`. The tightest eye
+/// meets the largest of each side: `e_w = (max(u + tx·w) + max(tx·w − u)) / (2 tx)` and `e_u`
+/// half their difference (the extreme points at equal angles either side); the same in `v`,
+/// and the farther `e_w` of the two axes binds.
+fn fit_eye(points: &[DVec3], origin: DVec3, axes: [DVec3; 3], tan: [f64; 2]) -> ([f64; 3], f64) {
+    let [right, up, back] = axes;
+    let mut most = [f64::NEG_INFINITY; 4];
+    let mut nearest = f64::NEG_INFINITY;
+    for p in points {
+        let d = *p - origin;
+        let (u, v, w) = (d.dot(right), d.dot(up), d.dot(back));
+        most[0] = most[0].max(u + tan[0] * w);
+        most[1] = most[1].max(tan[0] * w - u);
+        most[2] = most[2].max(v + tan[1] * w);
+        most[3] = most[3].max(tan[1] * w - v);
+        nearest = nearest.max(w);
+    }
+    let e_w = ((most[0] + most[1]) / (2.0 * tan[0])).max((most[2] + most[3]) / (2.0 * tan[1]));
+    let local: Vec<[f64; 3]> = points
+        .iter()
+        .map(|p| {
+            let d = *p - origin;
+            [d.dot(right), d.dot(up), e_w - d.dot(back)]
+        })
+        .collect();
+    let e_u = centring_shift(&local, 0, (most[0] - most[1]) / 2.0);
+    let e_v = centring_shift(&local, 1, (most[2] - most[3]) / 2.0);
+    ([e_u, e_v, e_w], nearest)
+}
+
+/// The eye's shift along image axis `axis` (0: right, 1: up) that centres the points' image:
+/// the largest and the smallest `(c − e) / depth` equal and opposite. In the axis that binds
+/// [`fit_eye`]'s closed form is that shift (`guess`); in the other the points lie at several
+/// depths, so it is found by bisection (the sum of the two extremes falls as `e` grows).
+/// `local` holds each point's right, up and depth from the eye's plane.
+fn centring_shift(local: &[[f64; 3]], axis: usize, guess: f64) -> f64 {
+    let imbalance = |e: f64| {
+        let (lo, hi) = local.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            let slope = (p[axis] - e) / p[2];
+            (lo.min(slope), hi.max(slope))
+        });
+        lo + hi
+    };
+    let span = local
+        .iter()
+        .map(|p| (p[axis] - guess).abs())
+        .fold(0.0, f64::max);
+    let (mut lo, mut hi) = (guess - span, guess + span);
+    if !(span > 0.0) || imbalance(lo) < 0.0 || imbalance(hi) > 0.0 {
+        return guess;
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if imbalance(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }

@@ -187,7 +187,13 @@ fn run_checked(
         (None, rays) => Layout::Rays(rays.as_ref().map_or(0, |r| r.rays.len())),
     };
     check_memory(
-        buffer_bytes(&job.aovs, formats, layout, job.hits.map(HitLimit::count)),
+        buffer_bytes(
+            &job.aovs,
+            formats,
+            layout,
+            job.hits.map(HitLimit::count),
+            rayon::current_num_threads(),
+        ),
         job.max_memory,
         &match layout {
             Layout::Image { width, height } => format!(
@@ -447,7 +453,7 @@ fn framing(scene: &Scene, aspect: f64) -> Camera {
         Some(stage) if stage.up_axis == "Z" => DVec3::Z,
         _ => DVec3::Y,
     };
-    Camera::framing_image(&scene.world_bounds(), aspect, up)
+    Camera::framing_image(&scene.framing_points(), &scene.world_bounds(), aspect, up)
 }
 
 /// The camera asked for, or the file's first; `None` for the automatic framing camera.

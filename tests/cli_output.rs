@@ -26,13 +26,16 @@ fn buffers_beyond_max_memory_are_refused_before_allocating() {
         "depth,normal,position,id",
         "--max-memory",
         "1G",
+        "--threads",
+        "1",
         "--out",
         arg(&out),
     ]);
     let stderr = String::from_utf8_lossy(&result.stderr);
     assert_eq!(result.status.code(), Some(2), "{stderr}");
-    // 576e6 pixels × (60 buffers + 2 × 12 for the normal's EXR) bytes = 45.1 GiB (no array
-    // of hits: each ray's buffers are filled as its hit is found).
+    // 576e6 pixels × (60 buffers + 2 × 12 for the normal's EXR, one file encoded at a time
+    // with one thread) bytes = 45.1 GiB (no array of hits: each ray's buffers are filled as
+    // its hit is found).
     assert!(stderr.contains("need about 45.1 GiB"), "{stderr}");
     assert!(stderr.contains("--max-memory"), "{stderr}");
     assert!(file_names(&out).is_empty(), "{:?}", file_names(&out));
@@ -472,4 +475,46 @@ fn progress_covers_tracing_and_writing() {
         .collect();
     assert_eq!(done, [0, 1, 2, 3, 4]);
     assert_eq!(sidecar.files.len(), 5);
+}
+
+/// Without --max-memory a render may take half the physical memory (or what is available,
+/// if less): all eight AOVs in all formats at 32768² need about 152 GiB (104 bytes of buffers
+/// and twice the largest encoder's 24 per pixel, one thread), refused in one line that names
+/// the estimate and the flag, before anything is written. (It used to run for minutes at
+/// 15.8 of 24 GB: the default was all the available memory.)
+#[test]
+fn the_default_memory_limit_refuses_a_render_that_would_take_the_machine() {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").unwrap_or_default();
+    let total_kib: u64 = meminfo
+        .lines()
+        .find(|l| l.starts_with("MemTotal:"))
+        .and_then(|l| l.split_whitespace().nth(1)?.parse().ok())
+        .unwrap_or(0);
+    if total_kib == 0 || total_kib / 2 > 150 << 20 {
+        return; // no /proc/meminfo, or a machine where such a render fits the default
+    }
+    let out = temp_dir("default-memory");
+    let cube = fixture("gltf/cube.gltf");
+    let result = raycast(&[
+        arg(&cube),
+        "--width",
+        "32768",
+        "--height",
+        "32768",
+        "--aov",
+        "depth,z,t,normal,position,bary,id,prim",
+        "--format",
+        "exr,png,npy",
+        "--threads",
+        "1",
+        "--out",
+        arg(&out),
+    ]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("need about 152.0 GiB"), "{stderr}");
+    assert!(stderr.contains("half the physical memory"), "{stderr}");
+    assert!(stderr.contains("--max-memory"), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(!out.exists());
 }

@@ -175,19 +175,29 @@ fn encoding_bytes(aov: Aov, format: Format) -> u64 {
 }
 
 /// An estimate of the memory the buffers of a run take at their peak: every AOV buffer, twice
-/// the largest file being encoded, and with `--hits` (at most `hits` crossings per ray) the
+/// the `encoders` largest files being encoded (the files are encoded in parallel), and with
+/// `--hits` (at most `hits` crossings per ray) the
 /// crossing lists, counting two crossings per ray at most.
-pub fn buffer_bytes(aovs: &[Aov], formats: &[Format], layout: Layout, hits: Option<usize>) -> u64 {
+pub fn buffer_bytes(
+    aovs: &[Aov],
+    formats: &[Format],
+    layout: Layout,
+    hits: Option<usize>,
+    encoders: usize,
+) -> u64 {
     let rays_mode = matches!(layout, Layout::Rays(_));
     let count = layout.rays() as u64;
     let buffers: u64 = aovs.iter().map(|&a| aov_bytes(a)).sum();
-    let encoding = aovs
+    // The files are encoded in parallel, `encoders` (the worker threads) at a time: the
+    // largest ones may be in flight together.
+    let mut encodings: Vec<u64> = aovs
         .iter()
         .flat_map(|&a| formats.iter().map(move |&f| (a, f)))
         .filter(|&(a, f)| f.holds(a, rays_mode))
         .map(|(a, f)| encoding_bytes(a, f))
-        .max()
-        .unwrap_or(0);
+        .collect();
+    encodings.sort_unstable_by(|a, b| b.cmp(a));
+    let encoding: u64 = encodings.iter().take(encoders.max(1)).sum();
     let lists = hits.map_or(0, |limit| {
         SPLIT_BYTES + CROSSING_BYTES * ASSUMED_CROSSINGS.min(limit as u64)
     });
@@ -195,14 +205,15 @@ pub fn buffer_bytes(aovs: &[Aov], formats: &[Format], layout: Layout, hits: Opti
 }
 
 /// Refuses a run whose buffers need more than `limit` bytes (`--max-memory`, or by default
-/// the memory the system reports available).
+/// [`default_memory_limit`]).
 pub fn check_memory(need: u64, limit: Option<u64>, what: &str) -> Result<()> {
     let (limit, source) = match limit {
         Some(limit) => (limit, "--max-memory"),
-        None => match available_memory() {
-            Some(available) => (
-                available,
-                "the available memory; raise it with --max-memory",
+        None => match default_memory_limit() {
+            Some(default) => (
+                default,
+                "the default: half the physical memory, or what is available if less; raise it \
+                 with --max-memory",
             ),
             None => return Ok(()),
         },
@@ -217,12 +228,23 @@ pub fn check_memory(need: u64, limit: Option<u64>, what: &str) -> Result<()> {
     )))
 }
 
-/// The memory the system reports available (Linux `MemAvailable`), if it can be read.
-fn available_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
+/// The default memory limit of a render: half the physical memory (Linux `MemTotal`), or the
+/// memory the system reports available (`MemAvailable`) if that is less, so that one render
+/// never takes a machine's memory from everything else on it; `None` where `/proc/meminfo`
+/// cannot be read.
+pub fn default_memory_limit() -> Option<u64> {
+    limit_of_meminfo(&std::fs::read_to_string("/proc/meminfo").ok()?)
+}
+
+/// [`default_memory_limit`] for the text of `/proc/meminfo`.
+fn limit_of_meminfo(text: &str) -> Option<u64> {
+    let read = |key: &str| -> Option<u64> {
+        let line = text.lines().find(|l| l.starts_with(key))?;
+        let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+        Some(kib * 1024)
+    };
+    let half = read("MemTotal:")? / 2;
+    Some(read("MemAvailable:").map_or(half, |available| available.min(half)))
 }
 
 /// A byte count for people: `1.5 GiB`.
@@ -258,10 +280,13 @@ mod tests {
             width: 5,
             height: 2,
         };
-        let bytes = buffer_bytes(&[Aov::Depth, Aov::Normal], &[Format::Exr], layout, None);
+        let aovs = [Aov::Depth, Aov::Normal];
+        let bytes = buffer_bytes(&aovs, &[Format::Exr], layout, None, 1);
         assert_eq!(bytes, 560);
+        // two encoders: depth's EXR (4) is encoded beside normal's: 10 * (32 + 2 * 16)
+        assert_eq!(buffer_bytes(&aovs, &[Format::Exr], layout, None, 2), 640);
         // --hits 1: + 10 * (8 + 32).
-        let with_hits = buffer_bytes(&[Aov::Depth, Aov::Normal], &[Format::Exr], layout, Some(1));
+        let with_hits = buffer_bytes(&aovs, &[Format::Exr], layout, Some(1), 1);
         assert_eq!(with_hits, 960);
         assert!(check_memory(800, Some(800), "buffers").is_ok());
         let e = check_memory(801, Some(800), "buffers").unwrap_err();

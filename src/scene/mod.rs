@@ -44,6 +44,9 @@ use serde::Serialize;
 use std::ops::Range;
 use std::path::PathBuf;
 
+/// Vertices [`Scene::framing_points`] gathers at most (48 MiB of points).
+pub const FRAMING_POINTS: usize = 2 << 20;
+
 /// What an object is made of.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -277,6 +280,25 @@ impl Scene {
             }
         }
         triangles
+    }
+
+    /// Points whose projections frame the scene for the automatic camera: every vertex of
+    /// the scene's triangles in world coordinates (instances placed) and the corners of each
+    /// quadric's bounds; past [`FRAMING_POINTS`] vertices, the corners of the remaining
+    /// objects' bounds instead.
+    pub fn framing_points(&self) -> Vec<DVec3> {
+        let mut points = Vec::new();
+        for object in &self.objects {
+            let bounds = self.object_bounds(object);
+            if object.quadric.is_some() || points.len() + 3 * object.triangles as usize > FRAMING_POINTS {
+                if !bounds.is_empty() {
+                    points.extend(bounds.corners());
+                }
+                continue;
+            }
+            points.extend(self.mesh_triangles(object).into_iter().flatten());
+        }
+        points
     }
 
     /// World-space bounds of one object.
