@@ -29,6 +29,7 @@ pub mod integrity;
 pub mod mesh;
 pub mod meshopt;
 pub mod node;
+pub mod pose;
 pub mod scene;
 
 pub use diagnostics::{Diagnostic, ErrorsOnly, FailFast, Severity, Sink};
