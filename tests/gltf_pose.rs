@@ -102,7 +102,12 @@ fn vertex_difference(scene: &Scene, reference: &[(usize, Vec<[DVec3; 3]>)]) -> f
 
 /// The nearest hit of `ray` on `triangles` (Möller–Trumbore in f64), and whether the ray
 /// passes within `margin` (in barycentric terms) of some triangle's edge.
-fn reference_hit(triangles: &[[DVec3; 3]], origin: DVec3, dir: DVec3, margin: f64) -> (Option<f64>, bool) {
+fn reference_hit(
+    triangles: &[[DVec3; 3]],
+    origin: DVec3,
+    dir: DVec3,
+    margin: f64,
+) -> (Option<f64>, bool) {
     let (mut nearest, mut near_edge) = (None::<f64>, false);
     for [a, b, c] in triangles {
         let (e1, e2) = (*b - *a, *c - *a);
@@ -132,7 +137,7 @@ fn reference_hit(triangles: &[[DVec3; 3]], origin: DVec3, dir: DVec3, margin: f6
 }
 
 /// 2000 rays from a sphere around the reference bounds toward points inside them: how many
-/// agree in hit or miss and depth with the reference, how many were left out for passing
+/// agree in hit or miss and depth (to 1e-9 of the scene size) with the reference, how many were left out for passing
 /// within 1e-9 of an edge, and the hits among the agreeing rays.
 fn ray_agreement(scene: &Scene, reference: &[(usize, Vec<[DVec3; 3]>)]) -> (usize, usize, usize) {
     let all: Vec<[DVec3; 3]> = reference.iter().flat_map(|(_, t)| t.clone()).collect();
@@ -154,7 +159,10 @@ fn ray_agreement(scene: &Scene, reference: &[(usize, Vec<[DVec3; 3]>)]) -> (usiz
         .collect();
     let samples = cast(
         scene,
-        &rays.iter().map(|&(o, d)| Ray::new(o, d)).collect::<Vec<_>>(),
+        &rays
+            .iter()
+            .map(|&(o, d)| Ray::new(o, d))
+            .collect::<Vec<_>>(),
     );
     let (mut agree, mut skipped, mut hits) = (0, 0, 0);
     for ((origin, dir), sample) in rays.iter().zip(&samples) {
@@ -168,33 +176,44 @@ fn ray_agreement(scene: &Scene, reference: &[(usize, Vec<[DVec3; 3]>)]) -> (usiz
             None => sample.depth == f64::INFINITY,
             Some(_) => (sample.depth - depth).abs() <= TOLERANCE * radius,
         };
-        assert!(same, "ray {origin} {dir}: depth {} (three.js: {depth})", sample.depth);
-        agree += 1;
-        hits += expected.is_some() as usize;
+        agree += same as usize;
+        hits += (same && expected.is_some()) as usize;
     }
     (agree, skipped, hits)
 }
 
 #[test]
 fn posed_vertices_agree_with_three_js() {
+    let mut failed = Vec::new();
     for file in FILES {
         let scene = load(&format!("posed/{file}"));
         let reference = reference(file);
         let d = vertex_difference(&scene, &reference);
         println!("{file}: largest vertex difference {d:.2e} of the scene size");
-        assert!(d <= TOLERANCE, "{file}: vertices differ by {d:e} of the scene size");
+        if d > TOLERANCE {
+            failed.push(format!("{file}: {d:.2e}"));
+        }
     }
+    assert!(failed.is_empty(), "vertices differ: {failed:?}");
 }
 
 #[test]
 fn rays_agree_with_three_js_triangles() {
+    let mut failed = Vec::new();
     for file in FILES {
         let scene = load(&format!("posed/{file}"));
         let (agree, skipped, hits) = ray_agreement(&scene, &reference(file));
-        println!("{file}: {agree} of 2000 rays agree ({hits} hits), {skipped} within 1e-9 of an edge");
-        assert_eq!(agree + skipped, 2000);
-        assert!(skipped < 20, "{file}: {skipped} rays near edges");
+        println!(
+            "{file}: {agree} of 2000 rays agree ({hits} hits), {skipped} within 1e-9 of an edge"
+        );
+        if agree + skipped != 2000 || skipped >= 20 {
+            failed.push(format!(
+                "{file}: {} disagree, {skipped} skipped",
+                2000 - agree - skipped
+            ));
+        }
     }
+    assert!(failed.is_empty(), "rays disagree: {failed:?}");
 }
 
 #[test]
