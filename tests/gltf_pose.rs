@@ -12,7 +12,7 @@ use raycast::geometry::Ray;
 use raycast::scene::Scene;
 use serde_json::Value;
 
-/// The files of fixtures/posed with a three.js reference.
+/// The files of fixtures/posed with a three.js reference of their rest pose.
 const FILES: &[&str] = &[
     "AnimatedMorphCube.glb",
     "AnimatedTriangle.gltf",
@@ -32,11 +32,49 @@ const FILES: &[&str] = &[
 /// Largest vertex difference allowed, relative to the scene's size.
 const TOLERANCE: f64 = 1e-9;
 
-/// three.js's world triangles of each glTF node it draws: (node index, triangles).
-fn reference(file: &str) -> Vec<(usize, Vec<[DVec3; 3]>)> {
-    let path = fixture(&format!("posed/three/{file}.json"));
+/// The three.js references at a time: (the fixture, the reference's name, time, animation).
+fn timed_cases() -> Vec<(String, String, f64, Option<String>)> {
+    let mut cases = Vec::new();
+    for entry in std::fs::read_dir(fixture("posed/three")).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        let stem = name.trim_end_matches(".json").to_string();
+        let json = read_json(&stem);
+        let Some(time) = json["time"].as_f64() else {
+            continue;
+        };
+        let end = [".glb", ".gltf"]
+            .iter()
+            .filter_map(|e| stem.find(e).map(|i| i + e.len()))
+            .min()
+            .unwrap();
+        let animation = json["animation"].as_u64().map(|a| a.to_string());
+        cases.push((stem[..end].to_string(), stem, time, animation));
+    }
+    cases.sort_by(|a, b| a.1.cmp(&b.1));
+    cases
+}
+
+/// Reference `name` (fixtures/posed/three/NAME.json).
+fn read_json(name: &str) -> Value {
+    let path = fixture(&format!("posed/three/{name}.json"));
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
-    let json: Value = serde_json::from_str(&text).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+/// A fixture of fixtures/posed posed at `time` by `animation` (all: `None`).
+fn load_at(file: &str, time: f64, animation: Option<String>) -> Scene {
+    let options = raycast::import::LoadOptions {
+        time: Some(time),
+        animation,
+        ..Default::default()
+    };
+    raycast::import::load(&fixture(&format!("posed/{file}")), &options)
+        .unwrap_or_else(|e| panic!("{file} at {time}: {e}"))
+}
+
+/// three.js's world triangles of each glTF node it draws: (node index, triangles).
+fn reference(name: &str) -> Vec<(usize, Vec<[DVec3; 3]>)> {
+    let json = read_json(name);
     let numbers = |v: &Value| -> Vec<f64> {
         v.as_array()
             .unwrap()
@@ -214,6 +252,29 @@ fn rays_agree_with_three_js_triangles() {
         }
     }
     assert!(failed.is_empty(), "rays disagree: {failed:?}");
+}
+
+#[test]
+fn animated_vertices_and_rays_agree_with_three_js() {
+    let cases = timed_cases();
+    assert!(cases.len() >= 26, "{} timed references", cases.len());
+    let mut failed = Vec::new();
+    for (file, name, time, animation) in cases {
+        let scene = load_at(&file, time, animation);
+        let reference = reference(&name);
+        let d = vertex_difference(&scene, &reference);
+        let (agree, skipped, hits) = ray_agreement(&scene, &reference);
+        println!(
+            "{name}: largest vertex difference {d:.2e}; {agree} of 2000 rays agree ({hits} hits), {skipped} within 1e-9 of an edge"
+        );
+        if d > TOLERANCE || agree + skipped != 2000 || skipped >= 20 {
+            failed.push(format!(
+                "{name}: {d:.2e}, {} rays disagree",
+                2000 - agree - skipped
+            ));
+        }
+    }
+    assert!(failed.is_empty(), "{failed:?}");
 }
 
 #[test]

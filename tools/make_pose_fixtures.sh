@@ -42,3 +42,19 @@ for file in "$out"/*.glb "$out"/*.gltf; do
   [ -f "${file%.glb}.plain.glb" ] && source="${file%.glb}.plain.glb"
   node "$npm_dir/pose_reference.mjs" "$source" "$out/three/$(basename "$file").json"
 done
+
+# Poses at three times (inside the keyframes, and past the end, where they clamp): every
+# animation together, except Fox, whose three animations move the same joints (three.js would
+# blend them): its Walk at the three times, Survey and Run at one.
+timed() { # FILE TIME [ANIMATION]
+  local suffix=".t$2"
+  [ $# -gt 2 ] && suffix=".a$3$suffix"
+  node "$npm_dir/pose_reference.mjs" "$out/$1" "$out/three/$1$suffix.json" "${@:2}"
+}
+for file in AnimatedMorphCube.glb AnimatedTriangle.gltf BoxAnimated.glb CesiumMan.glb \
+  InterpolationTest.glb RiggedFigure.glb SimpleSkin.gltf; do
+  for time in 0.3 0.65 5; do timed "$file" "$time"; done
+done
+for time in 0.3 0.65 5; do timed Fox.glb "$time" 1; done
+timed Fox.glb 0.65 0
+timed Fox.glb 0.65 2

@@ -14,11 +14,13 @@
 //! reads its joints and weights from that data, and its morph targets from their accessors,
 //! in the decoded vertex order (as three.js's GLTFLoader does).
 
+use super::animation::NodeValues;
 use super::decode;
 use super::diagnostics::{Diagnostic, FailFast};
 use super::document::{array, as_index, index_of, numbers, Document};
 use super::mesh::Geometry;
-use super::node::local_transform;
+use super::node::animated_transform;
+use crate::scene::{AnimationInfo, PoseInfo};
 use glam::DMat4;
 use serde_json::Value;
 
@@ -42,9 +44,15 @@ impl Pose {
 const MAX_SETS: usize = 64;
 
 impl Document {
-    /// The default morph weights of `node` drawing mesh `mesh` (the node's `weights`, else the
-    /// mesh's), `None` when the mesh has no morph targets or every weight is 0.
-    pub fn morph_weights(&self, node: &Value, mesh: usize) -> Option<Vec<f64>> {
+    /// The morph weights of `node` drawing mesh `mesh`: `animated` (what an animation gives
+    /// it), else the node's `weights`, else the mesh's; `None` when the mesh has no morph
+    /// targets or every weight is 0.
+    pub fn morph_weights(
+        &self,
+        node: &Value,
+        mesh: usize,
+        animated: Option<&[f64]>,
+    ) -> Option<Vec<f64>> {
         let json = self.item("meshes", mesh)?;
         let has_targets = array(json, "primitives")
             .iter()
@@ -52,13 +60,20 @@ impl Document {
         if !has_targets {
             return None;
         }
-        let weights = numbers(node, "weights").or_else(|| numbers(json, "weights"))?;
+        let weights = match animated {
+            Some(weights) => weights.to_vec(),
+            None => numbers(node, "weights").or_else(|| numbers(json, "weights"))?,
+        };
         weights.iter().any(|&w| w != 0.0).then_some(weights)
     }
 
     /// The global transform of every node, by index, through its parents (`None` for a node
-    /// in a cycle). Fails on a node transform that is not valid or not finite.
-    pub fn global_transforms(&self) -> Result<Vec<Option<DMat4>>, Diagnostic> {
+    /// in a cycle), with what the applied animations give the nodes. Fails on a node transform
+    /// that is not valid or not finite.
+    pub fn global_transforms(
+        &self,
+        animated: &NodeValues,
+    ) -> Result<Vec<Option<DMat4>>, Diagnostic> {
         let nodes = self.list("nodes");
         let mut parent = vec![None; nodes.len()];
         for (i, node) in nodes.iter().enumerate() {
@@ -71,7 +86,8 @@ impl Document {
         let mut local = Vec::with_capacity(nodes.len());
         for (i, node) in nodes.iter().enumerate() {
             let mut sink = FailFast::default();
-            local.push(local_transform(node, &format!("/nodes/{i}"), &mut sink));
+            let at = format!("/nodes/{i}");
+            local.push(animated_transform(node, animated.get(&i), &at, &mut sink));
             if let Some(error) = sink.error {
                 return Err(error);
             }
@@ -306,4 +322,38 @@ impl Document {
         }
         Ok(Some(ids.into_iter().zip(ws).collect()))
     }
+}
+
+/// What `info` and the sidecar say about a document's posing: its animations (those in
+/// `applied` evaluated at `time`), skins and meshes with morph targets; `None` for a file
+/// without any.
+pub fn pose_info(doc: &Document, time: Option<f64>, applied: &[usize]) -> Option<PoseInfo> {
+    let animations: Vec<AnimationInfo> = doc
+        .animation_summaries()
+        .into_iter()
+        .enumerate()
+        .map(|(index, a)| AnimationInfo {
+            index,
+            name: a.name,
+            range: a.range.map(|(lo, hi)| [lo, hi]),
+            channels: a.channels,
+            applied: applied.contains(&index),
+        })
+        .collect();
+    let skins = doc.list("skins").len();
+    let morphed_meshes = doc
+        .list("meshes")
+        .iter()
+        .filter(|m| {
+            array(m, "primitives")
+                .iter()
+                .any(|p| !array(p, "targets").is_empty())
+        })
+        .count();
+    (!animations.is_empty() || skins > 0 || morphed_meshes > 0).then_some(PoseInfo {
+        time,
+        animations,
+        skins,
+        morphed_meshes,
+    })
 }

@@ -3,11 +3,12 @@
 //! becomes scene objects is [`add_mesh_object`].
 
 use super::accessor::NO_DATA;
+use super::animation::NodeValues;
 use super::decode::{self, GPU_INSTANCING, MESHOPT};
 use super::diagnostics::{Diagnostic, FailFast};
 use super::document::{array, as_index, extension, index_of, Document};
 use super::mesh::DRACO;
-use super::node::{local_transform, Node};
+use super::node::{animated_transform, Node};
 use super::pose::Pose;
 use super::QUADRIC_EXTENSION;
 use crate::camera::Camera;
@@ -25,12 +26,51 @@ pub const MAX_NODE_VISITS: usize = 10_000_000;
 /// Builds the scene `choice` (by index or name; `None`: the default) of a document whose
 /// buffers are loaded. Fails at the first problem in what the scene draws.
 pub fn build(doc: &Document, choice: Option<&str>, path: &Path) -> Result<Scene, Diagnostic> {
+    build_at(doc, choice, &Timing::default(), path)
+}
+
+/// When the scene is posed: `--time` and `--animation`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Timing {
+    /// Seconds; `None`: no animation applied.
+    pub time: Option<f64>,
+    /// The animation by index or name; `None`: all of them.
+    pub animation: Option<String>,
+}
+
+/// [`build`] with the animations `timing` chooses evaluated at its time.
+pub fn build_at(
+    doc: &Document,
+    choice: Option<&str>,
+    timing: &Timing,
+    path: &Path,
+) -> Result<Scene, Diagnostic> {
+    let chosen = match timing.time {
+        None => Vec::new(),
+        Some(_) => doc
+            .chosen_animations(timing.animation.as_deref())
+            .map_err(|e| Diagnostic::error("UNRESOLVED_REFERENCE", "/animations", e))?,
+    };
+    let animated = match timing.time {
+        Some(time) => doc.animate(&chosen, time)?,
+        None => NodeValues::new(),
+    };
     let mut walk = Walk {
         doc,
         builder: SceneBuilder::new(),
         meshes: HashMap::new(),
         globals: None,
+        animated,
     };
+    if let Some(pose) = super::pose::pose_info(doc, timing.time, &chosen) {
+        if timing.time.is_none() && !pose.animations.is_empty() {
+            walk.builder.warn(format!(
+                "the file has {} animations; drawn without --time: the nodes' own transforms and default morph weights",
+                pose.animations.len()
+            ));
+        }
+        walk.builder.set_pose(pose);
+    }
     walk.builder.set_extensions_used(
         doc.extension_names("extensionsUsed")
             .map(String::from)
@@ -98,8 +138,10 @@ fn add_mesh_object(
 
 /// Which buffers the geometry reads: those behind the accessors of mesh primitives (POSITION,
 /// indices, sparse parts), Draco data and GPU instancing attributes, and the sources of
-/// meshopt-compressed views. Others (textures, animations) are never read for a render.
-pub fn needed_buffers(doc: &Document) -> Vec<bool> {
+/// meshopt-compressed views; what posing reads (morph targets drawn with weights, skin joints,
+/// weights and inverse bind matrices); with `animating`, every morph target and animation
+/// sampler. Others (textures, animations without `--time`) are never read for a render.
+pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<bool> {
     let mut needed = vec![false; doc.list("buffers").len()];
     let mut mark_view = |view: Option<usize>| {
         let Some(v) = view.and_then(|v| doc.item("bufferViews", v)) else {
@@ -122,7 +164,7 @@ pub fn needed_buffers(doc: &Document) -> Vec<bool> {
     let (mut morphed, mut skinned) = (HashSet::new(), HashSet::new());
     for node in doc.list("nodes") {
         if let Some(mesh) = index_of(node, "mesh") {
-            if doc.morph_weights(node, mesh).is_some() {
+            if animating || doc.morph_weights(node, mesh, None).is_some() {
                 morphed.insert(mesh);
             }
             if let Some(skin) = index_of(node, "skin") {
@@ -152,6 +194,14 @@ pub fn needed_buffers(doc: &Document) -> Vec<bool> {
                     .iter()
                     .filter(|(k, _)| k.starts_with("JOINTS_") || k.starts_with("WEIGHTS_"));
                 accessors.extend(influences.filter_map(|(_, v)| as_index(v)));
+            }
+        }
+    }
+    if animating {
+        for animation in doc.list("animations") {
+            for sampler in array(animation, "samplers") {
+                accessors.extend(index_of(sampler, "input"));
+                accessors.extend(index_of(sampler, "output"));
             }
         }
     }
@@ -192,6 +242,8 @@ struct Walk<'a> {
     meshes: HashMap<usize, Arc<Mesh>>,
     /// Every node's global transform, once a skin needs them.
     globals: Option<Vec<Option<DMat4>>>,
+    /// What the applied animations give their nodes.
+    animated: NodeValues,
 }
 
 impl Walk<'_> {
@@ -220,7 +272,8 @@ impl Walk<'_> {
                 Diagnostic::error("UNRESOLVED_REFERENCE", &at, "node does not exist")
             })?;
             let mut sink = FailFast::default();
-            let world = parent * local_transform(node.json, &at, &mut sink);
+            let animated = self.animated.get(&index);
+            let world = parent * animated_transform(node.json, animated, &at, &mut sink);
             if let Some(error) = sink.error {
                 return Err(error);
             }
@@ -339,12 +392,14 @@ impl Walk<'_> {
     /// How node `node` poses its mesh `mesh`: its default morph weights and its skin's joint
     /// matrices (the global transforms of every node computed once, at the first skin).
     fn pose_of(&mut self, node: &Node, mesh: usize) -> Result<Pose, Diagnostic> {
-        let weights = self.doc.morph_weights(node.json, mesh);
+        let animated = self.animated.get(&node.index);
+        let weights = animated.and_then(|a| a.weights.as_deref());
+        let weights = self.doc.morph_weights(node.json, mesh, weights);
         let joints = match index_of(node.json, "skin") {
             None => None,
             Some(skin) => {
                 if self.globals.is_none() {
-                    self.globals = Some(self.doc.global_transforms()?);
+                    self.globals = Some(self.doc.global_transforms(&self.animated)?);
                 }
                 let globals = self.globals.as_deref().unwrap_or_default();
                 Some(self.doc.joint_matrices(skin, globals)?)
