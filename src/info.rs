@@ -210,23 +210,6 @@ fn tidy(v: f64, scale: f64) -> String {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn bounds_print_without_rounding_noise() {
-        assert_eq!(tidy(-2.000000000002, 28.0), "-2");
-        assert_eq!(tidy(15.000000000015, 28.0), "15");
-        assert_eq!(tidy(1.000000002001, 2.0), "1.000000002");
-        assert_eq!(tidy(0.125, 1.0), "0.125");
-        assert_eq!(tidy(-1e-13, 1.0), "0");
-        assert_eq!(tidy(123456789012.0, 1e11), "123456789012");
-        assert_eq!(count(1, "object"), "1 object");
-        assert_eq!(count(0, "quadric"), "0 quadrics");
-    }
-}
-
 /// The `info` lines of a glTF file's animations, skins and morph targets.
 fn write_pose(f: &mut fmt::Formatter<'_>, pose: &PoseInfo) -> fmt::Result {
     writeln!(
@@ -254,4 +237,21 @@ fn write_pose(f: &mut fmt::Formatter<'_>, pose: &PoseInfo) -> fmt::Result {
         )?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounds_print_without_rounding_noise() {
+        assert_eq!(tidy(-2.000000000002, 28.0), "-2");
+        assert_eq!(tidy(15.000000000015, 28.0), "15");
+        assert_eq!(tidy(1.000000002001, 2.0), "1.000000002");
+        assert_eq!(tidy(0.125, 1.0), "0.125");
+        assert_eq!(tidy(-1e-13, 1.0), "0");
+        assert_eq!(tidy(123456789012.0, 1e11), "123456789012");
+        assert_eq!(count(1, "object"), "1 object");
+        assert_eq!(count(0, "quadric"), "0 quadrics");
+    }
 }

@@ -218,11 +218,11 @@ impl Document {
                 times.len()
             )));
         }
-        if let Some(k) = (1..times.len()).find(|&k| !(times[k] > times[k - 1])) {
-            return Err(bad(format!("keyframe time {k} does not increase")));
-        }
         if times.iter().any(|t| !t.is_finite()) || out.iter().any(|v| !v.is_finite()) {
             return Err(bad("keyframe times or values are not finite".into()));
+        }
+        if let Some(k) = (1..times.len()).find(|&k| times[k] <= times[k - 1]) {
+            return Err(bad(format!("keyframe time {k} does not increase")));
         }
         // The value part of keyframe k.
         let value = |k: usize| -> &[f64] {

@@ -40,6 +40,9 @@ impl Pose {
     }
 }
 
+/// Each vertex's four joint indices and weights of one influence set.
+type Influences = Vec<([f64; 4], [f64; 4])>;
+
 /// Most skin influence sets (`JOINTS_n`) read per primitive.
 const MAX_SETS: usize = 64;
 
@@ -270,7 +273,7 @@ impl Document {
         json: &Value,
         set: usize,
         n: usize,
-    ) -> Result<Option<Vec<([f64; 4], [f64; 4])>>, Diagnostic> {
+    ) -> Result<Option<Influences>, Diagnostic> {
         let attributes = json.get("attributes");
         let (jname, wname) = (format!("JOINTS_{set}"), format!("WEIGHTS_{set}"));
         let at = format!("/meshes/{mesh}/primitives/{prim}/attributes");
