@@ -44,13 +44,15 @@ pub struct Camera {
 impl Camera {
     /// A camera at `eye` looking at `target`, with `up` giving the vertical.
     pub fn look_at(eye: DVec3, target: DVec3, up: DVec3, projection: Projection) -> Result<Camera> {
-        let back = (eye - target)
-            .try_normalize()
-            .ok_or_else(|| Error::msg("camera eye and target coincide"))?;
-        let right = up
-            .cross(back)
-            .try_normalize()
-            .ok_or_else(|| Error::msg("camera up vector is parallel to the view direction"))?;
+        let back = (eye - target).try_normalize().ok_or_else(|| {
+            Error::usage("the camera's eye and target are the same point (--eye, --target)")
+        })?;
+        if up.try_normalize().is_none() {
+            return Err(Error::usage("the camera's up vector is zero (--up)"));
+        }
+        let right = up.cross(back).try_normalize().ok_or_else(|| {
+            Error::usage("the camera's up vector is parallel to the view direction (--up)")
+        })?;
         let up = back.cross(right);
         Ok(Camera {
             name: "camera".into(),

@@ -115,8 +115,29 @@ impl SceneInfo {
     }
 }
 
-impl fmt::Display for SceneInfo {
+/// Object lines [`SceneInfo`]'s text shows before it summarises the rest (about a screenful
+/// with the header lines).
+pub const OBJECT_LINES: usize = 40;
+
+/// A [`SceneInfo`]'s text with every object listed (`raycast info --all`).
+pub struct AllObjects<'a>(pub &'a SceneInfo);
+
+impl fmt::Display for AllObjects<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.write_text(f, usize::MAX)
+    }
+}
+
+impl fmt::Display for SceneInfo {
+    /// The text for a person: at most [`OBJECT_LINES`] objects, then a line counting the rest.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.write_text(f, OBJECT_LINES)
+    }
+}
+
+impl SceneInfo {
+    /// Writes the text, listing at most `object_lines` objects.
+    fn write_text(&self, f: &mut fmt::Formatter<'_>, object_lines: usize) -> fmt::Result {
         writeln!(f, "{}", self.scene)?;
         writeln!(
             f,
@@ -134,7 +155,12 @@ impl fmt::Display for SceneInfo {
         let names = self.objects.iter().map(|o| o.name.chars().count());
         let camera_names = self.cameras.iter().map(|c| c.name.chars().count());
         let width = names.chain(camera_names).fold(32, usize::max);
-        for o in &self.objects {
+        let shown = if self.objects.len() > object_lines {
+            object_lines.min(OBJECT_LINES / 2)
+        } else {
+            self.objects.len()
+        };
+        for o in &self.objects[..shown] {
             let what = match o.quadric_type {
                 Some(kind) => format!("quadric ({kind})"),
                 None => count(o.triangles as usize, "triangle"),
@@ -143,6 +169,13 @@ impl fmt::Display for SceneInfo {
                 f,
                 "  object {:>4}  {:<width$} {what:<24} {}",
                 o.id, o.name, o.source
+            )?;
+        }
+        if shown < self.objects.len() {
+            writeln!(
+                f,
+                "  ... {} (--all lists every object, --json gives them all)",
+                count(self.objects.len() - shown, "more object")
             )?;
         }
         for c in &self.cameras {

@@ -8,7 +8,7 @@ use crate::import::{self, LoadOptions};
 use crate::output::npy::RayFile;
 use crate::output::request::{self, buffer_bytes, check_memory};
 use crate::output::sidecar::{self, CameraInfo, HitsInfo, Sidecar, Stats, Timings};
-use crate::output::{self, npz, Format, Layout, Staging};
+use crate::output::{self, npz, ownership, Format, Layout, Staging};
 use crate::query::HitLists;
 use crate::render::{self, AccelKind, AccelStructure, Aov, Buffers, CameraView, RaySource};
 use crate::render::{Rays, Tracer};
@@ -147,10 +147,14 @@ pub fn run(job: &RenderJob, progress: impl FnMut(Progress) + Send) -> Result<Sid
     let formats = check_request(job)?;
     let out = job.out_dir();
     let created = request::prepare_folder(&out)?;
-    let result = run_checked(job, &formats, progress);
+    output::track_created_folder(&out, created.as_deref());
+    let names = request::file_names(&job.aovs, &formats, job.rays.is_some(), job.hits.is_some());
+    let result = ownership::claim(&out, &job.scene, &names)
+        .and_then(|_| run_checked(job, &formats, progress));
     if result.is_err() {
         request::remove_created_folder(&out, created.as_deref());
     }
+    output::untrack_created_folder(&out);
     result
 }
 
@@ -214,7 +218,7 @@ fn run_checked(
     let trace = started.elapsed().as_secs_f64();
 
     let started = Instant::now();
-    let mut staging = Staging::new(&job.out_dir())?;
+    let mut staging = Staging::for_render(&job.out_dir(), &job.scene)?;
     staging.protect(&job.scene);
     if let Some(rays) = &job.rays {
         staging.protect(rays);
@@ -236,6 +240,7 @@ fn run_checked(
     let sidecar = Sidecar {
         raycast_version: env!("CARGO_PKG_VERSION"),
         scene: job.scene.display().to_string(),
+        scene_file: ownership::scene_key(&job.scene),
         mode: if view.is_some() { "camera" } else { "rays" },
         width: view.as_ref().map(|v| v.width),
         height: view.as_ref().map(|v| v.height),
@@ -364,6 +369,11 @@ fn read_rays(path: &Path, job: &RenderJob, warnings: &mut Vec<String>) -> Result
 /// Checks what can be checked before loading (see [`run`]); returns the formats to write,
 /// merged.
 fn check_request(job: &RenderJob) -> Result<Vec<Format>> {
+    if job.out.as_deref() == Some(Path::new("-")) {
+        return Err(Error::usage(
+            "--out -: a render writes a folder of files, not standard output; name a folder",
+        ));
+    }
     let rays_mode = job.rays.is_some();
     if rays_mode && job.aovs.contains(&Aov::Z) {
         return Err(Error::usage(

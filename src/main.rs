@@ -7,7 +7,7 @@ use glam::DVec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raycast::accel::OctreeParams;
 use raycast::import::{self, LoadOptions};
-use raycast::info::SceneInfo;
+use raycast::info::{AllObjects, SceneInfo};
 use raycast::job::{self, CameraChoice, HitLimit, RenderJob};
 use raycast::output::Format;
 use raycast::render::{AccelKind, Aov};
@@ -48,9 +48,13 @@ struct InfoArgs {
     /// glTF scene by index or name.
     #[arg(long = "scene", value_name = "N|NAME")]
     scene_choice: Option<String>,
-    /// Print JSON instead of text.
+    /// Print JSON instead of text (one record per file: a failed file's has its error).
     #[arg(long)]
     json: bool,
+    /// List every object (the text lists the first ones of a large scene, then counts the
+    /// rest).
+    #[arg(long)]
+    all: bool,
     /// Seconds the USD reader may take on one file (it reads it in a child process first).
     #[arg(long, value_name = "SECS", default_value_t = 120.0, value_parser = parse_positive)]
     usd_timeout: f64,
@@ -253,9 +257,19 @@ fn parse_positive(text: &str) -> Result<f64, String> {
 }
 
 fn main() -> ExitCode {
-    // Ctrl-C: remove temporary output files, then exit as a shell expects (128 + SIGINT).
-    let _ = ctrlc::set_handler(|| raycast::output::remove_partial_files_and_exit(130));
-    let cli = Cli::parse();
+    // SIGINT, SIGTERM, SIGHUP: remove temporary output files, then exit as a shell expects.
+    cli::signals::install();
+    let args: Vec<String> = std::env::args().collect();
+    let cli = match Cli::try_parse_from(&args) {
+        Ok(cli) => cli,
+        Err(e) => match cli::slips::explain::<Cli>(&e, &args[1..]) {
+            Some(meant) => {
+                eprintln!("raycast: error: {meant}");
+                return ExitCode::from(2);
+            }
+            None => e.exit(),
+        },
+    };
     let result = match cli.command {
         Some(Command::Info(args)) => info(args),
         Some(Command::Check(args)) => return cli::check::run(&args),
@@ -273,28 +287,47 @@ fn main() -> ExitCode {
     }
 }
 
+/// One file's record for `raycast info --json`: what was found, or why it could not be read.
+#[derive(serde::Serialize)]
+#[serde(untagged)]
+enum InfoRecord {
+    /// The file was read.
+    Read(Box<SceneInfo>),
+    /// The file could not be read.
+    Failed {
+        /// The file, as given.
+        scene: String,
+        /// What is wrong, in one line.
+        error: String,
+    },
+}
+
 /// `raycast info`: each file in turn (text blocks, or one JSON object per file; a JSON array
-/// for several files). A file that fails is reported and the others still printed; the run
-/// then fails.
+/// for several files, a record for each, a failed one with its error). A file that fails is
+/// reported and the others still printed; the run then fails.
 fn info(args: InfoArgs) -> raycast::Result<()> {
     let child_args = args.paths.child_args();
     let options = args.paths.load_options(args.scene_choice, args.pose);
     let mut failed = None;
-    let mut infos = Vec::new();
+    let mut records = Vec::new();
     for path in &args.scenes {
         match probe_usd(path, args.usd_timeout, &child_args)
             .and_then(|()| import::load(path, &options))
         {
-            Ok(scene) => infos.push(SceneInfo::new(&scene)),
+            Ok(scene) => records.push(InfoRecord::Read(Box::new(SceneInfo::new(&scene)))),
             Err(e) if args.scenes.len() == 1 => return Err(e),
             Err(e) => {
                 eprintln!("raycast: error: {e}");
+                records.push(InfoRecord::Failed {
+                    scene: path.display().to_string(),
+                    error: e.message.clone(),
+                });
                 failed = Some(e);
             }
         }
     }
     let text = if args.json {
-        let json = match &infos[..] {
+        let json = match &records[..] {
             [one] if args.scenes.len() == 1 => serde_json::to_string_pretty(one),
             all => serde_json::to_string_pretty(all),
         };
@@ -303,9 +336,13 @@ fn info(args: InfoArgs) -> raycast::Result<()> {
             json.map_err(|e| raycast::Error::msg(e.to_string()))?
         )
     } else {
-        infos
+        records
             .iter()
-            .map(ToString::to_string)
+            .filter_map(|r| match r {
+                InfoRecord::Read(info) if args.all => Some(AllObjects(info).to_string()),
+                InfoRecord::Read(info) => Some(info.to_string()),
+                InfoRecord::Failed { .. } => None,
+            })
             .collect::<Vec<_>>()
             .join("\n")
     };
@@ -350,7 +387,11 @@ fn print_stdout(text: &str) -> raycast::Result<()> {
 fn render(args: RenderArgs) -> raycast::Result<()> {
     if let Some(threads) = args.threads {
         rayon::ThreadPoolBuilder::new()
-            .num_threads(threads as usize)
+            .num_threads(cli::threads::clamp(
+                threads as usize,
+                "--threads",
+                args.quiet,
+            ))
             .build_global()
             .map_err(|e| raycast::Error::msg(format!("cannot start {threads} threads: {e}")))?;
     }

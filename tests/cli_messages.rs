@@ -30,11 +30,89 @@ fn a_glb_named_obj_is_named_for_what_it_is() {
     std::fs::copy(fixture("gltf/cube.glb"), &disguised).unwrap();
     let result = raycast(&["info", arg(&disguised)]);
     assert_eq!(result.status.code(), Some(1));
+    let said = "the content is a binary glTF (GLB), not what the .obj name says";
     assert!(
-        stderr(&result).contains("model.obj: the content is a binary glTF (GLB)"),
+        stderr(&result).contains(&format!("model.obj: {said}")),
         "{}",
         stderr(&result)
     );
+    // `check` says the same words (it said "OBJ_NOT_TEXT ... not UTF-8")
+    let checked = raycast(&["check", arg(&disguised)]);
+    let stdout = String::from_utf8_lossy(&checked.stdout);
+    assert_eq!(checked.status.code(), Some(1));
+    assert!(
+        stdout.contains(&format!("FILE_TYPE_MISMATCH: {said}")),
+        "{stdout}"
+    );
+}
+
+/// Runs `raycast ARGS` under a 1.5 GB address-space limit (`ulimit -v`), so that a run that
+/// reads a 2 GiB file whole fails instead of answering.
+#[cfg(target_os = "linux")]
+fn raycast_in_1_5_gb(args: &[&str]) -> std::process::Output {
+    let mut script = format!("ulimit -v 1500000; exec '{}'", raycast_bin().display());
+    for a in args {
+        script.push_str(&format!(" '{a}'"));
+    }
+    std::process::Command::new("sh")
+        .args(["-c", &script])
+        .output()
+        .unwrap()
+}
+
+/// A 2 GiB file whose first bytes already say it is no glTF is refused from those bytes,
+/// by render, `info` and `check` alike, without reading it (it used to be read whole first:
+/// 4.5-15 s and 2.1 GB for a 2 GB file).
+#[cfg(target_os = "linux")]
+#[test]
+fn a_huge_file_is_refused_from_its_first_bytes() {
+    let dir = temp_dir("huge");
+    std::fs::create_dir_all(&dir).unwrap();
+    let sparse = |name: &str, head: &[u8]| {
+        let path = dir.join(name);
+        std::fs::write(&path, head).unwrap();
+        let file = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
+        file.set_len(2 << 30).unwrap();
+        path
+    };
+    let cases = [
+        (
+            sparse("zeros.glb", b""),
+            "the file does not start with 'glTF'",
+        ),
+        (
+            sparse("short.glb", b"glTF\x02\0\0\0\0\0\0\0"),
+            "the GLB header declares 0 bytes: no room for a chunk",
+        ),
+        (
+            sparse("zeros.gltf", b""),
+            "not valid glTF JSON: expected value at line 1 column 1",
+        ),
+    ];
+    for (path, message) in &cases {
+        for args in [vec![arg(path)], vec!["info", arg(path)]] {
+            let result = raycast_in_1_5_gb(&args);
+            assert_eq!(
+                result.status.code(),
+                Some(1),
+                "{args:?}: {}",
+                stderr(&result)
+            );
+            assert!(stderr(&result).contains(message), "{}", stderr(&result));
+        }
+    }
+    let checked = raycast_in_1_5_gb(&["check", arg(&dir)]);
+    let stdout = String::from_utf8_lossy(&checked.stdout);
+    assert_eq!(
+        checked.status.code(),
+        Some(1),
+        "{stdout}{}",
+        stderr(&checked)
+    );
+    for (_, message) in &cases {
+        assert!(stdout.contains(message), "{stdout}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -127,4 +205,155 @@ fn usd_reader_crashes_and_hangs_end_with_one_line() {
         }
     }
     assert!(!out.exists());
+}
+
+/// Common slips get words for what was meant (clap called each "the subcommand '…' cannot be
+/// used with '<SCENE>'"), one line, exit 2.
+#[test]
+fn common_slips_say_what_was_meant() {
+    let cube = fixture("gltf/cube.gltf");
+    let cases: [(Vec<&str>, &str); 5] = [
+        (
+            vec!["a.glb", "b.obj"],
+            "one scene per render: got 'a.glb' and 'b.obj'",
+        ),
+        (
+            vec!["--width", "8", arg(&cube), "extra"],
+            "one scene per render: got",
+        ),
+        (vec!["chek", "dir"], "did you mean 'raycast check dir'?"),
+        (vec!["ifno", "x.glb"], "did you mean 'raycast info x.glb'?"),
+        (vec![arg(&cube), "info"], "'info' goes first: raycast info"),
+    ];
+    for (args, said) in cases {
+        let result = raycast(&args);
+        assert_eq!(result.status.code(), Some(2), "{args:?}");
+        let text = stderr(&result);
+        assert!(text.contains(said), "{args:?}: {text}");
+        assert_eq!(text.lines().count(), 1, "{text}");
+    }
+}
+
+/// Invalid camera values exit 2 as the README says of invalid values, each named for what is
+/// wrong (`--up 0,0,0` was called "parallel"); `--out -` and a scene from standard input are
+/// refused in plain words.
+#[test]
+fn invalid_cameras_and_standard_streams_are_usage_errors() {
+    let cube = fixture("gltf/cube.gltf");
+    let out = temp_dir("camera-slips");
+    let look = |extra: &[&str]| {
+        let mut args = vec![arg(&cube), "--width", "8", "--out", arg(&out)];
+        args.extend(extra);
+        raycast(&args)
+    };
+    for (extra, said) in [
+        (
+            vec!["--eye", "1,1,1", "--target", "1,1,1"],
+            "eye and target are the same point",
+        ),
+        (
+            vec!["--eye", "1,1,1", "--target", "0,0,0", "--up", "0,0,0"],
+            "up vector is zero",
+        ),
+        (
+            vec!["--eye", "0,1,0", "--target", "0,0,0"],
+            "up vector is parallel to the view direction",
+        ),
+    ] {
+        let result = look(&extra);
+        assert_eq!(result.status.code(), Some(2), "{extra:?}");
+        assert!(stderr(&result).contains(said), "{}", stderr(&result));
+        assert!(!out.exists());
+    }
+    let dash = raycast(&[arg(&cube), "--out", "-"]);
+    assert_eq!(dash.status.code(), Some(2));
+    assert!(stderr(&dash).contains("not standard output; name a folder"));
+    assert!(!std::path::Path::new("-").exists());
+    let stdin = raycast(&["-"]);
+    assert!(
+        stderr(&stdin).contains("standard input is not read"),
+        "{}",
+        stderr(&stdin)
+    );
+    let piped = std::process::Command::new(raycast_bin())
+        .arg("/dev/stdin")
+        .stdin(std::process::Stdio::piped())
+        .output()
+        .unwrap();
+    assert!(
+        stderr(&piped).contains("is not a regular file"),
+        "{}",
+        stderr(&piped)
+    );
+}
+
+/// `--threads` and `check --jobs` follow one rule: 0 is refused, more than the cores is
+/// brought down to the cores with a warning.
+#[test]
+fn threads_and_jobs_follow_one_rule() {
+    let cube = fixture("gltf/cube.gltf");
+    let out = temp_dir("threads");
+    let cores = std::thread::available_parallelism().unwrap().get();
+    let many = (cores + 1).to_string();
+    for (args, flag) in [
+        (
+            vec![arg(&cube), "--width", "8", "--out", arg(&out), "--threads"],
+            "--threads",
+        ),
+        (vec!["check", arg(&cube), "--jobs"], "--jobs"),
+    ] {
+        let mut zero = args.clone();
+        zero.push("0");
+        assert_eq!(raycast(&zero).status.code(), Some(2), "{flag} 0");
+        let mut more = args.clone();
+        more.push(&many);
+        let result = raycast(&more);
+        assert!(result.status.success(), "{}", stderr(&result));
+        let said = format!("{flag} {many} is more than the {cores} cores; using {cores}");
+        assert!(stderr(&result).contains(&said), "{}", stderr(&result));
+    }
+}
+
+/// `info --json` on several files gives one record per file, a failed file's with its error,
+/// so that results match inputs (it gave only the files that were read).
+#[test]
+fn info_json_has_a_record_for_each_file() {
+    let good = fixture("gltf/cube.gltf");
+    let bad = fixture("bad/bad_index.gltf");
+    let result = raycast(&["info", "--json", arg(&good), arg(&bad), arg(&good)]);
+    assert_eq!(result.status.code(), Some(1));
+    let records: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
+    let records = records.as_array().unwrap();
+    assert_eq!(records.len(), 3);
+    assert_eq!(records[0]["triangles"], 12);
+    assert_eq!(records[1]["scene"], arg(&bad));
+    assert!(records[1]["error"]
+        .as_str()
+        .unwrap()
+        .contains("index 99 out of range"));
+    assert!(records[1].get("triangles").is_none());
+    assert_eq!(records[2]["triangles"], 12);
+}
+
+/// A scene of many objects lists the first ones and counts the rest (501 lines for a scene
+/// of 500 cubes); `--all` and `--json` list every one.
+#[test]
+fn info_summarises_many_objects_unless_asked_for_all() {
+    let mut text = String::new();
+    for i in 0..100 {
+        text += &format!("o part{i}\nv {i} 0 0\nv {i}.5 0 0\nv {i} 1 0\nf -3 -2 -1\n");
+    }
+    let obj = temp_file("many-objects", "parts.obj", text);
+    let listed = |args: &[&str]| {
+        let out = raycast_ok(args).stdout;
+        let text = String::from_utf8_lossy(&out).into_owned();
+        text.lines().filter(|l| l.contains("  object ")).count()
+    };
+    assert_eq!(listed(&["info", arg(&obj)]), 20);
+    let summary = raycast_ok(&["info", arg(&obj)]).stdout;
+    assert!(String::from_utf8_lossy(&summary).contains("... 80 more objects (--all"));
+    assert_eq!(listed(&["info", "--all", arg(&obj)]), 100);
+    let json: serde_json::Value =
+        serde_json::from_slice(&raycast_ok(&["info", "--json", arg(&obj)]).stdout).unwrap();
+    assert_eq!(json["objects"].as_array().unwrap().len(), 100);
 }

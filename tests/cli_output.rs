@@ -166,33 +166,122 @@ fn invalid_option_values_exit_with_2() {
     }
 }
 
-#[test]
-fn ctrl_c_removes_partial_files() {
-    let out = temp_dir("interrupt");
+/// Starts a large render into `out` and sends it `signal` once its first temporary file
+/// exists (or, with `during_trace`, as soon as it runs); returns its exit status and stderr.
+fn interrupted_render(out: &std::path::Path, signal: &str, during_trace: bool) -> (i32, String) {
     let cube = fixture("gltf/cube.gltf");
-    let mut child = std::process::Command::new(raycast_bin())
+    let child = std::process::Command::new(raycast_bin())
         .args([arg(&cube), "--width", "2000", "--height", "2000"])
         .args(["--aov", "depth,normal,position", "--format", "exr,png,npy"])
-        .args(["--out", arg(&out), "--quiet"])
+        .args(["--out", arg(out), "--quiet"])
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
     let started = std::time::Instant::now();
-    let mut interrupted = false;
+    let mut sent = false;
+    let mut child = child;
     while child.try_wait().unwrap().is_none() && started.elapsed().as_secs() < 120 {
-        if !partial_files(&out).is_empty() {
+        if (during_trace && out.exists()) || !partial_files(out).is_empty() {
             std::process::Command::new("kill")
-                .args(["-INT", &child.id().to_string()])
+                .args([&format!("-{signal}"), &child.id().to_string()])
                 .status()
                 .unwrap();
-            interrupted = true;
+            sent = true;
             break;
         }
         std::thread::sleep(std::time::Duration::from_millis(2));
     }
-    let status = child.wait().unwrap();
-    assert!(interrupted, "the render ended before writing: {status:?}");
-    assert_eq!(partial_files(&out), Vec::<String>::new());
-    assert_eq!(status.code(), Some(130));
+    let output = child.wait_with_output().unwrap();
+    assert!(sent, "the render ended before writing: {:?}", output.status);
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    (output.status.code().unwrap_or(-1), stderr)
+}
+
+/// SIGINT, SIGTERM and SIGHUP alike: no temporary file, not even the folder the run created,
+/// "interrupted" on stderr, and the exit status a shell gives a process the signal killed.
+#[test]
+fn signals_remove_partial_files_and_the_created_folder() {
+    for (signal, code) in [("INT", 130), ("TERM", 143), ("HUP", 129)] {
+        for during_trace in [false, true] {
+            let out = temp_dir(&format!("interrupt-{signal}-{during_trace}"));
+            let (status, stderr) = interrupted_render(&out, signal, during_trace);
+            assert!(!out.exists(), "{signal}: {:?}", file_names(&out));
+            assert_eq!(status, code, "{signal}: {stderr}");
+            assert_eq!(stderr.trim(), "raycast: interrupted", "{signal}");
+        }
+    }
+}
+
+/// An interrupted run into a folder that already holds outputs leaves them as they were.
+#[test]
+fn an_interrupted_run_leaves_an_existing_folder_and_its_files() {
+    let out = temp_dir("interrupt-existing");
+    let cube = fixture("gltf/cube.gltf");
+    raycast_ok(&[arg(&cube), "--width", "8", "--out", arg(&out), "--quiet"]);
+    let before = std::fs::read(out.join("depth.exr")).unwrap();
+    let (status, _) = interrupted_render(&out, "TERM", false);
+    assert_eq!(status, 143);
+    assert_eq!(file_names(&out), ["depth.exr", "depth.png", "raycast.json"]);
+    assert_eq!(std::fs::read(out.join("depth.exr")).unwrap(), before);
+}
+
+/// A render of another scene file into a folder that holds a scene's outputs (the default
+/// folder is named by the stem: `Box/Box.gltf` and `Box.glb` share `Box.raycast/`) is refused
+/// before any work, and removes nothing; so is one that would replace a file no run of its
+/// scene wrote. A second run of the same scene still replaces and removes its own outputs.
+#[test]
+fn outputs_of_another_scene_or_person_are_never_replaced_or_removed() {
+    let dir = temp_dir("ownership");
+    std::fs::create_dir_all(dir.join("a")).unwrap();
+    let first = dir.join("a/cube.gltf");
+    let second = dir.join("cube.gltf");
+    for folder in [dir.join("a"), dir.clone()] {
+        for name in ["cube.gltf", "cube.bin"] {
+            std::fs::copy(fixture(&format!("gltf/{name}")), folder.join(name)).unwrap();
+        }
+    }
+    let out = dir.join("cube.raycast");
+    let run = |scene: &std::path::Path, aov: &str| {
+        raycast(&[
+            arg(scene),
+            "--aov",
+            aov,
+            "--width",
+            "8",
+            "--out",
+            arg(&out),
+            "--quiet",
+        ])
+    };
+    assert!(run(&first, "depth,normal").status.success());
+    let owned = file_names(&out);
+    let refused = run(&second, "id");
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("holds the outputs of another scene"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("--out"), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert_eq!(file_names(&out), owned);
+    // the same scene by another path (`a/../a/cube.gltf`) is the same file
+    let again = dir.join("a/../a/cube.gltf");
+    assert!(run(&again, "id").status.success());
+    assert_eq!(file_names(&out), ["id.exr", "id.png", "raycast.json"]);
+    // a file of a person's in a folder without a sidecar
+    let mine = dir.join("mine");
+    std::fs::create_dir_all(&mine).unwrap();
+    std::fs::write(mine.join("depth.png"), b"my picture").unwrap();
+    let refused = raycast(&[arg(&second), "--width", "8", "--out", arg(&mine), "--quiet"]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("already has depth.png"));
+    assert_eq!(
+        std::fs::read(mine.join("depth.png")).unwrap(),
+        b"my picture"
+    );
+    assert_eq!(file_names(&mine), ["depth.png"]);
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

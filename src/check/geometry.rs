@@ -148,20 +148,59 @@ fn hole_area(mut outgoing: HashMap<u32, Vec<u32>>, points: &[DVec3]) -> f64 {
     total
 }
 
-/// Signed volume enclosed by the triangles (positive when normals point outward).
-pub fn signed_volume(triangles: &[[DVec3; 3]]) -> f64 {
+/// Signed volume enclosed by the triangles and the bound below which its sign says nothing:
+/// `(volume, zero_below)`. A mesh whose `|volume| <= zero_below` encloses no volume up to
+/// rounding (a flat mesh, or one flattened by a singular or projective transform), and its
+/// sign is no finding.
+///
+/// The bound adds two parts:
+/// - the rounding of this sum: each term `a · (b × c)` (vertices relative to the first one,
+///   `v - o` rounded once) is a 3 × 3 determinant, computed with an error of at most
+///   `γ₆ · P` where `P = Σ |a_i b_j c_k|` over its six products (one rounding of each
+///   difference, two of each cross-product term, three of the dot product's sum), and the
+///   `n` terms are summed with a further error of at most `γₙ · Σ |term|`, which `P` bounds
+///   too; `(γ₆ + γₙ) Σ P` with `γₖ = k·u / (1 - k·u)`, `u = 2⁻⁵³`;
+/// - the rounding already in the coordinates: world vertices come out of f64 transforms (a
+///   projective one divides by `w`), each coordinate off by some units in the last place of
+///   the mesh's extent `E` (its largest absolute coordinate). Moving every point of a
+///   surface of area `A` by at most `δ` changes the volume it encloses by at most `δ · A`;
+///   with `δ = 64 u E` (a generous count of roundings per coordinate) this is `64 u E A`.
+///
+/// On `weird_matrix_transform.usda` (usd-wg: a cube under a rank-2 projective matrix) the
+/// volume is -3.8e-15 and the bound 3.3e-12. A real closed mesh that is inside out encloses
+/// a volume of the order of `A` times its thickness, far above both.
+pub fn signed_volume_bound(triangles: &[[DVec3; 3]]) -> (f64, f64) {
+    const U: f64 = f64::EPSILON / 2.0;
+    let gamma = |k: f64| k * U / (1.0 - k * U);
     let Some(first) = triangles.first() else {
-        return 0.0;
+        return (0.0, 0.0);
     };
     let o = first[0];
-    triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|v| v - o);
-            a.dot(b.cross(c))
-        })
-        .sum::<f64>()
-        / 6.0
+    let (mut sum, mut products, mut area, mut extent) = (0.0, 0.0, 0.0, 0.0f64);
+    for t in triangles {
+        let [a, b, c] = t.map(|v| v - o);
+        sum += a.dot(b.cross(c));
+        let (a, b, c) = (a.abs(), b.abs(), c.abs());
+        products += a.dot(DVec3::new(
+            b.y * c.z + b.z * c.y,
+            b.z * c.x + b.x * c.z,
+            b.x * c.y + b.y * c.x,
+        ));
+        area += 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length();
+        for v in t {
+            extent = extent.max(v.abs().max_element());
+        }
+    }
+    let n = triangles.len() as f64;
+    let rounding = (gamma(6.0) + gamma(n)) * products / 6.0;
+    let coordinates = 64.0 * U * extent * area;
+    // The bound's own arithmetic rounds too; a relative 1e-9 covers it.
+    (sum / 6.0, (rounding + coordinates) * (1.0 + 1e-9))
+}
+
+/// Signed volume enclosed by the triangles (positive when normals point outward).
+pub fn signed_volume(triangles: &[[DVec3; 3]]) -> f64 {
+    signed_volume_bound(triangles).0
 }
 
 /// Points spread over the unit sphere (a Fibonacci lattice), deterministic.
@@ -306,8 +345,8 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
                     ),
                 );
             }
-            let volume = signed_volume(&triangles);
-            if volume < 0.0 {
+            let (volume, zero_below) = signed_volume_bound(&triangles);
+            if volume < -zero_below {
                 f.warn(
                     "INVERTED_NORMALS",
                     at.clone(),
@@ -373,6 +412,38 @@ mod tests {
         assert!(t.closed(), "{t:?}");
         assert!((signed_volume(&c) - 1.0).abs() < 1e-12);
         assert_eq!(odd_crossings(&c, 64).0, 0);
+    }
+
+    #[test]
+    fn a_volume_zero_up_to_rounding_has_no_sign() {
+        // usd-wg's weird_matrix_transform.usda: the unit cube (centred) under the rank-2
+        // projective matrix ((1,2,3,4),(5,6,7,8),(9,10,11,12),(13,14,15,1)) (USD's rows,
+        // points as rows) is flat; its computed volume is a rounding residue.
+        let m = glam::DMat4::from_cols_array(&[
+            1., 2., 3., 4., 5., 6., 7., 8., 9., 10., 11., 12., 13., 14., 15., 1.,
+        ]);
+        let flat: Vec<_> = cube()
+            .into_iter()
+            .map(|t| t.map(|p| m.project_point3(p - DVec3::splat(0.5))))
+            .collect();
+        let (volume, zero_below) = signed_volume_bound(&flat);
+        assert!(
+            volume != 0.0 && volume.abs() <= zero_below,
+            "{volume} {zero_below}"
+        );
+        assert!(zero_below < 1e-10, "{zero_below}");
+        // A cube inside out keeps its sign, with a bound near 1e-14.
+        let inverted: Vec<_> = cube().into_iter().map(|[a, b, c]| [a, c, b]).collect();
+        let (volume, zero_below) = signed_volume_bound(&inverted);
+        assert_eq!(volume, -1.0);
+        assert!(zero_below < 1e-13, "{zero_below}");
+        // So does a thin closed slab (1 × 1 × 1e-9) inside out.
+        let slab: Vec<_> = inverted
+            .iter()
+            .map(|t| t.map(|p| DVec3::new(p.x, p.y, p.z * 1e-9)))
+            .collect();
+        let (volume, zero_below) = signed_volume_bound(&slab);
+        assert!(volume < -zero_below, "{volume} {zero_below}");
     }
 
     #[test]

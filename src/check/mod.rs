@@ -532,17 +532,14 @@ fn check_into(
         );
         return None;
     };
+    // The same words as a render's for content that is another format than the name says.
+    let extension = crate::import::extension_of(path);
+    if let Err(e) = crate::import::sniff::check_content(path, &extension) {
+        findings.error("FILE_TYPE_MISMATCH", "", e.message);
+        return None;
+    }
     let scene = match format {
-        "gltf" | "glb" => {
-            let bytes = match std::fs::read(path) {
-                Ok(bytes) => bytes,
-                Err(e) => {
-                    findings.error("IO_ERROR", "", format!("cannot read: {e}"));
-                    return None;
-                }
-            };
-            gltf::check(path, root, bytes, options, findings)?
-        }
+        "gltf" | "glb" => gltf::check(path, root, options, findings)?,
         "obj" => {
             let bytes = match std::fs::read(path) {
                 Ok(bytes) => bytes,

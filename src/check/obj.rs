@@ -31,7 +31,10 @@ pub fn check(
     let base = path.parent().unwrap_or(Path::new("."));
     let mut vertices = 0usize;
     let mut faces = 0usize;
-    for (n, raw) in text.lines().enumerate() {
+    // The text as the importer reads it: continuations joined, empty and unknown statements
+    // blanked (the importer's warnings about them come back as notes), lines at their numbers.
+    let normal = crate::import::obj_text::normalise(text);
+    for (n, raw) in normal.text.lines().enumerate() {
         let at = format!("line {}", n + 1);
         let line = raw.split('#').next().unwrap_or("").trim();
         let mut words = line.split_whitespace();

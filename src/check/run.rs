@@ -258,7 +258,7 @@ impl Files {
         let staging = match self.0.entry(dir.clone()) {
             std::collections::btree_map::Entry::Occupied(e) => e.into_mut(),
             std::collections::btree_map::Entry::Vacant(e) => {
-                e.insert(Staging::among_others(&dir).map_err(Error::as_usage)?)
+                e.insert(Staging::new(&dir).map_err(Error::as_usage)?)
             }
         };
         staging
@@ -277,13 +277,21 @@ impl Files {
     }
 }
 
-/// Refuses a `--junit` or `--summary` path that is a folder or one of the run's inputs (an
-/// asset, or a shard file of a merge).
+/// Refuses, before any asset is checked, a `--junit` or `--summary` path that is a folder or
+/// one of the run's inputs (an asset, or a shard file of a merge), and any report path
+/// (`--validator-json` too) whose folder cannot be written.
 fn refuse_overwriting_inputs(options: &RunOptions, inputs: &[PathBuf]) -> Result<()> {
     for out in [&options.junit, &options.summary].into_iter().flatten() {
         if out.is_dir() {
             return Err(Error::usage(format!("{} is a folder", out.display())));
         }
+        let folder = out.parent().filter(|p| !p.as_os_str().is_empty());
+        probe_writable(out, folder.unwrap_or(Path::new(".")))?;
+    }
+    if let Some(dir) = &options.validator_json {
+        probe_writable(dir, dir)?;
+    }
+    for out in [&options.junit, &options.summary].into_iter().flatten() {
         let Ok(target) = out.canonicalize() else {
             continue;
         };
@@ -297,5 +305,24 @@ fn refuse_overwriting_inputs(options: &RunOptions, inputs: &[PathBuf]) -> Result
             )));
         }
     }
+    Ok(())
+}
+
+/// Refuses the report path `report` when the folder `dir` it goes into (or, when `dir` does
+/// not exist yet, the nearest folder above it that does) cannot be written: a probe file is
+/// created there and removed, and nothing else is created.
+fn probe_writable(report: &Path, dir: &Path) -> Result<()> {
+    let refuse =
+        |why: String| Error::in_file(report, format!("cannot be written: {why}")).as_usage();
+    let absolute = std::path::absolute(dir).map_err(|e| refuse(e.to_string()))?;
+    let Some(existing) = absolute.ancestors().find(|a| a.exists()) else {
+        return Err(refuse("no folder above it exists".into()));
+    };
+    if !existing.is_dir() {
+        return Err(refuse(format!("{} is not a folder", existing.display())));
+    }
+    let probe = existing.join(format!(".raycast-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(|e| refuse(format!("{}: {e}", existing.display())))?;
+    let _ = std::fs::remove_file(&probe);
     Ok(())
 }

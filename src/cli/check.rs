@@ -64,9 +64,9 @@ pub struct CheckArgs {
     /// every finding).
     #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub max_findings: Option<String>,
-    /// Assets checked at once (default: all cores).
-    #[arg(long, value_name = "N")]
-    pub jobs: Option<usize>,
+    /// Assets checked at once (default: all cores; at most the cores).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub jobs: Option<u32>,
     /// Expected bounding-box diagonal of each scene, MIN..MAX in scene units.
     #[arg(long, value_name = "MIN..MAX", value_parser = parse_range)]
     pub expect_size: Option<(f64, f64)>,
@@ -159,7 +159,9 @@ impl CheckArgs {
             summary: self.summary.clone(),
             validator_json: self.validator_json.clone(),
             github: self.github,
-            jobs: self.jobs.unwrap_or(0),
+            jobs: self.jobs.map_or(0, |n| {
+                super::threads::clamp(n as usize, "--jobs", self.quiet)
+            }),
             root: self.isolated_root.clone().or_else(|| self.root.clone()),
             verbose: self.verbose,
             quiet: self.quiet,

@@ -2,3 +2,6 @@
 //! bars (indicatif) live here, on the binary side, so the library does not depend on them.
 
 pub mod check;
+pub mod signals;
+pub mod slips;
+pub mod threads;

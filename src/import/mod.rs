@@ -2,8 +2,9 @@
 
 pub mod gltf;
 pub mod obj;
+pub mod obj_text;
 pub mod paths;
-mod sniff;
+pub mod sniff;
 pub mod usd;
 
 use crate::error::{Error, ErrorKind, Result};
@@ -30,6 +31,13 @@ pub struct LoadOptions {
 /// Loads a `.gltf`, `.glb`, `.obj`, `.usda`, `.usdc`, `.usd` or `.usdz` file, choosing the
 /// importer by extension after checking that the content is that format.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
+    if path == Path::new("-") {
+        return Err(Error::in_file(
+            path,
+            "standard input is not read: give the path of a scene file (.gltf, .glb, .obj, \
+             .usda, .usdc, .usd or .usdz)",
+        ));
+    }
     let extension = extension_of(path);
     sniff::check_content(path, &extension)?;
     let mut scene = match extension.as_str() {
@@ -64,7 +72,7 @@ pub fn load_bytes(bytes: Vec<u8>, name: &Path, options: &LoadOptions) -> Result<
 }
 
 /// A path's extension in lower case (empty when it has none).
-fn extension_of(path: &Path) -> String {
+pub fn extension_of(path: &Path) -> String {
     path.extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)

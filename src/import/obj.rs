@@ -4,7 +4,9 @@
 //!
 //! `tobj` skips lines it does not know, as the format allows (exporters write their own
 //! statements), so before it runs the text is checked to be OBJ at all: UTF-8 (see [`text`]),
-//! with at least one line that is an OBJ statement if it has any (see [`check_statements`]).
+//! with at least one line that is an OBJ statement if it has any (see [`check_statements`]);
+//! then continuations are joined and empty or unknown statements skipped with a warning
+//! (see [`super::obj_text`]).
 
 use crate::error::{Error, Result};
 use crate::scene::{Mesh, Scene, SceneBuilder};
@@ -15,7 +17,7 @@ use std::sync::Arc;
 /// The keywords of the OBJ format (Wavefront's specification: vertex data, free-form curve
 /// and surface attributes and bodies, elements, connectivity, grouping, display and render
 /// attributes, and the superseded and general statements).
-const STATEMENTS: &[&str] = &[
+pub(crate) const STATEMENTS: &[&str] = &[
     "v",
     "vt",
     "vn",
@@ -81,18 +83,30 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
         )
     })?;
     check_statements(text).map_err(|e| Error::in_file(path, e))?;
+    let normal = super::obj_text::normalise(text);
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _materials) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    })
-    .map_err(|e| Error::in_file(path, format!("not a valid OBJ file: {e}")))?;
+    let (mut models, _materials) =
+        tobj::load_obj_buf(&mut normal.text.as_bytes(), &options, |_| {
+            Err(tobj::LoadError::OpenFileFailed)
+        })
+        .map_err(|e| Error::in_file(path, format!("not a valid OBJ file: {e}")))?;
+    // tobj ends every file with the object being read, also one that got no face (a file
+    // of vertices only, or nothing at all); that one is no scene object.
+    if models.last().is_some_and(|m| m.mesh.indices.is_empty()) {
+        models.pop();
+    }
     let mut builder = SceneBuilder::new();
+    for warning in normal.warnings {
+        builder.warn(warning);
+    }
+    let mut triangles = 0;
     for (index, model) in models.iter().enumerate() {
+        triangles += model.mesh.indices.len() / 3;
         let mesh = model_mesh(&model.mesh)
             .map_err(|e| Error::in_file(path, format!("object '{}': {e}", model.name)))?;
         let name = if model.name.is_empty() {
@@ -103,8 +117,9 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
         let id = builder.new_object(name.clone(), format!("obj:{name}"));
         builder.place_mesh(id, Arc::new(mesh), DMat4::IDENTITY);
     }
-    if builder.object_count() == 0 {
-        builder.warn("the file holds no faces");
+    if triangles == 0 {
+        // The words of the glTF and USD readers' warning for an empty scene.
+        builder.warn("the scene holds no triangles or quadrics");
     }
     Ok(builder.finish(path.to_path_buf()))
 }
@@ -148,7 +163,7 @@ pub fn check_statements(text: &str) -> std::result::Result<(), String> {
 
 /// The start of a foreign line, for a message: at most [`QUOTED_CHARS`] characters, control
 /// characters escaped.
-fn quoted(line: &str) -> String {
+pub(crate) fn quoted(line: &str) -> String {
     let mut out: String = line
         .chars()
         .take(QUOTED_CHARS)

@@ -46,6 +46,12 @@ pub fn check_content(path: &Path, extension: &str) -> Result<()> {
             "is a folder, not a scene file (raycast check searches folders)",
         ));
     }
+    if path.metadata().is_ok_and(|m| !m.is_file()) {
+        return Err(Error::in_file(
+            path,
+            "is not a regular file (a pipe or a device): give the path of a scene file",
+        ));
+    }
     let mut head = [0u8; 8];
     // A file that cannot be read is left to the importer, which says why.
     let n = std::fs::File::open(path)

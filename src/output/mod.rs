@@ -1,12 +1,13 @@
 //! Writing results: AOV buffers as EXR, PNG and NPY, and the JSON sidecar. Every file is
 //! written under a temporary name and renamed into place only when all files are written, so
-//! a failed run leaves no half-written output. A run owns the files an earlier run listed in
-//! the folder's `raycast.json`: those it does not write again are removed; other files in the
-//! folder are never touched.
+//! a failed run leaves no half-written output. A render owns the files an earlier render of
+//! the same scene file listed in the folder's `raycast.json` ([`ownership`]): those it does not
+//! write again are removed; other files in the folder are never touched.
 
 pub mod exr;
 pub mod npy;
 pub mod npz;
+pub mod ownership;
 pub mod png;
 pub mod request;
 pub mod sidecar;
@@ -23,20 +24,45 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 /// Temporary files of every uncommitted [`Staging`] in this process, for
-/// [`remove_partial_files`].
+/// [`remove_partial_files_and_exit`].
 static PARTIAL_FILES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
-/// Removes the temporary files of every uncommitted staging and exits with `code`; for an
-/// interrupt handler (Ctrl-C). The list stays locked until the process ends, and temporary
-/// files are only created under that lock and then written through their open handle (see
+/// Output folders a running render created (the folder, and the outermost folder created for
+/// it), removed again by [`remove_partial_files_and_exit`] when they are still empty.
+static CREATED_FOLDERS: Mutex<Vec<(PathBuf, PathBuf)>> = Mutex::new(Vec::new());
+
+/// Removes the temporary files of every uncommitted staging, and the folders a running render
+/// created if nothing else is in them, then exits with `code`; for a signal handler (SIGINT,
+/// SIGTERM, SIGHUP). The list stays locked until the process ends, and temporary files are
+/// only created under that lock and then written through their open handle (see
 /// [`Staging::write`]), so none can reappear in between: a writer still running writes into an
-/// unlinked file.
+/// unlinked file. A commit renames under the same lock, so it is either done or not begun.
 pub fn remove_partial_files_and_exit(code: i32) -> ! {
     let files = PARTIAL_FILES.lock().unwrap_or_else(|p| p.into_inner());
     for file in files.iter() {
         let _ = std::fs::remove_file(file);
     }
+    let folders = CREATED_FOLDERS.lock().unwrap_or_else(|p| p.into_inner());
+    for (dir, created) in folders.iter() {
+        request::remove_created_folder(dir, Some(created));
+    }
     std::process::exit(code)
+}
+
+/// Records that a render created `dir` (up to `created`), for the interrupt handler; `None`
+/// records nothing.
+pub fn track_created_folder(dir: &Path, created: Option<&Path>) {
+    if let Some(created) = created {
+        let mut folders = CREATED_FOLDERS.lock().unwrap_or_else(|p| p.into_inner());
+        folders.push((dir.to_path_buf(), created.to_path_buf()));
+    }
+}
+
+/// Forgets the folders recorded for `dir` (the render is over: they hold its outputs, or were
+/// removed).
+pub fn untrack_created_folder(dir: &Path) {
+    let mut folders = CREATED_FOLDERS.lock().unwrap_or_else(|p| p.into_inner());
+    folders.retain(|(d, _)| d != dir);
 }
 
 /// Creates a temporary file under the lock of [`PARTIAL_FILES`] and adds it there.
@@ -60,24 +86,6 @@ fn is_output_name(name: &str) -> bool {
         || name
             .split_once('.')
             .is_some_and(|(aov, ext)| aov.parse::<Aov>().is_ok() && ext.parse::<Format>().is_ok())
-}
-
-/// The output files an earlier run listed in `dir/raycast.json` (only names raycast writes).
-fn earlier_outputs(dir: &Path) -> Vec<String> {
-    let Ok(text) = std::fs::read(dir.join("raycast.json")) else {
-        return Vec::new();
-    };
-    let Ok(json) = serde_json::from_slice::<serde_json::Value>(&text) else {
-        return Vec::new();
-    };
-    json["files"]
-        .as_array()
-        .into_iter()
-        .flatten()
-        .filter_map(|f| f.as_str())
-        .filter(|f| is_output_name(f))
-        .map(str::to_string)
-        .collect()
 }
 
 /// A file format for buffers.
@@ -157,13 +165,15 @@ pub struct Staging {
     dir: PathBuf,
     files: Vec<(PathBuf, String)>,
     protected: Vec<PathBuf>,
-    /// Whether the folder is a render's output folder, whose `raycast.json` lists files
-    /// this run replaces.
-    owns_listed: bool,
+    /// For a render's output folder: the scene file whose earlier outputs there this run
+    /// replaces (see [`ownership`]).
+    scene: Option<PathBuf>,
 }
 
 impl Staging {
-    /// Prepares `dir` (created if missing).
+    /// Prepares `dir` (created if missing) for files written among others: committing
+    /// replaces only the staged names and never removes anything (reports of `raycast
+    /// check`, golden buffers).
     pub fn new(dir: &Path) -> Result<Staging> {
         std::fs::create_dir_all(dir)
             .map_err(|e| Error::in_file(dir, format!("cannot create output folder: {e}")))?;
@@ -171,16 +181,16 @@ impl Staging {
             dir: dir.to_path_buf(),
             files: Vec::new(),
             protected: Vec::new(),
-            owns_listed: true,
+            scene: None,
         })
     }
 
-    /// Prepares `dir` (created if missing) for files written among others: committing
-    /// replaces only the staged names and never removes what a `raycast.json` there lists
-    /// (reports of `raycast check`).
-    pub fn among_others(dir: &Path) -> Result<Staging> {
+    /// Prepares `dir` (created if missing) as the output folder of a render of `scene`:
+    /// committing claims the folder again ([`ownership::claim`]) and removes the files an
+    /// earlier render of the same scene listed that this one did not write.
+    pub fn for_render(dir: &Path, scene: &Path) -> Result<Staging> {
         let mut staging = Staging::new(dir)?;
-        staging.owns_listed = false;
+        staging.scene = Some(scene.to_path_buf());
         Ok(staging)
     }
 
@@ -244,14 +254,15 @@ impl Staging {
     }
 
     /// Renames every staged file to its final name (`raycast.json`, staged last, last of all),
-    /// then removes the files an earlier run listed in the folder's `raycast.json` that this
-    /// run did not write. Refuses, before renaming anything, when a final name is one of the
-    /// protected inputs.
+    /// then, for a render, removes the files an earlier render of the same scene listed in the
+    /// folder's `raycast.json` that this one did not write. Refuses, before renaming anything,
+    /// when a final name is one of the protected inputs, or when the folder is no longer this
+    /// scene's to write (another run wrote there meanwhile).
     pub fn commit(mut self) -> Result<()> {
-        let earlier = if self.owns_listed {
-            earlier_outputs(&self.dir)
-        } else {
-            Vec::new()
+        let written = self.names();
+        let earlier = match &self.scene {
+            Some(scene) => ownership::claim(&self.dir, scene, &written)?.listed,
+            None => Vec::new(),
         };
         for (_, name) in &self.files {
             let target = self.dir.join(name);
@@ -265,18 +276,24 @@ impl Staging {
                 ));
             }
         }
-        let written = self.names();
-        for (temp, name) in std::mem::take(&mut self.files) {
+        // Renamed under the lock of the interrupt handler: an interrupt waits until every
+        // file is in place, so it never leaves a temporary file or half the set renamed.
+        let mut partial = PARTIAL_FILES.lock().unwrap_or_else(|p| p.into_inner());
+        while !self.files.is_empty() {
+            let (temp, name) = self.files.remove(0);
             let target = self.dir.join(&name);
-            untrack_partial(&temp);
+            partial.retain(|f| f != &temp);
             if let Err(e) = std::fs::rename(&temp, &target) {
                 let _ = std::fs::remove_file(&temp);
+                drop(partial);
+                // the rest are removed by `drop(self)`
                 return Err(Error::in_file(
                     &target,
                     format!("cannot move into place: {e}"),
                 ));
             }
         }
+        drop(partial);
         for stale in earlier.iter().filter(|name| !written.contains(name)) {
             let _ = std::fs::remove_file(self.dir.join(stale));
         }

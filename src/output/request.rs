@@ -83,6 +83,25 @@ pub fn check_files(aovs: &[Aov], formats: &[Format], rays_mode: bool) -> Result<
     Ok(())
 }
 
+/// The names of the files a request writes, `raycast.json` last (what
+/// [`super::write_buffers`] and the `--hits` list write).
+pub fn file_names(aovs: &[Aov], formats: &[Format], rays_mode: bool, hits: bool) -> Vec<String> {
+    let mut names: Vec<String> = merge_formats(formats)
+        .into_iter()
+        .flat_map(|format| {
+            Aov::ALL
+                .into_iter()
+                .filter(move |aov| aovs.contains(aov) && format.holds(*aov, rays_mode))
+                .map(move |aov| format!("{aov}.{}", format.name()))
+        })
+        .collect();
+    if hits {
+        names.push(super::npz::HITS_FILE.to_string());
+    }
+    names.push(super::ownership::SIDECAR.to_string());
+    names
+}
+
 /// The AOV names joined with commas.
 pub fn names(aovs: &[Aov]) -> String {
     aovs.iter()

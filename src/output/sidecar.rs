@@ -11,8 +11,11 @@ use std::collections::BTreeMap;
 pub struct Sidecar {
     /// Version of raycast that wrote it.
     pub raycast_version: &'static str,
-    /// The scene file.
+    /// The scene file, as given.
     pub scene: String,
+    /// The scene file's canonical path: a later render into the same folder replaces these
+    /// outputs only when it renders the same file (see [`super::ownership`]).
+    pub scene_file: String,
     /// `camera` or `rays`.
     pub mode: &'static str,
     /// Image width (camera mode).

@@ -2,9 +2,14 @@
 //! `f(x0 + t·v) = K t² + L t + M` along a ray in that frame.
 
 use glam::{DMat3, DVec3};
+use twofloat::TwoFloat;
 
 /// Ray coefficients below this fraction of their rounding scale count as zero.
 const NEGLIGIBLE_COEFFICIENT: f64 = 1e-13;
+
+/// A bound on the rounding error of `K = v·Q·v` relative to its scale `|v|·|Q|·|v|` (the
+/// products and the two sums of each of the three terms, and the sum of the three).
+const K_ROUNDING: f64 = 8.0 * f64::EPSILON;
 
 /// Relative rounding error assumed for a point computed along a ray (a few ulps).
 const VERTEX_ROUNDING: f64 = 4.0 * f64::EPSILON;
@@ -75,10 +80,10 @@ impl Polynomial {
     /// The real roots of `f(x0 + t·v) = 0` in ascending order (equal for a double or a single
     /// linear root), or `None` when there is none or the ray lies along the surface.
     ///
-    /// Stable roots `q = −(L + sign(L)·√Δ)/2`, `t = q/K` and `M/q`; the linear case when `K`
-    /// vanishes to rounding (the far root `q/K` is then noise), unless a non-zero `K` still
-    /// gives a negative discriminant: a ray nearly along a cylinder's axis that passes outside
-    /// it never reaches the surface. An accurate discriminant (see
+    /// Stable roots `q = −(L + sign(L)·√Δ)/2`, `t = q/K` and `M/q`; the linear case when the
+    /// quadratic is linear to rounding ([`Polynomial::nearly_linear`]: the far root `q/K` is
+    /// then noise), unless a non-zero `K` still gives a negative discriminant: a ray nearly
+    /// along a cylinder's axis that passes outside it never reaches the surface. An accurate discriminant (see
     /// [`Polynomial::discriminant`]); one negative only by its rounding error counts as zero (a
     /// tangent ray, or any ray crossing coincident planes `x² = 0`).
     pub fn ray_roots(&self, x0: DVec3, v: DVec3) -> Option<[f64; 2]> {
@@ -87,7 +92,7 @@ impl Polynomial {
         if disc.is_some_and(|d| d.is_nan() || d < 0.0) {
             return None;
         }
-        if poly.k.abs() <= NEGLIGIBLE_COEFFICIENT * poly.k_scale {
+        if self.nearly_linear(&poly) {
             if poly.l.abs() <= NEGLIGIBLE_COEFFICIENT * poly.l_scale {
                 return None;
             }
@@ -102,6 +107,19 @@ impl Polynomial {
         }
         let (a, b) = (q / poly.k, poly.m / q);
         Some([a.min(b), a.max(b)])
+    }
+
+    /// Whether the ray's quadratic is linear to rounding: `K` vanishes against its scale, and
+    /// either it is no more than its own rounding error or its term is negligible at the
+    /// linear root (`|K·M| ≪ L²`, so `t = −M/L` is the near root). A `K` well above its
+    /// rounding error whose term is not negligible (a ray 1e-7 rad off a cylinder's axis:
+    /// `4KM ≈ L²`) keeps the quadratic: the stable near root `M/q` is right where `−M/L` is
+    /// off by `K·M/L²` (40 % there), and the far root is a real exit.
+    fn nearly_linear(&self, poly: &RayPolynomial) -> bool {
+        let k = poly.k.abs();
+        k <= NEGLIGIBLE_COEFFICIENT * poly.k_scale
+            && (k <= K_ROUNDING * poly.k_scale
+                || 4.0 * k * poly.m.abs() <= NEGLIGIBLE_COEFFICIENT * poly.l * poly.l)
     }
 
     /// `Δ = L² − 4KM`. When `4KM` is close to `L²` the difference cancels, so it is computed as
@@ -122,11 +140,67 @@ impl Polynomial {
         let delta = VERTEX_ROUNDING * (x0.abs() + (t_c * v).abs());
         let gradient = (2.0 * (self.q_abs * m.abs()) + self.p.abs()).dot(delta);
         let uncertainty = gradient + delta.dot(self.q_abs * delta);
-        if value.abs() <= uncertainty {
+        if value.abs() > uncertainty {
+            return -4.0 * poly.k * value;
+        }
+        self.vertex_discriminant(x0, v)
+    }
+
+    /// `Δ` at the parabola's vertex in double-double arithmetic, for when f64 cannot tell its
+    /// sign: the vertex is far along the ray (a ray nearly along a cylinder's axis, `t_c` ≈
+    /// 1e7), so `f(m)` in f64 is uncertain by `|Q|·|m|·ε|m|`, more than its value.
+    ///
+    /// `K` and `L` are recomputed to about ε² (so `t_c` is right to a few ulps and `f(m)`
+    /// exceeds the minimum of `f` along the ray by `K·(4ε·t_c)²` at most), the vertex `m =
+    /// x0 + t_c·v` is formed exactly, and `f(m)` is summed to about ε²·(|m|·|Q|·|m| + |P|·|m|
+    /// + |R|). A value within those bounds of zero gives `Δ = 0` (tangent).
+    fn vertex_discriminant(&self, x0: DVec3, v: DVec3) -> f64 {
+        let (x0, v) = (x0.to_array(), v.to_array());
+        let k = self.form(&v, &v);
+        let l = self.form(&x0, &v) * 2.0 + dot(&self.p.to_array(), &v);
+        if k.hi() <= 0.0 || !k.hi().is_finite() || !l.hi().is_finite() {
             return 0.0;
         }
-        -4.0 * poly.k * value
+        let t_c = -l.hi() / (2.0 * k.hi());
+        let m: [TwoFloat; 3] = std::array::from_fn(|i| TwoFloat::new_mul(t_c, v[i]) + x0[i]);
+        let p = self.p.to_array();
+        let value = self.form_dd(&m, &m)
+            + (0..3).fold(TwoFloat::from(0.0), |s, i| s + m[i] * p[i])
+            + self.r;
+        let m_abs = m.map(|x| x.hi().abs());
+        let size = DVec3::from_array(m_abs);
+        let scale = size.dot(self.q_abs * size) + self.p.abs().dot(size) + self.r.abs();
+        let excess = k.hi() * (4.0 * f64::EPSILON * t_c).powi(2);
+        let uncertainty = 16.0 * f64::EPSILON * f64::EPSILON * scale + excess;
+        if value.hi().abs() <= uncertainty {
+            return 0.0;
+        }
+        -4.0 * k.hi() * value.hi()
     }
+
+    /// `aᵀ Q b` in double-double, for f64 vectors.
+    fn form(&self, a: &[f64; 3], b: &[f64; 3]) -> TwoFloat {
+        self.form_dd(&a.map(TwoFloat::from), &b.map(TwoFloat::from))
+    }
+
+    /// `aᵀ Q b` in double-double.
+    fn form_dd(&self, a: &[TwoFloat; 3], b: &[TwoFloat; 3]) -> TwoFloat {
+        let q = self.q.to_cols_array_2d();
+        let mut sum = TwoFloat::from(0.0);
+        for (i, ai) in a.iter().enumerate() {
+            for (j, bj) in b.iter().enumerate() {
+                sum += *ai * *bj * q[j][i];
+            }
+        }
+        sum
+    }
+}
+
+/// `a · b` in double-double.
+fn dot(a: &[f64; 3], b: &[f64; 3]) -> TwoFloat {
+    (0..3).fold(TwoFloat::from(0.0), |s, i| {
+        s + TwoFloat::new_mul(a[i], b[i])
+    })
 }
 
 /// The power of two that brings the largest entry of `Q` (or of `P` when `Q = 0`) near 1, as

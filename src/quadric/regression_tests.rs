@@ -194,3 +194,38 @@ fn normal_at_a_rounded_cone_apex_falls_back_to_the_ray() {
     let expected = (-dir).normalize();
     assert!((n - expected).length() < 1e-12, "{n:?} vs {expected:?}");
 }
+
+/// Issue 27, item 14: the unit cylinder about the axis `a` turned by 0.7 and 1.1 rad (`Q = I −
+/// a·aᵀ` rounded to f64, dense) and rays 1e-7 rad off the axis that start 2.24 from it. mpmath
+/// (60 digits) on these exact inputs: K = 9.866e-15, M = 4, and
+/// - passing 1.1 from the axis: L = −3.894e-7, Δ = −6.258e-15 against 4KM = 1.579e-13, min f
+///   along the ray 0.1586 > 0: a miss (it was a hit at −M/L ≈ 1.03e7: f64 could not tell the
+///   sign of Δ at the vertex 2e7 away, and the near-linear branch took −M/L);
+/// - passing 0.95 from it: L = −4.048e-7, Δ = +6.042e-15, roots 16577691.70623 and
+///   24456225.94754 (it was 9.88e6, the linear root −M/L, off by 40 %).
+#[test]
+fn rays_a_hair_off_a_dense_cylinders_axis_miss_or_hit_where_mpmath_says() {
+    let q = [
+        0.5353764715877305,
+        -0.39134699927141203,
+        -0.3091860789545092,
+        -0.39134699927141203,
+        0.6703729697845965,
+        -0.2604238417043233,
+        -0.3091860789545092,
+        -0.2604238417043233,
+        0.7942505586276729,
+    ];
+    let cylinder = from_matrices(q, [0.0; 3], -1.0, cube(1e9));
+    let dir = DVec3::new(0.6816330212863645, 0.5741315735694477, 0.453596032304839);
+    let outside = DVec3::new(0.03323989783793313, -1.4102076059902822, 1.7349955669104404);
+    assert_eq!(cylinder.intersect(outside, dir, f64::INFINITY), None);
+    let inside = DVec3::new(
+        -0.09025758917863547,
+        -1.3181092153606886,
+        1.8040071130616118,
+    );
+    let t = cylinder.intersect(inside, dir, f64::INFINITY).unwrap();
+    // Δ cancels 26-fold against 4KM, and K itself is known to ~1e-16 in f64: a few 1e-10
+    assert!((t / 16577691.70623 - 1.0).abs() < 1e-9, "{t}");
+}

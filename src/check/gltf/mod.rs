@@ -65,13 +65,12 @@ impl Sink for Collect<'_> {
     }
 }
 
-/// Checks a `.gltf` or `.glb` file held in `bytes`, external files confined to the folder
-/// tree `tree_root`. Returns the scene the importer builds from it, or `None` when it is not
-/// built (no JSON to read, or more than the memory limit).
+/// Checks a `.gltf` or `.glb` file, external files confined to the folder tree `tree_root`.
+/// Returns the scene the importer builds from it, or `None` when it is not built (the file
+/// cannot be read, no JSON to read, or more than the memory limit).
 pub fn check(
     path: &Path,
     tree_root: &Path,
-    bytes: Vec<u8>,
     options: &CheckOptions,
     f: &mut Findings,
 ) -> Option<crate::Result<Scene>> {
@@ -79,7 +78,15 @@ pub fn check(
         f,
         too_large: false,
     };
-    let mut doc = Document::parse(bytes, layer::is_glb_path(path), &mut sink)?;
+    let is_glb = layer::is_glb_path(path);
+    let bytes = match layer::document::read_file(path, is_glb, &mut sink) {
+        Ok(bytes) => bytes?,
+        Err(e) => {
+            sink.f.error("IO_ERROR", "", format!("cannot read: {e}"));
+            return None;
+        }
+    };
+    let mut doc = Document::parse(bytes, is_glb, &mut sink)?;
     let base = crate::import::paths::folder_of(path);
     let resources = Resources {
         base: &base,

@@ -119,7 +119,14 @@ impl dyn Sink + '_ {
     }
 }
 
+impl Sink for Vec<Diagnostic> {
+    fn push(&mut self, diagnostic: Diagnostic) {
+        Vec::push(self, diagnostic);
+    }
+}
+
 /// Keeps the first error and every warning and info; stops the reader at the first error.
+/// The errors in [`READ_WITH_WARNING`] are kept as warnings.
 #[derive(Debug, Default)]
 pub struct FailFast {
     /// The first error, if any.
@@ -128,8 +135,20 @@ pub struct FailFast {
     pub notes: Vec<Diagnostic>,
 }
 
+/// Errors of the validator's that other readers read through (trimesh, three.js and Blender
+/// read a GLB chunk whose length is not a multiple of 4, as older trimesh exporters wrote
+/// them, by taking the next chunk right after its bytes): the importer reads on with a
+/// warning, `raycast check` keeps the error.
+pub const READ_WITH_WARNING: &[&str] = &["GLB_CHUNK_LENGTH_UNALIGNED"];
+
 impl Sink for FailFast {
-    fn push(&mut self, diagnostic: Diagnostic) {
+    fn push(&mut self, mut diagnostic: Diagnostic) {
+        if diagnostic.severity == Severity::Error && READ_WITH_WARNING.contains(&diagnostic.code) {
+            diagnostic.severity = Severity::Warning;
+            diagnostic
+                .message
+                .push_str(": read anyway (`raycast check` reports it as an error)");
+        }
         if diagnostic.severity != Severity::Error {
             self.notes.push(diagnostic);
         } else if self.error.is_none() {

@@ -7,10 +7,12 @@
 //! cameras, scenes). Textures, images, samplers, materials, animations and skins are never
 //! interpreted here: only `raycast check` looks at them.
 
-use super::diagnostics::Sink;
+use super::diagnostics::{Severity, Sink};
 use serde_json::{Map, Value};
 use std::collections::HashMap;
+use std::io::Read;
 use std::ops::Range;
+use std::path::Path;
 
 const JSON_CHUNK: u32 = 0x4E4F_534A;
 const BIN_CHUNK: u32 = 0x004E_4942;
@@ -152,9 +154,62 @@ pub fn escape(key: &str) -> String {
     key.replace('~', "~0").replace('/', "~1")
 }
 
-/// Splits a GLB into the ranges of its JSON and BIN chunks, reporting every structural
-/// problem. `None` when there is no JSON chunk to read.
-fn glb_chunks(bytes: &[u8], sink: &mut dyn Sink) -> Option<(Range<usize>, Option<Range<usize>>)> {
+/// Reads a `.gltf` or `.glb` file (`is_glb` from its extension), checking its first bytes
+/// before the rest: a GLB header that cannot be right (magic, version, a declared length the
+/// file does not have) or JSON text that goes wrong at its start is reported to `sink` as
+/// [`Document::parse`] would report it, without reading a large file whole. `Ok(None)` when
+/// such a problem was reported.
+pub fn read_file(
+    path: &Path,
+    is_glb: bool,
+    sink: &mut dyn Sink,
+) -> std::io::Result<Option<Vec<u8>>> {
+    let mut file = std::fs::File::open(path)?;
+    let length = file.metadata()?.len();
+    let mut head = Vec::with_capacity(HEAD_BYTES);
+    (&mut file).take(HEAD_BYTES as u64).read_to_end(&mut head)?;
+    if (head.len() as u64) < length {
+        // Problems are gathered here first: when there are none, the whole file's parse
+        // reports what it finds (the warnings included) once.
+        let mut found = Vec::new();
+        if is_glb || head.starts_with(b"glTF") {
+            glb_header(
+                &head,
+                usize::try_from(length).unwrap_or(usize::MAX),
+                &mut found,
+            );
+        } else {
+            json_start(&head, &mut found);
+        }
+        if found.iter().any(|d| d.severity == Severity::Error) {
+            for diagnostic in found {
+                sink.push(diagnostic);
+            }
+            return Ok(None);
+        }
+    }
+    let mut bytes = head;
+    file.read_to_end(&mut bytes)?;
+    Ok(Some(bytes))
+}
+
+/// Bytes [`read_file`] looks at before reading the rest of a file.
+const HEAD_BYTES: usize = 64 * 1024;
+
+/// Reports to `sink` a syntax error within the first bytes `head` of a longer JSON file: the
+/// error the whole file's parse would report first.
+fn json_start(head: &[u8], sink: &mut dyn Sink) {
+    if let Err(e) = serde_json::from_slice::<serde::de::IgnoredAny>(head) {
+        if e.classify() == serde_json::error::Category::Syntax {
+            sink.error("INVALID_JSON", "", format!("not valid glTF JSON: {e}"));
+        }
+    }
+}
+
+/// Checks a GLB's 12-byte header at the start of `bytes`, the file being `file_length` bytes
+/// long, reporting every problem; returns the declared length, `None` when the header cannot
+/// be read (wrong magic, too short, another version).
+fn glb_header(bytes: &[u8], file_length: usize, sink: &mut dyn Sink) -> Option<usize> {
     let u32_at = |at: usize| -> Option<u32> {
         bytes
             .get(at..at + 4)
@@ -193,16 +248,25 @@ fn glb_chunks(bytes: &[u8], sink: &mut dyn Sink) -> Option<(Range<usize>, Option
             format!("the GLB header declares {declared} bytes: no room for a chunk"),
         );
     }
-    if declared > bytes.len() || declared < 20 && declared != bytes.len() {
+    if declared > file_length || declared < 20 && declared != file_length {
         sink.error(
             "GLB_LENGTH_MISMATCH",
             "",
-            format!(
-                "the GLB header declares {declared} bytes but the file has {}",
-                bytes.len()
-            ),
+            format!("the GLB header declares {declared} bytes but the file has {file_length}"),
         );
     }
+    Some(declared)
+}
+
+/// Splits a GLB into the ranges of its JSON and BIN chunks, reporting every structural
+/// problem. `None` when there is no JSON chunk to read.
+fn glb_chunks(bytes: &[u8], sink: &mut dyn Sink) -> Option<(Range<usize>, Option<Range<usize>>)> {
+    let u32_at = |at: usize| -> Option<u32> {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let declared = glb_header(bytes, bytes.len(), sink)?;
     let end = declared.min(bytes.len());
     let mut chunks = Chunks::default();
     let mut at = 12;

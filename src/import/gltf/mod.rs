@@ -94,8 +94,15 @@ pub fn check_required_extensions(doc: &Document, sink: &mut dyn Sink) {
 /// Loads a glTF or GLB file, fail-fast. External files resolve under the path rule of
 /// `options` (the asset's folder unless widened or lifted).
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
-    let bytes = std::fs::read(path).map_err(|e| super::read_error(path, e))?;
-    load_bytes(bytes, path, options)
+    let mut sink = FailFast::default();
+    match document::read_file(path, is_glb_path(path), &mut sink) {
+        Ok(Some(bytes)) => load_bytes(bytes, path, options),
+        Ok(None) => Err(Error::in_file(
+            path,
+            sink.error.map_or_else(String::new, |d| d.to_string()),
+        )),
+        Err(e) => Err(super::read_error(path, e)),
+    }
 }
 
 /// Loads glTF or GLB `bytes` as if they had been read from `path` (which names them in

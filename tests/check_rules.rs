@@ -1,0 +1,82 @@
+//! `raycast check` rules that disagreed with the Khronos glTF-Validator (issue 29), on the
+//! fixtures of `fixtures/check/` (written by `fixtures/check/make.py`). Each expected set of
+//! error codes is the validator's (2.0.0-dev.3.10, tools/npm), recorded in
+//! `fixtures/check/README.md`.
+
+use raycast::check::{check_asset, Asset, AssetReport, CheckOptions, Severity};
+use raycast::import::{self, LoadOptions};
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures/check")
+        .join(name)
+}
+
+fn report(name: &str) -> AssetReport {
+    check_asset(&Asset::file(fixture(name)), &CheckOptions::default())
+}
+
+fn codes(report: &AssetReport, severity: Severity) -> BTreeSet<&str> {
+    report
+        .findings
+        .iter()
+        .filter(|f| f.severity == severity)
+        .map(|f| f.code.as_str())
+        .collect()
+}
+
+#[test]
+fn errors_agree_with_the_validator() {
+    let cases: [(&str, &[&str]); 5] = [
+        // One POSITION accessor on a view without byteStride, read by two primitives.
+        ("one_accessor_two_primitives.gltf", &[]),
+        // Two accessors on that view.
+        (
+            "two_accessors_one_view.gltf",
+            &["MESH_PRIMITIVE_ACCESSOR_WITHOUT_BYTESTRIDE"],
+        ),
+        // Weights that add up to 1 over three WEIGHTS_n sets, never in WEIGHTS_0 alone.
+        ("weights_three_sets.gltf", &[]),
+        // A negative weight: an error of its own, and left out of the sum (1 and -0.25 add up
+        // to 1).
+        (
+            "weights_negative_left_out.gltf",
+            &["ACCESSOR_WEIGHTS_NEGATIVE"],
+        ),
+        // The same with vertex 2's weights adding up to 0.6.
+        (
+            "weights_three_sets_short.gltf",
+            &["ACCESSOR_WEIGHTS_NON_NORMALIZED"],
+        ),
+    ];
+    for (name, validator) in cases {
+        let report = report(name);
+        let errors = codes(&report, Severity::Error);
+        let expected: BTreeSet<&str> = validator.iter().copied().collect();
+        assert_eq!(errors, expected, "{name}: {:?}", report.findings);
+    }
+}
+
+#[test]
+fn a_flat_mesh_has_no_inverted_normals() {
+    // The cube flattened by a rank-2 projective matrix: usd-core reads it (a valid stage);
+    // its signed volume, -3.8e-15, is zero up to rounding.
+    let path = fixture("flat_projective_cube.usda");
+    let scene = import::load(&path, &LoadOptions::default()).expect("loads");
+    let triangles = scene.mesh_triangles(&scene.objects[0]);
+    let (volume, zero_below) = raycast::check::geometry::signed_volume_bound(&triangles);
+    eprintln!("flat cube: volume {volume:e}, zero below {zero_below:e}");
+    assert!(
+        volume < 0.0 && -volume <= zero_below,
+        "{volume:e} {zero_below:e}"
+    );
+    let report = report("flat_projective_cube.usda");
+    assert!(
+        !report.findings.iter().any(|f| f.code == "INVERTED_NORMALS"),
+        "{:?}",
+        report.findings
+    );
+    assert!(codes(&report, Severity::Error).is_empty());
+}

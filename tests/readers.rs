@@ -1,0 +1,104 @@
+//! Valid files that readers used to refuse (issue 29): OBJ continuations and empty or unknown
+//! statements, OBJ files without faces. Expected counts are trimesh 5.2.0's reading of the
+//! same fixture (`trimesh.load(..., split_objects=True, group_material=False,
+//! maintain_order=True, process=False)`), not raycast's own output.
+
+mod common;
+
+use common::{assert_hit, cast_one, load};
+
+#[test]
+fn obj_continuations_and_empty_usemtl_load_as_trimesh_reads_them() {
+    let scene = load("obj/lenient.obj");
+    // trimesh: grid 30 faces, penta 3.
+    let objects: Vec<(&str, u32)> = scene
+        .objects
+        .iter()
+        .map(|o| (o.name.as_str(), o.triangles))
+        .collect();
+    assert_eq!(objects, [("grid", 30), ("penta", 3)]);
+    assert_eq!(scene.triangle_count(), 33);
+    // One warning per kind of skipped statement, naming its first line.
+    assert_eq!(
+        scene.warnings,
+        [
+            "line 2: empty 'mtllib' statement skipped",
+            "line 34: 'vc' is not an OBJ statement: skipped (and 1 more line)",
+            "line 4: empty 'usemtl' statement skipped (and 1 more line)",
+            "line 93: 'exporter_note' is not an OBJ statement: skipped",
+        ]
+    );
+    // A vertex continued over two lines: v 4 \ 1 0 is (4, 1, 0); the quad (3..4, 1..2)
+    // is triangles 16 and 17 of the grid.
+    let s = cast_one(&scene, [3.75, 1.25, 5.0], [0.0, 0.0, -1.0]);
+    assert_hit(&s, "grid", 5.0, [0.0, 0.0, 1.0], &[16]);
+    let s = cast_one(&scene, [8.0, 1.0, 5.0], [0.0, 0.0, -1.0]);
+    assert_hit(&s, "penta", 6.0, [0.0, 0.0, 1.0], &[1]);
+}
+
+#[test]
+fn obj_without_faces_is_an_empty_scene_with_the_gltf_warning() {
+    let gltf = load("bad/empty.gltf");
+    let gltf_warning = "the scene holds no triangles or quadrics";
+    assert!(
+        gltf.warnings.iter().any(|w| w == gltf_warning),
+        "{:?}",
+        gltf.warnings
+    );
+    // trimesh: no geometry (empty, comments only) or a PointCloud (vertices only).
+    for name in ["empty", "comments_only", "vertices_only"] {
+        let scene = load(&format!("obj/{name}.obj"));
+        assert!(scene.objects.is_empty(), "{name}: {:?}", scene.objects);
+        assert_eq!(scene.warnings, [gltf_warning], "{name}");
+    }
+}
+
+/// `fixtures/usd/number_literals.usda` writes numbers as `.5`, `5.`, `-.5e1`, `5.e-1`, `-5.E-1`,
+/// and attributes `inf`, `-inf`, `nan`. usd-core 26.11 reads the quad's world points as
+/// (0, 4.5, -5), (1, 4.5, -5), (1, 5.5, -5), (0, 5.5, -5) (`UsdGeom.XformCache`); openusd 0.6
+/// refused the layer (`Unexpected token Punctuation('.')`) before vendor/openusd's patch.
+#[test]
+fn usda_number_literals_read_as_usd_core_reads_them() {
+    let scene = load("usd/number_literals.usda");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let quad = &scene.objects[0];
+    assert_eq!((quad.name.as_str(), quad.triangles), ("/World/quad", 2));
+    let bounds = scene.object_bounds(quad);
+    assert_eq!(bounds.min.to_array(), [0.0, 4.5, -5.0]);
+    assert_eq!(bounds.max.to_array(), [1.0, 5.5, -5.0]);
+    let s = cast_one(&scene, [0.25, 4.75, 0.0], [0.0, 0.0, -1.0]);
+    assert_hit(&s, "/World/quad", 5.0, [0.0, 0.0, 1.0], &[0, 1]);
+}
+
+/// `fixtures/gltf/cube_unpadded.glb`: the cube with a 746-byte JSON chunk (not padded to a
+/// multiple of 4, as older trimesh exporters wrote GLBs). trimesh 5.2.0 reads it as `cube`,
+/// 12 triangles; the Khronos glTF-Validator 2.0.0-dev.3.10 reports GLB_CHUNK_LENGTH_UNALIGNED
+/// (an error). Render and `info` read it with a warning; `check` keeps the validator's error.
+#[test]
+fn unpadded_glb_chunks_render_with_a_warning_and_fail_check() {
+    let scene = load("gltf/cube_unpadded.glb");
+    assert_eq!(scene.triangle_count(), 12);
+    assert_eq!(
+        scene.warnings,
+        ["chunk 0 length 746 is not a multiple of 4: read anyway (`raycast check` reports it as an error)"]
+    );
+    let s = cast_one(&scene, [0.25, 0.5, 5.0], [0.0, 0.0, -1.0]);
+    assert_hit(
+        &s,
+        "cube",
+        4.0,
+        [0.0, 0.0, 1.0],
+        &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11],
+    );
+    let glb = common::fixture("gltf/cube_unpadded.glb");
+    let info = common::raycast(&["info", common::arg(&glb)]);
+    assert_eq!(info.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&info.stdout).contains("read anyway"));
+    let check = common::raycast(&["check", "--json", common::arg(&glb)]);
+    assert_eq!(check.status.code(), Some(1));
+    let stdout = String::from_utf8_lossy(&check.stdout);
+    assert!(
+        stdout.contains("\"GLB_CHUNK_LENGTH_UNALIGNED\"") && stdout.contains("\"error\""),
+        "{stdout}"
+    );
+}
