@@ -1,7 +1,7 @@
 //! `raycast info`: what the importer found in a scene.
 
 use crate::camera::Projection;
-use crate::scene::{ObjectKind, Scene, StageInfo};
+use crate::scene::{ObjectKind, PoseInfo, Scene, StageInfo};
 use serde::Serialize;
 use std::fmt;
 
@@ -27,6 +27,9 @@ pub struct SceneInfo {
     /// USD stage metadata.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stage: Option<StageInfo>,
+    /// glTF animations, skins and morph targets, and the pose drawn.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pose: Option<PoseInfo>,
     /// Importer warnings.
     pub warnings: Vec<String>,
 }
@@ -106,6 +109,7 @@ impl SceneInfo {
             extensions_used: scene.extensions_used.clone(),
             decoded: scene.decoded.clone(),
             stage: scene.stage.clone(),
+            pose: scene.pose.clone(),
             warnings: scene.warnings.clone(),
         }
     }
@@ -192,6 +196,9 @@ impl SceneInfo {
                 stage.up_axis, stage.meters_per_unit
             )?;
         }
+        if let Some(pose) = &self.pose {
+            write_pose(f, pose)?;
+        }
         if !self.extensions_used.is_empty() {
             writeln!(f, "  extensions used: {}", self.extensions_used.join(", "))?;
         }
@@ -234,6 +241,35 @@ fn tidy(v: f64, scale: f64) -> String {
     } else {
         text
     }
+}
+
+/// The `info` lines of a glTF file's animations, skins and morph targets.
+fn write_pose(f: &mut fmt::Formatter<'_>, pose: &PoseInfo) -> fmt::Result {
+    writeln!(
+        f,
+        "  posing: {} animations, {} skins, {} meshes with morph targets; drawn {}",
+        pose.animations.len(),
+        pose.skins,
+        pose.morphed_meshes,
+        match pose.time {
+            Some(t) => format!("at --time {t}"),
+            None => "without animation (the nodes' own transforms and default weights)".into(),
+        }
+    )?;
+    for a in &pose.animations {
+        let range = a.range.map_or("no keyframe bounds".into(), |[lo, hi]| {
+            format!("{lo} .. {hi} s")
+        });
+        writeln!(
+            f,
+            "  animation {:>3}  {:<24} {range}, {} channels{}",
+            a.index,
+            a.name.as_deref().unwrap_or("-"),
+            a.channels,
+            if a.applied { ", applied" } else { "" }
+        )?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -292,6 +292,7 @@ fn run_checked(
         },
         stage: scene.stage.clone(),
         decoded: scene.decoded.clone(),
+        pose: scene.pose.clone(),
         warnings,
     };
     let json = serde_json::to_string_pretty(&sidecar).map_err(|e| Error::msg(e.to_string()))?;

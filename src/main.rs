@@ -60,6 +60,20 @@ struct InfoArgs {
     usd_timeout: f64,
     #[command(flatten)]
     paths: PathArgs,
+    #[command(flatten)]
+    pose: PoseArgs,
+}
+
+/// When a glTF scene is posed.
+#[derive(Args)]
+struct PoseArgs {
+    /// Evaluate the glTF animations at this time in seconds (default: no animation, the nodes'
+    /// own transforms and default morph weights).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_finite, allow_hyphen_values = true)]
+    time: Option<f64>,
+    /// The glTF animation to apply at --time, by index or name (default: all of them).
+    #[arg(long, value_name = "N|NAME", requires = "time")]
+    animation: Option<String>,
 }
 
 /// Where a scene's external files may come from (the same rule as `raycast check`).
@@ -86,11 +100,13 @@ impl PathArgs {
         args
     }
 
-    fn load_options(self, scene: Option<String>) -> LoadOptions {
+    fn load_options(self, scene: Option<String>, pose: PoseArgs) -> LoadOptions {
         LoadOptions {
             scene,
             root: self.root,
             allow_outside: self.allow_outside,
+            time: pose.time,
+            animation: pose.animation,
         }
     }
 }
@@ -172,6 +188,8 @@ struct RenderArgs {
     quiet: bool,
     #[command(flatten)]
     paths: PathArgs,
+    #[command(flatten)]
+    pose: PoseArgs,
 }
 
 fn parse_vec3(text: &str) -> Result<DVec3, String> {
@@ -219,6 +237,14 @@ fn parse_range(text: &str) -> Result<[f64; 2], String> {
     match values[..] {
         [near, far] if near.is_finite() && far.is_finite() && near < far => Ok([near, far]),
         _ => Err(format!("expected NEAR,FAR with NEAR < FAR, got '{text}'")),
+    }
+}
+
+/// A finite number.
+fn parse_finite(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("'{text}' is not a finite number")),
     }
 }
 
@@ -281,7 +307,7 @@ enum InfoRecord {
 /// reported and the others still printed; the run then fails.
 fn info(args: InfoArgs) -> raycast::Result<()> {
     let child_args = args.paths.child_args();
-    let options = args.paths.load_options(args.scene_choice);
+    let options = args.paths.load_options(args.scene_choice, args.pose);
     let mut failed = None;
     let mut records = Vec::new();
     for path in &args.scenes {
@@ -378,7 +404,7 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         .map(|(eye, target)| (eye, target, args.up.unwrap_or(DVec3::Y)));
     let job = RenderJob {
         scene: args.scene.unwrap_or_default(),
-        load: args.paths.load_options(args.scene_choice),
+        load: args.paths.load_options(args.scene_choice, args.pose),
         aovs: dedup(args.aov),
         camera: CameraChoice {
             name: args.camera,

@@ -43,7 +43,12 @@ RENDER_OUTPUTS = ("t", "distance", "depth", "z", "normal", "position", "id", "pr
 INVALID_PRIM = 2**32 - 1
 
 
-def load(path: str | os.PathLike, scene: str | int | None = None) -> Scene:
+def load(
+    path: str | os.PathLike,
+    scene: str | int | None = None,
+    time: float | None = None,
+    animation: str | int | None = None,
+) -> Scene:
     """Loads a scene file and builds its octree.
 
     Parameters
@@ -53,6 +58,11 @@ def load(path: str | os.PathLike, scene: str | int | None = None) -> Scene:
     scene : str or int, optional
         glTF: the scene by index or name (default: the file's default scene); USD: a prim path
         whose subtree is drawn.
+    time : float, optional
+        glTF: play the animations to this time in seconds (default: none applied, the nodes'
+        own transforms and default morph weights), as ``--time``.
+    animation : str or int, optional
+        glTF, with ``time``: the one animation to apply, by index or name (default: all).
 
     Returns
     -------
@@ -66,10 +76,17 @@ def load(path: str | os.PathLike, scene: str | int | None = None) -> Scene:
         The file cannot be read or is not a valid scene; the message names the file.
     """
     choice = None if scene is None else str(scene)
-    return Scene(_raycast.load_path(os.fspath(path), choice))
+    which = None if animation is None else str(animation)
+    return Scene(_raycast.load_path(os.fspath(path), choice, time, which))
 
 
-def load_bytes(data: bytes, name: str = "scene.glb", scene: str | int | None = None) -> Scene:
+def load_bytes(
+    data: bytes,
+    name: str = "scene.glb",
+    scene: str | int | None = None,
+    time: float | None = None,
+    animation: str | int | None = None,
+) -> Scene:
     """Loads a scene held in memory, as if it had been read from the file ``name``.
 
     Parameters
@@ -81,13 +98,16 @@ def load_bytes(data: bytes, name: str = "scene.glb", scene: str | int | None = N
         folder is where a glTF's external buffers are read from.
     scene : str or int, optional
         As for :func:`load`.
+    time, animation : optional
+        As for :func:`load`.
 
     Returns
     -------
     Scene
     """
     choice = None if scene is None else str(scene)
-    return Scene(_raycast.load_bytes(bytes(data), os.fspath(name), choice))
+    which = None if animation is None else str(animation)
+    return Scene(_raycast.load_bytes(bytes(data), os.fspath(name), choice, time, which))
 
 
 def _floats(value, name: str, shape: tuple) -> np.ndarray:
@@ -136,10 +156,10 @@ class Scene:
         self._scene = compiled
 
     def __reduce__(self):
-        data, name, choice = self._scene.source()
+        data, name, choice, time, animation = self._scene.source()
         if name is None:
-            return (load, (data, choice))
-        return (load_bytes, (data, name, choice))
+            return (load, (data, choice, time, animation))
+        return (load_bytes, (data, name, choice, time, animation))
 
     @property
     def objects(self) -> list[dict]:

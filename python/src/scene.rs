@@ -30,12 +30,29 @@ pub struct PyScene {
     octree: Octree,
     source: Source,
     choice: Option<String>,
+    /// glTF: the animation time and the animation (`--time`, `--animation`).
+    pose: (Option<f64>, Option<String>),
 }
 
 impl PyScene {
-    fn build(py: Python<'_>, source: Source, choice: Option<String>) -> PyResult<PyScene> {
+    fn build(
+        py: Python<'_>,
+        source: Source,
+        choice: Option<String>,
+        pose: (Option<f64>, Option<String>),
+    ) -> PyResult<PyScene> {
+        if pose.0.is_some_and(|t| !t.is_finite()) {
+            return Err(PyValueError::new_err(
+                "time must be a finite number of seconds",
+            ));
+        }
+        if pose.1.is_some() && pose.0.is_none() {
+            return Err(PyValueError::new_err("animation needs a time"));
+        }
         let options = LoadOptions {
             scene: choice.clone(),
+            time: pose.0,
+            animation: pose.1.clone(),
             ..LoadOptions::default()
         };
         let loaded = py.detach(|| {
@@ -53,6 +70,7 @@ impl PyScene {
             octree,
             source,
             choice,
+            pose,
         })
     }
 
@@ -90,25 +108,34 @@ impl PyScene {
     }
 }
 
-/// Loads the scene file `path` (`scene`: a glTF scene by index or name, a USD prim path).
+/// Loads the scene file `path` (`scene`: a glTF scene by index or name, a USD prim path;
+/// `time`, `animation`: the glTF animations played to that time).
 #[pyfunction]
-#[pyo3(signature = (path, scene = None))]
-pub fn load_path(py: Python<'_>, path: PathBuf, scene: Option<String>) -> PyResult<PyScene> {
+#[pyo3(signature = (path, scene = None, time = None, animation = None))]
+pub fn load_path(
+    py: Python<'_>,
+    path: PathBuf,
+    scene: Option<String>,
+    time: Option<f64>,
+    animation: Option<String>,
+) -> PyResult<PyScene> {
     // Absolute, so that a pickled scene loads in a worker with another working folder.
     let path = std::path::absolute(&path).unwrap_or(path);
-    PyScene::build(py, Source::Path(path), scene)
+    PyScene::build(py, Source::Path(path), scene, (time, animation))
 }
 
 /// Loads a scene from bytes, as if read from the file `name` (its extension is the format).
 #[pyfunction]
-#[pyo3(signature = (data, name, scene = None))]
+#[pyo3(signature = (data, name, scene = None, time = None, animation = None))]
 pub fn load_bytes(
     py: Python<'_>,
     data: Vec<u8>,
     name: PathBuf,
     scene: Option<String>,
+    time: Option<f64>,
+    animation: Option<String>,
 ) -> PyResult<PyScene> {
-    PyScene::build(py, Source::Bytes { data, name }, scene)
+    PyScene::build(py, Source::Bytes { data, name }, scene, (time, animation))
 }
 
 /// The rays as the Python layer hands them over: float64 (N, 3) origins and directions, and
@@ -278,13 +305,27 @@ impl PyScene {
         serde_json::to_string(&info).map_err(|e| PyValueError::new_err(e.to_string()))
     }
 
-    /// What loads this scene again: (path, None, scene) or (bytes, name, scene).
+    /// What loads this scene again: (path, None, scene, time, animation) or (bytes, name,
+    /// scene, time, animation).
     fn source<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        let (time, animation) = self.pose.clone();
         match &self.source {
-            Source::Path(path) => (path.clone(), py.None(), self.choice.clone()).into_pyobject(py),
-            Source::Bytes { data, name } => {
-                (PyBytes::new(py, data), name.clone(), self.choice.clone()).into_pyobject(py)
-            }
+            Source::Path(path) => (
+                path.clone(),
+                py.None(),
+                self.choice.clone(),
+                time,
+                animation,
+            )
+                .into_pyobject(py),
+            Source::Bytes { data, name } => (
+                PyBytes::new(py, data),
+                name.clone(),
+                self.choice.clone(),
+                time,
+                animation,
+            )
+                .into_pyobject(py),
         }
     }
 }

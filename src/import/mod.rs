@@ -21,6 +21,11 @@ pub struct LoadOptions {
     pub root: Option<std::path::PathBuf>,
     /// Read external files wherever they are (`--allow-outside`).
     pub allow_outside: bool,
+    /// Evaluate the glTF file's animations at this time, in seconds (`--time`); `None`: the
+    /// nodes' own transforms and default morph weights.
+    pub time: Option<f64>,
+    /// The glTF animation to apply at `time`, by index or name (`--animation`); `None`: all.
+    pub animation: Option<String>,
 }
 
 /// Loads a `.gltf`, `.glb`, `.obj`, `.usda`, `.usdc`, `.usd` or `.usdz` file, choosing the

@@ -2,7 +2,7 @@
 
 use crate::accel::{BvhStats, OctreeParams, OctreeStats};
 use crate::camera::{Camera, Projection};
-use crate::scene::{Object, StageInfo};
+use crate::scene::{Object, PoseInfo, StageInfo};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -54,6 +54,10 @@ pub struct Sidecar {
     /// What the importer decoded (Draco, meshopt, GPU instancing), one line per extension.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub decoded: Vec<String>,
+    /// glTF animations, skins and morph targets, and the pose drawn: the `--time` and the
+    /// animations applied (glTF files that have any).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pose: Option<PoseInfo>,
     /// Importer and render warnings.
     pub warnings: Vec<String>,
 }

@@ -2,7 +2,7 @@
 
 use super::instance::{Instance, StoredMesh};
 use super::mesh::{Mesh, MeshSet, Positions};
-use super::{near_origin, Object, ObjectKind, Part, PartKind, Scene, StageInfo};
+use super::{near_origin, Object, ObjectKind, Part, PartKind, PoseInfo, Scene, StageInfo};
 use crate::accel::OctreeParams;
 use crate::camera::Camera;
 use crate::geometry::Aabb;
@@ -43,6 +43,7 @@ pub struct SceneBuilder {
     extensions_used: Vec<String>,
     decoded: Vec<String>,
     stage: Option<StageInfo>,
+    pose: Option<PoseInfo>,
     /// Meshes seen so far by content hash, so that equal meshes read from different places
     /// (USD prims referencing one asset, say) are stored once.
     by_content: HashMap<u64, Vec<Arc<Mesh>>>,
@@ -141,6 +142,11 @@ impl SceneBuilder {
         self.decoded.push(line);
     }
 
+    /// Records what the file can pose and what was drawn.
+    pub fn set_pose(&mut self, pose: PoseInfo) {
+        self.pose = Some(pose);
+    }
+
     /// Records USD stage metadata.
     pub fn set_stage(&mut self, stage: StageInfo) {
         self.stage = Some(stage);
@@ -163,6 +169,7 @@ impl SceneBuilder {
             extensions_used,
             decoded,
             stage,
+            pose,
             ..
         } = self;
         items.sort_by_key(|&(object, first, _)| (object, first));
@@ -208,6 +215,7 @@ impl SceneBuilder {
             extensions_used,
             decoded,
             stage,
+            pose,
         }
     }
 }

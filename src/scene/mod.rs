@@ -109,6 +109,36 @@ pub struct StageInfo {
     pub meters_per_unit: f64,
 }
 
+/// What a glTF file can pose and what was drawn: its animations, skins and morph targets, and
+/// the time and animations applied (`--time`, `--animation`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PoseInfo {
+    /// The time the animations were evaluated at (seconds); `None`: no animation applied, the
+    /// nodes' own transforms and default morph weights drawn.
+    pub time: Option<f64>,
+    /// Every animation of the file.
+    pub animations: Vec<AnimationInfo>,
+    /// Number of skins.
+    pub skins: usize,
+    /// Number of meshes with morph targets.
+    pub morphed_meshes: usize,
+}
+
+/// One animation of [`PoseInfo`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AnimationInfo {
+    /// Index in the file.
+    pub index: usize,
+    /// `name`, if any.
+    pub name: Option<String>,
+    /// First and last keyframe time (seconds), from the samplers' input bounds.
+    pub range: Option<[f64; 2]>,
+    /// Number of channels.
+    pub channels: usize,
+    /// True when it was applied (with `time`).
+    pub applied: bool,
+}
+
 /// A loaded scene, ready for an acceleration structure.
 #[derive(Debug, Clone)]
 pub struct Scene {
@@ -135,6 +165,8 @@ pub struct Scene {
     pub decoded: Vec<String>,
     /// USD stage metadata (USD files only).
     pub stage: Option<StageInfo>,
+    /// Animations, skins and morph targets and the pose drawn (glTF files that have any).
+    pub pose: Option<PoseInfo>,
 }
 
 /// Per-ray data of the scene's primitives.

@@ -202,3 +202,26 @@ def test_file_cameras_render():
     assert len(scene.cameras) >= 1
     image = scene.render(scene.cameras[0], 8, 8, aovs=["depth", "normal"])
     assert image["normal"].shape == (8, 8, 3)
+
+
+def test_load_poses_gltf_animations_at_a_time():
+    """``time=`` plays the glTF animations as ``--time`` does: the bounds are those of three.js's
+    vertices at that time (fixtures/posed/three, made by tools/make_pose_fixtures.sh), and a
+    pickled scene keeps its time."""
+    import json
+
+    path = ROOT / "fixtures" / "posed" / "SimpleSkin.gltf"
+    reference = json.loads((ROOT / "fixtures/posed/three/SimpleSkin.gltf.t0.65.json").read_text())
+    points = np.concatenate(
+        [np.reshape(p["positions"], (-1, 3)) for n in reference["nodes"] for p in n["primitives"]]
+    )
+    expected = np.array([points.min(axis=0), points.max(axis=0)])
+    posed = raycast.load(path, time=0.65)
+    assert np.allclose(posed.bounds, expected, rtol=0, atol=1e-12)
+    assert not np.allclose(raycast.load(path).bounds, expected, rtol=0, atol=1e-3)
+    assert np.array_equal(pickle.loads(pickle.dumps(posed)).bounds, posed.bounds)
+    assert np.array_equal(raycast.load(path, time=0.65, animation=0).bounds, posed.bounds)
+    with pytest.raises(ValueError, match="animation needs a time"):
+        raycast.load(path, animation=0)
+    with pytest.raises(raycast.SceneError, match="no animation 'run'"):
+        raycast.load(path, time=1.0, animation="run")

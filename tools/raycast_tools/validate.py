@@ -140,6 +140,10 @@ def find_scenes(paths):
         for f in files:
             if "bad" in f.parts[:-1]:
                 out.append((f, "in a bad/ folder (expected to fail)"))
+            elif "posed" in f.parts[:-1]:
+                # trimesh draws neither skins nor morph targets; three.js is the reference
+                # for these (tests/gltf_pose.rs, fixtures/posed/three).
+                out.append((f, "in a posed/ folder (three.js is its reference: gltf_pose.rs)"))
             elif f.suffix.lower() not in SCENE_EXTS:
                 out.append((f, "not a .gltf/.glb/.obj file"))
             else:

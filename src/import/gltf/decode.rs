@@ -140,6 +140,28 @@ fn decode_draco(
     Geometry::new(positions, Some(decoded.indices), TriangleMode::List, at)
 }
 
+/// The stored values of glTF attribute `name` (`comps` per vertex) of a primitive read from
+/// Draco data whose extension compresses that attribute, in the decoded vertex order; `None`
+/// when the primitive's accessors are read instead.
+pub fn draco_attribute(
+    doc: &Document,
+    mesh: usize,
+    prim: usize,
+    name: &str,
+    comps: usize,
+) -> Option<Result<Vec<f64>, Diagnostic>> {
+    let json = doc.item("meshes", mesh)?.get("primitives")?.get(prim)?;
+    let ext = extension(json, DRACO).filter(|_| reads_draco(doc, json))?;
+    let at_ext = format!("/meshes/{mesh}/primitives/{prim}/extensions/{DRACO}");
+    let invalid = |e: String| Diagnostic::error("DRACO_INVALID", &at_ext, e);
+    let read = || -> Result<Option<Vec<f64>>, Diagnostic> {
+        let view = draco::buffer_view(ext).map_err(invalid)?;
+        let bytes = doc.view_bytes(view)?;
+        draco::decode_attribute(bytes, ext, name, comps).map_err(invalid)
+    };
+    read().transpose()
+}
+
 /// The local instance matrices (relative to the node) of a node with GPU instancing, whose
 /// extension object is `ext`.
 pub fn gpu_instances(

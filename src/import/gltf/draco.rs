@@ -56,15 +56,7 @@ pub fn decode(bytes: &[u8], extension: &Value) -> Result<DracoPrimitive, String>
         .and_then(|id| u32::try_from(id).ok())
         .ok_or_else(|| format!("{EXTENSION}: attributes.POSITION is missing or not an id"))?;
     let method = method(bytes)?;
-    let limits = DecodeLimits::default()
-        .with_max_points(MAX_ELEMENTS)
-        .with_max_faces(MAX_ELEMENTS)
-        .with_max_decoded_bytes(MAX_DECODED_BYTES);
-    let mut buffer = DecoderBuffer::new(bytes).with_limits(limits);
-    let mut mesh = Mesh::new();
-    MeshDecoder::new()
-        .decode(&mut buffer, &mut mesh)
-        .map_err(|e| format!("{EXTENSION}: cannot decode the Draco stream: {e}"))?;
+    let mesh = decode_mesh(bytes)?;
     let attribute = mesh.attribute_by_unique_id(position_id).ok_or_else(|| {
         format!("{EXTENSION}: the Draco stream has no attribute {position_id} for POSITION")
     })?;
@@ -91,6 +83,51 @@ pub fn decode(bytes: &[u8], extension: &Value) -> Result<DracoPrimitive, String>
         indices,
         method,
     })
+}
+
+/// Decodes a Draco mesh stream under the limits of one glTF primitive.
+fn decode_mesh(bytes: &[u8]) -> Result<Mesh, String> {
+    let limits = DecodeLimits::default()
+        .with_max_points(MAX_ELEMENTS)
+        .with_max_faces(MAX_ELEMENTS)
+        .with_max_decoded_bytes(MAX_DECODED_BYTES);
+    let mut buffer = DecoderBuffer::new(bytes).with_limits(limits);
+    let mut mesh = Mesh::new();
+    MeshDecoder::new()
+        .decode(&mut buffer, &mut mesh)
+        .map_err(|e| format!("{EXTENSION}: cannot decode the Draco stream: {e}"))?;
+    Ok(mesh)
+}
+
+/// The values of the attribute the extension maps glTF attribute `name` to (JOINTS_0, say),
+/// `comps` per point as stored (integers are not normalized here), in the decoded point
+/// order; `Ok(None)` when the extension does not compress that attribute.
+pub fn decode_attribute(
+    bytes: &[u8],
+    extension: &Value,
+    name: &str,
+    comps: usize,
+) -> Result<Option<Vec<f64>>, String> {
+    let Some(id) = extension.get("attributes").and_then(|a| a.get(name)) else {
+        return Ok(None);
+    };
+    let id = id
+        .as_u64()
+        .and_then(|id| u32::try_from(id).ok())
+        .ok_or_else(|| format!("{EXTENSION}: attributes.{name} is not an id"))?;
+    method(bytes)?;
+    let mesh = decode_mesh(bytes)?;
+    let attribute = mesh
+        .attribute_by_unique_id(id)
+        .ok_or_else(|| format!("{EXTENSION}: the Draco stream has no attribute {id} for {name}"))?;
+    if attribute.num_components() as usize != comps {
+        return Err(format!(
+            "{EXTENSION}: {name} attribute has {} components, not {comps}",
+            attribute.num_components()
+        ));
+    }
+    let values = attribute.read_f32s(mesh.num_points(), comps);
+    Ok(Some(values.into_iter().map(f64::from).collect()))
 }
 
 /// Reads the connectivity method from the stream header ("DRACO", major, minor, geometry

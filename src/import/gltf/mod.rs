@@ -19,6 +19,7 @@
 //! Compressed data (Draco, meshopt) and GPU instancing enter through the seams of [`decode`].
 
 pub mod accessor;
+pub mod animation;
 pub mod buffers;
 pub mod decode;
 pub mod diagnostics;
@@ -29,6 +30,7 @@ pub mod integrity;
 pub mod mesh;
 pub mod meshopt;
 pub mod node;
+pub mod pose;
 pub mod scene;
 
 pub use diagnostics::{Diagnostic, ErrorsOnly, FailFast, Severity, Sink};
@@ -128,7 +130,7 @@ pub fn load_bytes(bytes: Vec<u8>, path: &Path, options: &LoadOptions) -> Result<
         max_bytes: u64::MAX,
     };
     if sink.error.is_none() {
-        let needed = scene::needed_buffers(&doc);
+        let needed = scene::needed_buffers(&doc, options.time.is_some());
         doc.load_buffers(&resources, Some(&needed), &mut sink);
     }
     if sink.error.is_none() {
@@ -137,7 +139,11 @@ pub fn load_bytes(bytes: Vec<u8>, path: &Path, options: &LoadOptions) -> Result<
     if let Some(error) = sink.error {
         return Err(fail(error));
     }
-    let mut scene = scene::build(&doc, options.scene.as_deref(), path).map_err(fail)?;
+    let timing = scene::Timing {
+        time: options.time,
+        animation: options.animation.clone(),
+    };
+    let mut scene = scene::build_at(&doc, options.scene.as_deref(), &timing, path).map_err(fail)?;
     // What the layer noticed while reading (a network URI, extra bytes after a GLB) comes
     // before what the scene walk noticed.
     let notes = sink

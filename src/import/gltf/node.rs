@@ -2,6 +2,7 @@
 //! `matrix`, or translation · rotation · scale), the root nodes of the chosen scene, and
 //! camera projections.
 
+use super::animation::Animated;
 use super::diagnostics::{Diagnostic, Sink};
 use super::document::{array, as_index, index_of, Document};
 use crate::camera::Projection;
@@ -160,6 +161,17 @@ impl Document {
 /// property that is not the right number of finite numbers is reported (`VALUE_NOT_IN_RANGE`)
 /// and read as absent; a zero quaternion is an error, another non-unit one is normalized.
 pub fn local_transform(node: &Value, at: &str, sink: &mut dyn Sink) -> DMat4 {
+    animated_transform(node, None, at, sink)
+}
+
+/// [`local_transform`] with what an animation gives the node in place of its own
+/// translation, rotation and scale (a node with a `matrix` is not animated).
+pub fn animated_transform(
+    node: &Value,
+    animated: Option<&Animated>,
+    at: &str,
+    sink: &mut dyn Sink,
+) -> DMat4 {
     let mut read = |key: &str, len: usize| -> Option<Vec<f64>> {
         let list = node
             .get(key)?
@@ -181,9 +193,20 @@ pub fn local_transform(node: &Value, at: &str, sink: &mut dyn Sink) -> DMat4 {
     if node.get("matrix").is_some() {
         return read("matrix", 16).map_or(DMat4::IDENTITY, |m| DMat4::from_cols_slice(&m));
     }
-    let t = read("translation", 3).map_or(DVec3::ZERO, |v| DVec3::from_slice(&v));
-    let s = read("scale", 3).map_or(DVec3::ONE, |v| DVec3::from_slice(&v));
-    let r = match read("rotation", 4) {
+    let animated = animated.cloned().unwrap_or_default();
+    let t = match animated.translation {
+        Some(t) => t,
+        None => read("translation", 3).map_or(DVec3::ZERO, |v| DVec3::from_slice(&v)),
+    };
+    let s = match animated.scale {
+        Some(s) => s,
+        None => read("scale", 3).map_or(DVec3::ONE, |v| DVec3::from_slice(&v)),
+    };
+    let stored = match animated.rotation {
+        Some(r) => Some(vec![r.x, r.y, r.z, r.w]),
+        None => read("rotation", 4),
+    };
+    let r = match stored {
         None => DQuat::IDENTITY,
         Some(q) => {
             let q = DQuat::from_xyzw(q[0], q[1], q[2], q[3]);

@@ -3,17 +3,20 @@
 //! becomes scene objects is [`add_mesh_object`].
 
 use super::accessor::NO_DATA;
+use super::animation::NodeValues;
 use super::decode::{self, GPU_INSTANCING, MESHOPT};
 use super::diagnostics::{Diagnostic, FailFast};
 use super::document::{array, as_index, extension, index_of, Document};
 use super::mesh::DRACO;
-use super::node::{local_transform, Node};
+use super::node::{animated_transform, Node};
+use super::pose::Pose;
 use super::QUADRIC_EXTENSION;
 use crate::camera::Camera;
 use crate::quadric::{Quadric, QuadricSpec};
 use crate::scene::{Mesh, Scene, SceneBuilder};
-use glam::DMat4;
-use std::collections::HashMap;
+use glam::{DMat4, DVec3};
+use serde_json::Value;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -23,11 +26,51 @@ pub const MAX_NODE_VISITS: usize = 10_000_000;
 /// Builds the scene `choice` (by index or name; `None`: the default) of a document whose
 /// buffers are loaded. Fails at the first problem in what the scene draws.
 pub fn build(doc: &Document, choice: Option<&str>, path: &Path) -> Result<Scene, Diagnostic> {
+    build_at(doc, choice, &Timing::default(), path)
+}
+
+/// When the scene is posed: `--time` and `--animation`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Timing {
+    /// Seconds; `None`: no animation applied.
+    pub time: Option<f64>,
+    /// The animation by index or name; `None`: all of them.
+    pub animation: Option<String>,
+}
+
+/// [`build`] with the animations `timing` chooses evaluated at its time.
+pub fn build_at(
+    doc: &Document,
+    choice: Option<&str>,
+    timing: &Timing,
+    path: &Path,
+) -> Result<Scene, Diagnostic> {
+    let chosen = match timing.time {
+        None => Vec::new(),
+        Some(_) => doc
+            .chosen_animations(timing.animation.as_deref())
+            .map_err(|e| Diagnostic::error("UNRESOLVED_REFERENCE", "/animations", e))?,
+    };
+    let animated = match timing.time {
+        Some(time) => doc.animate(&chosen, time)?,
+        None => NodeValues::new(),
+    };
     let mut walk = Walk {
         doc,
         builder: SceneBuilder::new(),
         meshes: HashMap::new(),
+        globals: None,
+        animated,
     };
+    if let Some(pose) = super::pose::pose_info(doc, timing.time, &chosen) {
+        if timing.time.is_none() && !pose.animations.is_empty() {
+            walk.builder.warn(format!(
+                "the file has {} animations; drawn without --time: the nodes' own transforms and default morph weights",
+                pose.animations.len()
+            ));
+        }
+        walk.builder.set_pose(pose);
+    }
     walk.builder.set_extensions_used(
         doc.extension_names("extensionsUsed")
             .map(String::from)
@@ -95,8 +138,10 @@ fn add_mesh_object(
 
 /// Which buffers the geometry reads: those behind the accessors of mesh primitives (POSITION,
 /// indices, sparse parts), Draco data and GPU instancing attributes, and the sources of
-/// meshopt-compressed views. Others (textures, animations) are never read for a render.
-pub fn needed_buffers(doc: &Document) -> Vec<bool> {
+/// meshopt-compressed views; what posing reads (morph targets drawn with weights, skin joints,
+/// weights and inverse bind matrices); with `animating`, every morph target and animation
+/// sampler. Others (textures, animations without `--time`) are never read for a render.
+pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<bool> {
     let mut needed = vec![false; doc.list("buffers").len()];
     let mut mark_view = |view: Option<usize>| {
         let Some(v) = view.and_then(|v| doc.item("bufferViews", v)) else {
@@ -114,11 +159,50 @@ pub fn needed_buffers(doc: &Document) -> Vec<bool> {
         }
     };
     let mut accessors = Vec::new();
-    for mesh in doc.list("meshes") {
+    // What posing reads: morph targets of meshes some node draws with weights that are not
+    // all zero, the joints and weights of skinned meshes, inverse bind matrices.
+    let (mut morphed, mut skinned) = (HashSet::new(), HashSet::new());
+    for node in doc.list("nodes") {
+        if let Some(mesh) = index_of(node, "mesh") {
+            if animating || doc.morph_weights(node, mesh, None).is_some() {
+                morphed.insert(mesh);
+            }
+            if let Some(skin) = index_of(node, "skin") {
+                skinned.insert(mesh);
+                accessors.extend(
+                    doc.item("skins", skin)
+                        .and_then(|s| index_of(s, "inverseBindMatrices")),
+                );
+            }
+        }
+    }
+    for (m, mesh) in doc.list("meshes").iter().enumerate() {
         for prim in array(mesh, "primitives") {
-            accessors.extend(prim.get("attributes").and_then(|a| index_of(a, "POSITION")));
+            let attributes = prim.get("attributes");
+            accessors.extend(attributes.and_then(|a| index_of(a, "POSITION")));
             accessors.extend(index_of(prim, "indices"));
             mark_view(extension(prim, DRACO).and_then(|d| index_of(d, "bufferView")));
+            if morphed.contains(&m) {
+                let targets = array(prim, "targets").iter();
+                accessors.extend(targets.filter_map(|t| index_of(t, "POSITION")));
+            }
+            if let Some(attributes) = attributes
+                .and_then(Value::as_object)
+                .filter(|_| skinned.contains(&m))
+            {
+                let influences = attributes
+                    .iter()
+                    .filter(|(k, _)| k.starts_with("JOINTS_") || k.starts_with("WEIGHTS_"));
+                accessors.extend(influences.filter_map(|(_, v)| as_index(v)));
+            }
+        }
+    }
+    if animating {
+        for animation in doc.list("animations") {
+            for sampler in array(animation, "samplers") {
+                accessors.extend(index_of(sampler, "input"));
+                accessors.extend(index_of(sampler, "output"));
+            }
         }
     }
     for node in doc.list("nodes") {
@@ -156,6 +240,10 @@ struct Walk<'a> {
     builder: SceneBuilder,
     /// Each mesh read so far, in its own frame (f32 as the file stores it), by index.
     meshes: HashMap<usize, Arc<Mesh>>,
+    /// Every node's global transform, once a skin needs them.
+    globals: Option<Vec<Option<DMat4>>>,
+    /// What the applied animations give their nodes.
+    animated: NodeValues,
 }
 
 impl Walk<'_> {
@@ -167,7 +255,6 @@ impl Walk<'_> {
             .map(|&n| (n, DMat4::IDENTITY, 0))
             .collect();
         let mut visits = 0usize;
-        let mut warned_skin = false;
         while let Some((index, parent, depth)) = stack.pop() {
             let at = format!("/nodes/{index}");
             if depth > node_count {
@@ -185,7 +272,8 @@ impl Walk<'_> {
                 Diagnostic::error("UNRESOLVED_REFERENCE", &at, "node does not exist")
             })?;
             let mut sink = FailFast::default();
-            let world = parent * local_transform(node.json, &at, &mut sink);
+            let animated = self.animated.get(&index);
+            let world = parent * animated_transform(node.json, animated, &at, &mut sink);
             if let Some(error) = sink.error {
                 return Err(error);
             }
@@ -195,11 +283,6 @@ impl Walk<'_> {
                     at,
                     "world transform is not finite",
                 ));
-            }
-            if node.json.get("skin").is_some() && !warned_skin {
-                warned_skin = true;
-                self.builder
-                    .warn("skinned meshes are drawn in their bind pose");
             }
             self.add_node(&node, &world)?;
             for child in node.children().rev() {
@@ -218,16 +301,36 @@ impl Walk<'_> {
             .map_or_else(|| format!("node{}", node.index), String::from);
         let mut object = None;
         if let Some(mesh) = node.mesh {
-            self.read_mesh(mesh).map_err(|e| e.within(&at))?;
-            let local = &self.meshes[&mesh];
+            let pose = self.pose_of(node, mesh).map_err(|e| e.within(&at))?;
+            // A skinned mesh is placed by its joints: its vertices are posed in the world.
+            let placement = &match pose.joints {
+                Some(_) => DMat4::IDENTITY,
+                None => *world,
+            };
+            let posed;
+            let local = if pose.is_rest() {
+                self.read_mesh(mesh).map_err(|e| e.within(&at))?;
+                &self.meshes[&mesh]
+            } else {
+                let triangles = self
+                    .mesh_triangles(mesh, Some(&pose))
+                    .map_err(|e| e.within(&at))?;
+                posed = Arc::new(Mesh::from_soup(&triangles));
+                &posed
+            };
             let instances = match extension(node.json, GPU_INSTANCING) {
                 Some(ext) => decode::gpu_instances(self.doc, node.index, ext)?,
                 None => None,
             };
             match instances {
                 None => {
-                    object =
-                        add_mesh_object(&mut self.builder, name.clone(), at.clone(), local, world)?
+                    object = add_mesh_object(
+                        &mut self.builder,
+                        name.clone(),
+                        at.clone(),
+                        local,
+                        placement,
+                    )?
                 }
                 Some(instances) => {
                     for (k, instance) in instances.iter().enumerate() {
@@ -237,7 +340,7 @@ impl Walk<'_> {
                             format!("{name}[{k}]"),
                             pointer,
                             local,
-                            &(*world * *instance),
+                            &(*placement * *instance),
                         )?;
                     }
                 }
@@ -280,10 +383,47 @@ impl Walk<'_> {
                 "mesh does not exist",
             ));
         }
+        let triangles = self.mesh_triangles(mesh, None)?;
+        self.meshes
+            .insert(mesh, Arc::new(Mesh::from_soup(&triangles)));
+        Ok(())
+    }
+
+    /// How node `node` poses its mesh `mesh`: its default morph weights and its skin's joint
+    /// matrices (the global transforms of every node computed once, at the first skin).
+    fn pose_of(&mut self, node: &Node, mesh: usize) -> Result<Pose, Diagnostic> {
+        let animated = self.animated.get(&node.index);
+        let weights = animated.and_then(|a| a.weights.as_deref());
+        let weights = self.doc.morph_weights(node.json, mesh, weights);
+        let joints = match index_of(node.json, "skin") {
+            None => None,
+            Some(skin) => {
+                if self.globals.is_none() {
+                    self.globals = Some(self.doc.global_transforms(&self.animated)?);
+                }
+                let globals = self.globals.as_deref().unwrap_or_default();
+                Some(self.doc.joint_matrices(skin, globals)?)
+            }
+        };
+        Ok(Pose { weights, joints })
+    }
+
+    /// The triangles of mesh `mesh` (all its triangle primitives, in order), posed by `pose`
+    /// when given, in the mesh's frame (the world's for a skin).
+    fn mesh_triangles(
+        &mut self,
+        mesh: usize,
+        pose: Option<&Pose>,
+    ) -> Result<Vec<[DVec3; 3]>, Diagnostic> {
         let mut triangles = Vec::new();
         for prim in 0..self.doc.primitive_count(mesh) {
             match self.doc.primitive_geometry(mesh, prim) {
-                Ok(Some(geometry)) => triangles.extend(geometry.triangles()),
+                Ok(Some(mut geometry)) => {
+                    if let Some(pose) = pose {
+                        self.doc.pose_primitive(mesh, prim, &mut geometry, pose)?;
+                    }
+                    triangles.extend(geometry.triangles())
+                }
                 Ok(None) => {
                     let why = self.doc.primitive_skip_reason(mesh, prim);
                     self.builder
@@ -297,9 +437,7 @@ impl Walk<'_> {
                 Err(e) => return Err(e),
             }
         }
-        self.meshes
-            .insert(mesh, Arc::new(Mesh::from_soup(&triangles)));
-        Ok(())
+        Ok(triangles)
     }
 
     fn add_camera(&mut self, camera: usize, node_name: &str, world: &DMat4) {
