@@ -90,7 +90,11 @@ impl Camera {
             *bounds
         };
         let corners = bounds.corners();
-        let points = if points.is_empty() { &corners[..] } else { points };
+        let points = if points.is_empty() {
+            &corners[..]
+        } else {
+            points
+        };
         let centre = bounds.center();
         // The front of a Z-up scene is its -Y side (+Z of a Y-up one turned up to +Z).
         let direction = if up == DVec3::Z {
@@ -251,10 +255,12 @@ fn fit_eye(points: &[DVec3], origin: DVec3, axes: [DVec3; 3], tan: [f64; 2]) -> 
 /// `local` holds each point's right, up and depth from the eye's plane.
 fn centring_shift(local: &[[f64; 3]], axis: usize, guess: f64) -> f64 {
     let imbalance = |e: f64| {
-        let (lo, hi) = local.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-            let slope = (p[axis] - e) / p[2];
-            (lo.min(slope), hi.max(slope))
-        });
+        let (lo, hi) = local
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                let slope = (p[axis] - e) / p[2];
+                (lo.min(slope), hi.max(slope))
+            });
         lo + hi
     };
     let span = local

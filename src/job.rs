@@ -149,7 +149,11 @@ pub fn run(job: &RenderJob, progress: impl FnMut(Progress) + Send) -> Result<Sid
     let created = request::prepare_folder(&out)?;
     output::track_created_folder(&out, created.as_deref());
     let names = request::file_names(&job.aovs, &formats, job.rays.is_some(), job.hits.is_some());
-    let result = ownership::claim(&out, &job.scene, &names)
+    let inputs: Vec<&Path> = std::iter::once(job.scene.as_path())
+        .chain(job.rays.as_deref())
+        .collect();
+    let result = ownership::refuse_inputs(&out, &names, &inputs)
+        .and_then(|()| ownership::claim(&out, &job.scene, &names))
         .and_then(|_| run_checked(job, &formats, progress));
     if result.is_err() {
         request::remove_created_folder(&out, created.as_deref());

@@ -313,7 +313,8 @@ fn an_input_is_never_overwritten() {
     let before = std::fs::read(&rays).unwrap();
     let scene = fixture("gltf/cube.gltf");
     let result = raycast(&[arg(&scene), "--rays", arg(&rays), "--out", arg(&dir)]);
-    assert_eq!(result.status.code(), Some(1));
+    // refused before any work, as other --out problems are (usage, exit 2)
+    assert_eq!(result.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&result.stderr).contains("is an input of this run"));
     assert_eq!(
         std::fs::read(&rays).unwrap(),

@@ -216,9 +216,7 @@ fn write_files(options: &RunOptions, outcome: &Outcome) -> Result<()> {
     }
     if let Some(dir) = &options.validator_json {
         if dir.is_file() {
-            return Err(
-                Error::in_file(dir, "--validator-json needs a folder, this is a file").as_usage(),
-            );
+            return Err(validator_json_is_a_file(dir));
         }
         let mut names = std::collections::HashSet::new();
         for r in reports {
@@ -289,6 +287,9 @@ fn refuse_overwriting_inputs(options: &RunOptions, inputs: &[PathBuf]) -> Result
         probe_writable(out, folder.unwrap_or(Path::new(".")))?;
     }
     if let Some(dir) = &options.validator_json {
+        if dir.is_file() {
+            return Err(validator_json_is_a_file(dir));
+        }
         probe_writable(dir, dir)?;
     }
     for out in [&options.junit, &options.summary].into_iter().flatten() {
@@ -325,4 +326,9 @@ fn probe_writable(report: &Path, dir: &Path) -> Result<()> {
     std::fs::write(&probe, b"").map_err(|e| refuse(format!("{}: {e}", existing.display())))?;
     let _ = std::fs::remove_file(&probe);
     Ok(())
+}
+
+/// The error for a `--validator-json` path that is a file.
+fn validator_json_is_a_file(dir: &Path) -> Error {
+    Error::in_file(dir, "--validator-json needs a folder, this is a file").as_usage()
 }

@@ -103,3 +103,23 @@ pub fn claim(dir: &Path, scene: &Path, names: &[String]) -> Result<Claim> {
     }
     Ok(Claim { listed })
 }
+
+/// Refuses a render that would write one of `names` over one of its `inputs` (the scene, the
+/// ray file): an output never replaces an input.
+pub fn refuse_inputs(dir: &Path, names: &[String], inputs: &[&Path]) -> Result<()> {
+    let inputs: Vec<PathBuf> = inputs
+        .iter()
+        .filter_map(|p| p.canonicalize().ok())
+        .collect();
+    for name in names {
+        let target = dir.join(name);
+        if target.canonicalize().is_ok_and(|t| inputs.contains(&t)) {
+            return Err(Error::in_file(
+                &target,
+                "is an input of this run; choose another --out folder",
+            )
+            .as_usage());
+        }
+    }
+    Ok(())
+}

@@ -322,7 +322,9 @@ impl Scene {
         let mut points = Vec::new();
         for object in &self.objects {
             let bounds = self.object_bounds(object);
-            if object.quadric.is_some() || points.len() + 3 * object.triangles as usize > FRAMING_POINTS {
+            if object.quadric.is_some()
+                || points.len() + 3 * object.triangles as usize > FRAMING_POINTS
+            {
                 if !bounds.is_empty() {
                     points.extend(bounds.corners());
                 }
