@@ -268,7 +268,7 @@ fn centring_shift(local: &[[f64; 3]], axis: usize, guess: f64) -> f64 {
         .map(|p| (p[axis] - guess).abs())
         .fold(0.0, f64::max);
     let (mut lo, mut hi) = (guess - span, guess + span);
-    if !(span > 0.0) || imbalance(lo) < 0.0 || imbalance(hi) > 0.0 {
+    if span.is_nan() || span <= 0.0 || imbalance(lo) < 0.0 || imbalance(hi) > 0.0 {
         return guess;
     }
     for _ in 0..60 {
