@@ -181,7 +181,7 @@ fn run_checked(
     warnings.append(&mut ray_warnings);
     let view = match rays {
         Some(_) => None,
-        None => Some(camera_view(&scene, job)?),
+        None => Some(camera_view(&scene, job, &mut warnings)?),
     };
     let layout = match (&view, &rays) {
         (Some(v), _) => Layout::Image {
@@ -403,7 +403,8 @@ fn check_request(job: &RenderJob) -> Result<Vec<Format>> {
 }
 
 /// The camera and image size for camera mode.
-fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
+/// A file camera whose aspect ratio the image's does not match is said in `warnings`.
+fn camera_view(scene: &Scene, job: &RenderJob, warnings: &mut Vec<String>) -> Result<CameraView> {
     let chosen = choose_camera(scene, &job.camera)?;
     let auto = chosen.is_none();
     let mut camera = chosen.unwrap_or_else(|| framing(scene, 1.0));
@@ -436,6 +437,17 @@ fn camera_view(scene: &Scene, job: &RenderJob) -> Result<CameraView> {
         (None, None, Some(a)) => (DEFAULT_SIZE, from_aspect(DEFAULT_SIZE, 1.0 / a)),
         (None, None, None) => (DEFAULT_SIZE, DEFAULT_SIZE),
     };
+    if let (Some(a), Some(w), Some(h)) = (aspect, job.width, job.height) {
+        let image = w as f64 / h as f64;
+        if (image / a - 1.0).abs() > 1e-3 {
+            warnings.push(format!(
+                "camera '{}' has aspect ratio {a:.4}; the {w}x{h} image ({image:.4}) keeps its \
+                 vertical field of view and widens or narrows the horizontal one (give only \
+                 --width or --height to keep the camera's aspect)",
+                camera.name
+            ));
+        }
+    }
     if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
         return Err(Error::usage(format!(
             "image size {width}x{height} is out of range (1 to {MAX_SIDE} per side)"
