@@ -310,9 +310,9 @@ fn fuzzing_regressions() {
 }
 
 /// Inputs on which the USD reader never finished (found by fuzzing; an ancestor walk on a
-/// path that was its own parent) are refused well within `--timeout`, as `USD_INVALID_PATH`;
-/// the child process's timeout stays the last line of defence (`USD_READER_CRASHED`), shown
-/// here with a limit no child can meet.
+/// path that was its own parent) are refused well within `--timeout`, as `USD_INVALID_PATH`
+/// (they were `USD_READER_CRASHED` after it); the child process and its timeout stay the last
+/// line of defence (`fuzzing_regressions`: an abort is `USD_READER_CRASHED`).
 #[test]
 fn usd_reader_hangs_are_stopped() {
     let dir = fixture("fuzz-hang");
@@ -336,23 +336,6 @@ fn usd_reader_hangs_are_stopped() {
             "{line}"
         );
     }
-    let cube = fixture("usd/gltf_cube.usda");
-    let out = raycast(&[
-        "check",
-        "--json",
-        "--quiet",
-        "--timeout",
-        "0.001",
-        cube.to_str().unwrap_or_default(),
-    ]);
-    assert_eq!(out.status.code(), Some(1));
-    let r: Value = serde_json::from_slice(&out.stdout).expect("JSON");
-    assert!(
-        r["findings"]
-            .as_array()
-            .is_some_and(|f| f.iter().any(|f| f["code"] == "USD_READER_CRASHED")),
-        "{r}"
-    );
 }
 
 struct Scratch(PathBuf);

@@ -396,10 +396,8 @@ fn hostile_usd_is_refused_by_what_is_wrong() {
             serde_json::from_slice(&result.stdout).expect("one JSON report");
         let findings = report["findings"].as_array().expect("findings");
         assert!(
-            findings
-                .iter()
-                .any(|f| f["code"] == "USD_INVALID_PATH"
-                    && f["message"].as_str().is_some_and(|m| m.contains(said))),
+            findings.iter().any(|f| f["code"] == "USD_INVALID_PATH"
+                && f["message"].as_str().is_some_and(|m| m.contains(said))),
             "{findings:?}"
         );
     }
@@ -436,11 +434,21 @@ fn usd_layers_stay_inside_the_root() {
         let root = fixture("usd");
         for extra in [vec!["--allow-outside"], vec!["--root", arg(&root)]] {
             let result = info(&extra);
-            assert_eq!(result.status.code(), Some(0), "{file} {extra:?}: {}", stderr(&result));
+            assert_eq!(
+                result.status.code(),
+                Some(0),
+                "{file} {extra:?}: {}",
+                stderr(&result)
+            );
             let text = String::from_utf8_lossy(&result.stdout);
             assert!(text.contains("12 triangles"), "{file} {extra:?}: {text}");
             let result = render(&extra);
-            assert_eq!(result.status.code(), Some(0), "{file} {extra:?}: {}", stderr(&result));
+            assert_eq!(
+                result.status.code(),
+                Some(0),
+                "{file} {extra:?}: {}",
+                stderr(&result)
+            );
             std::fs::remove_dir_all(&out).expect("the render wrote its folder");
         }
     }

@@ -50,7 +50,13 @@ fn real_assets_match_usd_core_counts() {
         }
         if entry.get("error").is_some() {
             // usd-core cannot open it; raycast must not fail either way with a panic.
-            let _ = import::load(&path, &LoadOptions { root: Some(root.clone()), ..LoadOptions::default() });
+            let _ = import::load(
+                &path,
+                &LoadOptions {
+                    root: Some(root.clone()),
+                    ..LoadOptions::default()
+                },
+            );
             continue;
         }
         let scene = load_in(&path, &root);
@@ -515,7 +521,9 @@ fn stage_metadata_is_reported() {
     );
     assert!(load("gltf/cube.gltf").stage.is_none());
     let z_up = load_in(
-        &fixture("usd/assets/usd-wg/test_assets/foundation/stage_configuration/upAxis/upAxis_Z.usda"),
+        &fixture(
+            "usd/assets/usd-wg/test_assets/foundation/stage_configuration/upAxis/upAxis_Z.usda",
+        ),
         &fixture("usd/assets/usd-wg"),
     );
     assert_eq!(z_up.stage.unwrap().up_axis, "Z");

@@ -108,9 +108,7 @@ fn invert(m: DMat4) -> Option<DMat4> {
 fn is_property_name(name: &str) -> bool {
     name.split(':').all(|part| {
         let mut chars = part.chars();
-        chars
-            .next()
-            .is_some_and(|c| c.is_alphabetic() || c == '_')
+        chars.next().is_some_and(|c| c.is_alphabetic() || c == '_')
             && chars.all(|c| c.is_alphanumeric() || c == '_')
     })
 }
