@@ -79,7 +79,8 @@ struct PoseArgs {
 /// Where a scene's external files may come from (the same rule as `raycast check`).
 #[derive(Args)]
 struct PathArgs {
-    /// Folder tree external files (glTF buffers) must stay in (default: the scene's folder).
+    /// Folder tree external files (glTF buffers, USD layers) must stay in (default: the
+    /// scene's folder).
     #[arg(long, value_name = "DIR")]
     root: Option<PathBuf>,
     /// Read external files wherever they are.

@@ -309,29 +309,32 @@ fn fuzzing_regressions() {
         .is_some_and(|f| f.iter().any(|f| f["code"] == "USD_READER_CRASHED")));
 }
 
-/// Inputs on which the USD reader never finishes (found by fuzzing): the child process that
-/// reads them is stopped after `--timeout` seconds.
+/// Inputs on which the USD reader never finished (found by fuzzing; an ancestor walk on a
+/// path that was its own parent) are refused well within `--timeout`, as `USD_INVALID_PATH`
+/// (they were `USD_READER_CRASHED` after it); the child process and its timeout stay the last
+/// line of defence (`fuzzing_regressions`: an abort is `USD_READER_CRASHED`).
 #[test]
 fn usd_reader_hangs_are_stopped() {
     let dir = fixture("fuzz-hang");
-    let started = Instant::now();
     let out = raycast(&[
         "check",
         "--json",
         "--quiet",
         "--timeout",
-        "2",
+        "20",
         dir.to_str().unwrap_or_default(),
     ]);
-    assert!(started.elapsed() < Duration::from_secs(60));
     assert_eq!(out.status.code(), Some(1));
     let text = String::from_utf8_lossy(&out.stdout);
     assert_eq!(text.lines().count(), 2, "{text}");
     for line in text.lines() {
         let r: Value = serde_json::from_str(line).expect("JSON");
-        assert!(r["findings"]
-            .as_array()
-            .is_some_and(|f| f.iter().any(|f| f["code"] == "USD_READER_CRASHED")));
+        assert!(
+            r["findings"]
+                .as_array()
+                .is_some_and(|f| f.iter().any(|f| f["code"] == "USD_INVALID_PATH")),
+            "{line}"
+        );
     }
 }
 

@@ -357,3 +357,99 @@ fn info_summarises_many_objects_unless_asked_for_all() {
         serde_json::from_slice(&raycast_ok(&["info", "--json", arg(&obj)]).stdout).unwrap();
     assert_eq!(json["objects"].as_array().unwrap().len(), 100);
 }
+
+/// The fuzzer's two "hang" layers (issue 27, item 13) are refused at once, by what is wrong
+/// with them, in render, `info` and `check`: one line naming the file, exit 1, and for
+/// `check` a `USD_INVALID_PATH` finding. They ran until the child process's timeout (openusd
+/// walked the ancestors of a path whose last component ended in an unmatched `}`, and that
+/// path was its own parent). The generous `--usd-timeout 20` lets a regression fail on the
+/// timeout's different message instead of stalling for the default two minutes.
+#[test]
+fn hostile_usd_is_refused_by_what_is_wrong() {
+    let out = temp_dir("hostile-usd");
+    let cases = [
+        (
+            "fuzz-hang/usd/openusd_instancing_recursion_1.usda",
+            "ill-formed path <",
+        ),
+        (
+            "fuzz-hang/usd/openusd_instancing_recursion_2.usda",
+            "is not an attribute name",
+        ),
+    ];
+    for (file, said) in cases {
+        let scene = fixture(file);
+        for args in [
+            vec![arg(&scene), "--usd-timeout", "20", "--out", arg(&out)],
+            vec!["info", arg(&scene), "--usd-timeout", "20"],
+        ] {
+            let result = raycast(&args);
+            let text = stderr(&result);
+            assert_eq!(result.status.code(), Some(1), "{args:?}: {text}");
+            assert_eq!(text.lines().count(), 1, "{args:?}: {text}");
+            assert!(text.contains(file), "{args:?}: {text}");
+            assert!(text.contains(said), "{args:?}: {text}");
+        }
+        let result = raycast(&["check", "--json", "--quiet", "--timeout", "20", arg(&scene)]);
+        assert_eq!(result.status.code(), Some(1), "{}", stderr(&result));
+        let report: serde_json::Value =
+            serde_json::from_slice(&result.stdout).expect("one JSON report");
+        let findings = report["findings"].as_array().expect("findings");
+        assert!(
+            findings.iter().any(|f| f["code"] == "USD_INVALID_PATH"
+                && f["message"].as_str().is_some_and(|m| m.contains(said))),
+            "{findings:?}"
+        );
+    }
+    assert!(!out.exists());
+}
+
+/// USD sublayers, references and payloads follow the path rule of glTF buffers in render and
+/// `info`: one leading out of the scene's folder is refused in one line naming its asset path
+/// (exit 1); `--allow-outside` lifts the rule and `--root` widens the tree.
+#[test]
+fn usd_layers_stay_inside_the_root() {
+    let out = temp_dir("usd-confine");
+    for file in ["outside_reference.usda", "outside_sublayer.usda"] {
+        let scene = fixture(&format!("usd/confine/{file}"));
+        let render = |extra: &[&str]| {
+            let mut args = vec![arg(&scene), "--out", arg(&out), "--quiet"];
+            args.extend_from_slice(extra);
+            raycast(&args)
+        };
+        let info = |extra: &[&str]| {
+            let mut args = vec!["info", arg(&scene)];
+            args.extend_from_slice(extra);
+            raycast(&args)
+        };
+        for result in [render(&[]), info(&[])] {
+            let text = stderr(&result);
+            assert_eq!(result.status.code(), Some(1), "{file}: {text}");
+            assert_eq!(text.lines().count(), 1, "{file}: {text}");
+            assert!(text.contains(file), "{file}: {text}");
+            assert!(text.contains("gltf_cube.usda"), "{file}: {text}");
+            assert!(text.contains("leads out of the folder"), "{file}: {text}");
+        }
+        assert!(!out.exists());
+        let root = fixture("usd");
+        for extra in [vec!["--allow-outside"], vec!["--root", arg(&root)]] {
+            let result = info(&extra);
+            assert_eq!(
+                result.status.code(),
+                Some(0),
+                "{file} {extra:?}: {}",
+                stderr(&result)
+            );
+            let text = String::from_utf8_lossy(&result.stdout);
+            assert!(text.contains("12 triangles"), "{file} {extra:?}: {text}");
+            let result = render(&extra);
+            assert_eq!(
+                result.status.code(),
+                Some(0),
+                "{file} {extra:?}: {}",
+                stderr(&result)
+            );
+            std::fs::remove_dir_all(&out).expect("the render wrote its folder");
+        }
+    }
+}

@@ -16,9 +16,14 @@ fn shared_assets() -> Option<PathBuf> {
     (root.is_dir() && std::env::var_os("RAYCAST_NO_SHARED_ASSETS").is_none()).then_some(root)
 }
 
-fn load_path(path: &Path) -> Scene {
-    import::load(path, &LoadOptions::default())
-        .unwrap_or_else(|e| panic!("{} should load: {e}", path.display()))
+/// Loads an asset of a library whose files reference each other across the library's folders
+/// (usd-wg's test assets read `../../../_common`): the library's folder is the root.
+fn load_in(path: &Path, library: &Path) -> Scene {
+    let options = LoadOptions {
+        root: Some(library.to_path_buf()),
+        ..LoadOptions::default()
+    };
+    import::load(path, &options).unwrap_or_else(|e| panic!("{} should load: {e}", path.display()))
 }
 
 /// Every usd-wg asset loads, and draws as many triangles and quadrics as usd-core counts
@@ -45,10 +50,16 @@ fn real_assets_match_usd_core_counts() {
         }
         if entry.get("error").is_some() {
             // usd-core cannot open it; raycast must not fail either way with a panic.
-            let _ = import::load(&path, &LoadOptions::default());
+            let _ = import::load(
+                &path,
+                &LoadOptions {
+                    root: Some(root.clone()),
+                    ..LoadOptions::default()
+                },
+            );
             continue;
         }
-        let scene = load_path(&path);
+        let scene = load_in(&path, &root);
         let quadrics = scene.quadrics().len() as u64;
         let expected = (
             entry["raycast_triangles"].as_u64().unwrap(),
@@ -475,7 +486,7 @@ fn chess_set_draws_every_pawn() {
         eprintln!("skipped: ../shared/assets/usd is not present");
         return;
     };
-    let scene = load_path(&root.join("full_assets/OpenChessSet/chess_set.usda"));
+    let scene = load_in(&root.join("full_assets/OpenChessSet/chess_set.usda"), &root);
     let pawns: Vec<_> = scene
         .objects
         .iter()
@@ -509,8 +520,12 @@ fn stage_metadata_is_reported() {
         "{stage:?}"
     );
     assert!(load("gltf/cube.gltf").stage.is_none());
-    let z_up =
-        load("usd/assets/usd-wg/test_assets/foundation/stage_configuration/upAxis/upAxis_Z.usda");
+    let z_up = load_in(
+        &fixture(
+            "usd/assets/usd-wg/test_assets/foundation/stage_configuration/upAxis/upAxis_Z.usda",
+        ),
+        &fixture("usd/assets/usd-wg"),
+    );
     assert_eq!(z_up.stage.unwrap().up_axis, "Z");
     // composition.usda authors neither: USD's fallbacks apply.
     let fallback = load("usd/composition.usda").stage.unwrap();

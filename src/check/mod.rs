@@ -573,9 +573,13 @@ fn check_into(
             } else {
                 Severity::Error
             };
+            let code = match format {
+                "gltf" | "glb" | "obj" => "LOAD_FAILED",
+                _ => usd::load_failure_code(&e.message),
+            };
             findings.push(
                 severity,
-                "LOAD_FAILED",
+                code,
                 "",
                 format!("the importer refuses the asset: {}", e.message),
             );

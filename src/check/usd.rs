@@ -87,7 +87,10 @@ pub fn usdz_problem(bytes: &[u8]) -> Option<String> {
 /// Loads the stage with references confined to the asset's folder (unless
 /// `--allow-outside`); refused paths become `PATH_OUTSIDE_ASSET` errors.
 pub fn load(path: &Path, root: &Path, options: &CheckOptions, f: &mut Findings) -> Result<Scene> {
-    let load = LoadOptions::default();
+    let load = LoadOptions {
+        allow_outside: true,
+        ..LoadOptions::default()
+    };
     if options.allow_outside {
         return import::usd::load(path, &load);
     }
@@ -106,6 +109,18 @@ pub fn load(path: &Path, root: &Path, options: &CheckOptions, f: &mut Findings) 
         );
     }
     result
+}
+
+/// The code of a USD file the importer refuses: `USD_INVALID_PATH` for a path that cannot be
+/// an `SdfPath` (an ill-formed `<...>` literal, an `xformOpOrder` entry that is no attribute
+/// name; such paths once sent the reader's ancestor walks round without end), else
+/// `LOAD_FAILED`.
+pub fn load_failure_code(message: &str) -> &'static str {
+    if message.contains("ill-formed path <") || message.contains("is not an attribute name") {
+        "USD_INVALID_PATH"
+    } else {
+        "LOAD_FAILED"
+    }
 }
 
 /// Maps one composition problem reported by the USD reader to a finding: a layer that cannot

@@ -15,9 +15,11 @@ AOVS = ("depth", "normal", "id", "prim")
 def run_raycast(raycast, scene, args, out) -> dict:
     """`raycast SCENE ARGS... --out OUT --quiet`: each AOV file it wrote (depth, normal, id,
     prim) as an array, `sidecar` (raycast.json) and `wall` (whole-process seconds).
-    Raises RuntimeError with raycast's last line of output when it fails."""
+    Raises RuntimeError with raycast's last line of output when it fails. The scenes compared
+    are trusted fixtures and libraries (usd-wg's test assets reference `../../../_common`), so
+    external files are read wherever they are (`--allow-outside`)."""
     out = Path(out)
-    cmd = [str(raycast), str(scene), *args, "--out", str(out), "--quiet"]
+    cmd = [str(raycast), str(scene), *args, "--allow-outside", "--out", str(out), "--quiet"]
     t0 = time.perf_counter()
     p = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - t0
@@ -49,8 +51,11 @@ def run_rays(
 
 
 def raycast_info(raycast, scene) -> dict:
-    """`raycast info SCENE --json`, parsed."""
+    """`raycast info SCENE --json --allow-outside` (see run_raycast), parsed."""
     res = subprocess.run(
-        [str(raycast), "info", str(scene), "--json"], capture_output=True, text=True, check=True
+        [str(raycast), "info", str(scene), "--json", "--allow-outside"],
+        capture_output=True,
+        text=True,
+        check=True,
     )
     return json.loads(res.stdout)

@@ -94,9 +94,30 @@ const MAX_INSTANCER_DEPTH: usize = 16;
 /// Most prims one file may expand to, counting every instance.
 const MAX_PRIM_VISITS: usize = 20_000_000;
 
-/// Loads a USD file.
+/// Loads a USD file (render and `info`). Its sublayers, references and payloads follow the
+/// one path rule for external files (README): they must resolve inside `options.root`, the
+/// file's own folder by default, unless `options.allow_outside`; the first one that does not
+/// fails the load with one line naming its asset path.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
-    load_with(path, options, None)
+    if options.allow_outside {
+        return load_with(path, options, None);
+    }
+    let root = options
+        .root
+        .clone()
+        .unwrap_or_else(|| super::paths::folder_of(path));
+    let (result, refused) = load_confined(path, options, &root);
+    match refused.first() {
+        Some(asset) => Err(Error::in_file(
+            path,
+            format!(
+                "'{asset}' leads out of the folder {}: not read (--root DIR widens it, \
+                 --allow-outside lifts it)",
+                root.display()
+            ),
+        )),
+        None => result,
+    }
 }
 
 /// Loads a USD file whose layers, references and payloads may only come from inside the

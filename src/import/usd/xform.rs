@@ -101,6 +101,18 @@ fn invert(m: DMat4) -> Option<DMat4> {
     (det.is_finite() && det.abs() > 1e-300 && det.abs() > 1e-14 * scale).then(|| m.inverse())
 }
 
+/// Whether `name` can name an attribute: identifiers (a letter or `_`, then letters, digits
+/// or `_`) joined by single colons, as Sdf's property names are. An `xformOpOrder` entry
+/// that is not one names no attribute of any layer (usd-core refuses the op stack); a
+/// malformed one (`xformOp:}ota`) is refused before it becomes a property path.
+fn is_property_name(name: &str) -> bool {
+    name.split(':').all(|part| {
+        let mut chars = part.chars();
+        chars.next().is_some_and(|c| c.is_alphabetic() || c == '_')
+            && chars.all(|c| c.is_alphanumeric() || c == '_')
+    })
+}
+
 /// The matrix of one op, `None` (with a warning) when it cannot be evaluated.
 fn op_matrix(prim: &Prim, name: &str, warnings: &mut Vec<String>) -> Result<Option<DMat4>, String> {
     let Some(rest) = name.strip_prefix("xformOp:") else {
@@ -110,6 +122,13 @@ fn op_matrix(prim: &Prim, name: &str, warnings: &mut Vec<String>) -> Result<Opti
         ));
         return Ok(None);
     };
+    if !is_property_name(name) {
+        return Err(format!(
+            "{}.xformOpOrder: entry '{}' is not an attribute name",
+            prim.path(),
+            name.escape_debug()
+        ));
+    }
     let kind = rest.split(':').next().unwrap_or(rest);
     let Some(raw) = value::raw(prim, name)? else {
         let why = if value::has_time_samples(prim, name) {

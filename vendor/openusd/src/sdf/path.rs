@@ -53,6 +53,55 @@ impl FromStr for Path {
     }
 }
 
+/// Why `text` cannot be an `SdfPath`, judged by its punctuation alone: whitespace or a
+/// control character, `<`, `>` or `@` (none belongs to a path; a `<...>` literal that swallowed
+/// them lost its `>`), a `{` opened inside a variant selection or never closed, a `}` that
+/// closes no `{`, a `]` that closes no `[` or a `[` never closed. `None` when nothing of that
+/// kind is found (the names themselves are not judged). The empty path passes.
+///
+/// Sdf's text format refuses such a path literal; without the check a path whose last
+/// component ends in an unmatched `}` would be its own [`Path::parent`] by the variant rules.
+pub fn path_syntax_error(text: &str) -> Option<String> {
+    let mut brackets = 0usize;
+    let mut in_variant = false;
+    for (at, c) in text.char_indices() {
+        let problem = match c {
+            c if c.is_whitespace() || c.is_control() => Some("whitespace or a control character"),
+            '<' | '>' | '@' => Some("a '<', '>' or '@'"),
+            '{' if in_variant => Some("a '{' inside a variant selection"),
+            '{' => {
+                in_variant = true;
+                None
+            }
+            '}' if !in_variant => Some("a '}' that closes no '{'"),
+            '}' => {
+                in_variant = false;
+                None
+            }
+            '[' => {
+                brackets += 1;
+                None
+            }
+            ']' if brackets == 0 => Some("a ']' that closes no '['"),
+            ']' => {
+                brackets -= 1;
+                None
+            }
+            _ => None,
+        };
+        if let Some(problem) = problem {
+            return Some(format!("{problem} at byte {at}"));
+        }
+    }
+    if in_variant {
+        return Some("a '{' that is never closed".into());
+    }
+    if brackets > 0 {
+        return Some("a '[' that is never closed".into());
+    }
+    None
+}
+
 impl Path {
     pub fn new(path: &str) -> Result<Self> {
         Path::from_str(path)
@@ -378,7 +427,26 @@ impl Path {
     /// "/"           -> None
     /// ""            -> None
     /// ```
+    ///
+    /// Every step is strictly shorter, so an ancestor walk ends on any string, even one that
+    /// is no well-formed path (a `}` that closes no `{`, as in a property name read from a
+    /// token, would otherwise be its own parent): such a path's parent is what precedes its
+    /// last `/`.
     pub fn parent(&self) -> Option<Path> {
+        let parent = self.parent_of_well_formed()?;
+        if parent.path.len() < self.path.len() {
+            return Some(parent);
+        }
+        match self.path.rfind('/') {
+            Some(0) => Some(Path::abs_root()),
+            Some(i) => Some(Path::from_str_unchecked(&self.path[..i])),
+            None => None,
+        }
+    }
+
+    /// [`parent`](Self::parent) by the rules of a well-formed path, which need not shorten
+    /// an ill-formed one.
+    fn parent_of_well_formed(&self) -> Option<Path> {
         if self.path.is_empty() || self.path == "/" {
             return None;
         }
@@ -881,6 +949,31 @@ impl From<String> for Path {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An ancestor walk ends on any string: a `}` that closes no `{` made such a path its own
+    /// parent (found by fuzzing: an `xformOpOrder` token `xformOp:}ota` read as a property).
+    #[test]
+    fn parent_always_shortens() {
+        for text in ["/World/Root.xformOp:}ota&&teXYZ", "/A}", "/A/B}", "a}", "/A.b}c}", "}", "/}"] {
+            let walk: Vec<Path> = Path::from(text).ancestors().take(64).collect();
+            assert!(walk.len() < 64, "{text}: {walk:?}");
+            assert!(walk.windows(2).all(|w| w[1].as_str().len() < w[0].as_str().len()), "{text}: {walk:?}");
+        }
+        assert_eq!(Path::from("/World/Root.xformOp:}ota").parent(), Some(Path::from("/World/Root.xformOp:}")));
+        assert_eq!(Path::from("/World/Root.xformOp:}").parent(), Some(Path::from("/World")));
+        assert_eq!(Path::from("/A{v=s}B").parent(), Some(Path::from("/A{v=s}")));
+        assert_eq!(Path::from("/A{v=s}").parent(), Some(Path::from("/A")));
+    }
+
+    #[test]
+    fn path_syntax() {
+        for good in ["", "/", "/A/B", "/A{v=s}B.attr", "/A.rel[/T{v=x}].attr", "../A", "/A.b:c", "/A.r[/B.r[/C]]"] {
+            assert_eq!(path_syntax_error(good), None, "{good}");
+        }
+        for bad in ["/World  int[]", "/A}", "/A{v={w=x}}", "/A{v=s", "/A]", "/A.r[/B", "/A\n/B", "/A<B", "/A@"] {
+            assert!(path_syntax_error(bad).is_some(), "{bad}");
+        }
+    }
 
     #[test]
     fn prim_element_count() {

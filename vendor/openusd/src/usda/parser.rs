@@ -166,7 +166,7 @@ impl<'a> Parser<'a> {
     /// Consumes and returns a path reference (`<...>`) token, or errors.
     fn fetch_path_ref(&mut self) -> Result<&'a str> {
         match self.fetch_next()? {
-            Token::PathRef(s) => Ok(s),
+            Token::PathRef(s) => checked_path_ref(s),
             other => bail!("Path reference expected, got {other:?}"),
         }
     }
@@ -1335,12 +1335,12 @@ impl<'a> Parser<'a> {
             Token::AssetRef(asset_path) => {
                 reference.asset_path = asset_path.to_string();
                 if let Some(Ok(Token::PathRef(path))) = self.peek_next() {
-                    reference.prim_path = sdf::Path::new(path)?;
+                    reference.prim_path = sdf::Path::new(checked_path_ref(path)?)?;
                     self.fetch_next()?;
                 }
             }
             Token::PathRef(path) => {
-                reference.prim_path = sdf::Path::new(path)?;
+                reference.prim_path = sdf::Path::new(checked_path_ref(path)?)?;
             }
             token => {
                 bail!("Expected asset reference (@...@) or path reference (<...>), got {token:?}");
@@ -1401,12 +1401,12 @@ impl<'a> Parser<'a> {
             Token::AssetRef(asset_path) => {
                 payload.asset_path = asset_path.to_string();
                 if let Some(Ok(Token::PathRef(path))) = self.peek_next() {
-                    payload.prim_path = sdf::Path::new(path)?;
+                    payload.prim_path = sdf::Path::new(checked_path_ref(path)?)?;
                     self.fetch_next()?;
                 }
             }
             Token::PathRef(path) => {
-                payload.prim_path = sdf::Path::new(path)?;
+                payload.prim_path = sdf::Path::new(checked_path_ref(path)?)?;
             }
             token => {
                 bail!("Expected asset reference (@...@) or path reference (<...>), got {token:?}");
@@ -1883,6 +1883,22 @@ fn push_unique(vec: &mut Vec<String>, name: &str) {
 /// not variant selections, so a `{set=sel}` element anywhere in the path is a
 /// parse error (C++ `Sdf_TextFileFormatParser` raises the same error, e.g.
 /// "Inherit paths cannot contain variant selections"). `arc` names the field.
+/// The text of a `<...>` path literal, refused when it cannot be an `SdfPath`
+/// ([`sdf::path_syntax_error`]), as Sdf's text format refuses it. The message quotes the
+/// literal's first 40 characters: a literal that lost its `>` runs to the next one.
+fn checked_path_ref(text: &str) -> Result<&str> {
+    match sdf::path_syntax_error(text) {
+        None => Ok(text),
+        Some(problem) => {
+            let mut shown: String = text.chars().take(40).collect::<String>().escape_debug().collect();
+            if text.chars().count() > 40 {
+                shown.push_str("...");
+            }
+            bail!("ill-formed path <{shown}>: {problem}")
+        }
+    }
+}
+
 fn reject_variant_selection_in_path(path: &sdf::Path, arc: &str) -> Result<()> {
     ensure!(
         !path.contains_prim_variant_selection(),
