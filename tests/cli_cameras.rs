@@ -108,24 +108,45 @@ fn an_unknown_camera_name_lists_the_files_cameras() {
 /// third empty and off-centre, and ShapeCollection filled under 60 % of a 1024x256 width.)
 #[test]
 fn the_automatic_view_fills_the_image_and_is_centred() {
-    let mut obj = String::from("o board\nv -4 0 -3\nv 4 0 -3\nv 4 0 3\nv -4 0 3\nf 1 2 3\nf 1 3 4\n");
+    let mut obj =
+        String::from("o board\nv -4 0 -3\nv 4 0 -3\nv 4 0 3\nv -4 0 3\nf 1 2 3\nf 1 3 4\n");
     obj += "o post\nv 3.9 0 2.9\nv 4 0 2.9\nv 4 3 2.9\nv 3.9 3 2.9\nf 5 6 7\nf 5 7 8\n";
     let scene = temp_file("framing", "board.obj", obj);
     for (width, height) in [(320usize, 180usize), (1024, 256)] {
         let out = temp_dir(&format!("framing-{width}"));
         let (w, h) = (width.to_string(), height.to_string());
         raycast_ok(&[
-            arg(&scene), "--aov", "id", "--format", "npy", "--width", &w, "--height", &h,
-            "--out", arg(&out), "--quiet",
+            arg(&scene),
+            "--aov",
+            "id",
+            "--format",
+            "npy",
+            "--width",
+            &w,
+            "--height",
+            &h,
+            "--out",
+            arg(&out),
+            "--quiet",
         ]);
         let (_, ids) = read_u32(&out.join("id.npy"));
         let hit = |x: usize, y: usize| ids[y * width + x] != 0;
-        let columns: Vec<usize> = (0..width).filter(|&x| (0..height).any(|y| hit(x, y))).collect();
-        let rows: Vec<usize> = (0..height).filter(|&y| (0..width).any(|x| hit(x, y))).collect();
+        let columns: Vec<usize> = (0..width)
+            .filter(|&x| (0..height).any(|y| hit(x, y)))
+            .collect();
+        let rows: Vec<usize> = (0..height)
+            .filter(|&y| (0..width).any(|x| hit(x, y)))
+            .collect();
         let (left, right) = (columns[0], width - 1 - columns[columns.len() - 1]);
         let (top, bottom) = (rows[0], height - 1 - rows[rows.len() - 1]);
-        assert!(left.abs_diff(right) <= 1, "{width}x{height}: left {left}, right {right}");
-        assert!(top.abs_diff(bottom) <= 1, "{width}x{height}: top {top}, bottom {bottom}");
+        assert!(
+            left.abs_diff(right) <= 1,
+            "{width}x{height}: left {left}, right {right}"
+        );
+        assert!(
+            top.abs_diff(bottom) <= 1,
+            "{width}x{height}: top {top}, bottom {bottom}"
+        );
         let fill_x = (width - left - right) as f64 / width as f64;
         let fill_y = (height - top - bottom) as f64 / height as f64;
         assert!(
@@ -156,6 +177,8 @@ fn an_overridden_camera_aspect_is_said_once() {
         .collect();
     assert_eq!(said.len(), 1, "{stretched:?}");
     assert!(said[0].as_str().unwrap().contains("40x20 image (2.0000)"));
-    assert!(sidecar(&["--width", "40"]).iter().all(|w| !w.as_str().unwrap().contains("aspect")));
+    assert!(sidecar(&["--width", "40"])
+        .iter()
+        .all(|w| !w.as_str().unwrap().contains("aspect")));
     assert!(sidecar(&["--width", "30", "--height", "30"]).is_empty());
 }
