@@ -107,13 +107,12 @@ impl Document {
             .map_or(0, |m| super::document::array(m, "primitives").len())
     }
 
-    /// The geometry of primitive `prim` of mesh `mesh`: `Ok(None)` for points and lines, and
-    /// for a primitive without POSITION (nothing to draw).
-    pub fn primitive_geometry(
+    /// The JSON of primitive `prim` of mesh `mesh`, and its JSON pointer.
+    pub(super) fn primitive_json(
         &self,
         mesh: usize,
         prim: usize,
-    ) -> Result<Option<Geometry>, Diagnostic> {
+    ) -> Result<(&serde_json::Value, String), Diagnostic> {
         let at = format!("/meshes/{mesh}/primitives/{prim}");
         let json = self
             .item("meshes", mesh)
@@ -122,6 +121,17 @@ impl Document {
             .ok_or_else(|| {
                 Diagnostic::error("UNRESOLVED_REFERENCE", &at, "primitive does not exist")
             })?;
+        Ok((json, at))
+    }
+
+    /// The geometry of primitive `prim` of mesh `mesh`: `Ok(None)` for points and lines, and
+    /// for a primitive without POSITION (nothing to draw).
+    pub fn primitive_geometry(
+        &self,
+        mesh: usize,
+        prim: usize,
+    ) -> Result<Option<Geometry>, Diagnostic> {
+        let (json, at) = self.primitive_json(mesh, prim)?;
         let Some(mode) = TriangleMode::of(index_of(json, "mode").unwrap_or(4)) else {
             return Ok(None);
         };

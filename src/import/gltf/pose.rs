@@ -196,14 +196,7 @@ impl Document {
         geometry: &mut Geometry,
         pose: &Pose,
     ) -> Result<(), Diagnostic> {
-        let at = format!("/meshes/{mesh}/primitives/{prim}");
-        let json = self
-            .item("meshes", mesh)
-            .and_then(|m| m.get("primitives"))
-            .and_then(|p| p.get(prim))
-            .ok_or_else(|| {
-                Diagnostic::error("UNRESOLVED_REFERENCE", &at, "primitive does not exist")
-            })?;
+        let (json, at) = self.primitive_json(mesh, prim)?;
         let n = geometry.positions.len();
         if let Some(weights) = &pose.weights {
             for (t, target) in array(json, "targets").iter().enumerate() {
