@@ -193,7 +193,7 @@ def test_render_look_at_and_pinhole_agree(cube):
     assert a["z"][h // 2, w // 2] == pytest.approx(5.0, rel=1e-12)
     with pytest.raises(ValueError, match="made for 16x12 pixels"):
         cube.render(pin, 8, 8)
-    with pytest.raises(raycast.UsageError, match="eye and target coincide"):
+    with pytest.raises(raycast.UsageError, match="eye and target are the same point"):
         raycast.camera.look_at([0, 0, 0], [0, 0, 0])
 
 
