@@ -128,6 +128,27 @@ SCENE_EXTS = {".gltf", ".glb", ".obj"}
 # ------------------------------------------------------------------ scene discovery
 
 
+def poses(path: Path) -> bool:
+    """Whether a glTF or GLB has skins or morph targets (what raycast poses and trimesh does
+    not); False for other files and for files whose JSON cannot be read."""
+    if path.suffix.lower() not in (".gltf", ".glb"):
+        return False
+    try:
+        data = path.read_bytes()
+        if data[:4] == b"glTF":
+            length = int.from_bytes(data[12:16], "little")
+            data = data[20 : 20 + length]
+        doc = json.loads(data)
+    except (OSError, ValueError):
+        return False
+    try:
+        meshes = doc.get("meshes", [])
+        morphed = any(prim.get("targets") for mesh in meshes for prim in mesh.get("primitives", []))
+        return bool(doc.get("skins")) or morphed
+    except (AttributeError, TypeError):  # not a glTF document's shape: let the run say so
+        return False
+
+
 def find_scenes(paths):
     """[(path, skip_reason or None)] in a stable order."""
     out = []
@@ -144,6 +165,8 @@ def find_scenes(paths):
                 # trimesh draws neither skins nor morph targets; three.js is the reference
                 # for these (tests/gltf_pose.rs, fixtures/posed/three).
                 out.append((f, "in a posed/ folder (three.js is its reference: gltf_pose.rs)"))
+            elif poses(f):
+                out.append((f, "skinned or morphed (trimesh poses neither; see gltf_pose.rs)"))
             elif f.suffix.lower() not in SCENE_EXTS:
                 out.append((f, "not a .gltf/.glb/.obj file"))
             else:
