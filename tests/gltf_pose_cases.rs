@@ -134,40 +134,28 @@ fn bad_skin_data_is_a_one_line_error() {
 fn time_and_animation_on_the_command_line() {
     let scene = fixture("posed/SimpleSkin.gltf");
     let out = temp_dir("pose_time");
-    raycast_ok(&[
-        arg(&scene),
-        "--time",
-        "1.25",
-        "--format",
-        "npy",
-        "--width",
-        "8",
-        "--height",
-        "8",
-        "--out",
-        arg(&out),
-        "--quiet",
-    ]);
-    let sidecar: Value =
-        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    // Renders the scene with `extra` options; returns the sidecar.
+    let render = |extra: &[&str]| -> Value {
+        let mut args = vec![
+            arg(&scene),
+            "--format",
+            "npy",
+            "--width",
+            "8",
+            "--height",
+            "8",
+        ];
+        args.extend(extra);
+        args.extend(["--out", arg(&out), "--quiet"]);
+        raycast_ok(&args);
+        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap()
+    };
+    let sidecar = render(&["--time", "1.25"]);
     assert_eq!(sidecar["pose"]["time"], json!(1.25), "{}", sidecar["pose"]);
     assert_eq!(sidecar["pose"]["animations"][0]["applied"], json!(true));
     assert_eq!(sidecar["pose"]["skins"], json!(1));
     // Without --time the sidecar says no animation was applied, and a warning says so once.
-    raycast_ok(&[
-        arg(&scene),
-        "--format",
-        "npy",
-        "--width",
-        "8",
-        "--height",
-        "8",
-        "--out",
-        arg(&out),
-        "--quiet",
-    ]);
-    let sidecar: Value =
-        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    let sidecar = render(&[]);
     assert_eq!(sidecar["pose"]["time"], Value::Null);
     let warnings = sidecar["warnings"].as_array().unwrap();
     assert_eq!(
