@@ -190,22 +190,26 @@ fn run_checked(
         },
         (None, rays) => Layout::Rays(rays.as_ref().map_or(0, |r| r.rays.len())),
     };
+    let buffers = buffer_bytes(
+        &job.aovs,
+        formats,
+        layout,
+        job.hits.map(HitLimit::count),
+        rayon::current_num_threads(),
+    );
+    let what = match layout {
+        Layout::Image { width, height } => format!("{width}x{height} pixels"),
+        Layout::Rays(n) => format!("{n} rays"),
+    };
     check_memory(
-        buffer_bytes(
-            &job.aovs,
-            formats,
-            layout,
-            job.hits.map(HitLimit::count),
-            rayon::current_num_threads(),
-        ),
+        buffers.saturating_add(AccelStructure::estimated_bytes(&scene)),
         job.max_memory,
-        &match layout {
-            Layout::Image { width, height } => format!(
-                "{width}x{height} pixels of --aov {}",
-                request::names(&job.aovs)
-            ),
-            Layout::Rays(n) => format!("{n} rays of --aov {}", request::names(&job.aovs)),
-        },
+        &format!(
+            "{what} of --aov {} and the {} over {} primitives",
+            request::names(&job.aovs),
+            job.accel.name(),
+            scene.accel_primitive_count()
+        ),
     )?;
     let started = Instant::now();
     let accel = AccelStructure::build(&scene, job.accel, job.octree);

@@ -101,13 +101,19 @@ impl PathArgs {
         args
     }
 
-    fn load_options(self, scene: Option<String>, pose: PoseArgs) -> LoadOptions {
+    fn load_options(
+        self,
+        scene: Option<String>,
+        pose: PoseArgs,
+        max_memory: Option<u64>,
+    ) -> LoadOptions {
         LoadOptions {
             scene,
             root: self.root,
             allow_outside: self.allow_outside,
             time: pose.time,
             animation: pose.animation,
+            max_memory,
         }
     }
 }
@@ -308,7 +314,7 @@ enum InfoRecord {
 /// reported and the others still printed; the run then fails.
 fn info(args: InfoArgs) -> raycast::Result<()> {
     let child_args = args.paths.child_args();
-    let options = args.paths.load_options(args.scene_choice, args.pose);
+    let options = args.paths.load_options(args.scene_choice, args.pose, None);
     let mut failed = None;
     let mut records = Vec::new();
     for path in &args.scenes {
@@ -405,7 +411,9 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         .map(|(eye, target)| (eye, target, args.up.unwrap_or(DVec3::Y)));
     let job = RenderJob {
         scene: args.scene.unwrap_or_default(),
-        load: args.paths.load_options(args.scene_choice, args.pose),
+        load: args
+            .paths
+            .load_options(args.scene_choice, args.pose, args.max_memory),
         aovs: dedup(args.aov),
         camera: CameraChoice {
             name: args.camera,

@@ -41,6 +41,64 @@ fn buffers_beyond_max_memory_are_refused_before_allocating() {
     assert!(file_names(&out).is_empty(), "{:?}", file_names(&out));
 }
 
+/// The acceleration structure counts too: the bunny's 69,451 primitives at 128 bytes each
+/// (8.5 MiB) do not fit in 4 MiB though its 8×8 depth buffers do (the estimate used to count
+/// the buffers only, and the run went ahead).
+#[test]
+fn the_octree_counts_in_the_memory_estimate() {
+    let out = temp_dir("memory-octree");
+    let bunny = fixture("assets/stanford-bunny.obj");
+    let args = [
+        arg(&bunny),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--out",
+        arg(&out),
+    ];
+    let result = raycast(&[&args[..], &["--max-memory", "4M"]].concat());
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("the octree over 69451 primitives need about 8.5 MiB"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+    raycast_ok(&[&args[..], &["--max-memory", "40M"]].concat());
+}
+
+/// An accessor without a buffer view is zeros of any length: a file of a few hundred bytes
+/// can ask for gigabytes. Each of these three asks for 6 million values, charged 24 bytes
+/// each (144 MB): under a limit of 200 MB the first is read and the second refused, naming
+/// it and the flag, before the scene is built. (Render used to allocate them all.)
+#[test]
+fn accessors_without_buffer_views_are_capped_by_the_memory_limit() {
+    let accessor = r#"{"componentType": 5126, "count": 2000000, "type": "VEC3",
+        "min": [0, 0, 0], "max": [0, 0, 0]}"#;
+    let gltf = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0, 1, 2]}}],
+        "nodes": [{{"mesh": 0}}, {{"mesh": 1}}, {{"mesh": 2}}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}},
+                   {{"primitives": [{{"attributes": {{"POSITION": 1}}}}]}},
+                   {{"primitives": [{{"attributes": {{"POSITION": 2}}}}]}}],
+        "accessors": [{accessor}, {accessor}, {accessor}]}}"#
+    );
+    let scene = temp_file("unbacked", "zeros.gltf", gltf);
+    let out = temp_dir("unbacked-out");
+    let result = raycast(&[arg(&scene), "--max-memory", "200M", "--out", arg(&out)]);
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("zeros.gltf"), "{stderr}");
+    assert!(
+        stderr.contains("accessor 1 has no buffer view: its 2000000 elements"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("--max-memory"), "{stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(!out.exists());
+}
+
 #[test]
 fn repeated_formats_merge_and_leave_no_partial_files() {
     let out = temp_dir("png-png");

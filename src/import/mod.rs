@@ -26,6 +26,10 @@ pub struct LoadOptions {
     pub time: Option<f64>,
     /// The glTF animation to apply at `time`, by index or name (`--animation`); `None`: all.
     pub animation: Option<String>,
+    /// The memory limit (`--max-memory`, bytes) that data a file does not hold (glTF
+    /// accessors without a buffer view, which are zeros of any length) may take; `None`:
+    /// the default limit ([`crate::output::request::default_memory_limit`]).
+    pub max_memory: Option<u64>,
 }
 
 /// Loads a `.gltf`, `.glb`, `.obj`, `.usda`, `.usdc`, `.usd` or `.usdz` file, choosing the

@@ -2,7 +2,7 @@
 //! next to each other as soon as the cell splits, and every buffer is reused from cell to
 //! cell, so that no node or reference is copied after it is written.
 
-use super::build::{add_child, octant_counts, Builder, Children, Node, Subtree};
+use super::build::{add_child, child_budget, octant_counts, Builder, Children, Node, Subtree};
 use super::OctreeStats;
 use crate::accel::PrimitiveSet;
 use crate::geometry::Aabb;
@@ -37,9 +37,9 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
         }
     }
 
-    /// The subtree for `cell` holding `refs`, at `depth`.
-    pub fn subtree(mut self, cell: &Aabb, refs: &[u32], depth: u32) -> Subtree {
-        let (stats, occupied) = self.cell(0, cell, refs, depth);
+    /// The subtree for `cell` holding `refs`, at `depth`, with at most `budget` references.
+    pub fn subtree(mut self, cell: &Aabb, refs: &[u32], depth: u32, budget: f64) -> Subtree {
+        let (stats, occupied) = self.cell(0, cell, refs, depth, budget);
         self.finish(stats, occupied)
     }
 
@@ -62,22 +62,29 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
         }
     }
 
-    /// Builds `cell` (holding `refs`, at `depth`) into node `slot`; returns its figures and
-    /// occupied box.
-    fn cell(&mut self, slot: usize, cell: &Aabb, refs: &[u32], depth: u32) -> (OctreeStats, Aabb) {
+    /// Builds `cell` (holding `refs`, at `depth`, with at most `budget` references) into node
+    /// `slot`; returns its figures and occupied box.
+    fn cell(
+        &mut self,
+        slot: usize,
+        cell: &Aabb,
+        refs: &[u32],
+        depth: u32,
+        budget: f64,
+    ) -> (OctreeStats, Aabb) {
         let builder = self.builder;
         let weight = builder.weight(refs);
         if builder.may_split(refs.len(), weight, depth) {
             builder.masks(cell, refs, &mut self.masks);
             let counts = octant_counts(&self.masks);
-            if builder.pays(depth, refs, weight, &self.masks, &counts) {
+            if builder.pays(depth, refs, weight, &self.masks, &counts, budget) {
                 let level = depth as usize;
                 if self.levels.len() <= level {
                     self.levels.resize_with(level + 1, Children::default);
                 }
                 let mut children = std::mem::take(&mut self.levels[level]);
                 children.fill(refs, &self.masks, &counts);
-                let built = self.interior(slot, cell, &children, depth);
+                let built = self.interior(slot, cell, &children, depth, budget);
                 self.levels[level] = children;
                 return built;
             }
@@ -85,14 +92,15 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
         self.leaf(slot, cell, refs, depth)
     }
 
-    /// Places the non-empty children of a split cell next to each other, builds each, and
-    /// writes the cell into node `slot`.
+    /// Places the non-empty children of a split cell next to each other, builds each (sharing
+    /// the cell's `budget` of references), and writes the cell into node `slot`.
     fn interior(
         &mut self,
         slot: usize,
         cell: &Aabb,
         children: &Children,
         depth: u32,
+        budget: f64,
     ) -> (OctreeStats, Aabb) {
         let first = self.nodes.len();
         let wanted = (0..8).filter(|&i| !children.of(i).is_empty()).count();
@@ -102,6 +110,7 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
             ..OctreeStats::default()
         };
         let (mut mask, mut kept, mut occupied) = (0u32, 0usize, Aabb::EMPTY);
+        let child_refs = children.total();
         for i in 0..8 {
             let refs = children.of(i);
             if refs.is_empty() {
@@ -110,7 +119,9 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
                 continue;
             }
             let (nodes, refs_len) = (self.nodes.len(), self.refs.len());
-            let (child, child_occupied) = self.cell(first + kept, &cell.octant(i), refs, depth + 1);
+            let share = child_budget(budget, refs.len(), child_refs);
+            let (child, child_occupied) =
+                self.cell(first + kept, &cell.octant(i), refs, depth + 1, share);
             add_child(&mut stats, &child);
             if child.references == 0 {
                 // Left without references: dropped, and its slot goes to the next child.

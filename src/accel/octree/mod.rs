@@ -169,7 +169,8 @@ impl Octree {
             margin,
         };
         let all: Vec<u32> = (0..set.len() as u32).collect();
-        let tree = builder.subtree(&root, all, 0);
+        let budget = build::MAX_REFERENCES_PER_PRIMITIVE * all.len() as f64;
+        let tree = builder.subtree(&root, all, 0, budget);
         let layout = Layout::new(&tree.nodes, &tree.refs);
         // The largest stored plane bounds the node test's rounding; a tree whose planes could
         // not all be quantised does not cull.

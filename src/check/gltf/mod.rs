@@ -87,6 +87,7 @@ pub fn check(
         }
     };
     let mut doc = Document::parse(bytes, is_glb, &mut sink)?;
+    doc.limit_unbacked(options.max_bytes);
     let base = crate::import::paths::folder_of(path);
     let resources = Resources {
         base: &base,

@@ -9,6 +9,7 @@
 
 use super::diagnostics::{Severity, Sink};
 use serde_json::{Map, Value};
+use std::cell::Cell;
 use std::collections::HashMap;
 use std::io::Read;
 use std::ops::Range;
@@ -43,6 +44,8 @@ pub struct Document {
     pub(super) buffers: Vec<Option<BufferData>>,
     /// Buffer views whose bytes a decoder produced (EXT_meshopt_compression), by index.
     pub(super) decoded_views: HashMap<usize, Vec<u8>>,
+    /// Bytes that accessors without a buffer view may still take ([`Document::limit_unbacked`]).
+    pub(super) unbacked_budget: Cell<u64>,
 }
 
 impl Document {
@@ -80,6 +83,7 @@ impl Document {
             bin,
             buffers: Vec::new(),
             decoded_views: HashMap::new(),
+            unbacked_budget: Cell::new(u64::MAX),
         })
     }
 

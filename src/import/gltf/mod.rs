@@ -39,6 +39,7 @@ pub use document::Document;
 use super::paths::folder_of;
 use super::LoadOptions;
 use crate::error::{Error, Result};
+use crate::output::request::default_memory_limit;
 use crate::scene::Scene;
 use std::path::Path;
 
@@ -117,6 +118,8 @@ pub fn load_bytes(bytes: Vec<u8>, path: &Path, options: &LoadOptions) -> Result<
         (_, Some(error)) => return Err(fail(error)),
         (None, None) => return Err(Error::in_file(path, "not a glTF file")),
     };
+    let limit = options.max_memory.or_else(default_memory_limit);
+    doc.limit_unbacked(limit.unwrap_or(u64::MAX));
     check_required_extensions(&doc, &mut sink);
     if sink.error.is_none() {
         integrity::check(&doc, &mut ErrorsOnly(&mut sink));
