@@ -71,7 +71,7 @@ pub struct CameraSummary {
 impl SceneInfo {
     /// Summarises `scene`.
     pub fn new(scene: &Scene) -> SceneInfo {
-        let bounds = scene.world_bounds();
+        let bounds = scene.own_bounds();
         SceneInfo {
             scene: scene.path.display().to_string(),
             triangles: scene.triangle_count(),

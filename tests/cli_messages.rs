@@ -453,3 +453,38 @@ fn usd_layers_stay_inside_the_root() {
         }
     }
 }
+
+/// `info` gives the scene's own bounds, not the octree's conservative box: the "scaled"
+/// cylinder of fixtures/quadrics/cylinder.gltf (x² + y² = 1 clipped to [-1, 1]³, scaled by
+/// (0.5, 1.5, 2), moved by -16 in x) spans exactly [-16.5, -1.5, -2] .. [-15.5, 1.5, 2], and
+/// the unit sphere at x = 6.4e6 exactly [6399999, -1, -1] .. [6400001, 1, 1]. (They used to
+/// read -16.5000000000165 and -2.000000004002: the clip box's rounding tolerance and padding.)
+#[test]
+fn info_prints_the_scenes_own_bounds() {
+    let cylinder = fixture("quadrics/cylinder.gltf");
+    let result = raycast_ok(&["info", "--json", arg(&cylinder)]);
+    let json: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
+    let scaled = json["objects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|o| o["name"] == "scaled")
+        .unwrap();
+    assert_eq!(
+        scaled["bounds"],
+        serde_json::json!([[-16.5, -1.5, -2.0], [-15.5, 1.5, 2.0]])
+    );
+    let sphere = fixture("quadrics/far_sphere.gltf");
+    let result = raycast_ok(&["info", "--json", arg(&sphere)]);
+    let json: serde_json::Value = serde_json::from_slice(&result.stdout).unwrap();
+    assert_eq!(
+        json["bounds"],
+        serde_json::json!([[6399999.0, -1.0, -1.0], [6400001.0, 1.0, 1.0]])
+    );
+    let text = raycast_ok(&["info", arg(&cylinder)]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(
+        text.contains("bounds [-16.5, -1.7, -2] .. [17.3, 1.5, 2]"),
+        "{text}"
+    );
+}

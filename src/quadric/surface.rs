@@ -48,6 +48,8 @@ pub struct Quadric {
     clip: Option<[DVec3; 2]>,
     /// Conservative world AABB of the clipped surface, for the bounds pre-test.
     reach: ReachBox,
+    /// The same bounds from the clip box as given, not widened ([`Quadric::own_bounds`]).
+    own: [DVec3; 2],
     /// Affine type, from the world-space coefficients.
     kind: QuadricKind,
 }
@@ -85,13 +87,19 @@ impl Quadric {
             local_anchor,
             clip: spec.bounds.map(widen_clip_box),
             reach: ReachBox::new(Aabb::new(anchor, anchor)),
+            own: [anchor, anchor],
             kind: QuadricKind::Empty,
         };
+        let definite = is_definite(spec.q).then_some(linear);
         let clip_world = quadric
             .clip
             .map(|b| quadric.world_box_of_local_box(b, linear));
-        let [min, max] = quadric.clipped_bounds(clip_world, is_definite(spec.q).then_some(linear));
+        let [min, max] = quadric.clipped_bounds(clip_world, definite, pad);
         quadric.reach = ReachBox::new(Aabb::new(min, max));
+        let own_clip = spec
+            .bounds
+            .map(|b| quadric.world_box_of_local_box(b, linear));
+        quadric.own = quadric.clipped_bounds(own_clip, definite, |b| b);
         let length = clip_world.map_or(0.0, |[min, max]| 0.5 * (max - min).length());
         quadric.kind = classify(quadric.world.q, quadric.world.p, quadric.world.r, length);
         Ok(quadric)
@@ -101,6 +109,13 @@ impl Quadric {
     /// for an unclipped ellipsoid. Always finite; a single point for an empty surface.
     pub fn bounds(&self) -> [DVec3; 2] {
         [self.reach.bounds.min, self.reach.bounds.max]
+    }
+
+    /// World AABB `[min, max]` of the clipped surface as the scene gives it: as
+    /// [`Quadric::bounds`] but from the clip box not widened by the rounding tolerance of the
+    /// hit test (what `raycast info` prints).
+    pub fn own_bounds(&self) -> [DVec3; 2] {
+        self.own
     }
 
     /// The world anchor point the coefficients are expressed about.
@@ -201,24 +216,25 @@ impl Quadric {
         })
     }
 
-    /// World AABB of the local box `[min, max]` (its eight corners), padded for rounding.
+    /// World AABB of the local box `[min, max]` (its eight corners), to rounding.
     fn world_box_of_local_box(&self, [min, max]: [DVec3; 2], linear: DMat3) -> [DVec3; 2] {
         let centre = linear * ((min + max) * 0.5 - self.local_anchor);
         let half = linear.abs() * ((max - min) * 0.5);
-        let (lo, hi) = (self.anchor + centre - half, self.anchor + centre + half);
-        pad([lo, hi])
+        [self.anchor + centre - half, self.anchor + centre + half]
     }
 
     /// The world bounds: the clip box's world AABB, intersected with the ellipsoid's tight box
     /// when `Q` is definite (always so when there is no clip box); `definite_linear` is then
-    /// the object→world linear map.
+    /// the object→world linear map. `finish` is applied to both boxes first ([`pad`] for
+    /// conservative bounds).
     fn clipped_bounds(
         &self,
         clip_world: Option<[DVec3; 2]>,
         definite_linear: Option<DMat3>,
+        finish: fn([DVec3; 2]) -> [DVec3; 2],
     ) -> [DVec3; 2] {
-        let ellipsoid = definite_linear.map(|linear| self.ellipsoid_box(linear));
-        let [lo, hi] = match (clip_world, ellipsoid) {
+        let ellipsoid = definite_linear.map(|linear| finish(self.ellipsoid_box(linear)));
+        let [lo, hi] = match (clip_world.map(finish), ellipsoid) {
             (Some([a, b]), Some([c, d])) => [a.max(c), b.min(d)],
             (Some(b), None) | (None, Some(b)) => b,
             (None, None) => [self.anchor, self.anchor],
@@ -230,7 +246,7 @@ impl Quadric {
         }
     }
 
-    /// Tight world AABB of the ellipsoid `f = 0` for a definite `Q`, from the local form and
+    /// Tight world AABB (to rounding) of the ellipsoid `f = 0` for a definite `Q`, from the local form and
     /// the object→world map `A`: local centre `e = −Q⁻¹P/2`, world half-extent
     /// `sqrt(−f(e)·(A·Q⁻¹·Aᵀ)ᵢᵢ)` along axis `i`. Inverting the local `Q` (diagonal for a
     /// needle or a disc placed by its node) keeps the digits that inverting the world `Q'`
@@ -246,7 +262,7 @@ impl Quadric {
         let half = (diagonal * level).max(DVec3::ZERO);
         let half = DVec3::new(half.x.sqrt(), half.y.sqrt(), half.z.sqrt());
         let world_centre = self.anchor + linear * centre;
-        pad([world_centre - half, world_centre + half])
+        [world_centre - half, world_centre + half]
     }
 }
 

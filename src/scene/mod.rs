@@ -279,6 +279,15 @@ impl Scene {
         }
     }
 
+    /// World-space bounds of what the scene holds, as it gives it: instances by their placed
+    /// vertices and quadrics by their clip boxes as given ([`Quadric::own_bounds`]), where
+    /// [`Scene::world_bounds`] is the octree's conservative box (what `raycast info` prints).
+    pub fn own_bounds(&self) -> Aabb {
+        (0..self.len())
+            .map(|i| self.world_prim_bounds(i))
+            .fold(Aabb::EMPTY, Aabb::union)
+    }
+
     /// The top-level primitives of a part.
     fn part_prims(&self, part: &Part) -> Range<usize> {
         let t = self.world.mesh.len();
@@ -358,6 +367,10 @@ impl Scene {
     /// only conservative.
     fn world_prim_bounds(&self, index: usize) -> Aabb {
         match self.top(index) {
+            Top::Quadric(q) => {
+                let [min, max] = self.quadrics[q].own_bounds();
+                Aabb::new(min, max)
+            }
             Top::Instance(k) => {
                 let instance = &self.instances[k];
                 let positions = self.meshes[instance.mesh as usize].set.mesh.positions();
