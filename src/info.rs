@@ -253,10 +253,9 @@ fn write_stage_time(f: &mut fmt::Formatter<'_>, stage: &StageInfo) -> fmt::Resul
         };
         let drawn = match stage.time {
             Some(time) => format!("drawn at time code {time}"),
-            None if stage.time_sampled_reads > 0 => format!(
-                "drawn at the default time code ({} attribute reads passed over time samples; \
-                 --time CODE)",
-                stage.time_sampled_reads
+            None if stage.time_sampled_attributes > 0 => format!(
+                "drawn at the default time code ({} time-sampled attributes; --time CODE)",
+                stage.time_sampled_attributes
             ),
             None => "drawn at the default time code".into(),
         };

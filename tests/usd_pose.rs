@@ -251,7 +251,7 @@ fn default_time_says_which_pose_was_drawn() {
         .filter(|w| w.contains("drawn at the default time code"))
         .collect();
     assert_eq!(notes.len(), 1, "{:?}", scene.warnings);
-    assert!(scene.stage.as_ref().unwrap().time_sampled_reads > 0);
+    assert!(scene.stage.as_ref().unwrap().time_sampled_attributes > 0);
     let timed = load("time_samples.usda", Some(3.0), &[]);
     assert!(!timed
         .warnings

@@ -119,10 +119,9 @@ pub struct StageInfo {
     /// The time code drawn (`--time`); `None`: the default time code.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time: Option<f64>,
-    /// Attribute reads at the default time code that passed over time samples (a stage
-    /// drawn without `--time` that has some).
+    /// Attribute specs of the stage's layers that author time samples.
     #[serde(skip_serializing_if = "is_zero")]
-    pub time_sampled_reads: usize,
+    pub time_sampled_attributes: usize,
     /// Variant sets of the drawn prims, with their choices and selections.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub variant_sets: Vec<VariantSetInfo>,

@@ -103,7 +103,7 @@ impl Arrays {
     }
 }
 
-impl Loader<'_> {
+impl Loader {
     /// A UsdGeomPointInstancer: each instance walks its prototype with the instance
     /// transform `world · T(position) · R(orientation) · S(scale)`, collecting its
     /// triangles into one object named `name[i]`.

@@ -203,9 +203,8 @@ fn load_stage(
         Some(confine) => Stage::builder().resolver(confine).open(text),
     }
     .map_err(|e| fail(format!("cannot open the USD stage: {e:#}")))?;
-    let seen = value::Seen::default();
     let mut loader = Loader {
-        at: value::At::new(options.time, &seen),
+        at: value::At::new(options.time),
         variants: variants::Variants::new(options.variants.clone()),
         stage: stage.clone(),
         builder: SceneBuilder::new(),
@@ -261,13 +260,12 @@ fn load_stage(
     if builder.object_count() == 0 {
         builder.warn("the stage holds no triangles or quadrics");
     }
-    let (sampled, first) = seen.sampled();
+    let (sampled, first) = time_sampled_attributes(&stage);
     if let Some(first) = first.filter(|_| options.time.is_none()) {
         builder.warn(format!(
-            "the stage has time samples ({first} and {} more attribute reads): drawn at the \
-             default time code, as usd-core's Usd.TimeCode.Default() reads it; --time CODE \
-             draws it at a time code",
-            sampled - 1
+            "the stage has time samples ({sampled} attribute specs, such as {first}): drawn at \
+             the default time code, as usd-core's Usd.TimeCode.Default() reads it; --time CODE \
+             draws it at a time code"
         ));
     }
     let mut info = stage_info(&stage);
@@ -275,10 +273,32 @@ fn load_stage(
         info.time_codes_per_second = Some(stage.time_codes_per_second());
     }
     info.time = options.time;
-    info.time_sampled_reads = sampled;
+    info.time_sampled_attributes = sampled;
     info.variant_sets = variant_sets;
     builder.set_stage(info);
     Ok(builder.finish(path.to_path_buf()))
+}
+
+/// How many attribute specs of the stage's loaded layers author time samples, and the first
+/// of them by path (one pass over the specs once the walk has loaded every layer it needs).
+fn time_sampled_attributes(stage: &Stage) -> (usize, Option<String>) {
+    let mut count = 0;
+    let mut first: Option<sdf::Path> = None;
+    for identifier in stage.layer_identifiers() {
+        let Some(layer) = stage.layer(&identifier) else {
+            continue;
+        };
+        let data = layer.data();
+        for path in data.spec_paths() {
+            if path.is_property_path() && data.has_field(&path, "timeSamples") {
+                count += 1;
+                if first.as_ref().is_none_or(|f| path.as_str() < f.as_str()) {
+                    first = Some(path);
+                }
+            }
+        }
+    }
+    (count, first.map(|p| p.to_string()))
 }
 
 /// The stage's `upAxis` and `metersPerUnit`, with USD's fallbacks (Y, 0.01) where they are
@@ -303,7 +323,7 @@ fn stage_info(stage: &Stage) -> StageInfo {
         time_codes_per_second: None,
         time_code_range,
         time: None,
-        time_sampled_reads: 0,
+        time_sampled_attributes: 0,
         variant_sets: Vec::new(),
     }
 }
@@ -349,7 +369,7 @@ impl Target<'_> {
     }
 }
 
-struct Loader<'s> {
+struct Loader {
     stage: Stage,
     builder: SceneBuilder,
     /// Warnings, in the order met.
@@ -362,7 +382,7 @@ struct Loader<'s> {
     excluded: HashSet<String>,
     visits: usize,
     /// When values are read (`--time`).
-    at: value::At<'s>,
+    at: value::At,
     /// Variant sets met, and the `--variant` choices.
     variants: variants::Variants,
 }
@@ -380,7 +400,7 @@ pub(super) fn err(prim: &Prim, e: impl std::fmt::Display) -> String {
     format!("{}: {e:#}", prim.path())
 }
 
-impl Loader<'_> {
+impl Loader {
     fn note(&mut self, what: &'static str, prim: &Prim) {
         self.notes
             .entry(what)

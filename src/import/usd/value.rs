@@ -12,35 +12,17 @@
 use glam::{DMat4, DQuat, DVec3};
 use openusd::sdf::Value;
 use openusd::usd::{Prim, TimeCode};
-use std::cell::{Cell, RefCell};
 
-/// What reads at the default time code met: attributes that have time samples, whose
-/// default value (or none) was read instead.
-#[derive(Debug, Default)]
-pub struct Seen {
-    count: Cell<usize>,
-    first: RefCell<Option<String>>,
-}
-
-impl Seen {
-    /// How many reads at the default time met time samples, and the first attribute that did.
-    pub fn sampled(&self) -> (usize, Option<String>) {
-        (self.count.get(), self.first.borrow().clone())
-    }
-}
-
-/// When attribute values are read: a time code, or the default time code (`None`), and
-/// where reads at the default time record the time samples they pass over.
+/// When attribute values are read: a time code, or the default time code (`None`).
 #[derive(Debug, Clone, Copy)]
-pub struct At<'a> {
+pub struct At {
     time: Option<f64>,
-    seen: &'a Seen,
 }
 
-impl<'a> At<'a> {
-    /// Reads at `time` (`None`: the default time code), recording into `seen`.
-    pub fn new(time: Option<f64>, seen: &'a Seen) -> Self {
-        At { time, seen }
+impl At {
+    /// Reads at `time` (`None`: the default time code).
+    pub fn new(time: Option<f64>) -> Self {
+        At { time }
     }
 
     /// The time code, `None` for the default time code.
@@ -51,7 +33,7 @@ impl<'a> At<'a> {
     /// The lower of `prim.name`'s time samples bracketing the time (usd-core's
     /// `_GetAttrForTransforms`, where velocities move a PointInstancer's positions on from);
     /// the default time code when the attribute has no samples or no time is chosen.
-    pub fn held_sample(self, prim: &Prim, name: &str) -> Result<At<'a>, String> {
+    pub fn held_sample(self, prim: &Prim, name: &str) -> Result<At, String> {
         let Some(time) = self.time else {
             return Ok(self);
         };
@@ -65,10 +47,7 @@ impl<'a> At<'a> {
                 )
             })?
             .map(|(lower, _)| lower);
-        Ok(At {
-            time: lower,
-            seen: self.seen,
-        })
+        Ok(At { time: lower })
     }
 }
 
@@ -83,13 +62,6 @@ pub fn raw(prim: &Prim, name: &str, at: At) -> ValueResult<Value> {
         Some(time) => attribute.get_at::<Value>(TimeCode::new(time)),
     }
     .map_err(|e| format!("{}.{name}: cannot be read: {e}", prim.path()))?;
-    if at.time.is_none() && has_time_samples(prim, name) {
-        at.seen.count.set(at.seen.count.get() + 1);
-        at.seen
-            .first
-            .borrow_mut()
-            .get_or_insert_with(|| format!("{}.{name}", prim.path()));
-    }
     Ok(value.filter(|v| !matches!(v, Value::ValueBlock | Value::None)))
 }
 
