@@ -14,8 +14,10 @@
 //! - `def` prims only (not `over` or `class`), active, not `invisible`, purpose neither
 //!   `guide` nor `proxy`.
 //!
-//! Attribute values are read at the default time code, as usd-core does for
-//! `UsdTimeCode::Default()`. Composition problems (a missing referenced file, an unresolved
+//! Attribute values are read at `--time CODE` as usd-core's `UsdAttribute::Get(time)` reads
+//! them, or at the default time code, as usd-core does for `UsdTimeCode::Default()`
+//! ([`value`]); `--variant SET=NAME` selections are authored in memory as the walk meets
+//! their prims ([`variants`]); point instancers are in [`instancer`]. Composition problems (a missing referenced file, an unresolved
 //! payload) are warnings. The file format is read by openusd; docs/usd.md has the details.
 
 mod confine;
@@ -223,7 +225,7 @@ fn load_stage(
     let mut builder = std::mem::take(&mut loader.builder);
     let variant_sets = std::mem::replace(&mut loader.variants, variants::Variants::new(Vec::new()))
         .finish()
-        .map_err(|e| fail(e))?;
+        .map_err(fail)?;
     let (unread, errors): (Vec<String>, Vec<String>) = stage
         .composition_errors()
         .into_iter()
