@@ -195,6 +195,7 @@ impl SceneInfo {
                 "  stage: upAxis {}, metersPerUnit {}",
                 stage.up_axis, stage.meters_per_unit
             )?;
+            write_stage_time(f, stage)?;
         }
         if let Some(pose) = &self.pose {
             write_pose(f, pose)?;
@@ -241,6 +242,40 @@ fn tidy(v: f64, scale: f64) -> String {
     } else {
         text
     }
+}
+
+/// The `info` lines of a USD stage's time range, the time code drawn and its variant sets.
+fn write_stage_time(f: &mut fmt::Formatter<'_>, stage: &StageInfo) -> fmt::Result {
+    if let Some(rate) = stage.time_codes_per_second {
+        let range = match stage.time_code_range {
+            Some([start, end]) => format!("time codes {start} to {end}"),
+            None => "no authored time range".into(),
+        };
+        let drawn = match stage.time {
+            Some(time) => format!("drawn at time code {time}"),
+            None if stage.time_sampled_attributes > 0 => format!(
+                "drawn at the default time code ({} time-sampled attributes; --time CODE)",
+                stage.time_sampled_attributes
+            ),
+            None => "drawn at the default time code".into(),
+        };
+        writeln!(f, "  time: {range}, {rate} per second; {drawn}")?;
+    }
+    for v in &stage.variant_sets {
+        let chosen = match (&v.selected, &v.authored) {
+            (Some(s), Some(a)) if s != a => format!("{s} (chosen; authored {a})"),
+            (Some(s), _) => s.clone(),
+            (None, _) => "none".into(),
+        };
+        writeln!(
+            f,
+            "  variant set {} {{{}}}: {chosen}; choices {}",
+            v.prim,
+            v.set,
+            v.choices.join(", ")
+        )?;
+    }
+    Ok(())
 }
 
 /// The `info` lines of a glTF file's animations, skins and morph targets.

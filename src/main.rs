@@ -64,16 +64,41 @@ struct InfoArgs {
     pose: PoseArgs,
 }
 
-/// When a glTF scene is posed.
+/// When a scene is posed: glTF animations, USD time codes and variants.
 #[derive(Args)]
 struct PoseArgs {
-    /// Evaluate the glTF animations at this time in seconds (default: no animation, the nodes'
-    /// own transforms and default morph weights).
-    #[arg(long, value_name = "SECONDS", value_parser = parse_finite, allow_hyphen_values = true)]
+    /// glTF: evaluate the animations at this time in seconds (default: no animation, the
+    /// nodes' own transforms and default morph weights). USD: read the stage at this time
+    /// code (default: the default time code, as usd-core's Usd.TimeCode.Default()).
+    #[arg(long, value_name = "SECONDS|CODE", value_parser = parse_finite, allow_hyphen_values = true)]
     time: Option<f64>,
     /// The glTF animation to apply at --time, by index or name (default: all of them).
     #[arg(long, value_name = "N|NAME", requires = "time")]
     animation: Option<String>,
+    /// USD: select variant NAME of the variant set SET on every prim that has that set
+    /// (repeatable).
+    #[arg(long = "variant", value_name = "SET=NAME", value_parser = raycast::import::usd::parse_choice)]
+    variants: Vec<raycast::import::usd::Choice>,
+}
+
+impl PoseArgs {
+    /// The same choices for a child `raycast info` (see [`probe_usd`]).
+    fn child_args(&self) -> Vec<std::ffi::OsString> {
+        let mut args: Vec<std::ffi::OsString> = Vec::new();
+        if let Some(time) = self.time {
+            args.extend(["--time".into(), format!("{time:?}").into()]);
+        }
+        if let Some(animation) = &self.animation {
+            args.extend(["--animation".into(), animation.into()]);
+        }
+        for choice in &self.variants {
+            args.extend([
+                "--variant".into(),
+                format!("{}={}", choice.set, choice.name).into(),
+            ]);
+        }
+        args
+    }
 }
 
 /// Where a scene's external files may come from (the same rule as `raycast check`).
@@ -113,6 +138,7 @@ impl PathArgs {
             allow_outside: self.allow_outside,
             time: pose.time,
             animation: pose.animation,
+            variants: pose.variants,
             max_memory,
         }
     }
@@ -313,7 +339,8 @@ enum InfoRecord {
 /// for several files, a record for each, a failed one with its error). A file that fails is
 /// reported and the others still printed; the run then fails.
 fn info(args: InfoArgs) -> raycast::Result<()> {
-    let child_args = args.paths.child_args();
+    let mut child_args = args.paths.child_args();
+    child_args.extend(args.pose.child_args());
     let options = args.paths.load_options(args.scene_choice, args.pose, None);
     let mut failed = None;
     let mut records = Vec::new();
@@ -403,7 +430,9 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
             .map_err(|e| raycast::Error::msg(format!("cannot start {threads} threads: {e}")))?;
     }
     if let Some(scene) = &args.scene {
-        probe_usd(scene, args.usd_timeout, &args.paths.child_args())?;
+        let mut child_args = args.paths.child_args();
+        child_args.extend(args.pose.child_args());
+        probe_usd(scene, args.usd_timeout, &child_args)?;
     }
     let look_at = args
         .eye

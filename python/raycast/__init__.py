@@ -48,6 +48,7 @@ def load(
     scene: str | int | None = None,
     time: float | None = None,
     animation: str | int | None = None,
+    variants: dict[str, str] | None = None,
 ) -> Scene:
     """Loads a scene file and builds its octree.
 
@@ -60,9 +61,14 @@ def load(
         whose subtree is drawn.
     time : float, optional
         glTF: play the animations to this time in seconds (default: none applied, the nodes'
-        own transforms and default morph weights), as ``--time``.
+        own transforms and default morph weights); USD: read the stage at this time code
+        (default: the default time code, as usd-core's ``Usd.TimeCode.Default()``); as
+        ``--time``.
     animation : str or int, optional
         glTF, with ``time``: the one animation to apply, by index or name (default: all).
+    variants : dict of str to str, optional
+        USD: variant selections, set name to variant name, applied to every prim that has the
+        set (as ``--variant SET=NAME``).
 
     Returns
     -------
@@ -77,7 +83,8 @@ def load(
     """
     choice = None if scene is None else str(scene)
     which = None if animation is None else str(animation)
-    return Scene(_raycast.load_path(os.fspath(path), choice, time, which))
+    chosen = None if variants is None else [(str(k), str(v)) for k, v in variants.items()]
+    return Scene(_raycast.load_path(os.fspath(path), choice, time, which, chosen))
 
 
 def load_bytes(
@@ -156,9 +163,9 @@ class Scene:
         self._scene = compiled
 
     def __reduce__(self):
-        data, name, choice, time, animation = self._scene.source()
+        data, name, choice, time, animation, variants = self._scene.source()
         if name is None:
-            return (load, (data, choice, time, animation))
+            return (load, (data, choice, time, animation, dict(variants) or None))
         return (load_bytes, (data, name, choice, time, animation))
 
     @property
@@ -288,6 +295,6 @@ class Scene:
         return self._scene.render(camera, int(width), int(height), _names(aovs))
 
     def __repr__(self) -> str:
-        data, name, _ = self._scene.source()
+        data, name, *_ = self._scene.source()
         where = data if name is None else f"{name} (bytes)"
         return f"<raycast.Scene {where!s}: {len(self.objects)} objects>"

@@ -36,10 +36,21 @@ class _Scene:
     def info_json(self) -> str: ...
     def source(
         self,
-    ) -> tuple[os.PathLike | bytes, os.PathLike | None, str | None, float | None, str | None]: ...
+    ) -> tuple[
+        os.PathLike | bytes,
+        os.PathLike | None,
+        str | None,
+        float | None,
+        str | None,
+        list[tuple[str, str]],
+    ]: ...
 
 def load_path(
-    path: str, scene: str | None = None, time: float | None = None, animation: str | None = None
+    path: str,
+    scene: str | None = None,
+    time: float | None = None,
+    animation: str | None = None,
+    variants: list[tuple[str, str]] | None = None,
 ) -> _Scene: ...
 def load_bytes(
     data: bytes,

@@ -23,6 +23,18 @@ enum Source {
     Bytes { data: Vec<u8>, name: PathBuf },
 }
 
+/// What poses a scene: the glTF animation time and animation (`--time`, `--animation`), or
+/// the USD time code (`--time`) and variant selections (`--variant`).
+#[derive(Debug, Clone, Default)]
+pub struct Pose {
+    /// glTF seconds or USD time code.
+    pub time: Option<f64>,
+    /// The glTF animation.
+    pub animation: Option<String>,
+    /// USD (set, variant) selections.
+    pub variants: Vec<(String, String)>,
+}
+
 /// A loaded scene and its octree (the compiled half of `raycast.Scene`).
 #[pyclass(name = "_Scene", module = "raycast._raycast", frozen)]
 pub struct PyScene {
@@ -30,8 +42,8 @@ pub struct PyScene {
     octree: Octree,
     source: Source,
     choice: Option<String>,
-    /// glTF: the animation time and the animation (`--time`, `--animation`).
-    pose: (Option<f64>, Option<String>),
+    /// What posed it.
+    pose: Pose,
 }
 
 impl PyScene {
@@ -39,20 +51,28 @@ impl PyScene {
         py: Python<'_>,
         source: Source,
         choice: Option<String>,
-        pose: (Option<f64>, Option<String>),
+        pose: Pose,
     ) -> PyResult<PyScene> {
-        if pose.0.is_some_and(|t| !t.is_finite()) {
+        if pose.time.is_some_and(|t| !t.is_finite()) {
             return Err(PyValueError::new_err(
-                "time must be a finite number of seconds",
+                "time must be a finite number (glTF seconds, USD time code)",
             ));
         }
-        if pose.1.is_some() && pose.0.is_none() {
+        if pose.animation.is_some() && pose.time.is_none() {
             return Err(PyValueError::new_err("animation needs a time"));
         }
+        let variants = pose
+            .variants
+            .iter()
+            .map(|(set, name)| {
+                import::usd::parse_choice(&format!("{set}={name}")).map_err(PyValueError::new_err)
+            })
+            .collect::<PyResult<Vec<_>>>()?;
         let options = LoadOptions {
             scene: choice.clone(),
-            time: pose.0,
-            animation: pose.1.clone(),
+            time: pose.time,
+            animation: pose.animation.clone(),
+            variants,
             ..LoadOptions::default()
         };
         let loaded = py.detach(|| {
@@ -109,19 +129,26 @@ impl PyScene {
 }
 
 /// Loads the scene file `path` (`scene`: a glTF scene by index or name, a USD prim path;
-/// `time`, `animation`: the glTF animations played to that time).
+/// `time`, `animation`: the glTF animations played to that time, or the USD time code;
+/// `variants`: USD (set, variant) selections).
 #[pyfunction]
-#[pyo3(signature = (path, scene = None, time = None, animation = None))]
+#[pyo3(signature = (path, scene = None, time = None, animation = None, variants = None))]
 pub fn load_path(
     py: Python<'_>,
     path: PathBuf,
     scene: Option<String>,
     time: Option<f64>,
     animation: Option<String>,
+    variants: Option<Vec<(String, String)>>,
 ) -> PyResult<PyScene> {
     // Absolute, so that a pickled scene loads in a worker with another working folder.
     let path = std::path::absolute(&path).unwrap_or(path);
-    PyScene::build(py, Source::Path(path), scene, (time, animation))
+    let pose = Pose {
+        time,
+        animation,
+        variants: variants.unwrap_or_default(),
+    };
+    PyScene::build(py, Source::Path(path), scene, pose)
 }
 
 /// Loads a scene from bytes, as if read from the file `name` (its extension is the format).
@@ -135,7 +162,12 @@ pub fn load_bytes(
     time: Option<f64>,
     animation: Option<String>,
 ) -> PyResult<PyScene> {
-    PyScene::build(py, Source::Bytes { data, name }, scene, (time, animation))
+    let pose = Pose {
+        time,
+        animation,
+        variants: Vec::new(),
+    };
+    PyScene::build(py, Source::Bytes { data, name }, scene, pose)
 }
 
 /// The rays as the Python layer hands them over: float64 (N, 3) origins and directions, and
@@ -305,10 +337,14 @@ impl PyScene {
         serde_json::to_string(&info).map_err(|e| PyValueError::new_err(e.to_string()))
     }
 
-    /// What loads this scene again: (path, None, scene, time, animation) or (bytes, name,
-    /// scene, time, animation).
+    /// What loads this scene again: (path, None, scene, time, animation, variants) or (bytes,
+    /// name, scene, time, animation, variants).
     fn source<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-        let (time, animation) = self.pose.clone();
+        let Pose {
+            time,
+            animation,
+            variants,
+        } = self.pose.clone();
         match &self.source {
             Source::Path(path) => (
                 path.clone(),
@@ -316,6 +352,7 @@ impl PyScene {
                 self.choice.clone(),
                 time,
                 animation,
+                variants,
             )
                 .into_pyobject(py),
             Source::Bytes { data, name } => (
@@ -324,6 +361,7 @@ impl PyScene {
                 self.choice.clone(),
                 time,
                 animation,
+                variants,
             )
                 .into_pyobject(py),
         }

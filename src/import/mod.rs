@@ -21,8 +21,9 @@ pub struct LoadOptions {
     pub root: Option<std::path::PathBuf>,
     /// Read external files wherever they are (`--allow-outside`).
     pub allow_outside: bool,
-    /// Evaluate the glTF file's animations at this time, in seconds (`--time`); `None`: the
-    /// nodes' own transforms and default morph weights.
+    /// `--time`: evaluate the glTF file's animations at this time, in seconds; read a USD
+    /// stage's attributes at this time code. `None`: the glTF nodes' own transforms and
+    /// default morph weights; USD's default time code.
     pub time: Option<f64>,
     /// The glTF animation to apply at `time`, by index or name (`--animation`); `None`: all.
     pub animation: Option<String>,
@@ -30,6 +31,8 @@ pub struct LoadOptions {
     /// accessors without a buffer view, which are zeros of any length) may take; `None`:
     /// the default limit ([`crate::output::request::default_memory_limit`]).
     pub max_memory: Option<u64>,
+    /// USD variant selections (`--variant SET=NAME`), applied to every prim with that set.
+    pub variants: Vec<usd::Choice>,
 }
 
 /// Loads a `.gltf`, `.glb`, `.obj`, `.usda`, `.usdc`, `.usd` or `.usdz` file, choosing the

@@ -99,7 +99,9 @@ enum PartKind {
     Quadric(u32),
 }
 
-/// USD stage metadata, after USD's fallbacks (`upAxis` Y, `metersPerUnit` 0.01).
+/// USD stage metadata, after USD's fallbacks (`upAxis` Y, `metersPerUnit` 0.01), and the
+/// time code and variant selections drawn. The fields after `metersPerUnit` are left out of
+/// JSON when the stage has nothing to say there (a static stage's records are unchanged).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct StageInfo {
@@ -107,6 +109,42 @@ pub struct StageInfo {
     pub up_axis: String,
     /// Metres per scene unit.
     pub meters_per_unit: f64,
+    /// `timeCodesPerSecond` (fallbacks `framesPerSecond`, 24), when the stage authors a time
+    /// range or its drawn prims have time samples.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_codes_per_second: Option<f64>,
+    /// `startTimeCode` and `endTimeCode`, when both are authored.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_code_range: Option<[f64; 2]>,
+    /// The time code drawn (`--time`); `None`: the default time code.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time: Option<f64>,
+    /// Attribute specs of the stage's layers that author time samples.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub time_sampled_attributes: usize,
+    /// Variant sets of the drawn prims, with their choices and selections.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub variant_sets: Vec<VariantSetInfo>,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
+/// One variant set of one prim (see [`StageInfo`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct VariantSetInfo {
+    /// The prim's path.
+    pub prim: String,
+    /// The set's name.
+    pub set: String,
+    /// Its variants, sorted by name (as usd-core's `GetVariantNames`).
+    pub choices: Vec<String>,
+    /// The selection the layers author (or compose by fallback), before `--variant`.
+    pub authored: Option<String>,
+    /// The selection drawn: `--variant`'s where it names this set, else the authored one.
+    pub selected: Option<String>,
 }
 
 /// What a glTF file can pose and what was drawn: its animations, skins and morph targets, and

@@ -225,3 +225,36 @@ def test_load_poses_gltf_animations_at_a_time():
         raycast.load(path, animation=0)
     with pytest.raises(raycast.SceneError, match="no animation 'run'"):
         raycast.load(path, time=1.0, animation="run")
+
+
+def test_load_reads_usd_at_a_time_code_and_with_variants():
+    """``time=`` reads a USD stage at a time code and ``variants=`` selects variants, as
+    ``--time`` and ``--variant`` do: the bounds of the meshes are those of usd-core's world
+    points (fixtures/usd/posed/*.reference.json, tools/make_usd_pose_fixtures.sh), and a pickled
+    scene keeps both."""
+    import json
+
+    folder = ROOT / "fixtures" / "usd" / "posed"
+    timed = json.loads((folder / "time_samples.reference.json").read_text())
+    case = next(c for c in timed["cases"] if c["time"] == 30.5)
+    scene = raycast.load(folder / "time_samples.usda", time=30.5)
+    deform = next(o for o in scene.objects if o["name"] == "/World/Deform")
+    points = np.reshape(case["meshes"][0]["points"], (-1, 3))
+    assert case["meshes"][0]["path"] == "/World/Deform"
+    assert np.allclose(
+        deform["bounds"],
+        [points.min(axis=0), points.max(axis=0)],
+        rtol=0,
+        atol=1e-12,
+    )
+    assert np.array_equal(pickle.loads(pickle.dumps(scene)).bounds, scene.bounds)
+
+    chosen = json.loads((folder / "variants.reference.json").read_text())["cases"][3]
+    assert chosen["variants"] == {"shape": "tri", "detail": "high"}
+    tri = raycast.load(folder / "variants.usda", variants=chosen["variants"])
+    points = np.reshape(chosen["meshes"][0]["points"], (-1, 3))
+    assert np.allclose(tri.bounds, [points.min(axis=0), points.max(axis=0)], rtol=0, atol=1e-12)
+    again = pickle.loads(pickle.dumps(tri))
+    assert [o["name"] for o in again.objects] == ["/World/Thing/Tri"]
+    with pytest.raises(raycast.SceneError, match="choices: ball, box, tri"):
+        raycast.load(folder / "variants.usda", variants={"shape": "cone"})

@@ -42,6 +42,10 @@ COMMANDS = {
     ),
     "random-quadrics": ("random_quadric_scenes", "write random quadric scenes for validation"),
     "usd-counts": ("usd_counts", "count what a USD stage draws, with usd-core"),
+    "usd-pose-reference": (
+        "usd_pose_reference",
+        "usd-core's reading of fixtures/usd/posed at time codes and variants (issue 28)",
+    ),
     "thread-scaling": ("thread_scaling", "octree and BVH2 trace time from 1 to 16 threads"),
     "check-scale": (
         "check_scale",

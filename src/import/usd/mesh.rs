@@ -1,6 +1,6 @@
 //! UsdGeomMesh: polygons triangulated as fans in the prim's local space.
 
-use super::value;
+use super::value::{self, At};
 use crate::scene::Mesh;
 use openusd::usd::Prim;
 
@@ -23,24 +23,25 @@ pub enum MeshRead {
 /// `subdivisionScheme`. Malformed data (a value of the wrong type, an index out of range,
 /// counts that do not add up to the index count) skips the mesh with a warning, as
 /// usd-core's imaging does; the error only reports a failure to read the stage.
-pub fn read(prim: &Prim) -> Result<MeshRead, String> {
-    match read_checked(prim) {
+pub fn read(prim: &Prim, at: At) -> Result<MeshRead, String> {
+    match read_checked(prim, at) {
         Ok(read) => Ok(read),
         Err(message) => Ok(MeshRead::Skip(format!("{message}: mesh skipped"))),
     }
 }
 
-fn read_checked(prim: &Prim) -> Result<MeshRead, String> {
+fn read_checked(prim: &Prim, at: At) -> Result<MeshRead, String> {
     let path = prim.path();
-    let points = value::vec3s(prim, "points")?;
-    let counts = value::ints(prim, "faceVertexCounts")?;
-    let indices = value::ints(prim, "faceVertexIndices")?;
+    let points = value::vec3s(prim, "points", at)?;
+    let counts = value::ints(prim, "faceVertexCounts", at)?;
+    let indices = value::ints(prim, "faceVertexIndices", at)?;
     let (Some(points), Some(counts), Some(indices)) = (points, counts, indices) else {
-        let animated = ["points", "faceVertexCounts", "faceVertexIndices"]
-            .iter()
-            .any(|name| value::has_time_samples(prim, name));
+        let animated = at.time().is_none()
+            && ["points", "faceVertexCounts", "faceVertexIndices"]
+                .iter()
+                .any(|name| value::has_time_samples(prim, name));
         let why = if animated {
-            "has time-sampled points or topology but no default value"
+            "has time-sampled points or topology but no default value (--time CODE reads them)"
         } else {
             "has no points or faces"
         };
@@ -79,7 +80,7 @@ fn read_checked(prim: &Prim) -> Result<MeshRead, String> {
             points.len()
         )));
     }
-    let left_handed = match value::token(prim, "orientation")?.as_deref() {
+    let left_handed = match value::token(prim, "orientation", at)?.as_deref() {
         None | Some("rightHanded") => false,
         Some("leftHanded") => true,
         Some(other) => {
@@ -90,7 +91,7 @@ fn read_checked(prim: &Prim) -> Result<MeshRead, String> {
     };
     // USD's fallback subdivisionScheme is catmullClark: a mesh is a subdivision surface
     // unless it says `none`.
-    let subdivided = value::token(prim, "subdivisionScheme")?.as_deref() != Some("none");
+    let subdivided = value::token(prim, "subdivisionScheme", at)?.as_deref() != Some("none");
     let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(indices.len());
     let mut degenerate_faces = 0;
     let mut start = 0usize;

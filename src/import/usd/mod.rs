@@ -14,23 +14,29 @@
 //! - `def` prims only (not `over` or `class`), active, not `invisible`, purpose neither
 //!   `guide` nor `proxy`.
 //!
-//! Attribute values are read at the default time code, as usd-core does for
-//! `UsdTimeCode::Default()`. Composition problems (a missing referenced file, an unresolved
+//! Attribute values are read at `--time CODE` as usd-core's `UsdAttribute::Get(time)` reads
+//! them, or at the default time code, as usd-core does for `UsdTimeCode::Default()`
+//! ([`value`]); `--variant SET=NAME` selections are authored in memory as the walk meets
+//! their prims ([`variants`]); point instancers are in [`instancer`]. Composition problems (a missing referenced file, an unresolved
 //! payload) are warnings. The file format is read by openusd; docs/usd.md has the details.
 
 mod confine;
+mod instancer;
 mod mesh;
 mod quadric;
 mod shapes;
 mod value;
+mod variants;
 mod xform;
+
+pub use variants::{parse_choice, Choice};
 
 use super::LoadOptions;
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
 use crate::quadric::Quadric;
 use crate::scene::{Mesh, Scene, SceneBuilder, StageInfo};
-use glam::{DMat4, DVec3};
+use glam::DMat4;
 use openusd::sdf;
 use openusd::usd::{Prim, Stage};
 use shapes::Part;
@@ -89,7 +95,7 @@ pub(crate) fn text_nesting(bytes: &[u8]) -> Option<usize> {
 }
 
 /// Deepest nesting of point instancers (a prototype that instances itself is refused).
-const MAX_INSTANCER_DEPTH: usize = 16;
+pub(super) const MAX_INSTANCER_DEPTH: usize = 16;
 
 /// Most prims one file may expand to, counting every instance.
 const MAX_PRIM_VISITS: usize = 20_000_000;
@@ -200,6 +206,8 @@ fn load_stage(
     }
     .map_err(|e| fail(format!("cannot open the USD stage: {e:#}")))?;
     let mut loader = Loader {
+        at: value::At::new(options.time),
+        variants: variants::Variants::new(options.variants.clone()),
         stage: stage.clone(),
         builder: SceneBuilder::new(),
         warnings: Vec::new(),
@@ -215,6 +223,9 @@ fn load_stage(
             .map_err(fail)?;
     }
     let mut builder = std::mem::take(&mut loader.builder);
+    let variant_sets = std::mem::replace(&mut loader.variants, variants::Variants::new(Vec::new()))
+        .finish()
+        .map_err(fail)?;
     let (unread, errors): (Vec<String>, Vec<String>) = stage
         .composition_errors()
         .into_iter()
@@ -251,8 +262,45 @@ fn load_stage(
     if builder.object_count() == 0 {
         builder.warn("the stage holds no triangles or quadrics");
     }
-    builder.set_stage(stage_info(&stage));
+    let (sampled, first) = time_sampled_attributes(&stage);
+    if let Some(first) = first.filter(|_| options.time.is_none()) {
+        builder.warn(format!(
+            "the stage has time samples ({sampled} attribute specs, such as {first}): drawn at \
+             the default time code, as usd-core's Usd.TimeCode.Default() reads it; --time CODE \
+             draws it at a time code"
+        ));
+    }
+    let mut info = stage_info(&stage);
+    if sampled > 0 || info.time_code_range.is_some() || options.time.is_some() {
+        info.time_codes_per_second = Some(stage.time_codes_per_second());
+    }
+    info.time = options.time;
+    info.time_sampled_attributes = sampled;
+    info.variant_sets = variant_sets;
+    builder.set_stage(info);
     Ok(builder.finish(path.to_path_buf()))
+}
+
+/// How many attribute specs of the stage's loaded layers author time samples, and the first
+/// of them by path (one pass over the specs once the walk has loaded every layer it needs).
+fn time_sampled_attributes(stage: &Stage) -> (usize, Option<String>) {
+    let mut count = 0;
+    let mut first: Option<sdf::Path> = None;
+    for identifier in stage.layer_identifiers() {
+        let Some(layer) = stage.layer(&identifier) else {
+            continue;
+        };
+        let data = layer.data();
+        for path in data.spec_paths() {
+            if path.is_property_path() && data.has_field(&path, "timeSamples") {
+                count += 1;
+                if first.as_ref().is_none_or(|f| path.as_str() < f.as_str()) {
+                    first = Some(path);
+                }
+            }
+        }
+    }
+    (count, first.map(|p| p.to_string()))
 }
 
 /// The stage's `upAxis` and `metersPerUnit`, with USD's fallbacks (Y, 0.01) where they are
@@ -268,14 +316,22 @@ fn stage_info(stage: &Stage) -> StageInfo {
         Ok(Some(sdf::Value::Float(m))) => f64::from(m),
         _ => 0.01,
     };
+    let time_code_range = stage
+        .has_authored_time_code_range()
+        .then(|| [stage.start_time_code(), stage.end_time_code()]);
     StageInfo {
         up_axis,
         meters_per_unit,
+        time_codes_per_second: None,
+        time_code_range,
+        time: None,
+        time_sampled_attributes: 0,
+        variant_sets: Vec::new(),
     }
 }
 
 /// What an instance of a point instancer collects while its prototype is walked.
-struct Instance {
+pub(super) struct Instance {
     /// Object name of the instance: `instancer[i]`.
     name: String,
     /// Path of the prototype root being walked.
@@ -327,6 +383,10 @@ struct Loader {
     /// Point-instancer prototypes that live under their instancer: never drawn in place.
     excluded: HashSet<String>,
     visits: usize,
+    /// When values are read (`--time`).
+    at: value::At,
+    /// Variant sets met, and the `--variant` choices.
+    variants: variants::Variants,
 }
 
 /// `true` when the type carries a transform (UsdGeomXformable); the ops of untyped prims
@@ -338,7 +398,7 @@ fn is_xformable(type_name: &str) -> bool {
     )
 }
 
-fn err(prim: &Prim, e: impl std::fmt::Display) -> String {
+pub(super) fn err(prim: &Prim, e: impl std::fmt::Display) -> String {
     format!("{}: {e:#}", prim.path())
 }
 
@@ -422,7 +482,7 @@ impl Loader {
         if !is_xformable(type_name) {
             return Ok(parent);
         }
-        let local = xform::local_transform(prim, &mut self.warnings)?;
+        let local = xform::local_transform(prim, self.at, &mut self.warnings)?;
         let world = if local.resets {
             local.matrix
         } else {
@@ -473,15 +533,17 @@ impl Loader {
             // `over` without a `def` anywhere, and `class`, are not drawn (nor their subtree).
             _ => return Ok(()),
         }
+        // A chosen variant changes what the prim composes: before anything else is read.
+        self.variants.visit(&self.stage, prim)?;
         if !prim.is_active().map_err(|e| err(prim, e))? {
             self.note("inactive prims skipped", prim);
             return Ok(());
         }
-        if value::token(prim, "visibility")?.as_deref() == Some("invisible") {
+        if value::token(prim, "visibility", self.at)?.as_deref() == Some("invisible") {
             self.note("invisible prims skipped", prim);
             return Ok(());
         }
-        let purpose = match value::token(prim, "purpose")? {
+        let purpose = match value::token(prim, "purpose", self.at)? {
             Some(p) => Some(Rc::from(p.as_str())),
             None => purpose,
         };
@@ -489,7 +551,7 @@ impl Loader {
         let type_name = type_name.as_deref().unwrap_or("").to_string();
         let world = if is_instance_root {
             // A point-instance prototype keeps its own transform under the instance's.
-            let local = xform::local_transform(prim, &mut self.warnings)?;
+            let local = xform::local_transform(prim, self.at, &mut self.warnings)?;
             parent_world * local.matrix
         } else {
             self.world_of(prim, parent_world)?
@@ -548,7 +610,7 @@ impl Loader {
                 }
             }
         } else if shapes::is_shape(type_name) {
-            match shapes::parts(prim, type_name)? {
+            match shapes::parts(prim, type_name, self.at)? {
                 Err(reason) => self.warnings.push(reason),
                 Ok(parts) => {
                     for part in parts {
@@ -572,7 +634,7 @@ impl Loader {
             self.camera(prim, &name, world)?;
         }
         if quadric::has_quadric(prim)? {
-            let quadric = quadric::read(prim)
+            let quadric = quadric::read(prim, self.at)
                 .and_then(|spec| Quadric::new(&spec, world))
                 .map_err(|e| format!("{source}: raycast:quadric: {e}"))?;
             let id = target.id(&mut self.builder);
@@ -590,7 +652,7 @@ impl Loader {
         if let Some(cached) = self.meshes.get(&key) {
             return Ok(cached.clone());
         }
-        let read = match mesh::read(prim)? {
+        let read = match mesh::read(prim, self.at)? {
             mesh::MeshRead::Skip(reason) => {
                 self.warnings.push(reason);
                 None
@@ -625,11 +687,12 @@ impl Loader {
             ));
             return Ok(());
         };
-        let focal = value::scalar(prim, "focalLength")?.unwrap_or(50.0);
-        let horizontal = value::scalar(prim, "horizontalAperture")?.unwrap_or(20.955);
-        let vertical = value::scalar(prim, "verticalAperture")?.unwrap_or(15.2908);
-        let [near, far] = value::vec2(prim, "clippingRange")?.unwrap_or([1.0, 1e6]);
-        let projection = value::token(prim, "projection")?.unwrap_or_else(|| "perspective".into());
+        let focal = value::scalar(prim, "focalLength", self.at)?.unwrap_or(50.0);
+        let horizontal = value::scalar(prim, "horizontalAperture", self.at)?.unwrap_or(20.955);
+        let vertical = value::scalar(prim, "verticalAperture", self.at)?.unwrap_or(15.2908);
+        let [near, far] = value::vec2(prim, "clippingRange", self.at)?.unwrap_or([1.0, 1e6]);
+        let projection =
+            value::token(prim, "projection", self.at)?.unwrap_or_else(|| "perspective".into());
         let positive = |x: f64| x.is_finite() && x > 0.0;
         if !positive(horizontal) || !positive(vertical) {
             self.warnings.push(format!(
@@ -657,7 +720,7 @@ impl Loader {
             }
         };
         for offset in ["horizontalApertureOffset", "verticalApertureOffset"] {
-            if value::scalar(prim, offset)?.is_some_and(|x| x != 0.0) {
+            if value::scalar(prim, offset, self.at)?.is_some_and(|x| x != 0.0) {
                 self.warnings.push(format!(
                     "{}: camera {offset} is not supported (ignored)",
                     prim.path()
@@ -673,129 +736,6 @@ impl Loader {
             zfar: Some(far).filter(|f| f.is_finite()),
             to_world,
         });
-        Ok(())
-    }
-
-    /// A UsdGeomPointInstancer: each instance walks its prototype with the instance
-    /// transform `world · T(position) · R(orientation) · S(scale)`, collecting its
-    /// triangles into one object named `name[i]`.
-    fn point_instancer(
-        &mut self,
-        prim: &Prim,
-        world: DMat4,
-        outer: &mut Option<Instance>,
-        depth: usize,
-    ) -> std::result::Result<(), String> {
-        let path = prim.path().to_string();
-        if depth >= MAX_INSTANCER_DEPTH {
-            return Err(format!(
-                "{path}: point instancers nest deeper than {MAX_INSTANCER_DEPTH} (a prototype instancing itself?)"
-            ));
-        }
-        let targets = prim
-            .relationship("prototypes")
-            .targets()
-            .map_err(|e| err(prim, e))?;
-        let targets: Vec<Prim> = targets.into_iter().map(|t| self.stage.prim(t)).collect();
-        // Prototypes under their instancer are drawn only through it.
-        for target in &targets {
-            let target_path = target.path().to_string();
-            if target_path.starts_with(&format!("{path}/")) {
-                self.excluded.insert(target_path);
-            }
-        }
-        let skip = |loader: &mut Self, why: String| {
-            loader
-                .warnings
-                .push(format!("{path}: point instancer {why}: nothing drawn"));
-            Ok(())
-        };
-        let Some(indices) = value::ints(prim, "protoIndices")? else {
-            return skip(self, "has no protoIndices".into());
-        };
-        let n = indices.len();
-        let Some(positions) = value::vec3s(prim, "positions")? else {
-            return skip(self, "has no positions".into());
-        };
-        if positions.len() != n {
-            return skip(
-                self,
-                format!("has {} positions for {n} protoIndices", positions.len()),
-            );
-        }
-        let orientations = match value::quats(prim, "orientations")? {
-            Some(q) => Some(q),
-            None => value::quats(prim, "orientationsf")?,
-        };
-        let scales = value::vec3s(prim, "scales")?;
-        for (what, len) in [
-            ("orientations", orientations.as_ref().map(Vec::len)),
-            ("scales", scales.as_ref().map(Vec::len)),
-        ] {
-            if let Some(len) = len.filter(|&len| len != n) {
-                return skip(self, format!("has {len} {what} for {n} protoIndices"));
-            }
-        }
-        let ids = value::ints(prim, "ids")?;
-        if let Some(ids) = ids.as_ref().filter(|ids| ids.len() != n) {
-            return skip(self, format!("has {} ids for {n} protoIndices", ids.len()));
-        }
-        // usd-core's ComputeMaskAtTime: neither invisible nor deactivated ids are drawn
-        let hidden: HashSet<i64> = value::ints(prim, "invisibleIds")?
-            .unwrap_or_default()
-            .into_iter()
-            .chain(value::int64_list_metadata(prim, "inactiveIds")?.unwrap_or_default())
-            .collect();
-        let base_name = Self::object_name(prim, outer);
-        let mut bad_index = 0usize;
-        for i in 0..n {
-            let id = ids.as_ref().map_or(i as i64, |ids| ids[i]);
-            if hidden.contains(&id) {
-                continue;
-            }
-            let Some(target) = usize::try_from(indices[i])
-                .ok()
-                .and_then(|k| targets.get(k))
-            else {
-                bad_index += 1;
-                continue;
-            };
-            // As usd-core's ComputeInstanceTransformsAtTime: the quaternion goes into the
-            // rotation formula as stored, not normalised (half-precision orientations are a
-            // little off unit length, and usd-core places them so).
-            let rotation = orientations
-                .as_ref()
-                .map(|q| q[i])
-                .filter(|q| q.is_finite())
-                .unwrap_or(glam::DQuat::IDENTITY);
-            let scale = scales.as_ref().map_or(DVec3::ONE, |s| s[i]);
-            let instance_world =
-                world * DMat4::from_scale_rotation_translation(scale, rotation, positions[i]);
-            // Nested in an outer instance, this instance draws into the outer one's object.
-            let mut inner = Some(match outer {
-                Some(outer) => Instance {
-                    name: outer.name.clone(),
-                    root: target.path().to_string(),
-                    source: outer.source.clone(),
-                    object: outer.object,
-                },
-                None => Instance {
-                    name: format!("{base_name}[{i}]"),
-                    root: target.path().to_string(),
-                    source: path.clone(),
-                    object: None,
-                },
-            });
-            self.walk(target, instance_world, None, &mut inner, depth + 1)?;
-            if let (Some(outer), Some(inner)) = (outer.as_mut(), inner) {
-                outer.object = inner.object;
-            }
-        }
-        if bad_index > 0 {
-            self.warnings.push(format!(
-                "{path}: {bad_index} instances have a protoIndex with no prototype: skipped"
-            ));
-        }
         Ok(())
     }
 }

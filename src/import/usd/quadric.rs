@@ -2,7 +2,7 @@
 //! with the same forms, rules and errors as the glTF extension `RAYCAST_quadric`
 //! (docs/RAYCAST_quadric.md, docs/usd.md).
 
-use super::value;
+use super::value::{self, At};
 use crate::quadric::QuadricSpec;
 use openusd::usd::Prim;
 
@@ -26,24 +26,24 @@ pub fn has_quadric(prim: &Prim) -> Result<bool, String> {
 
 /// Reads the quadric of a prim that has `raycast:quadric:` properties. The error does not
 /// name the prim (the caller prefixes it).
-pub fn read(prim: &Prim) -> Result<QuadricSpec, String> {
+pub fn read(prim: &Prim, at: At) -> Result<QuadricSpec, String> {
     let strip = |e: String| {
         // value readers name `<prim>.<attr>`: keep only the attribute part.
         let prefix = format!("{}.", prim.path());
         e.strip_prefix(&prefix).map(str::to_string).unwrap_or(e)
     };
-    let min = value::vec3(prim, BOUNDS_MIN).map_err(strip)?;
-    let max = value::vec3(prim, BOUNDS_MAX).map_err(strip)?;
+    let min = value::vec3(prim, BOUNDS_MIN, at).map_err(strip)?;
+    let max = value::vec3(prim, BOUNDS_MAX, at).map_err(strip)?;
     let bounds = match (min, max) {
         (Some(min), Some(max)) => Some([min, max]),
         (None, None) => None,
         (Some(_), None) => return Err(format!("{BOUNDS_MIN} is given without {BOUNDS_MAX}")),
         (None, Some(_)) => return Err(format!("{BOUNDS_MAX} is given without {BOUNDS_MIN}")),
     };
-    let coefficients = value::numbers(prim, COEFFICIENTS).map_err(strip)?;
-    let q = value::matrix3_rows(prim, Q).map_err(strip)?;
-    let p = value::vec3(prim, P).map_err(strip)?;
-    let r = value::scalar(prim, R).map_err(strip)?;
+    let coefficients = value::numbers(prim, COEFFICIENTS, at).map_err(strip)?;
+    let q = value::matrix3_rows(prim, Q, at).map_err(strip)?;
+    let p = value::vec3(prim, P, at).map_err(strip)?;
+    let r = value::scalar(prim, R, at).map_err(strip)?;
     let matrix_form = q.is_some() || p.is_some() || r.is_some();
     match (coefficients, matrix_form) {
         (Some(_), true) => Err(format!(

@@ -20,7 +20,7 @@
 //! planar), the rim is a polygon inscribed in the circle (largest gap `r·(1 − cos(π/N))`,
 //! 1.9e-5 of the radius).
 
-use super::value;
+use super::value::{self, At};
 use crate::quadric::QuadricSpec;
 use glam::{DMat4, DVec3, DVec4};
 use openusd::usd::Prim;
@@ -54,8 +54,8 @@ pub fn is_shape(type_name: &str) -> bool {
 }
 
 /// A positive, finite size attribute with its fallback.
-fn size(prim: &Prim, name: &str, fallback: f64) -> Result<f64, String> {
-    let x = value::scalar(prim, name)?.unwrap_or(fallback);
+fn size(prim: &Prim, name: &str, fallback: f64, at: At) -> Result<f64, String> {
+    let x = value::scalar(prim, name, at)?.unwrap_or(fallback);
     if x.is_finite() && x >= 0.0 {
         Ok(x)
     } else {
@@ -67,8 +67,8 @@ fn size(prim: &Prim, name: &str, fallback: f64) -> Result<f64, String> {
 }
 
 /// The `axis` token (fallback `Z`) as the canonical → local permutation.
-fn axis_frame(prim: &Prim) -> Result<(char, DMat4), String> {
-    let axis = value::token(prim, "axis")?.unwrap_or_else(|| "Z".into());
+fn axis_frame(prim: &Prim, at: At) -> Result<(char, DMat4), String> {
+    let axis = value::token(prim, "axis", at)?.unwrap_or_else(|| "Z".into());
     let cols = |u: DVec3, v: DVec3, w: DVec3| {
         DMat4::from_cols(
             u.extend(0.0),
@@ -87,12 +87,12 @@ fn axis_frame(prim: &Prim) -> Result<(char, DMat4), String> {
 
 /// The surfaces of a gprim; `Ok(Err(reason))` when it has nothing to draw (a warning), `Err`
 /// for an attribute that cannot be read as its schema says.
-pub fn parts(prim: &Prim, type_name: &str) -> Result<Result<Vec<Part>, String>, String> {
+pub fn parts(prim: &Prim, type_name: &str, at: At) -> Result<Result<Vec<Part>, String>, String> {
     let path = prim.path();
     let empty = |what: &str| Ok(Err(format!("{path}: {type_name} with {what}: skipped")));
     match type_name {
         "Sphere" => {
-            let r = size(prim, "radius", 1.0)?;
+            let r = size(prim, "radius", 1.0, at)?;
             if r == 0.0 {
                 return empty("radius 0");
             }
@@ -100,7 +100,7 @@ pub fn parts(prim: &Prim, type_name: &str) -> Result<Result<Vec<Part>, String>, 
             Ok(Ok(vec![part]))
         }
         "Cube" => {
-            let s = size(prim, "size", 2.0)?;
+            let s = size(prim, "size", 2.0, at)?;
             if s == 0.0 {
                 return empty("size 0");
             }
@@ -109,32 +109,32 @@ pub fn parts(prim: &Prim, type_name: &str) -> Result<Result<Vec<Part>, String>, 
             }]))
         }
         "Cylinder" | "Cylinder_1" | "Cone" => {
-            let h = size(prim, "height", 2.0)?;
+            let h = size(prim, "height", 2.0, at)?;
             let (bottom, top) = match type_name {
-                "Cone" => (size(prim, "radius", 1.0)?, 0.0),
+                "Cone" => (size(prim, "radius", 1.0, at)?, 0.0),
                 "Cylinder" => {
-                    let r = size(prim, "radius", 1.0)?;
+                    let r = size(prim, "radius", 1.0, at)?;
                     (r, r)
                 }
                 _ => (
-                    size(prim, "radiusBottom", 1.0)?,
-                    size(prim, "radiusTop", 1.0)?,
+                    size(prim, "radiusBottom", 1.0, at)?,
+                    size(prim, "radiusTop", 1.0, at)?,
                 ),
             };
             if h == 0.0 || (top == 0.0 && bottom == 0.0) {
                 return empty("zero height or radius");
             }
-            let (_, frame) = axis_frame(prim)?;
+            let (_, frame) = axis_frame(prim, at)?;
             let parts = frustum(bottom, top, h, frame).map_err(|e| format!("{path}: {e}"))?;
             Ok(Ok(parts))
         }
         "Capsule" | "Capsule_1" => {
-            let h = size(prim, "height", 1.0)?;
+            let h = size(prim, "height", 1.0, at)?;
             let r = if type_name == "Capsule" {
-                size(prim, "radius", 0.5)?
+                size(prim, "radius", 0.5, at)?
             } else {
-                let top = size(prim, "radiusTop", 0.5)?;
-                let bottom = size(prim, "radiusBottom", 0.5)?;
+                let top = size(prim, "radiusTop", 0.5, at)?;
+                let bottom = size(prim, "radiusBottom", 0.5, at)?;
                 if top != bottom {
                     return empty("different radiusTop and radiusBottom (not supported)");
                 }
@@ -143,7 +143,7 @@ pub fn parts(prim: &Prim, type_name: &str) -> Result<Result<Vec<Part>, String>, 
             if r == 0.0 {
                 return empty("radius 0");
             }
-            let (_, frame) = axis_frame(prim)?;
+            let (_, frame) = axis_frame(prim, at)?;
             let mut parts = Vec::new();
             if h > 0.0 {
                 parts.push(Part::Quadric {
@@ -157,9 +157,9 @@ pub fn parts(prim: &Prim, type_name: &str) -> Result<Result<Vec<Part>, String>, 
             Ok(Ok(parts))
         }
         "Plane" => {
-            let width = size(prim, "width", 2.0)?;
-            let length = size(prim, "length", 2.0)?;
-            let (axis, _) = axis_frame(prim)?;
+            let width = size(prim, "width", 2.0, at)?;
+            let length = size(prim, "length", 2.0, at)?;
+            let (axis, _) = axis_frame(prim, at)?;
             let (w, l) = (width / 2.0, length / 2.0);
             // Extents as usd-core computes them: axis X spans (y: length, z: width),
             // Y spans (x: width, z: length), Z spans (x: width, y: length).

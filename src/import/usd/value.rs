@@ -3,22 +3,65 @@
 //! Every reader returns `Ok(None)` when the attribute has no authored default value (openusd
 //! has no schema registry, so the caller applies USD's fallback), and an error naming the
 //! attribute when the authored value has a type that cannot mean what the schema says.
-//! Values are read at the default time code, as usd-core does for `UsdTimeCode::Default()`:
-//! an attribute with time samples but no default value reads as unauthored.
+//! Values are read at the time an [`At`] carries: `--time CODE` resolves time samples as
+//! usd-core's `UsdAttribute::Get(time)` does (openusd interpolates them with usd-core's
+//! arithmetic, vendor/openusd/PATCHES.md); without it, at the default time code, as usd-core
+//! does for `UsdTimeCode::Default()`: an attribute with time samples but no default value
+//! reads as unauthored.
 
 use glam::{DMat4, DQuat, DVec3};
 use openusd::sdf::Value;
-use openusd::usd::Prim;
+use openusd::usd::{Prim, TimeCode};
+
+/// When attribute values are read: a time code, or the default time code (`None`).
+#[derive(Debug, Clone, Copy)]
+pub struct At {
+    time: Option<f64>,
+}
+
+impl At {
+    /// Reads at `time` (`None`: the default time code).
+    pub fn new(time: Option<f64>) -> Self {
+        At { time }
+    }
+
+    /// The time code, `None` for the default time code.
+    pub fn time(&self) -> Option<f64> {
+        self.time
+    }
+
+    /// The lower of `prim.name`'s time samples bracketing the time (usd-core's
+    /// `_GetAttrForTransforms`, where velocities move a PointInstancer's positions on from);
+    /// the default time code when the attribute has no samples or no time is chosen.
+    pub fn held_sample(self, prim: &Prim, name: &str) -> Result<At, String> {
+        let Some(time) = self.time else {
+            return Ok(self);
+        };
+        let lower = prim
+            .attribute(name)
+            .bracketing_time_samples(TimeCode::new(time))
+            .map_err(|e| {
+                format!(
+                    "{}.{name}: cannot read its time samples: {e:#}",
+                    prim.path()
+                )
+            })?
+            .map(|(lower, _)| lower);
+        Ok(At { time: lower })
+    }
+}
 
 /// Result of a value read: the message names the attribute.
 pub type ValueResult<T> = std::result::Result<Option<T>, String>;
 
-/// The raw composed default value of `prim.name`, `None` when unauthored or blocked.
-pub fn raw(prim: &Prim, name: &str) -> ValueResult<Value> {
-    let value = prim
-        .attribute(name)
-        .get::<Value>()
-        .map_err(|e| format!("{}.{name}: cannot be read: {e}", prim.path()))?;
+/// The raw composed value of `prim.name` at `at`, `None` when unauthored or blocked.
+pub fn raw(prim: &Prim, name: &str, at: At) -> ValueResult<Value> {
+    let attribute = prim.attribute(name);
+    let value = match at.time {
+        None => attribute.get::<Value>(),
+        Some(time) => attribute.get_at::<Value>(TimeCode::new(time)),
+    }
+    .map_err(|e| format!("{}.{name}: cannot be read: {e}", prim.path()))?;
     Ok(value.filter(|v| !matches!(v, Value::ValueBlock | Value::None)))
 }
 
@@ -50,8 +93,8 @@ pub fn value_kind(value: &Value) -> String {
 }
 
 /// A scalar number (double, float, half or integer).
-pub fn scalar(prim: &Prim, name: &str) -> ValueResult<f64> {
-    let Some(value) = raw(prim, name)? else {
+pub fn scalar(prim: &Prim, name: &str, at: At) -> ValueResult<f64> {
+    let Some(value) = raw(prim, name, at)? else {
         return Ok(None);
     };
     let x = match &value {
@@ -67,8 +110,8 @@ pub fn scalar(prim: &Prim, name: &str) -> ValueResult<f64> {
 }
 
 /// A token (or string) value.
-pub fn token(prim: &Prim, name: &str) -> ValueResult<String> {
-    let Some(value) = raw(prim, name)? else {
+pub fn token(prim: &Prim, name: &str, at: At) -> ValueResult<String> {
+    let Some(value) = raw(prim, name, at)? else {
         return Ok(None);
     };
     match value {
@@ -79,8 +122,8 @@ pub fn token(prim: &Prim, name: &str) -> ValueResult<String> {
 }
 
 /// A three-component vector of any precision.
-pub fn vec3(prim: &Prim, name: &str) -> ValueResult<DVec3> {
-    let Some(value) = raw(prim, name)? else {
+pub fn vec3(prim: &Prim, name: &str, at: At) -> ValueResult<DVec3> {
+    let Some(value) = raw(prim, name, at)? else {
         return Ok(None);
     };
     match value_vec3(&value) {
@@ -133,8 +176,8 @@ pub fn value_matrix4(value: &Value) -> Option<DMat4> {
 }
 
 /// A `matrix3d` value as its nine entries, row-major (as written in the file).
-pub fn matrix3_rows(prim: &Prim, name: &str) -> ValueResult<[f64; 9]> {
-    let Some(value) = raw(prim, name)? else {
+pub fn matrix3_rows(prim: &Prim, name: &str, at: At) -> ValueResult<[f64; 9]> {
+    let Some(value) = raw(prim, name, at)? else {
         return Ok(None);
     };
     match value {
@@ -144,8 +187,8 @@ pub fn matrix3_rows(prim: &Prim, name: &str) -> ValueResult<[f64; 9]> {
 }
 
 /// An array of numbers of any numeric type.
-pub fn numbers(prim: &Prim, name: &str) -> ValueResult<Vec<f64>> {
-    let Some(value) = raw(prim, name)? else {
+pub fn numbers(prim: &Prim, name: &str, at: At) -> ValueResult<Vec<f64>> {
+    let Some(value) = raw(prim, name, at)? else {
         return Ok(None);
     };
     let list: Vec<f64> = match &value {
@@ -160,8 +203,8 @@ pub fn numbers(prim: &Prim, name: &str) -> ValueResult<Vec<f64>> {
 }
 
 /// An array of integers (`int[]`, `int64[]`, `uint[]`).
-pub fn ints(prim: &Prim, name: &str) -> ValueResult<Vec<i64>> {
-    let Some(value) = raw(prim, name)? else {
+pub fn ints(prim: &Prim, name: &str, at: At) -> ValueResult<Vec<i64>> {
+    let Some(value) = raw(prim, name, at)? else {
         return Ok(None);
     };
     let list: Vec<i64> = match &value {
@@ -175,8 +218,8 @@ pub fn ints(prim: &Prim, name: &str) -> ValueResult<Vec<i64>> {
 }
 
 /// An array of 3-vectors of any precision (`point3f[]`, `double3[]`, `half3[]`, ...).
-pub fn vec3s(prim: &Prim, name: &str) -> ValueResult<Vec<DVec3>> {
-    let Some(value) = raw(prim, name)? else {
+pub fn vec3s(prim: &Prim, name: &str, at: At) -> ValueResult<Vec<DVec3>> {
+    let Some(value) = raw(prim, name, at)? else {
         return Ok(None);
     };
     let list: Vec<DVec3> = match &value {
@@ -199,8 +242,8 @@ pub fn vec3s(prim: &Prim, name: &str) -> ValueResult<Vec<DVec3>> {
 }
 
 /// An array of quaternions of any precision.
-pub fn quats(prim: &Prim, name: &str) -> ValueResult<Vec<DQuat>> {
-    let Some(value) = raw(prim, name)? else {
+pub fn quats(prim: &Prim, name: &str, at: At) -> ValueResult<Vec<DQuat>> {
+    let Some(value) = raw(prim, name, at)? else {
         return Ok(None);
     };
     let list: Vec<DQuat> = match &value {
@@ -222,8 +265,8 @@ pub fn quats(prim: &Prim, name: &str) -> ValueResult<Vec<DQuat>> {
 }
 
 /// A 2-vector of any precision (camera `clippingRange`).
-pub fn vec2(prim: &Prim, name: &str) -> ValueResult<[f64; 2]> {
-    let Some(value) = raw(prim, name)? else {
+pub fn vec2(prim: &Prim, name: &str, at: At) -> ValueResult<[f64; 2]> {
+    let Some(value) = raw(prim, name, at)? else {
         return Ok(None);
     };
     Ok(Some(match &value {

@@ -9,7 +9,7 @@
 //!
 //! `xformOpOrder` lists ops outermost first: for `[A, B, C]` a point `p` maps to `A·B·C·p`.
 
-use super::value::{self, value_matrix4, value_quat, value_scalar, value_vec3};
+use super::value::{self, value_matrix4, value_quat, value_scalar, value_vec3, At};
 use glam::{DMat4, DQuat, DVec3};
 use openusd::sdf::Value;
 use openusd::usd::Prim;
@@ -29,8 +29,8 @@ pub struct Local {
 /// Composes the prim's `xformOpOrder`. Problems that usd-core reports as warnings (an op
 /// attribute that is not authored, an unknown op name) are pushed to `warnings` and the op
 /// is skipped; a value of the wrong type or a singular inverted op is an error.
-pub fn local_transform(prim: &Prim, warnings: &mut Vec<String>) -> Result<Local, String> {
-    let order = match value::raw(prim, "xformOpOrder")? {
+pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Result<Local, String> {
+    let order = match value::raw(prim, "xformOpOrder", at)? {
         None => {
             return Ok(Local {
                 matrix: DMat4::IDENTITY,
@@ -69,7 +69,7 @@ pub fn local_transform(prim: &Prim, warnings: &mut Vec<String>) -> Result<Local,
             Some(rest) => (true, rest),
             None => (false, entry.as_str()),
         };
-        let Some(op) = op_matrix(prim, name, warnings)? else {
+        let Some(op) = op_matrix(prim, name, at, warnings)? else {
             continue;
         };
         let op = if inverted {
@@ -114,7 +114,12 @@ fn is_property_name(name: &str) -> bool {
 }
 
 /// The matrix of one op, `None` (with a warning) when it cannot be evaluated.
-fn op_matrix(prim: &Prim, name: &str, warnings: &mut Vec<String>) -> Result<Option<DMat4>, String> {
+fn op_matrix(
+    prim: &Prim,
+    name: &str,
+    at: At,
+    warnings: &mut Vec<String>,
+) -> Result<Option<DMat4>, String> {
     let Some(rest) = name.strip_prefix("xformOp:") else {
         warnings.push(format!(
             "{}: xformOpOrder entry '{name}' is not an xformOp: ignored",
@@ -130,9 +135,9 @@ fn op_matrix(prim: &Prim, name: &str, warnings: &mut Vec<String>) -> Result<Opti
         ));
     }
     let kind = rest.split(':').next().unwrap_or(rest);
-    let Some(raw) = value::raw(prim, name)? else {
-        let why = if value::has_time_samples(prim, name) {
-            "has only time samples (read at the default time, as usd-core does)"
+    let Some(raw) = value::raw(prim, name, at)? else {
+        let why = if at.time().is_none() && value::has_time_samples(prim, name) {
+            "has only time samples (read at the default time, as usd-core does; --time CODE reads them)"
         } else {
             "is not authored"
         };

@@ -19,13 +19,13 @@
 //!   `Quatd`) interpolate via spherical linear interpolation per
 //!   the spec. Past the last sample, or for types that don't support
 //!   linear (e.g. tokens, strings, arrays whose bracketing lengths
-//!   differ), behaviour falls back to held.
+//!   differ), behaviour falls back to held. The arithmetic is C++'s
+//!   `Usd_Lerp` to the last bit (see `lerp.rs`).
 //!
-//! When the bracketing samples include a [`Value::ValueBlock`] or
-//! [`Value::None`], evaluation returns `None` — the spec semantics
-//! for a "blocked" sample.
+//! When the lower bracketing sample is a [`Value::ValueBlock`] or
+//! [`Value::None`], evaluation returns `None`; a blocked upper sample
+//! holds the lower one, as C++ `Usd_Interpolator` does.
 
-use crate::gf;
 use crate::sdf::Value;
 
 /// Stage-level interpolation mode for time-sampled attributes.
@@ -72,18 +72,21 @@ pub fn evaluate(samples: &[(f64, Value)], time: f64, mode: InterpolationType) ->
     let (t_lo, v_lo) = &samples[lo];
     let (t_hi, v_hi) = &samples[hi];
 
-    // Blocked-sample fallthrough applies regardless of mode.
-    if is_blocked(v_lo) || is_blocked(v_hi) {
+    // As C++ `_GetInterpolatingSamplesImpl` and `Usd_Interpolate`: a blocked lower sample
+    // has no value; held interpolation, samples closer than 1e-6, a blocked upper sample,
+    // samples of different types and a zero parameter hold the lower sample.
+    if is_blocked(v_lo) {
         return None;
     }
-
-    match mode {
-        InterpolationType::Held => clean(v_lo.clone()),
-        InterpolationType::Linear => {
-            let t = (time - t_lo) / (t_hi - t_lo);
-            lerp_value(v_lo, v_hi, t).or_else(|| clean(v_lo.clone()))
-        }
+    let held = mode == InterpolationType::Held
+        || (t_hi - t_lo).abs() <= 1e-6
+        || is_blocked(v_hi)
+        || std::mem::discriminant(v_lo) != std::mem::discriminant(v_hi);
+    let alpha = (time - t_lo) / (t_hi - t_lo);
+    if held || alpha == 0.0 {
+        return clean(v_lo.clone());
     }
+    super::lerp::lerp_value(v_lo, v_hi, alpha).or_else(|| clean(v_lo.clone()))
 }
 
 /// The pair of authored sample times bracketing `time`, or `None` when
@@ -124,111 +127,10 @@ fn clean(v: Value) -> Option<Value> {
     }
 }
 
-/// Component-wise lerp between two authored samples. Returns `None`
-/// when `(a, b)` aren't the same linear-interpolatable type — the
-/// caller then falls back to held. The local alias `V` avoids
-/// `use Value::*` (which would shadow `Option::None` with the
-/// `Value::None` variant in `match` arms).
-///
-/// `t` is f64 throughout; f32-sample paths narrow once at the call
-/// site so we don't double-cast f64 → f32 → f64.
-fn lerp_value(a: &Value, b: &Value, t: f64) -> Option<Value> {
-    use crate::sdf::Value as V;
-    let t32 = t as f32;
-    Some(match (a, b) {
-        (V::Half(x), V::Half(y)) => V::Half(gf::lerp_half(*x, *y, t32)),
-        (V::Float(x), V::Float(y)) => V::Float(gf::lerp(*x, *y, t32)),
-        (V::Double(x), V::Double(y)) => V::Double(gf::lerp(*x, *y, t)),
-        (V::TimeCode(x), V::TimeCode(y)) => V::TimeCode(gf::lerp(x.0, y.0, t).into()),
-
-        (V::Matrix2d(x), V::Matrix2d(y)) => V::Matrix2d(x.lerp(*y, t)),
-        (V::Matrix3d(x), V::Matrix3d(y)) => V::Matrix3d(x.lerp(*y, t)),
-        (V::Matrix4d(x), V::Matrix4d(y)) => V::Matrix4d(x.lerp(*y, t)),
-
-        (V::Vec2h(x), V::Vec2h(y)) => V::Vec2h(x.lerp(*y, t32)),
-        (V::Vec2f(x), V::Vec2f(y)) => V::Vec2f(x.lerp(*y, t32)),
-        (V::Vec2d(x), V::Vec2d(y)) => V::Vec2d(x.lerp(*y, t)),
-        (V::Vec3h(x), V::Vec3h(y)) => V::Vec3h(x.lerp(*y, t32)),
-        (V::Vec3f(x), V::Vec3f(y)) => V::Vec3f(x.lerp(*y, t32)),
-        (V::Vec3d(x), V::Vec3d(y)) => V::Vec3d(x.lerp(*y, t)),
-        (V::Vec4h(x), V::Vec4h(y)) => V::Vec4h(x.lerp(*y, t32)),
-        (V::Vec4f(x), V::Vec4f(y)) => V::Vec4f(x.lerp(*y, t32)),
-        (V::Vec4d(x), V::Vec4d(y)) => V::Vec4d(x.lerp(*y, t)),
-
-        (V::Quath(x), V::Quath(y)) => V::Quath(x.slerp(*y, t)),
-        (V::Quatf(x), V::Quatf(y)) => V::Quatf(x.slerp(*y, t)),
-        (V::Quatd(x), V::Quatd(y)) => V::Quatd(x.slerp(*y, t)),
-
-        // Array (VtArray) variants. Per C++: bracketing samples must
-        // agree on length, otherwise fall back to held.
-        (V::HalfVec(x), V::HalfVec(y)) if x.len() == y.len() => {
-            V::HalfVec(x.iter().zip(y).map(|(a, b)| gf::lerp_half(*a, *b, t32)).collect())
-        }
-        (V::FloatVec(x), V::FloatVec(y)) if x.len() == y.len() => {
-            V::FloatVec(x.iter().zip(y).map(|(a, b)| gf::lerp(*a, *b, t32)).collect())
-        }
-        (V::DoubleVec(x), V::DoubleVec(y)) if x.len() == y.len() => {
-            V::DoubleVec(x.iter().zip(y).map(|(a, b)| gf::lerp(*a, *b, t)).collect())
-        }
-        (V::TimeCodeVec(x), V::TimeCodeVec(y)) if x.len() == y.len() => {
-            V::TimeCodeVec(x.iter().zip(y).map(|(a, b)| gf::lerp(a.0, b.0, t).into()).collect())
-        }
-
-        (V::Matrix2dVec(x), V::Matrix2dVec(y)) if x.len() == y.len() => {
-            V::Matrix2dVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t)).collect())
-        }
-        (V::Matrix3dVec(x), V::Matrix3dVec(y)) if x.len() == y.len() => {
-            V::Matrix3dVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t)).collect())
-        }
-        (V::Matrix4dVec(x), V::Matrix4dVec(y)) if x.len() == y.len() => {
-            V::Matrix4dVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t)).collect())
-        }
-
-        (V::Vec2hVec(x), V::Vec2hVec(y)) if x.len() == y.len() => {
-            V::Vec2hVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t32)).collect())
-        }
-        (V::Vec2fVec(x), V::Vec2fVec(y)) if x.len() == y.len() => {
-            V::Vec2fVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t32)).collect())
-        }
-        (V::Vec2dVec(x), V::Vec2dVec(y)) if x.len() == y.len() => {
-            V::Vec2dVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t)).collect())
-        }
-        (V::Vec3hVec(x), V::Vec3hVec(y)) if x.len() == y.len() => {
-            V::Vec3hVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t32)).collect())
-        }
-        (V::Vec3fVec(x), V::Vec3fVec(y)) if x.len() == y.len() => {
-            V::Vec3fVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t32)).collect())
-        }
-        (V::Vec3dVec(x), V::Vec3dVec(y)) if x.len() == y.len() => {
-            V::Vec3dVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t)).collect())
-        }
-        (V::Vec4hVec(x), V::Vec4hVec(y)) if x.len() == y.len() => {
-            V::Vec4hVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t32)).collect())
-        }
-        (V::Vec4fVec(x), V::Vec4fVec(y)) if x.len() == y.len() => {
-            V::Vec4fVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t32)).collect())
-        }
-        (V::Vec4dVec(x), V::Vec4dVec(y)) if x.len() == y.len() => {
-            V::Vec4dVec(x.iter().zip(y).map(|(a, b)| a.lerp(*b, t)).collect())
-        }
-
-        (V::QuathVec(x), V::QuathVec(y)) if x.len() == y.len() => {
-            V::QuathVec(x.iter().zip(y).map(|(a, b)| a.slerp(*b, t)).collect())
-        }
-        (V::QuatfVec(x), V::QuatfVec(y)) if x.len() == y.len() => {
-            V::QuatfVec(x.iter().zip(y).map(|(a, b)| a.slerp(*b, t)).collect())
-        }
-        (V::QuatdVec(x), V::QuatdVec(y)) if x.len() == y.len() => {
-            V::QuatdVec(x.iter().zip(y).map(|(a, b)| a.slerp(*b, t)).collect())
-        }
-
-        _ => return None,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gf;
 
     fn samples_f64(pairs: &[(f64, f64)]) -> Vec<(f64, Value)> {
         pairs.iter().map(|(t, v)| (*t, Value::Double(*v))).collect()
@@ -280,7 +182,11 @@ mod tests {
     #[test]
     fn linear_blocked_sample_returns_none() {
         let s = vec![(0.0, Value::Double(1.0)), (10.0, Value::ValueBlock)];
+        // Between a value and a block, C++ holds the value.
+        assert_eq!(evaluate(&s, 5.0, InterpolationType::Linear), Some(Value::Double(1.0)));
+        let s = vec![(0.0, Value::ValueBlock), (10.0, Value::Double(1.0))];
         assert_eq!(evaluate(&s, 5.0, InterpolationType::Linear), None);
+        let s = vec![(0.0, Value::Double(1.0)), (10.0, Value::ValueBlock)];
         // At t == 10 exactly, the sample IS the block — return None.
         assert_eq!(evaluate(&s, 10.0, InterpolationType::Linear), None);
     }

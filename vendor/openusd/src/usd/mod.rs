@@ -12,6 +12,7 @@ mod connections;
 mod diff;
 mod editor;
 mod interp;
+mod lerp;
 mod prim;
 mod relationship;
 mod schema;

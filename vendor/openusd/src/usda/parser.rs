@@ -1290,9 +1290,11 @@ impl<'a> Parser<'a> {
     /// - `[` for any array type (scalar arrays like `int[]`,
     ///   `float[]`, `token[]`, as well as arrays of tuples like
     ///   `quatf[]` or `matrix4d[]`).
-    /// - a bare number for a scalar `timecode`, so a sample like
-    ///   `1: 24` resolves to [`sdf::Value::TimeCode`] rather than the
-    ///   type-blind path's `Int64` / `Double`.
+    /// - a bare number for a scalar numeric type (`timecode`, `half`,
+    ///   `float`, `double`, the integers), so a sample like `1: 24`
+    ///   resolves to the declared type ([`sdf::Value::TimeCode`],
+    ///   [`sdf::Value::Float`], ...) rather than the type-blind path's
+    ///   `Int64` / `Double`.
     ///
     /// Anything else (scalar literal, `None`, identifier) flows
     /// through the type-blind path so the spec corpus's lenient
@@ -1322,7 +1324,23 @@ impl<'a> Parser<'a> {
         match self.peek_next() {
             Some(Ok(Token::Punctuation('('))) => is_tuple_type,
             Some(Ok(Token::Punctuation('['))) => is_tuple_type || info.is_array,
-            Some(Ok(Token::Number(_))) => info.ty == Type::TimeCode && !info.is_array,
+            // A bare number for a scalar numeric type is read as that type (a `float`
+            // sample is a float, `0` in a `double` sample is a double), as Sdf reads it.
+            Some(Ok(Token::Number(_))) => {
+                !info.is_array
+                    && matches!(
+                        info.ty,
+                        Type::TimeCode
+                            | Type::Half
+                            | Type::Float
+                            | Type::Double
+                            | Type::Int
+                            | Type::Int64
+                            | Type::Uint
+                            | Type::Uint64
+                            | Type::Uchar
+                    )
+            }
             _ => false,
         }
     }

@@ -1,0 +1,207 @@
+//! UsdGeomPointInstancer: one object per instance, each walking its prototype under the
+//! instance transform, read as usd-core's `ComputeInstanceTransformsAtTime` reads it.
+//!
+//! At a time code, `positions`, `orientations` (or `orientationsf`) and `scales` are read at
+//! that time (interpolated, as usd-core reads them when no velocities apply). Authored
+//! `velocities`, `accelerations` and `angularVelocities`, with which usd-core instead moves
+//! the lower bracketing sample on to the time, are not applied: a warning says so when they
+//! would have moved something.
+
+use super::value::{self, At};
+use super::{err, Instance, Loader, MAX_INSTANCER_DEPTH};
+use glam::{DMat4, DQuat, DVec3};
+use openusd::usd::Prim;
+use std::collections::HashSet;
+
+/// The per-instance arrays of a point instancer, checked against `protoIndices`.
+struct Arrays {
+    indices: Vec<i64>,
+    positions: Vec<DVec3>,
+    orientations: Option<Vec<DQuat>>,
+    scales: Option<Vec<DVec3>>,
+    ids: Option<Vec<i64>>,
+    /// Ids neither drawn nor counted (usd-core's `ComputeMaskAtTime`: invisible or inactive).
+    hidden: HashSet<i64>,
+}
+
+impl Arrays {
+    /// Reads the arrays at `at`; `Ok(Err(why))` when the instancer draws nothing (a warning).
+    fn read(prim: &Prim, at: At) -> Result<Result<Arrays, String>, String> {
+        let Some(indices) = value::ints(prim, "protoIndices", at)? else {
+            return Ok(Err("has no protoIndices".into()));
+        };
+        let n = indices.len();
+        let Some(positions) = value::vec3s(prim, "positions", at)? else {
+            return Ok(Err("has no positions".into()));
+        };
+        if positions.len() != n {
+            return Ok(Err(format!(
+                "has {} positions for {n} protoIndices",
+                positions.len()
+            )));
+        }
+        let orientations = match value::quats(prim, "orientations", at)? {
+            Some(q) => Some(q),
+            None => value::quats(prim, "orientationsf", at)?,
+        };
+        let scales = value::vec3s(prim, "scales", at)?;
+        for (what, len) in [
+            ("orientations", orientations.as_ref().map(Vec::len)),
+            ("scales", scales.as_ref().map(Vec::len)),
+        ] {
+            if let Some(len) = len.filter(|&len| len != n) {
+                return Ok(Err(format!("has {len} {what} for {n} protoIndices")));
+            }
+        }
+        let ids = value::ints(prim, "ids", at)?;
+        if let Some(ids) = ids.as_ref().filter(|ids| ids.len() != n) {
+            return Ok(Err(format!("has {} ids for {n} protoIndices", ids.len())));
+        }
+        // usd-core's ComputeMaskAtTime: neither invisible nor deactivated ids are drawn
+        let hidden: HashSet<i64> = value::ints(prim, "invisibleIds", at)?
+            .unwrap_or_default()
+            .into_iter()
+            .chain(value::int64_list_metadata(prim, "inactiveIds")?.unwrap_or_default())
+            .collect();
+        Ok(Ok(Arrays {
+            indices,
+            positions,
+            orientations,
+            scales,
+            ids,
+            hidden,
+        }))
+    }
+
+    /// A warning when motion attributes that usd-core would apply at this time are authored:
+    /// at a time code between or off the samples of `positions` (`orientations`), authored
+    /// `velocities` (`angularVelocities`) move usd-core's instances on from the lower sample;
+    /// raycast interpolates the samples instead.
+    fn unused_motion(&self, prim: &Prim, at: At) -> Result<Option<String>, String> {
+        let Some(time) = at.time() else {
+            return Ok(None);
+        };
+        let mut unused = Vec::new();
+        for (motion, moved) in [
+            ("velocities", "positions"),
+            ("angularVelocities", "orientations"),
+        ] {
+            let held = at.held_sample(prim, moved)?.time();
+            let authored = value::raw(prim, motion, at)?.is_some();
+            if authored && held.is_some_and(|sample| sample != time) {
+                unused.push(motion);
+            }
+        }
+        Ok((!unused.is_empty()).then(|| {
+            format!(
+                "{}: point instancer {} not applied: instances drawn with the samples \
+                 interpolated to time {time} (usd-core moves the lower sample on by them)",
+                prim.path(),
+                unused.join(" and ")
+            )
+        }))
+    }
+}
+
+impl Loader {
+    /// A UsdGeomPointInstancer: each instance walks its prototype with the instance
+    /// transform `world · T(position) · R(orientation) · S(scale)`, collecting its
+    /// triangles into one object named `name[i]`.
+    pub(super) fn point_instancer(
+        &mut self,
+        prim: &Prim,
+        world: DMat4,
+        outer: &mut Option<Instance>,
+        depth: usize,
+    ) -> std::result::Result<(), String> {
+        let path = prim.path().to_string();
+        if depth >= MAX_INSTANCER_DEPTH {
+            return Err(format!(
+                "{path}: point instancers nest deeper than {MAX_INSTANCER_DEPTH} (a prototype instancing itself?)"
+            ));
+        }
+        let targets = prim
+            .relationship("prototypes")
+            .targets()
+            .map_err(|e| err(prim, e))?;
+        let targets: Vec<Prim> = targets.into_iter().map(|t| self.stage.prim(t)).collect();
+        // Prototypes under their instancer are drawn only through it.
+        for target in &targets {
+            let target_path = target.path().to_string();
+            if target_path.starts_with(&format!("{path}/")) {
+                self.excluded.insert(target_path);
+            }
+        }
+        let arrays = match Arrays::read(prim, self.at)? {
+            Ok(arrays) => arrays,
+            Err(why) => {
+                self.warnings
+                    .push(format!("{path}: point instancer {why}: nothing drawn"));
+                return Ok(());
+            }
+        };
+        if let Some(note) = arrays.unused_motion(prim, self.at)? {
+            self.warnings.push(note);
+        }
+        let Arrays {
+            indices,
+            positions,
+            orientations,
+            scales,
+            ids,
+            hidden,
+        } = arrays;
+        let n = indices.len();
+        let base_name = Self::object_name(prim, outer);
+        let mut bad_index = 0usize;
+        for i in 0..n {
+            let id = ids.as_ref().map_or(i as i64, |ids| ids[i]);
+            if hidden.contains(&id) {
+                continue;
+            }
+            let Some(target) = usize::try_from(indices[i])
+                .ok()
+                .and_then(|k| targets.get(k))
+            else {
+                bad_index += 1;
+                continue;
+            };
+            // As usd-core's ComputeInstanceTransformsAtTime: the quaternion goes into the
+            // rotation formula as stored, not normalised (half-precision orientations are a
+            // little off unit length, and usd-core places them so).
+            let rotation = orientations
+                .as_ref()
+                .map(|q| q[i])
+                .filter(|q| q.is_finite())
+                .unwrap_or(glam::DQuat::IDENTITY);
+            let scale = scales.as_ref().map_or(DVec3::ONE, |s| s[i]);
+            let instance_world =
+                world * DMat4::from_scale_rotation_translation(scale, rotation, positions[i]);
+            // Nested in an outer instance, this instance draws into the outer one's object.
+            let mut inner = Some(match outer {
+                Some(outer) => Instance {
+                    name: outer.name.clone(),
+                    root: target.path().to_string(),
+                    source: outer.source.clone(),
+                    object: outer.object,
+                },
+                None => Instance {
+                    name: format!("{base_name}[{i}]"),
+                    root: target.path().to_string(),
+                    source: path.clone(),
+                    object: None,
+                },
+            });
+            self.walk(target, instance_world, None, &mut inner, depth + 1)?;
+            if let (Some(outer), Some(inner)) = (outer.as_mut(), inner) {
+                outer.object = inner.object;
+            }
+        }
+        if bad_index > 0 {
+            self.warnings.push(format!(
+                "{path}: {bad_index} instances have a protoIndex with no prototype: skipped"
+            ));
+        }
+        Ok(())
+    }
+}
