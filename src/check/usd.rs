@@ -133,7 +133,7 @@ pub fn composition_finding(message: &str, f: &mut Findings) {
         .rsplit_once(" at /")
         .map(|(_, rest)| format!("/{}", rest.split([' ', ':']).next().unwrap_or("")))
         .unwrap_or_default();
-    if message.contains("no file format registered") {
+    if message.contains(import::usd::UNREAD_LAYER) || message.contains(import::usd::UNREAD_NOTE) {
         f.info("USD_UNSUPPORTED_LAYER", location, message.to_string());
     } else if message.contains("cycle") {
         f.error("USD_COMPOSITION_CYCLE", location, message.to_string());

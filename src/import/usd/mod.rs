@@ -20,6 +20,8 @@
 //! their prims ([`variants`]); point instancers are in [`instancer`]. Composition problems (a missing referenced file, an unresolved
 //! payload) are warnings. The file format is read by openusd; docs/usd.md has the details.
 
+mod composition;
+pub use composition::{UNREAD_LAYER, UNREAD_NOTE};
 mod confine;
 mod instancer;
 mod mesh;
@@ -44,9 +46,6 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::Path;
 use std::rc::Rc;
 use std::sync::Arc;
-
-/// What the USD reader says of a referenced layer whose format it cannot read.
-const UNREAD_LAYER: &str = "no file format registered";
 
 /// Deepest nesting of braces, parentheses and brackets accepted in a text layer: the USD
 /// reader parses recursively, so a hostile file could otherwise exhaust the stack.
@@ -226,22 +225,8 @@ fn load_stage(
     let variant_sets = std::mem::replace(&mut loader.variants, variants::Variants::new(Vec::new()))
         .finish()
         .map_err(fail)?;
-    let (unread, errors): (Vec<String>, Vec<String>) = stage
-        .composition_errors()
-        .into_iter()
-        .map(|e| e.to_string())
-        .partition(|e| e.contains(UNREAD_LAYER));
-    for error in errors {
-        builder.warn(format!("composition: {error}"));
-    }
-    if let Some(first) = unread.iter().min() {
-        // MaterialX (.mtlx) material layers and the like: a ray caster needs none of them, so
-        // one note for all of them, not one warning per reference.
-        builder.warn(format!(
-            "composition: {} references to layers with {UNREAD_LAYER} (such as MaterialX \
-             .mtlx materials) skipped, not needed for ray casting; first: {first}",
-            unread.len()
-        ));
+    for warning in composition::warnings(&stage) {
+        builder.warn(warning);
     }
     for warning in loader.warnings.drain(..) {
         builder.warn(warning);

@@ -1,0 +1,78 @@
+//! What the USD reader could not compose, as warnings: problems with arcs (cycles, layers
+//! that could not be read), and one note for all the layers of formats it has no reader for
+//! (MaterialX `.mtlx` materials, for instance), which a ray caster does not need.
+
+use openusd::pcp;
+use openusd::usd::Stage;
+use std::collections::BTreeSet;
+
+/// What the USD reader says of a referenced layer whose format it cannot read.
+pub const UNREAD_LAYER: &str = "no file format registered";
+
+/// The words of the one note for all such layers (`raycast check` maps it to
+/// `USD_UNSUPPORTED_LAYER`).
+pub const UNREAD_NOTE: &str = "of a format raycast does not read";
+
+/// A referenced layer of a format the reader has no reader for.
+struct Unread {
+    asset: String,
+    site: String,
+}
+
+/// The composition warnings of `stage`, each one line: every problem in its own line, and
+/// the layers of unknown formats counted in one.
+pub fn warnings(stage: &Stage) -> Vec<String> {
+    let mut unread = Vec::new();
+    let mut lines = Vec::new();
+    for error in stage.composition_errors() {
+        match &error {
+            pcp::Error::MalformedLayer {
+                asset_path,
+                site_path,
+                reason,
+                ..
+            } if reason.contains(UNREAD_LAYER) => unread.push(Unread {
+                asset: asset_path.clone(),
+                site: site_path.to_string(),
+            }),
+            _ => lines.push(format!("composition: {error}")),
+        }
+    }
+    lines.extend(unread_note(unread));
+    lines
+}
+
+/// One line for the layers of unknown formats, naming their kinds and the first of them.
+fn unread_note(mut unread: Vec<Unread>) -> Option<String> {
+    unread.sort_by(|a, b| (&a.asset, &a.site).cmp(&(&b.asset, &b.site)));
+    let first = unread.first()?;
+    let kinds: BTreeSet<String> = unread.iter().map(|u| kind_of(&u.asset)).collect();
+    let kinds: Vec<String> = kinds.into_iter().collect();
+    let count = unread.len();
+    let references = if count == 1 {
+        "reference"
+    } else {
+        "references"
+    };
+    Some(format!(
+        "composition: {count} {references} to layers {UNREAD_NOTE} ({}) skipped: materials \
+         and the like, not needed for ray casting; first: @{}@ at {}",
+        kinds.join(", "),
+        first.asset,
+        first.site
+    ))
+}
+
+/// The kind of layer an asset path names: `MaterialX .mtlx` for MaterialX, else its
+/// extension.
+fn kind_of(asset: &str) -> String {
+    let extension = std::path::Path::new(asset)
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match extension.as_str() {
+        "mtlx" => "MaterialX .mtlx".into(),
+        "" => "no extension".into(),
+        other => format!(".{other}"),
+    }
+}
