@@ -28,7 +28,8 @@ STL_DIR = FIX / "stl"
 BAD_DIR = FIX / "bad"
 FILES = FixtureFiles(ROOT)
 
-# The cube's faces as quads whose fans (0,1,2), (0,2,3) are the cube's triangles in order.
+# The cube's faces as quads, face by face in the cube's order; their fans (0,1,2), (0,2,3) are
+# the cube's triangles, but for -Z, whose two triangles come in the other order.
 CUBE_QUADS = [[4, 5, 6, 7], [0, 3, 2, 1], [1, 2, 6, 5], [0, 4, 7, 3], [3, 7, 6, 2], [0, 1, 5, 4]]
 
 PLY_TYPES = {
