@@ -48,7 +48,11 @@ PLY_TYPES = {
 
 def ply_header(fmt: str, vertex_props, n_vertices: int, faces, index: str, extra: str = "") -> str:
     """A PLY header: `vertex_props` [(type, name)], a face list `index` = (count, item, name)."""
-    lines = ["ply", f"format {fmt} 1.0", "comment raycast tools/raycast_tools/make_mesh_fixtures.py"]
+    lines = [
+        "ply",
+        f"format {fmt} 1.0",
+        "comment raycast tools/raycast_tools/make_mesh_fixtures.py",
+    ]
     lines.append(f"element vertex {n_vertices}")
     lines += [f"property {t} {name}" for t, name in vertex_props]
     if faces is not None:
@@ -89,7 +93,9 @@ def make_ply() -> None:
     props = xyz_float + [("float", "confidence"), ("uchar", "red")]
     rows = [list(p) + [0.5, 7] for p in v]
     material = "element material 1\nproperty uchar diffuse_red\nproperty float shininess"
-    head = ply_header("binary_little_endian", props, 8, f, ("uchar", "int", "vertex_indices"), material)
+    head = ply_header(
+        "binary_little_endian", props, 8, f, ("uchar", "int", "vertex_indices"), material
+    )
     body = ply_binary("little", props, rows, f.tolist(), ("uchar", "int", "vertex_indices"))
     body += struct.pack("<Bf", 255, 0.25)
     FILES.write_bytes(PLY_DIR / "cube_binary_le.ply", head.encode() + body)
@@ -108,7 +114,9 @@ def make_ply() -> None:
     points += [[2, 0, 0], [3, 0, 0], [3, 1, 0], [2, 1, 0]]  # quad 3 4 5 6
     points += [[4, 0, 0], [6, 0, 0], [6, 1, 0], [5, 2, 0], [4, 1, 0]]  # pentagon 7..11
     faces = [[0, 1, 2], [3, 4, 5, 6], [7, 8, 9, 10, 11]]
-    head = ply_header("binary_little_endian", xyz_float, 12, faces, ("uint8", "ushort", "vertex_indices"))
+    head = ply_header(
+        "binary_little_endian", xyz_float, 12, faces, ("uint8", "ushort", "vertex_indices")
+    )
     body = ply_binary("little", xyz_float, points, faces, ("uint8", "ushort", "vertex_indices"))
     FILES.write_bytes(PLY_DIR / "polygons_binary_le.ply", head.encode() + body)
 
@@ -149,7 +157,9 @@ def make_stl() -> None:
     header = b"solid cube exported as binary"
     FILES.write_bytes(STL_DIR / "cube_binary_solid.stl", stl_binary(header, tris))
     # Two solids: the cube, and a plate (the quad at z = -2, 2 triangles), upper-case keywords.
-    plate = np.array([[[-1, -1, -2], [1, -1, -2], [1, 1, -2]], [[-1, -1, -2], [1, 1, -2], [-1, 1, -2]]])
+    plate = np.array(
+        [[[-1, -1, -2], [1, -1, -2], [1, 1, -2]], [[-1, -1, -2], [1, 1, -2], [-1, 1, -2]]]
+    )
     text = f"solid cube\n{stl_facets(tris)}endsolid cube\n"
     text += f"SOLID plate\n{stl_facets(plate.astype(float)).upper()}ENDSOLID plate\n"
     FILES.write_bytes(STL_DIR / "two_solids.stl", text.encode())
