@@ -236,3 +236,32 @@ fn ply_polygons_triangulate_as_the_same_obj_faces_do() {
         obj.mesh_triangles(&obj.objects[0])
     );
 }
+
+/// An ASCII solid of `n` facets: a strip of triangles along x.
+fn strip_solid(name: &str, n: usize) -> String {
+    let mut text = format!("solid {name}\n");
+    for i in 0..n {
+        let x = i as f64;
+        text += &format!(
+            "facet normal 0 0 1\nouter loop\nvertex {x} 0 0\nvertex {} 0 0\nvertex {x} 1 0\n\
+             endloop\nendfacet\n",
+            x + 1.0
+        );
+    }
+    text + "endsolid\n"
+}
+
+#[test]
+fn equal_solids_follow_the_instancing_rule() {
+    let options = LoadOptions::default();
+    let load_text = |text: String| {
+        import::load_bytes(text.into_bytes(), std::path::Path::new("s.stl"), &options).unwrap()
+    };
+    // Two equal solids of 16 triangles: stored once, drawn twice, one id each.
+    let scene = load_text(strip_solid("a", 16) + &strip_solid("b", 16));
+    assert_eq!((scene.objects.len(), scene.triangle_count()), (2, 32));
+    assert_eq!(scene.stored_triangle_count(), 16);
+    // Below the rule's 16 triangles they are copied into the world mesh.
+    let scene = load_text(strip_solid("a", 15) + &strip_solid("b", 15));
+    assert_eq!(scene.stored_triangle_count(), 30);
+}
