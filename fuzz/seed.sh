@@ -14,6 +14,8 @@ seed() {
 seed gltf '\.(gltf|glb)$' fixtures/gltf fixtures/gltf-validator fixtures/malformed fixtures/bad fixtures/compressed
 seed obj '\.obj$' fixtures/obj fixtures/bad fixtures/assets fuzz/seeds/obj
 seed usd '\.(usda|usdc|usd)$' fixtures/usd
-for t in gltf obj usd; do
+seed ply '\.ply$' fixtures/ply fixtures/bad
+seed stl '\.stl$' fixtures/stl fixtures/bad
+for t in gltf obj usd ply stl; do
     echo "$t: $(ls "fuzz/corpus/$t" | wc -l) seeds"
 done

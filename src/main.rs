@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-/// Exact ray casting of glTF, USD and OBJ scenes with triangle meshes and analytic quadrics.
+/// Exact ray casting of glTF, USD, OBJ, PLY and STL scenes with triangle meshes and analytic
+/// quadrics.
 #[derive(Parser)]
 #[command(
     name = "raycast",
@@ -42,7 +43,7 @@ enum Command {
 
 #[derive(Args)]
 struct InfoArgs {
-    /// Scene files (.gltf, .glb, .obj, .usda, .usdc, .usd, .usdz).
+    /// Scene files (.gltf, .glb, .obj, .ply, .stl, .usda, .usdc, .usd, .usdz).
     #[arg(required = true)]
     scenes: Vec<PathBuf>,
     /// glTF scene by index or name.
@@ -146,7 +147,7 @@ impl PathArgs {
 
 #[derive(Args)]
 struct RenderArgs {
-    /// Scene file (.gltf, .glb, .obj, .usda, .usdc, .usd, .usdz).
+    /// Scene file (.gltf, .glb, .obj, .ply, .stl, .usda, .usdc, .usd, .usdz).
     #[arg(required = true)]
     scene: Option<PathBuf>,
     /// Buffers to compute: depth, z, t, normal, position, bary, id, prim.

@@ -1,4 +1,4 @@
-"""raycast: exact ray queries on glTF, USD and OBJ scenes, for numpy users.
+"""raycast: exact ray queries on glTF, USD, OBJ, PLY and STL scenes, for numpy users.
 
 >>> import numpy as np, raycast
 >>> scene = raycast.load("fixtures/gltf/cube.gltf")            # doctest: +SKIP
@@ -55,7 +55,8 @@ def load(
     Parameters
     ----------
     path : str or os.PathLike
-        A ``.gltf``, ``.glb``, ``.obj``, ``.usda``, ``.usdc``, ``.usd`` or ``.usdz`` file.
+        A ``.gltf``, ``.glb``, ``.obj``, ``.ply``, ``.stl``, ``.usda``, ``.usdc``, ``.usd`` or
+        ``.usdz`` file.
     scene : str or int, optional
         glTF: the scene by index or name (default: the file's default scene); USD: a prim path
         whose subtree is drawn.
@@ -99,7 +100,7 @@ def load_bytes(
     Parameters
     ----------
     data : bytes
-        The file's content: glTF, GLB or OBJ (USD is read from files only).
+        The file's content: glTF, GLB, OBJ, PLY or STL (USD is read from files only).
     name : str
         A file name: its extension gives the format, it names the scene in messages, and its
         folder is where a glTF's external buffers are read from.
@@ -174,6 +175,12 @@ class Scene:
         output), ``name``, ``kind`` (``mesh`` or ``quadric``), ``source``, ``triangles`` and
         ``bounds`` ([min, max])."""
         return self._scene.objects()
+
+    def triangles(self, id: int) -> np.ndarray:
+        """Object ``id``'s triangles in world coordinates: a (T, 3, 3) float64 array, row ``i``
+        the triangle whose ``prim`` is ``i`` (empty for a quadric). Raises ValueError for an
+        id no object has."""
+        return self._scene.triangles(int(id))
 
     @property
     def bounds(self) -> np.ndarray:

@@ -315,6 +315,18 @@ impl PyScene {
             .collect()
     }
 
+    /// Object `id`'s triangles in world coordinates, a (T, 3, 3) float64 array in the order of
+    /// its `prim` numbers (empty for a quadric).
+    fn triangles<'py>(&self, py: Python<'py>, id: u32) -> PyResult<Bound<'py, PyAny>> {
+        let object = id
+            .checked_sub(1)
+            .and_then(|i| self.scene.objects.get(i as usize))
+            .ok_or_else(|| PyValueError::new_err(format!("no object has id {id}")))?;
+        let triangles = self.scene.mesh_triangles(object);
+        let values = triangles.iter().flatten().flat_map(|p| p.to_array());
+        array(py, &[triangles.len(), 3, 3], values.collect())
+    }
+
     /// World bounds [[xmin, ymin, zmin], [xmax, ymax, zmax]].
     fn bounds(&self) -> [[f64; 3]; 2] {
         let b = self.scene.world_bounds();

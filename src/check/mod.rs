@@ -17,6 +17,7 @@ pub mod gltf;
 pub mod golden;
 pub mod layers;
 pub mod merge;
+pub mod meshes;
 pub mod obj;
 pub mod report;
 pub mod run;
@@ -230,7 +231,7 @@ pub struct AssetReport {
     /// The asset's path relative to the folder named on the command line (the file name for
     /// a file named directly), with `/` separators: the key assets are sorted and sharded by.
     pub relpath: String,
-    /// `gltf`, `glb`, `obj` or `usd`.
+    /// `gltf`, `glb`, `obj`, `ply`, `stl` or `usd`.
     pub format: String,
     /// `ok`, `warning` or `error`: the worst severity among the findings (infos are `ok`).
     pub status: Status,
@@ -333,6 +334,8 @@ pub fn format_of(path: &Path) -> Option<&'static str> {
         "gltf" => Some("gltf"),
         "glb" => Some("glb"),
         "obj" => Some("obj"),
+        "ply" => Some("ply"),
+        "stl" => Some("stl"),
         "usd" | "usda" | "usdc" | "usdz" => Some("usd"),
         _ => None,
     }
@@ -418,8 +421,8 @@ pub fn discover(paths: &[PathBuf]) -> Result<Vec<Asset>, String> {
             }
             if in_dir.is_empty() {
                 return Err(format!(
-                    "{}: no assets in this folder (searched for .gltf, .glb, .obj, .usd, .usda, \
-                     .usdc and .usdz files)",
+                    "{}: no assets in this folder (searched for .gltf, .glb, .obj, .ply, .stl, \
+                     .usd, .usda, .usdc and .usdz files)",
                     path.display()
                 ));
             }
@@ -528,7 +531,7 @@ fn check_into(
         findings.error(
             "UNSUPPORTED_FILE_TYPE",
             "",
-            "not a .gltf, .glb, .obj, .usd, .usda, .usdc or .usdz file",
+            format!("not a {} file", import::FILE_TYPES),
         );
         return None;
     };
@@ -553,6 +556,7 @@ fn check_into(
             }
             import::obj::load(path)
         }
+        "ply" | "stl" => Ok(meshes::check(path, format, findings)?),
         _ => {
             if !usd::precheck(path, options, findings) {
                 return None;

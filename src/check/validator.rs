@@ -53,12 +53,15 @@ pub struct Message<'a> {
     pub pointer: &'a str,
 }
 
-/// The media type the validator would give (glTF), or the registered one (OBJ, USD).
+/// The media type the validator would give (glTF), or the registered one (OBJ, STL, USD).
 fn mime_type(report: &AssetReport) -> &'static str {
     match report.format.as_str() {
         "gltf" => "model/gltf+json",
         "glb" => "model/gltf-binary",
         "obj" => "model/obj",
+        "stl" => "model/stl",
+        // PLY has no registered media type; this is the unregistered one tools give it.
+        "ply" => "model/x-ply",
         _ if report.relpath.to_ascii_lowercase().ends_with(".usdz") => "model/vnd.usdz+zip",
         _ => "model/vnd.usda",
     }

@@ -13,8 +13,8 @@ use std::process::ExitCode;
 /// Arguments of `raycast check`.
 #[derive(Args, Debug, Clone)]
 pub struct CheckArgs {
-    /// Asset files, or folders searched recursively for .gltf, .glb, .obj, .usd, .usda,
-    /// .usdc and .usdz files (with --merge: the shard files).
+    /// Asset files, or folders searched recursively for .gltf, .glb, .obj, .ply, .stl, .usd,
+    /// .usda, .usdc and .usdz files (with --merge: the shard files).
     #[arg(required = true)]
     pub paths: Vec<PathBuf>,
     /// Print one JSON object per asset (JSON Lines) instead of the text report; with --shard,

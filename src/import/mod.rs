@@ -4,7 +4,9 @@ pub mod gltf;
 pub mod obj;
 pub mod obj_text;
 pub mod paths;
+pub mod ply;
 pub mod sniff;
+pub mod stl;
 pub mod usd;
 
 use crate::error::{Error, ErrorKind, Result};
@@ -35,14 +37,19 @@ pub struct LoadOptions {
     pub variants: Vec<usd::Choice>,
 }
 
-/// Loads a `.gltf`, `.glb`, `.obj`, `.usda`, `.usdc`, `.usd` or `.usdz` file, choosing the
-/// importer by extension after checking that the content is that format.
+/// The file types the importers read, as messages list them.
+pub const FILE_TYPES: &str = ".gltf, .glb, .obj, .ply, .stl, .usda, .usdc, .usd or .usdz";
+
+/// The warning of every reader for a scene with nothing to draw.
+pub const EMPTY_SCENE: &str = "the scene holds no triangles or quadrics";
+
+/// Loads a `.gltf`, `.glb`, `.obj`, `.ply`, `.stl`, `.usda`, `.usdc`, `.usd` or `.usdz` file,
+/// choosing the importer by extension after checking that the content is that format.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     if path == Path::new("-") {
         return Err(Error::in_file(
             path,
-            "standard input is not read: give the path of a scene file (.gltf, .glb, .obj, \
-             .usda, .usdc, .usd or .usdz)",
+            format!("standard input is not read: give the path of a scene file ({FILE_TYPES})"),
         ));
     }
     let extension = extension_of(path);
@@ -50,6 +57,8 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     let mut scene = match extension.as_str() {
         "gltf" | "glb" => gltf::load(path, options),
         "obj" => obj::load(path),
+        "ply" => ply::load(path),
+        "stl" => stl::load(path),
         "usda" | "usdc" | "usd" | "usdz" => usd::load(path, options),
         _ => Err(unsupported(path)),
     }?;
@@ -59,14 +68,16 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
 
 /// Loads a scene from `bytes` in memory, as if they had been read from the file `name`: its
 /// extension chooses the importer, it names the scene in messages, and its folder is where a
-/// glTF's external files resolve (under the same rule as [`load`]'s). glTF, GLB and OBJ only:
-/// the USD reader reads files.
+/// glTF's external files resolve (under the same rule as [`load`]'s). glTF, GLB, OBJ, PLY and
+/// STL only: the USD reader reads files.
 pub fn load_bytes(bytes: Vec<u8>, name: &Path, options: &LoadOptions) -> Result<Scene> {
     let extension = extension_of(name);
     sniff::check_head(name, &bytes, &extension)?;
     let mut scene = match extension.as_str() {
         "gltf" | "glb" => gltf::load_bytes(bytes, name, options),
         "obj" => obj::load_bytes(&bytes, name),
+        "ply" => ply::load_bytes(&bytes, name),
+        "stl" => stl::load_bytes(&bytes, name),
         "usda" | "usdc" | "usd" | "usdz" => Err(Error::in_file(
             name,
             "USD scenes load from a file, not from bytes (the USD reader resolves layers by path)",
@@ -86,10 +97,18 @@ pub fn extension_of(path: &Path) -> String {
         .unwrap_or_default()
 }
 
+/// A path's file name without its extension, naming the one object of a PLY or binary STL
+/// file (`mesh` when the path has none).
+pub(crate) fn file_stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "mesh".to_string())
+}
+
 fn unsupported(path: &Path) -> Error {
     Error::in_file(
         path,
-        "unsupported file type (expected .gltf, .glb, .obj, .usda, .usdc, .usd or .usdz)",
+        format!("unsupported file type (expected {FILE_TYPES})"),
     )
 }
 

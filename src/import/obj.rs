@@ -119,7 +119,7 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
     }
     if triangles == 0 {
         // The words of the glTF and USD readers' warning for an empty scene.
-        builder.warn("the scene holds no triangles or quadrics");
+        builder.warn(super::EMPTY_SCENE);
     }
     Ok(builder.finish(path.to_path_buf()))
 }

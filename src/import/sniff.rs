@@ -13,8 +13,9 @@ struct Magic {
 }
 
 /// Formats with an unambiguous signature. A `.gltf` may hold a GLB and a `.usd` either USD
-/// encoding, as their readers accept.
-const MAGICS: [Magic; 4] = [
+/// encoding, as their readers accept. Text that starts with `solid` is an STL file, ASCII or
+/// binary (binary exporters often begin their header with the word).
+const MAGICS: [Magic; 7] = [
     Magic {
         prefix: b"glTF",
         what: "a binary glTF (GLB)",
@@ -34,6 +35,21 @@ const MAGICS: [Magic; 4] = [
         prefix: b"PK\x03\x04",
         what: "a zip archive (usdz)",
         extensions: &["usdz"],
+    },
+    Magic {
+        prefix: b"ply\n",
+        what: "a PLY mesh (ply)",
+        extensions: &["ply"],
+    },
+    Magic {
+        prefix: b"ply\r\n",
+        what: "a PLY mesh (ply)",
+        extensions: &["ply"],
+    },
+    Magic {
+        prefix: b"solid",
+        what: "an STL mesh (stl)",
+        extensions: &["stl"],
     },
 ];
 
@@ -61,8 +77,13 @@ pub fn check_content(path: &Path, extension: &str) -> Result<()> {
 }
 
 /// Refuses content whose leading bytes `head` show another format than the extension
-/// `extension` (lower case) of `path`, naming what the content is.
+/// `extension` (lower case) of `path`, naming what the content is. A `.stl` file is not
+/// judged by its first bytes: a binary STL's header is free text, which may begin with any
+/// of the signatures (`glTF` in a converter's name, say); its reader tells what it is not.
 pub fn check_head(path: &Path, head: &[u8], extension: &str) -> Result<()> {
+    if extension == "stl" {
+        return Ok(());
+    }
     match MAGICS.iter().find(|m| head.starts_with(m.prefix)) {
         Some(m) if !m.extensions.contains(&extension) => Err(Error::in_file(
             path,
@@ -94,5 +115,15 @@ mod tests {
             .message
             .contains("is a folder"));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn ply_and_stl_content_is_named_and_stl_headers_are_free_text() {
+        let e = check_head(Path::new("scan.obj"), b"ply\r\nformat", "obj").unwrap_err();
+        assert!(e.message.contains("a PLY mesh (ply)"), "{e}");
+        let e = check_head(Path::new("part.ply"), b"solid part", "ply").unwrap_err();
+        assert!(e.message.contains("rename it to .stl"), "{e}");
+        assert!(check_head(Path::new("scan.ply"), b"ply\n", "ply").is_ok());
+        assert!(check_head(Path::new("x.stl"), b"glTF converter", "stl").is_ok());
     }
 }

@@ -147,6 +147,8 @@ def test_load_errors_are_typed(tmp_path):
     assert not isinstance(raised.value, FileNotFoundError)
     assert str(broken) in str(raised.value)
     with pytest.raises(raycast.SceneError, match="unsupported file type"):
+        raycast.load_bytes(b"<model/>", "x.3mf")
+    with pytest.raises(raycast.SceneError, match="has no 'endsolid' line"):
         raycast.load_bytes(b"solid x", "x.stl")
     with pytest.raises(raycast.UsageError, match="USD scenes load from a file"):
         raycast.load_bytes(b"#usda 1.0\n", "x.usda")

@@ -375,7 +375,7 @@ def test_cli_exit_codes(tmp_path, fake_raycast):
 
 def real_scenes():
     out = []
-    for sub in ("gltf", "obj"):
+    for sub in ("gltf", "obj", "ply", "stl"):
         d = FIXTURES / sub
         if d.exists():
             out += [p for p, skip in validate.find_scenes([d]) if skip is None]

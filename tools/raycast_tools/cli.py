@@ -27,6 +27,7 @@ COMMANDS = {
     ),
     "error-vs-time": ("error_vs_time", "depth error against run time (reports/error_vs_time.md)"),
     "fixtures": ("make_fixtures", "write the glTF/OBJ fixtures under fixtures/"),
+    "mesh-fixtures": ("make_mesh_fixtures", "write the PLY and STL fixtures (ply/, stl/, bad/)"),
     "exact-fixtures": (
         "make_exact_fixtures",
         "write fixtures/exact/ (far OBJ, nested far glTF, PointInstancer)",

@@ -3,7 +3,7 @@
     python -m raycast_tools validate SCENE_OR_DIR... [--rays N] [--seed S] [--json] [--raycast PATH]
                                    [--max-rays-f64 N] [--camera] [--keep DIR]
 
-For each scene (.gltf/.glb/.obj; directories are searched recursively; files in a
+For each scene (.gltf/.glb/.obj/.ply/.stl; directories are searched recursively; files in a
 `bad/` folder, files trimesh cannot load and files trimesh is known to load wrongly
 are skipped with a stated reason) this generates N deterministic rays, runs
 `raycast SCENE --rays rays.npy --aov depth,normal,id,prim --out TMP --quiet` and
@@ -122,7 +122,7 @@ TRIMESH_BAD_EXTENSIONS = {
     "KHR_meshopt_compression": "trimesh cannot decode meshopt",
 }
 
-SCENE_EXTS = {".gltf", ".glb", ".obj"}
+SCENE_EXTS = {".gltf", ".glb", ".obj", ".ply", ".stl"}
 
 
 # ------------------------------------------------------------------ scene discovery
@@ -168,7 +168,7 @@ def find_scenes(paths):
             elif poses(f):
                 out.append((f, "skinned or morphed (trimesh poses neither; see gltf_pose.rs)"))
             elif f.suffix.lower() not in SCENE_EXTS:
-                out.append((f, "not a .gltf/.glb/.obj file"))
+                out.append((f, "not a .gltf/.glb/.obj/.ply/.stl file"))
             else:
                 out.append((f, None))
     return out
@@ -219,6 +219,9 @@ class RefScene:
     offsets: np.ndarray = field(init=False)
     normals: np.ndarray = field(init=False)  # (T,3) front-face unit normal (0 if degenerate)
     quadrics: list = field(default_factory=list)
+    # Whether each object's triangles are in raycast's prim order (not for a PLY with polygons:
+    # trimesh splits its quads apart from its triangles, raycast fans each face in file order).
+    prim_order: bool = True
     header: dict | None = None
     notes: list = field(default_factory=list)
 
@@ -360,6 +363,8 @@ def load_reference(path: Path) -> RefScene:
     suffix = path.suffix.lower()
     if suffix == ".obj":
         return _load_obj(path)
+    if suffix in (".ply", ".stl"):
+        return _load_mesh_file(path)
     header = qref.load_gltf_json(path)
     used = set(header.get("extensionsUsed", []))
     plain = path.with_name(path.stem + ".plain.glb")
@@ -455,6 +460,46 @@ def _load_obj(path: Path) -> RefScene:
         tris = v[np.asarray(geom.faces)] @ np.asarray(T)[:3, :3].T + np.asarray(T)[:3, 3]
         objects.append(RefObject(f"obj:{gname}", str(gname), -1, tris, False))
     ref = RefScene(path, objects)
+    ref.finish()
+    return ref
+
+
+def _ply_face_count(path: Path) -> int | None:
+    """The count of a PLY header's `face` element (None when it has none)."""
+    with open(path, "rb") as f:
+        for raw in f:
+            words = raw.decode("ascii", "replace").split()
+            if words[:2] == ["element", "face"] and len(words) == 3:
+                return int(words[2])
+            if words == ["end_header"]:
+                return None
+    return None
+
+
+def _load_mesh_file(path: Path) -> RefScene:
+    """PLY and STL through trimesh's readers (process=False: vertices and faces as read):
+    one object per mesh, keyed as raycast's source (`ply:<file stem>`, `stl:<solid name>` or
+    `stl:<file stem>` for a binary or unnamed solid)."""
+    import trimesh
+
+    kind = path.suffix.lower()[1:]
+    scene = trimesh.load(str(path), force="scene", process=False)
+    objects = []
+    for frame in scene.graph.nodes_geometry:
+        T, gname = scene.graph[frame]
+        geom = scene.geometry[gname]
+        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
+            continue
+        v = np.asarray(geom.vertices, dtype=np.float64)
+        tris = v[np.asarray(geom.faces)] @ np.asarray(T)[:3, :3].T + np.asarray(T)[:3, 3]
+        name = Path(str(gname)).stem if str(gname).lower().endswith(f".{kind}") else str(gname)
+        objects.append(RefObject(f"{kind}:{name}", name, -1, tris, False))
+    ref = RefScene(path, objects)
+    if kind == "ply":
+        faces = _ply_face_count(path)
+        ref.prim_order = faces is None or faces == sum(len(o.tris) for o in objects)
+    if not ref.prim_order:
+        ref.notes.append("prims not compared: trimesh orders a PLY's polygons apart")
     ref.finish()
     return ref
 
@@ -665,7 +710,7 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
         rc_obj[(rid == oid) & (rprim >= triangles)] = -(node + 2)
     # raycast's own hit triangle, for graze and edge tests
     rc_tri = np.full(n, -1, dtype=np.int64)
-    okr = rc_obj >= 0
+    okr = (rc_obj >= 0) & ref.prim_order
     if okr.any():
         k = rc_obj[okr]
         counts = ref.offsets[k + 1] - ref.offsets[k]
@@ -738,7 +783,7 @@ def compare(ref: RefScene, origins, unit, rc, max_f64, label="rays"):
             )
             if label_ == "mesh":
                 bi = bh & (rc_obj == ref_obj)
-                if bi.any():
+                if bi.any() and ref.prim_order:
                     pok = float((rc_tri[bi] == ref_tri[bi]).mean())
                     check("prim_agreement", pok, pok >= TOL["prim_agreement"])
             err = np.abs(rdepth[bh] - ref_depth[bh])

@@ -95,8 +95,7 @@ pub fn build_at(
         walk.builder.note_decoded(line);
     }
     if walk.builder.object_count() == 0 {
-        walk.builder
-            .warn("the scene holds no triangles or quadrics");
+        walk.builder.warn(crate::import::EMPTY_SCENE);
     }
     Ok(walk.builder.finish(path.to_path_buf()))
 }
