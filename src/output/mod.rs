@@ -8,6 +8,7 @@ pub mod exr;
 pub mod npy;
 pub mod npz;
 pub mod ownership;
+pub mod palette;
 pub mod png;
 pub mod request;
 pub mod sidecar;
