@@ -613,6 +613,12 @@ fn importer_warning(format: &str, warning: &str, findings: &mut Findings) {
             usd::composition_finding(rest, findings);
             return;
         }
+        if let Some((location, _)) = warning.split_once(": cannot be read: ") {
+            // A value the file holds but the reader cannot decode (a corrupt crate field):
+            // the file is broken there, though the render skips the prim and goes on.
+            findings.error("USD_UNREADABLE_VALUE", location, warning.to_string());
+            return;
+        }
     }
     let location = warning
         .split_once(": ")

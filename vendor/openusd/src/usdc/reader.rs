@@ -547,8 +547,7 @@ impl<R: io::Read + io::Seek> CrateFile<R> {
     fn read_compressed<T: Default + NoUninit + AnyBitPattern>(&mut self, estimated_count: usize) -> Result<Vec<T>> {
         // Read data to memory.
         let compressed_size = self.reader.read_count()?;
-        let mut input = vec![0_u8; compressed_size];
-        self.reader.read_exact(&mut input)?;
+        let input: Vec<u8> = self.reader.read_vec(compressed_size)?;
 
         // Decompress to output buffer.
         let mut output = vec![T::default(); estimated_count];
@@ -1204,7 +1203,7 @@ impl<R: io::Read + io::Seek> CrateFile<R> {
 
                 let list = self.read_list_op(value, |file: &mut Self| {
                     let count = file.reader.read_count()?;
-                    let mut vec = Vec::with_capacity(count);
+                    let mut vec = Vec::with_capacity(count.min(PREALLOCATE_LIMIT));
 
                     for _ in 0..count {
                         let reference = file.read_reference()?;
@@ -1306,7 +1305,7 @@ impl<R: io::Read + io::Seek> CrateFile<R> {
             Type::PayloadListOp => {
                 let list = self.read_list_op(value, |file: &mut Self| {
                     let count = file.reader.read_count()?;
-                    let mut vec = Vec::with_capacity(count);
+                    let mut vec = Vec::with_capacity(count.min(PREALLOCATE_LIMIT));
                     for _ in 0..count {
                         let payload = file.read_payload()?;
                         vec.push(payload);
@@ -1326,7 +1325,7 @@ impl<R: io::Read + io::Seek> CrateFile<R> {
                 self.set_position(value.payload())?;
 
                 let count = self.reader.read_count()?;
-                let mut map = HashMap::with_capacity(count);
+                let mut map = HashMap::with_capacity(count.min(PREALLOCATE_LIMIT));
 
                 for _ in 0..count {
                     let key = self.read_string()?;
@@ -1430,7 +1429,7 @@ impl<R: io::Read + io::Seek> CrateFile<R> {
                 ensure!(!value.is_inlined());
                 self.set_position(value.payload())?;
                 let count = self.reader.read_count()?;
-                let mut pairs = Vec::with_capacity(count);
+                let mut pairs = Vec::with_capacity(count.min(PREALLOCATE_LIMIT));
                 for _ in 0..count {
                     let src_idx: u32 = self.reader.read_pod()?;
                     let tgt_idx: u32 = self.reader.read_pod()?;
@@ -1502,6 +1501,13 @@ fn decompress_lz4(mut input: &[u8], output: &mut [u8]) -> Result<usize> {
     }
 }
 
+/// Most elements reserved ahead for a list whose length the file gives; the list grows past
+/// it as elements are actually read.
+const PREALLOCATE_LIMIT: usize = 1 << 16;
+
+/// Bytes [`ReadExt::read_vec`] allocates ahead of what it has read.
+const READ_VEC_CHUNK_BYTES: usize = 1 << 20;
+
 pub trait ReadExt {
     /// Read a single "size" or "count" value encoded as `u64`.
     ///
@@ -1537,9 +1543,19 @@ impl<R: io::Read> ReadExt for R {
             return Ok(Vec::new());
         }
 
-        let mut vec = vec![T::default(); count];
-        self.read_exact(cast_slice_mut(&mut vec))
-            .context("Unable to read vec")?;
+        // A count comes from the file: read in chunks, so that a corrupt count runs into the
+        // end of the data instead of allocating what it claims (2^54 bytes, say) up front.
+        let chunk = (READ_VEC_CHUNK_BYTES / mem::size_of::<T>().max(1)).max(1);
+        let mut vec = Vec::new();
+        let mut left = count;
+        while left > 0 {
+            let start = vec.len();
+            let n = left.min(chunk);
+            vec.resize(start + n, T::default());
+            self.read_exact(cast_slice_mut(&mut vec[start..]))
+                .context("Unable to read vec")?;
+            left -= n;
+        }
 
         Ok(vec)
     }
