@@ -19,6 +19,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
 
+pub mod sequence;
+
 /// How to choose the camera.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CameraChoice {
@@ -144,6 +146,16 @@ pub enum Progress {
 /// The request is checked before the scene is loaded: every format and AOV must give a file,
 /// and the output folder must be writable. The buffers' memory is estimated before tracing.
 pub fn run(job: &RenderJob, progress: impl FnMut(Progress) + Send) -> Result<Sidecar> {
+    run_from(job, None, progress)
+}
+
+/// [`run`] with the scene posed from `source` (a file opened once for many runs, see
+/// [`sequence`]) at the job's time, instead of reading `job.scene`.
+pub fn run_from(
+    job: &RenderJob,
+    source: Option<&import::Source>,
+    progress: impl FnMut(Progress) + Send,
+) -> Result<Sidecar> {
     let formats = check_request(job)?;
     let out = job.out_dir();
     let created = request::prepare_folder(&out)?;
@@ -154,7 +166,7 @@ pub fn run(job: &RenderJob, progress: impl FnMut(Progress) + Send) -> Result<Sid
         .collect();
     let result = ownership::refuse_inputs(&out, &names, &inputs)
         .and_then(|()| ownership::claim(&out, &job.scene, &names))
-        .and_then(|_| run_checked(job, &formats, progress));
+        .and_then(|_| run_checked(job, source, &formats, progress));
     if result.is_err() {
         request::remove_created_folder(&out, created.as_deref());
     }
@@ -165,6 +177,7 @@ pub fn run(job: &RenderJob, progress: impl FnMut(Progress) + Send) -> Result<Sid
 /// [`run`] after the request checks.
 fn run_checked(
     job: &RenderJob,
+    source: Option<&import::Source>,
     formats: &[Format],
     progress: impl FnMut(Progress) + Send,
 ) -> Result<Sidecar> {
@@ -175,7 +188,10 @@ fn run_checked(
         .map(|path| read_rays(path, job, &mut ray_warnings))
         .transpose()?;
     let started = Instant::now();
-    let scene = import::load(&job.scene, &job.load)?;
+    let scene = match source {
+        Some(source) => source.at(job.load.time)?,
+        None => import::load(&job.scene, &job.load)?,
+    };
     let load = started.elapsed().as_secs_f64();
     let mut warnings = scene.warnings.clone();
     warnings.append(&mut ray_warnings);

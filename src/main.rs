@@ -8,6 +8,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use raycast::accel::OctreeParams;
 use raycast::import::{self, LoadOptions};
 use raycast::info::{AllObjects, SceneInfo};
+use raycast::job::sequence::{self, Times};
 use raycast::job::{self, CameraChoice, HitLimit, RenderJob};
 use raycast::output::Format;
 use raycast::render::{AccelKind, Aov};
@@ -70,9 +71,10 @@ struct InfoArgs {
 struct PoseArgs {
     /// glTF: evaluate the animations at this time in seconds (default: no animation, the
     /// nodes' own transforms and default morph weights). USD: read the stage at this time
-    /// code (default: the default time code, as usd-core's Usd.TimeCode.Default()).
-    #[arg(long, value_name = "SECONDS|CODE", value_parser = parse_finite, allow_hyphen_values = true)]
-    time: Option<f64>,
+    /// code (default: the default time code, as usd-core's Usd.TimeCode.Default()). A render
+    /// takes START:STOP:STEP too: one folder per time, <out>/NNNN-tTIME, the file read once.
+    #[arg(long, value_name = "SECONDS|CODE|START:STOP:STEP", value_parser = parse_time, allow_hyphen_values = true)]
+    time: Option<TimeArg>,
     /// The glTF animation to apply at --time, by index or name (default: all of them).
     #[arg(long, value_name = "N|NAME", requires = "time")]
     animation: Option<String>,
@@ -82,11 +84,51 @@ struct PoseArgs {
     variants: Vec<raycast::import::usd::Choice>,
 }
 
+/// `--time`: one time, or the text of a sequence START:STOP:STEP (read by [`Times`] where a
+/// sequence is allowed, so that what is wrong with it is said in one line).
+#[derive(Debug, Clone, PartialEq)]
+enum TimeArg {
+    /// One time.
+    At(f64),
+    /// A sequence, as written.
+    Sequence(String),
+}
+
+/// A finite number, or text with a colon (a sequence).
+fn parse_time(text: &str) -> Result<TimeArg, String> {
+    match text.contains(':') {
+        true => Ok(TimeArg::Sequence(text.to_string())),
+        false => parse_finite(text).map(TimeArg::At),
+    }
+}
+
 impl PoseArgs {
-    /// The same choices for a child `raycast info` (see [`probe_usd`]).
+    /// The sequence `--time START:STOP:STEP` gives, if it gives one; a usage error when it is
+    /// not a sequence raycast renders.
+    fn sequence(&self) -> raycast::Result<Option<Times>> {
+        match &self.time {
+            Some(TimeArg::Sequence(text)) => text.parse().map(Some).map_err(|e| {
+                raycast::Error::usage(format!("--time {text}: {e} (START:STOP:STEP)"))
+            }),
+            _ => Ok(None),
+        }
+    }
+
+    /// The one time `--time` gives; the first of a sequence (bad sequences are refused by
+    /// [`PoseArgs::sequence`] first).
+    fn single_time(&self) -> Option<f64> {
+        match &self.time {
+            Some(TimeArg::At(time)) => Some(*time),
+            Some(TimeArg::Sequence(text)) => text.parse::<Times>().ok().map(|t| t.time(0)),
+            None => None,
+        }
+    }
+
+    /// The same choices for a child `raycast info` (see [`probe_usd`]); the first time of a
+    /// sequence.
     fn child_args(&self) -> Vec<std::ffi::OsString> {
         let mut args: Vec<std::ffi::OsString> = Vec::new();
-        if let Some(time) = self.time {
+        if let Some(time) = self.single_time() {
             args.extend(["--time".into(), format!("{time:?}").into()]);
         }
         if let Some(animation) = &self.animation {
@@ -137,7 +179,7 @@ impl PathArgs {
             scene,
             root: self.root,
             allow_outside: self.allow_outside,
-            time: pose.time,
+            time: pose.single_time(),
             animation: pose.animation,
             variants: pose.variants,
             max_memory,
@@ -340,6 +382,11 @@ enum InfoRecord {
 /// for several files, a record for each, a failed one with its error). A file that fails is
 /// reported and the others still printed; the run then fails.
 fn info(args: InfoArgs) -> raycast::Result<()> {
+    if args.pose.sequence()?.is_some() {
+        return Err(raycast::Error::usage(
+            "--time START:STOP:STEP renders a sequence; info reads one time (--time SECONDS)",
+        ));
+    }
     let mut child_args = args.paths.child_args();
     child_args.extend(args.pose.child_args());
     let options = args.paths.load_options(args.scene_choice, args.pose, None);
@@ -430,6 +477,7 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
             .build_global()
             .map_err(|e| raycast::Error::msg(format!("cannot start {threads} threads: {e}")))?;
     }
+    let times = args.pose.sequence()?;
     if let Some(scene) = &args.scene {
         let mut child_args = args.paths.child_args();
         child_args.extend(args.pose.child_args());
@@ -464,6 +512,14 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         hits: args.hits,
     };
     let bar = Progress::new(args.quiet);
+    if let Some(times) = times {
+        let outcome = sequence::run(&job, &times, |_, event| bar.update(event))?;
+        bar.finish();
+        if !args.quiet {
+            say_sequence(&job, &outcome);
+        }
+        return Ok(());
+    }
     let sidecar = job::run(&job, |event| bar.update(event))?;
     bar.finish();
     if !args.quiet {
@@ -482,6 +538,37 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         );
     }
     Ok(())
+}
+
+/// What a sequence wrote: its warnings (each once), then one line.
+fn say_sequence(job: &RenderJob, outcome: &sequence::Outcome) {
+    let mut warnings: Vec<&String> = outcome.sidecars.iter().flat_map(|s| &s.warnings).collect();
+    warnings.sort();
+    warnings.dedup();
+    for warning in warnings {
+        eprintln!("raycast: warning: {warning}");
+    }
+    let sum = |part: fn(&raycast::output::sidecar::Timings) -> f64| -> f64 {
+        outcome.sidecars.iter().map(|s| part(&s.timings)).sum()
+    };
+    let folder = |f: Option<&sequence::Frame>| {
+        f.and_then(|f| f.folder.file_name())
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    eprintln!(
+        "raycast: wrote {} times to {} ({} … {}), each {} (open {:.3}s; in all: pose {:.3}s, build {:.3}s, trace {:.3}s, write {:.3}s)",
+        outcome.frames.len(),
+        job.out_dir().display(),
+        folder(outcome.frames.first()),
+        folder(outcome.frames.last()),
+        outcome.sidecars.first().map(|s| s.files.join(", ")).unwrap_or_default(),
+        outcome.open,
+        sum(|t| t.load),
+        sum(|t| t.build),
+        sum(|t| t.trace),
+        sum(|t| t.write),
+    );
 }
 
 /// AOVs in the order given, without repeats.

@@ -169,6 +169,27 @@ class Scene:
             return (load, (data, choice, time, animation, dict(variants) or None))
         return (load_bytes, (data, name, choice, time, animation))
 
+    def at(self, time: float) -> Scene:
+        """The same scene posed at another time, as ``load(path, time=time)`` with this scene's
+        other choices (``scene``, ``animation``, ``variants``) would give it, hit for hit.
+
+        A glTF file is not read again: the parsed document, its buffers decoded, is kept and
+        posed at ``time`` (except for a scene loaded without ``time``, whose animations' data
+        were not read: the file is read once more, and the scene returned keeps it). A USD stage
+        is opened again at that time code; an OBJ file has one pose.
+
+        Parameters
+        ----------
+        time : float
+            glTF seconds or USD time code (a finite number).
+
+        Returns
+        -------
+        Scene
+            A new scene; this one is unchanged.
+        """
+        return Scene(self._scene.at(float(time)))
+
     @property
     def objects(self) -> list[dict]:
         """The object table: one dict per object with ``id`` (1-based, as in the ``id``

@@ -15,6 +15,7 @@ use raycast::render::{Aov, RaySource, Rays, Tracer};
 use raycast::scene::Scene;
 use rayon::prelude::*;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Where a scene came from, so that it can be loaded again (pickling).
 #[derive(Debug, Clone)]
@@ -44,6 +45,9 @@ pub struct PyScene {
     choice: Option<String>,
     /// What posed it.
     pose: Pose,
+    /// The file as opened (a glTF document with its buffers decoded), which `at` poses again
+    /// without reading the file.
+    opened: Arc<import::Source>,
 }
 
 impl PyScene {
@@ -75,22 +79,36 @@ impl PyScene {
             variants,
             ..LoadOptions::default()
         };
-        let loaded = py.detach(|| {
-            let scene = match &source {
-                Source::Path(path) => import::load(path, &options),
-                Source::Bytes { data, name } => import::load_bytes(data.clone(), name, &options),
-            }?;
+        let opened = py.detach(|| match &source {
+            Source::Path(path) => import::open(path, &options),
+            Source::Bytes { data, name } => import::open_bytes(data.clone(), name, &options),
+        });
+        let opened = Arc::new(opened.map_err(|e| crate::to_pyerr(py, e))?);
+        PyScene::posed(py, source, choice, pose, opened)
+    }
+
+    /// The scene `opened` gives at `pose.time`, with its octree.
+    fn posed(
+        py: Python<'_>,
+        source: Source,
+        choice: Option<String>,
+        pose: Pose,
+        opened: Arc<import::Source>,
+    ) -> PyResult<PyScene> {
+        let built = py.detach(|| {
+            let scene = opened.at(pose.time)?;
             scene.build_instances();
             let octree = Octree::build(&scene, OctreeParams::default());
             Ok((scene, octree))
         });
-        let (scene, octree) = loaded.map_err(|e| crate::to_pyerr(py, e))?;
+        let (scene, octree) = built.map_err(|e| crate::to_pyerr(py, e))?;
         Ok(PyScene {
             scene,
             octree,
             source,
             choice,
             pose,
+            opened,
         })
     }
 
@@ -341,6 +359,21 @@ impl PyScene {
                 kind: Kind::Scene(c),
             })
             .collect()
+    }
+
+    /// The same file posed at `time` (glTF seconds, USD time code), as `load(..., time=time)`
+    /// with this scene's other choices: a glTF document is not read again, unless this
+    /// scene was loaded without a time (its animations' data were not read then).
+    fn at(&self, py: Python<'_>, time: f64) -> PyResult<PyScene> {
+        let pose = Pose {
+            time: Some(time),
+            ..self.pose.clone()
+        };
+        let (source, choice) = (self.source.clone(), self.choice.clone());
+        match self.opened.animating() && time.is_finite() {
+            true => PyScene::posed(py, source, choice, pose, Arc::clone(&self.opened)),
+            false => PyScene::build(py, source, choice, pose),
+        }
     }
 
     /// What `raycast info --json` prints, as a JSON string.

@@ -46,6 +46,30 @@ pub const EMPTY_SCENE: &str = "the scene holds no triangles or quadrics";
 /// Loads a `.gltf`, `.glb`, `.obj`, `.ply`, `.stl`, `.usda`, `.usdc`, `.usd` or `.usdz` file,
 /// choosing the importer by extension after checking that the content is that format.
 pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
+    open(path, options)?.at(options.time)
+}
+
+/// A scene file opened once and posed at any number of times ([`Source::at`]): a glTF file is
+/// read, parsed and decoded once; an OBJ, PLY or STL file, which has one pose, is read once; a USD stage is
+/// read again at each time (the USD reader composes a stage at one time code).
+pub enum Source {
+    /// A glTF document with its buffers decoded.
+    Gltf(Box<gltf::Prepared>),
+    /// A scene with one pose whatever the time (OBJ, PLY, STL).
+    Fixed(Box<Scene>),
+    /// A USD stage, read again at each time.
+    Usd {
+        /// The stage's file.
+        path: std::path::PathBuf,
+        /// Its options (the time is replaced at each [`Source::at`]).
+        options: LoadOptions,
+    },
+}
+
+/// Opens `path` for [`Source::at`], checking that its content is the format its extension
+/// says. A glTF file opened with `options.time` set has its animations' data loaded, so that
+/// any time can be built from it.
+pub fn open(path: &Path, options: &LoadOptions) -> Result<Source> {
     if path == Path::new("-") {
         return Err(Error::in_file(
             path,
@@ -54,39 +78,73 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     }
     let extension = extension_of(path);
     sniff::check_content(path, &extension)?;
-    let mut scene = match extension.as_str() {
-        "gltf" | "glb" => gltf::load(path, options),
-        "obj" => obj::load(path),
-        "ply" => ply::load(path),
-        "stl" => stl::load(path),
-        "usda" | "usdc" | "usd" | "usdz" => usd::load(path, options),
+    match extension.as_str() {
+        "gltf" | "glb" => Ok(Source::Gltf(Box::new(gltf::prepare_file(path, options)?))),
+        "obj" => Ok(Source::Fixed(Box::new(obj::load(path)?))),
+        "ply" => Ok(Source::Fixed(Box::new(ply::load(path)?))),
+        "stl" => Ok(Source::Fixed(Box::new(stl::load(path)?))),
+        "usda" | "usdc" | "usd" | "usdz" => Ok(Source::Usd {
+            path: path.to_path_buf(),
+            options: options.clone(),
+        }),
         _ => Err(unsupported(path)),
-    }?;
-    sort_warnings(&mut scene.warnings);
-    Ok(scene)
+    }
 }
 
-/// Loads a scene from `bytes` in memory, as if they had been read from the file `name`: its
+/// [`open`] of `bytes` in memory, as if they had been read from the file `name`: its
 /// extension chooses the importer, it names the scene in messages, and its folder is where a
 /// glTF's external files resolve (under the same rule as [`load`]'s). glTF, GLB, OBJ, PLY and
 /// STL only: the USD reader reads files.
-pub fn load_bytes(bytes: Vec<u8>, name: &Path, options: &LoadOptions) -> Result<Scene> {
+pub fn open_bytes(bytes: Vec<u8>, name: &Path, options: &LoadOptions) -> Result<Source> {
     let extension = extension_of(name);
     sniff::check_head(name, &bytes, &extension)?;
-    let mut scene = match extension.as_str() {
-        "gltf" | "glb" => gltf::load_bytes(bytes, name, options),
-        "obj" => obj::load_bytes(&bytes, name),
-        "ply" => ply::load_bytes(&bytes, name),
-        "stl" => stl::load_bytes(&bytes, name),
+    match extension.as_str() {
+        "gltf" | "glb" => Ok(Source::Gltf(Box::new(gltf::prepare(bytes, name, options)?))),
+        "obj" => Ok(Source::Fixed(Box::new(obj::load_bytes(&bytes, name)?))),
+        "ply" => Ok(Source::Fixed(Box::new(ply::load_bytes(&bytes, name)?))),
+        "stl" => Ok(Source::Fixed(Box::new(stl::load_bytes(&bytes, name)?))),
         "usda" | "usdc" | "usd" | "usdz" => Err(Error::in_file(
             name,
             "USD scenes load from a file, not from bytes (the USD reader resolves layers by path)",
         )
         .as_usage()),
         _ => Err(unsupported(name)),
-    }?;
-    sort_warnings(&mut scene.warnings);
-    Ok(scene)
+    }
+}
+
+impl Source {
+    /// The scene posed at `time` (glTF seconds, USD time code; `None`: the file's own pose),
+    /// exactly as [`load`] with that time would give it.
+    pub fn at(&self, time: Option<f64>) -> Result<Scene> {
+        let mut scene = match self {
+            Source::Gltf(prepared) => prepared.build(time)?,
+            Source::Fixed(scene) => Scene::clone(scene),
+            Source::Usd { path, options } => {
+                let options = LoadOptions {
+                    time,
+                    ..options.clone()
+                };
+                usd::load(path, &options)?
+            }
+        };
+        sort_warnings(&mut scene.warnings);
+        Ok(scene)
+    }
+
+    /// Whether [`Source::at`] can pose any time: false for a glTF document opened without a
+    /// time, whose animations' data were not read.
+    pub fn animating(&self) -> bool {
+        match self {
+            Source::Gltf(prepared) => prepared.animating(),
+            Source::Fixed(_) | Source::Usd { .. } => true,
+        }
+    }
+}
+
+/// Loads a scene from `bytes` in memory, as if they had been read from the file `name` (see
+/// [`open_bytes`]).
+pub fn load_bytes(bytes: Vec<u8>, name: &Path, options: &LoadOptions) -> Result<Scene> {
+    open_bytes(bytes, name, options)?.at(options.time)
 }
 
 /// A path's extension in lower case (empty when it has none).

@@ -8,6 +8,7 @@
 use super::diagnostics::Diagnostic;
 use super::document::{index_of, Document};
 use serde_json::Value;
+use std::sync::atomic::Ordering;
 
 /// Most values (elements × components) one accessor may decode to; it bounds what an
 /// accessor without a buffer view (not limited by the file's size) can make us allocate.
@@ -212,15 +213,21 @@ impl Document {
     /// Limits what accessors without a buffer view (zeros of any length, which the file's
     /// size does not bound) may take to `bytes` in all, at [`UNBACKED_BYTES_PER_VALUE`]; one
     /// that would pass it is refused with `ASSET_TOO_LARGE`, naming `--max-memory`.
-    pub fn limit_unbacked(&mut self, bytes: u64) {
-        self.unbacked_budget.set(bytes);
+    pub fn limit_unbacked(&self, bytes: u64) {
+        self.unbacked_budget.store(bytes, Ordering::Relaxed);
+    }
+
+    /// What accessors without a buffer view may still take: the limit of
+    /// [`Document::limit_unbacked`] less what they took since.
+    pub fn unbacked_left(&self) -> u64 {
+        self.unbacked_budget.load(Ordering::Relaxed)
     }
 
     /// Charges `values` decoded by accessor `index`, which has no buffer view, against the
     /// limit of [`Document::limit_unbacked`].
     fn charge_unbacked(&self, index: usize, count: usize, values: usize) -> Result<(), Diagnostic> {
         let need = (values as u64).saturating_mul(UNBACKED_BYTES_PER_VALUE);
-        let left = self.unbacked_budget.get();
+        let left = self.unbacked_left();
         if need > left {
             return Err(Diagnostic::error(
                 "ASSET_TOO_LARGE",
@@ -231,7 +238,8 @@ impl Document {
                 ),
             ));
         }
-        self.unbacked_budget.set(left - need);
+        // One reader charges at a time (a scene build: see `Prepared::build`).
+        self.unbacked_budget.store(left - need, Ordering::Relaxed);
         Ok(())
     }
 

@@ -9,11 +9,11 @@
 
 use super::diagnostics::{Severity, Sink};
 use serde_json::{Map, Value};
-use std::cell::Cell;
 use std::collections::HashMap;
 use std::io::Read;
 use std::ops::Range;
 use std::path::Path;
+use std::sync::atomic::AtomicU64;
 
 const JSON_CHUNK: u32 = 0x4E4F_534A;
 const BIN_CHUNK: u32 = 0x004E_4942;
@@ -45,7 +45,7 @@ pub struct Document {
     /// Buffer views whose bytes a decoder produced (EXT_meshopt_compression), by index.
     pub(super) decoded_views: HashMap<usize, Vec<u8>>,
     /// Bytes that accessors without a buffer view may still take ([`Document::limit_unbacked`]).
-    pub(super) unbacked_budget: Cell<u64>,
+    pub(super) unbacked_budget: AtomicU64,
 }
 
 impl Document {
@@ -83,7 +83,7 @@ impl Document {
             bin,
             buffers: Vec::new(),
             decoded_views: HashMap::new(),
-            unbacked_budget: Cell::new(u64::MAX),
+            unbacked_budget: AtomicU64::new(u64::MAX),
         })
     }
 

@@ -1,6 +1,7 @@
 //! glTF 2.0 (`.gltf` and `.glb`): one document layer, used twice.
 //!
-//! - The importer ([`load`]) reads it fail-fast: the first error ends the load.
+//! - The importer ([`prepare`], then [`Prepared::build`] at each time) reads it fail-fast:
+//!   the first error ends the load.
 //! - `raycast check` reads the same [`Document`] collect-all, through a [`Sink`] that keeps
 //!   every [`Diagnostic`] (code, severity, JSON pointer, message), then builds the scene from
 //!   it with [`scene::build`]: the file is parsed once, and both agree on what loads.
@@ -92,12 +93,12 @@ pub fn check_required_extensions(doc: &Document, sink: &mut dyn Sink) {
     }
 }
 
-/// Loads a glTF or GLB file, fail-fast. External files resolve under the path rule of
-/// `options` (the asset's folder unless widened or lifted).
-pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
+/// [`prepare`] of the file at `path`, fail-fast. External files resolve under the path rule
+/// of `options` (the asset's folder unless widened or lifted).
+pub fn prepare_file(path: &Path, options: &LoadOptions) -> Result<Prepared> {
     let mut sink = FailFast::default();
     match document::read_file(path, is_glb_path(path), &mut sink) {
-        Ok(Some(bytes)) => load_bytes(bytes, path, options),
+        Ok(Some(bytes)) => prepare(bytes, path, options),
         Ok(None) => Err(Error::in_file(
             path,
             sink.error.map_or_else(String::new, |d| d.to_string()),
@@ -106,10 +107,33 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
     }
 }
 
-/// Loads glTF or GLB `bytes` as if they had been read from `path` (which names them in
-/// messages, says by its extension whether they are a GLB, and is where external files
-/// resolve).
-pub fn load_bytes(bytes: Vec<u8>, path: &Path, options: &LoadOptions) -> Result<Scene> {
+/// A glTF document read, checked, with its buffers loaded and decoded: what every pose of
+/// the file is built from, so that a sequence of times (`--time START:STOP:STEP`,
+/// `Scene.at`) reads and decodes the file once.
+pub struct Prepared {
+    /// The document, its buffers loaded and decoded.
+    doc: Document,
+    /// The file it was read from (or named by), for messages and the scene's source.
+    path: std::path::PathBuf,
+    /// The scene to build (`--scene`).
+    choice: Option<String>,
+    /// The animation to play (`--animation`).
+    animation: Option<String>,
+    /// What the document layer noticed while reading (warnings), put before the scene's own.
+    notes: Vec<String>,
+    /// Whether the animations' data were loaded (the document was prepared with a time).
+    animating: bool,
+    /// What accessors without a buffer view may take in each build (the memory limit less
+    /// what reading took), restored before each; held while building, so that builds from
+    /// several threads charge that budget one at a time.
+    unbacked: std::sync::Mutex<u64>,
+}
+
+/// Parses glTF or GLB `bytes` (read from `path`) and loads and decodes the buffers the
+/// geometry (and, with `options.time`, the animations) read, fail-fast. `bytes` are named by
+/// `path` in messages, which says by its extension whether they are a GLB and is where
+/// external files resolve.
+pub fn prepare(bytes: Vec<u8>, path: &Path, options: &LoadOptions) -> Result<Prepared> {
     let fail = |d: Diagnostic| Error::in_file(path, d.to_string());
     let mut sink = FailFast::default();
     let parsed = Document::parse(bytes, is_glb_path(path), &mut sink);
@@ -142,18 +166,50 @@ pub fn load_bytes(bytes: Vec<u8>, path: &Path, options: &LoadOptions) -> Result<
     if let Some(error) = sink.error {
         return Err(fail(error));
     }
-    let timing = scene::Timing {
-        time: options.time,
-        animation: options.animation.clone(),
-    };
-    let mut scene = scene::build_at(&doc, options.scene.as_deref(), &timing, path).map_err(fail)?;
-    // What the layer noticed while reading (a network URI, extra bytes after a GLB) comes
-    // before what the scene walk noticed.
     let notes = sink
         .notes
         .iter()
         .filter(|d| d.severity == Severity::Warning);
-    let notes: Vec<String> = notes.map(Diagnostic::to_string).collect();
-    scene.warnings.splice(0..0, notes);
-    Ok(scene)
+    Ok(Prepared {
+        path: path.to_path_buf(),
+        choice: options.scene.clone(),
+        animation: options.animation.clone(),
+        notes: notes.map(Diagnostic::to_string).collect(),
+        animating: options.time.is_some(),
+        unbacked: std::sync::Mutex::new(doc.unbacked_left()),
+        doc,
+    })
+}
+
+impl Prepared {
+    /// Whether any time can be built ([`Prepared::build`]): the document was prepared with a
+    /// time, so the animations' data were loaded (they are not read without one).
+    pub fn animating(&self) -> bool {
+        self.animating
+    }
+
+    /// The scene posed at `time` (seconds; `None`: no animation); a time needs a document
+    /// prepared with one ([`Prepared::animating`]).
+    pub fn build(&self, time: Option<f64>) -> Result<Scene> {
+        if time.is_some() && !self.animating {
+            return Err(Error::in_file(
+                &self.path,
+                "was read without a time: its animations' data were not loaded",
+            ));
+        }
+        let timing = scene::Timing {
+            time,
+            animation: self.animation.clone(),
+        };
+        let built = {
+            let budget = self.unbacked.lock().unwrap_or_else(|p| p.into_inner());
+            self.doc.limit_unbacked(*budget);
+            scene::build_at(&self.doc, self.choice.as_deref(), &timing, &self.path)
+        };
+        let mut scene = built.map_err(|d| Error::in_file(&self.path, d.to_string()))?;
+        // What the layer noticed while reading (a network URI, extra bytes after a GLB) comes
+        // before what the scene walk noticed.
+        scene.warnings.splice(0..0, self.notes.iter().cloned());
+        Ok(scene)
+    }
 }
