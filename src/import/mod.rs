@@ -112,6 +112,13 @@ pub fn open_bytes(bytes: Vec<u8>, name: &Path, options: &LoadOptions) -> Result<
     }
 }
 
+/// Reads `path` whole and loads its bytes with `load_bytes` (the mesh formats read in
+/// memory: PLY, STL).
+fn load_whole(path: &Path, load_bytes: fn(&[u8], &Path) -> Result<Scene>) -> Result<Scene> {
+    let bytes = std::fs::read(path).map_err(|e| read_error(path, e))?;
+    load_bytes(&bytes, path)
+}
+
 impl Source {
     /// The scene posed at `time` (glTF seconds, USD time code; `None`: the file's own pose),
     /// exactly as [`load`] with that time would give it.

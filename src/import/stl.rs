@@ -139,8 +139,7 @@ pub struct StlMesh {
 
 /// Loads an STL file.
 pub fn load(path: &Path) -> Result<Scene> {
-    let bytes = std::fs::read(path).map_err(|e| super::read_error(path, e))?;
-    load_bytes(&bytes, path)
+    super::load_whole(path, load_bytes)
 }
 
 /// Loads STL `bytes`; `path` names them in messages and names unnamed solids.

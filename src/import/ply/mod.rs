@@ -170,8 +170,7 @@ pub struct PlyMesh {
 
 /// Loads a PLY file.
 pub fn load(path: &Path) -> Result<Scene> {
-    let bytes = std::fs::read(path).map_err(|e| super::read_error(path, e))?;
-    load_bytes(&bytes, path)
+    super::load_whole(path, load_bytes)
 }
 
 /// Loads PLY `bytes`; `path` names them in messages and names the scene object.
