@@ -158,8 +158,7 @@ pub fn run_from(
 ) -> Result<Sidecar> {
     let formats = check_request(job)?;
     let out = job.out_dir();
-    let created = request::prepare_folder(&out)?;
-    output::track_created_folder(&out, created.as_deref());
+    let created = output::prepare_tracked_folder(&out)?;
     let names = request::file_names(&job.aovs, &formats, job.rays.is_some(), job.hits.is_some());
     let inputs: Vec<&Path> = std::iter::once(job.scene.as_path())
         .chain(job.rays.as_deref())

@@ -50,13 +50,18 @@ pub fn remove_partial_files_and_exit(code: i32) -> ! {
     std::process::exit(code)
 }
 
-/// Records that a render created `dir` (up to `created`), for the interrupt handler; `None`
-/// records nothing.
-pub fn track_created_folder(dir: &Path, created: Option<&Path>) {
-    if let Some(created) = created {
-        let mut folders = CREATED_FOLDERS.lock().unwrap_or_else(|p| p.into_inner());
-        folders.push((dir.to_path_buf(), created.to_path_buf()));
+/// Creates a render's output folder `dir` if needed and proves it writable
+/// ([`request::prepare_folder`]), and records what it created for the interrupt handler, all
+/// under the lock of [`CREATED_FOLDERS`]: a signal in between waits for the record, so the
+/// folder cannot be left behind (it was, when SIGTERM came right after the folder appeared).
+/// Returns the outermost folder created.
+pub fn prepare_tracked_folder(dir: &Path) -> Result<Option<PathBuf>> {
+    let mut folders = CREATED_FOLDERS.lock().unwrap_or_else(|p| p.into_inner());
+    let created = request::prepare_folder(dir)?;
+    if let Some(created) = &created {
+        folders.push((dir.to_path_buf(), created.clone()));
     }
+    Ok(created)
 }
 
 /// Forgets the folders recorded for `dir` (the render is over: they hold its outputs, or were
