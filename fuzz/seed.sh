@@ -1,6 +1,7 @@
 #!/bin/sh
 # Fills fuzz/corpus/<target>/ with seed inputs from the fixtures (files under 64 KiB) and
-# fuzz/seeds/<target>/. Run from the repository root: fuzz/seed.sh
+# fuzz/seeds/<target>/ (for ply and stl: the corpus their first runs grew, kept whole).
+# Run from the repository root: fuzz/seed.sh
 set -eu
 seed() {
     target=$1
@@ -15,7 +16,9 @@ seed gltf '\.(gltf|glb)$' fixtures/gltf fixtures/gltf-validator fixtures/malform
 seed obj '\.obj$' fixtures/obj fixtures/bad fixtures/assets fuzz/seeds/obj
 seed usd '\.(usda|usdc|usd)$' fixtures/usd
 seed ply '\.ply$' fixtures/ply fixtures/bad
+seed ply '' fuzz/seeds/ply
 seed stl '\.stl$' fixtures/stl fixtures/bad
+seed stl '' fuzz/seeds/stl
 for t in gltf obj usd ply stl; do
     echo "$t: $(ls "fuzz/corpus/$t" | wc -l) seeds"
 done

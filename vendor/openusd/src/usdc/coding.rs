@@ -41,7 +41,13 @@ where
         codes_reader.read_pod::<i32>()? as i64
     };
 
-    let num_code_bytes = (count * 2).div_ceil(8);
+    let num_code_bytes = count.saturating_mul(2).div_ceil(8);
+    // The count comes from the file: the codes must be there before anything is allocated.
+    anyhow::ensure!(
+        data.len() >= mem::size_of::<T>().saturating_add(num_code_bytes),
+        "{count} encoded integers need {num_code_bytes} code bytes, more than the {} bytes decoded",
+        data.len()
+    );
 
     let mut ints_reader = {
         let offset = mem::size_of::<T>() + num_code_bytes;

@@ -319,11 +319,11 @@ impl<R: io::Read + io::Seek> CrateFile<R> {
     }
 
     fn read_paths(&mut self) -> Result<()> {
-        let Some(section) = self.find_section(Section::PATHS) else {
+        let Some((start, size)) = self.find_section(Section::PATHS).map(|s| (s.start, s.size)) else {
             return Ok(());
         };
 
-        self.set_position(section.start)?;
+        self.set_position(start)?;
 
         let file_ver = self.version();
 
@@ -334,6 +334,13 @@ impl<R: io::Read + io::Seek> CrateFile<R> {
         } else {
             // Read # of paths.
             let path_count = self.reader.read_count()?;
+            // Each path has a path index, at least 2 bits of code once decompressed, in a
+            // section whose bytes LZ4 expands at most 255 times: a larger count is corrupt.
+            let most = (size as usize).saturating_mul(LZ4_MAX_EXPANSION * 4);
+            ensure!(
+                path_count <= most,
+                "{path_count} paths cannot be held in a PATHS section of {size} bytes"
+            );
             self.paths = vec![sdf::Path::default(); path_count];
 
             self.read_compressed_paths()?;
@@ -549,8 +556,10 @@ impl<R: io::Read + io::Seek> CrateFile<R> {
         let compressed_size = self.reader.read_count()?;
         let input: Vec<u8> = self.reader.read_vec(compressed_size)?;
 
-        // Decompress to output buffer.
-        let mut output = vec![T::default(); estimated_count];
+        // Decompress to output buffer. `estimated_count` follows from a count in the file; LZ4
+        // cannot expand data more than 255 times, so no more than that is allocated.
+        let bound = compressed_size.saturating_mul(LZ4_MAX_EXPANSION).saturating_add(64) / mem::size_of::<T>().max(1);
+        let mut output = vec![T::default(); estimated_count.min(bound)];
         let actual_size = decompress_lz4(&input, cast_slice_mut(&mut output))?;
 
         let actual_count = actual_size / mem::size_of::<T>();
@@ -1500,6 +1509,9 @@ fn decompress_lz4(mut input: &[u8], output: &mut [u8]) -> Result<usize> {
         todo!("Support lz4 chunked decompression")
     }
 }
+
+/// The most an LZ4 block can expand: a match of length `n` takes at least `n / 255` bytes.
+const LZ4_MAX_EXPANSION: usize = 255;
 
 /// Most elements reserved ahead for a list whose length the file gives; the list grows past
 /// it as elements are actually read.
