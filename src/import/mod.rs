@@ -10,9 +10,10 @@ pub mod stl;
 pub mod usd;
 
 use crate::error::{Error, ErrorKind, Result};
-use crate::scene::Scene;
+use crate::scene::{Mesh, Scene, SceneBuilder};
 use glam::{DMat4, DVec3, DVec4};
 use std::path::Path;
+use std::sync::Arc;
 
 /// Choices that affect what is loaded.
 #[derive(Debug, Clone, Default)]
@@ -117,6 +118,29 @@ pub fn open_bytes(bytes: Vec<u8>, name: &Path, options: &LoadOptions) -> Result<
 fn load_whole(path: &Path, load_bytes: fn(&[u8], &Path) -> Result<Scene>) -> Result<Scene> {
     let bytes = std::fs::read(path).map_err(|e| read_error(path, e))?;
     load_bytes(&bytes, path)
+}
+
+/// The scene of a mesh file (PLY, STL): its reader's `warnings`, then one object per
+/// `(name, mesh)` with source `<kind>:<name>`, placed as stored; an empty scene with the
+/// readers' [`EMPTY_SCENE`] warning when there is none.
+fn mesh_file_scene(
+    path: &Path,
+    kind: &str,
+    warnings: Vec<String>,
+    objects: Vec<(String, Mesh)>,
+) -> Scene {
+    let mut builder = SceneBuilder::new();
+    for warning in warnings {
+        builder.warn(warning);
+    }
+    if objects.is_empty() {
+        builder.warn(EMPTY_SCENE);
+    }
+    for (name, mesh) in objects {
+        let id = builder.new_object(name.clone(), format!("{kind}:{name}"));
+        builder.place_mesh(id, Arc::new(mesh), DMat4::IDENTITY);
+    }
+    builder.finish(path.to_path_buf())
 }
 
 impl Source {

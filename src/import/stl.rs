@@ -15,13 +15,12 @@
 //! binary file is one object named after the file.
 
 use crate::error::{Error, Result};
-use crate::scene::{Mesh, Positions, Scene, SceneBuilder};
-use glam::{DMat4, Vec3};
+use crate::scene::{Mesh, Positions, Scene};
+use glam::Vec3;
 use std::borrow::Cow;
 use std::fmt;
 use std::io::Cursor;
 use std::path::Path;
-use std::sync::Arc;
 
 /// Bytes before the first triangle of a binary STL: the 80-byte header and the count.
 const HEADER: usize = 84;
@@ -151,23 +150,15 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
 /// The scene of an STL file read by [`read`]: one object per solid, or an empty scene with
 /// the other readers' warning when there is no triangle.
 pub fn scene(mesh: StlMesh, path: &Path) -> Scene {
-    let mut builder = SceneBuilder::new();
-    for warning in mesh.warnings {
-        builder.warn(warning);
-    }
-    if mesh.solids.is_empty() {
-        builder.warn(super::EMPTY_SCENE);
-    }
-    for solid in mesh.solids {
+    let objects = mesh.solids.into_iter().map(|solid| {
         let name = if solid.name.is_empty() {
             super::file_stem(path)
         } else {
             solid.name
         };
-        let id = builder.new_object(name.clone(), format!("stl:{name}"));
-        builder.place_mesh(id, Arc::new(solid.mesh), DMat4::IDENTITY);
-    }
-    builder.finish(path.to_path_buf())
+        (name, solid.mesh)
+    });
+    super::mesh_file_scene(path, "stl", mesh.warnings, objects.collect())
 }
 
 /// Reads an STL file held in `bytes`.

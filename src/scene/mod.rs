@@ -263,10 +263,7 @@ impl Scene {
     /// Primitives the acceleration structures are built over: the top level's (world
     /// triangles, instances, quadrics) and every stored instanced mesh's triangles.
     pub fn accel_primitive_count(&self) -> usize {
-        self.world.mesh.len()
-            + self.instances.len()
-            + self.quadrics.len()
-            + self.meshes.iter().map(|m| m.set.mesh.len()).sum::<usize>()
+        PrimitiveSet::len(self) + self.meshes.iter().map(|m| m.set.mesh.len()).sum::<usize>()
     }
 
     /// Builds the octree of every instanced mesh that has none yet, in parallel. Tracing

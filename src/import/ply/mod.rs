@@ -17,13 +17,12 @@ mod body;
 pub mod header;
 
 use crate::error::{Error, Result};
-use crate::scene::{Mesh, Positions, Scene, SceneBuilder};
+use crate::scene::{Mesh, Positions, Scene};
 use body::{Body, Fault};
-use glam::{DMat4, DVec3};
+use glam::DVec3;
 use header::{Element, Format, Header, Kind, Scalar};
 use std::fmt;
 use std::path::Path;
-use std::sync::Arc;
 
 /// Why a PLY file cannot be read. Each kind has a `raycast check` code ([`PlyError::code`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -182,20 +181,14 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
 /// The scene of a PLY file read by [`read`]: one object named after the file, or an empty
 /// scene with the glTF, OBJ and USD readers' warning when there is no face.
 pub fn scene(mesh: PlyMesh, path: &Path) -> Scene {
-    let mut builder = SceneBuilder::new();
-    for warning in mesh.warnings {
-        builder.warn(warning);
-    }
-    if mesh.triangles.is_empty() {
-        builder.warn(super::EMPTY_SCENE);
+    let objects = if mesh.triangles.is_empty() {
+        Vec::new()
     } else {
-        let name = super::file_stem(path);
-        let id = builder.new_object(name.clone(), format!("ply:{name}"));
         // `read` checked every index and every vertex a face uses.
-        let mesh = Mesh::from_parts(Positions::exact(mesh.positions), mesh.triangles);
-        builder.place_mesh(id, Arc::new(mesh), DMat4::IDENTITY);
-    }
-    builder.finish(path.to_path_buf())
+        let drawn = Mesh::from_parts(Positions::exact(mesh.positions), mesh.triangles);
+        vec![(super::file_stem(path), drawn)]
+    };
+    super::mesh_file_scene(path, "ply", mesh.warnings, objects)
 }
 
 /// Reads a PLY file held in `bytes`.
