@@ -9,9 +9,11 @@
 use super::{readable, Walker};
 use serde_json::{Map, Value};
 
-/// Texture infos of the material object itself: (key, the extra number it holds and its
-/// range).
-const TEXTURE_INFOS: &[(&str, Option<(&str, f64, f64)>)] = &[
+/// A number a texture info holds beside its index: (key, least, greatest value).
+type Extra = (&'static str, f64, f64);
+
+/// Texture infos of the material object itself: (key, the extra number it holds).
+const TEXTURE_INFOS: &[(&str, Option<Extra>)] = &[
     (
         "normalTexture",
         Some(("scale", f64::NEG_INFINITY, f64::INFINITY)),
@@ -99,7 +101,7 @@ impl<'a> Walker<'a, '_> {
         owner: &'a Map<String, Value>,
         key: &str,
         at: &str,
-        extra: Option<(&str, f64, f64)>,
+        extra: Option<Extra>,
     ) {
         let Some(info) = self.object(owner, key, at) else {
             return;
