@@ -29,7 +29,7 @@ fn codes(report: &AssetReport, severity: Severity) -> BTreeSet<&str> {
 
 #[test]
 fn errors_agree_with_the_validator() {
-    let cases: [(&str, &[&str]); 11] = [
+    let cases: [(&str, &[&str]); 12] = [
         // One POSITION accessor on a view without byteStride, read by two primitives.
         ("one_accessor_two_primitives.gltf", &[]),
         // Two accessors on that view.
@@ -69,6 +69,8 @@ fn errors_agree_with_the_validator() {
         ),
         // `"scene": "hello"`.
         ("scene_string.gltf", &["TYPE_MISMATCH"]),
+        // Shader techniques required: appearance only, the geometry is drawn.
+        ("techniques_webgl_required.gltf", &[]),
     ];
     for (name, validator) in cases {
         let report = report(name);
@@ -76,6 +78,16 @@ fn errors_agree_with_the_validator() {
         let expected: BTreeSet<&str> = validator.iter().copied().collect();
         assert_eq!(errors, expected, "{name}: {:?}", report.findings);
     }
+}
+
+#[test]
+fn required_shader_techniques_do_not_stop_a_render() {
+    let scene = import::load(
+        &fixture("techniques_webgl_required.gltf"),
+        &LoadOptions::default(),
+    )
+    .expect("loads");
+    assert_eq!(scene.objects.len(), 1);
 }
 
 #[test]
