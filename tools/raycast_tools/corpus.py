@@ -215,6 +215,8 @@ def main(argv=None) -> int:
             pool.map(lambda f: examine(f, str(f.relative_to(root)), raycast, opts), files)
         )
     summary = summarize(records, too_large=[str(f.relative_to(root)) for f in too_large])
+    absent = root / "ABSENT"  # tools/export_corpus.sh: files the mirror lacked
+    summary["absent"] = absent.read_text().split() if absent.is_file() else []
     opts.out.parent.mkdir(parents=True, exist_ok=True)
     opts.out.write_text(markdown(records, summary, sources, opts))
     if opts.list:

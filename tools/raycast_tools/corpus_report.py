@@ -231,6 +231,11 @@ def sources_lines(sources: dict, summary: dict) -> list[str]:
         f"{' ...' if len(s['paths']) > 6 else ''})"
         for name, s in sorted(sources.items())
     ]
+    if summary.get("absent"):
+        lines.append(
+            f"- absent from the mirrors (large files, not exported): {len(summary['absent'])} "
+            f"files ({', '.join(summary['absent'][:10])})"
+        )
     if summary["too_large"]:
         lines.append(
             f"- left out for their size: {len(summary['too_large'])} files "
