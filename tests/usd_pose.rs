@@ -383,13 +383,20 @@ fn hits_agree(scene: &Scene, case: &Value, what: &str) -> usize {
         for _ in 0..40 {
             let tri = triangles[(rng.next_u64() % triangles.len() as u64) as usize];
             let (a, b) = (rng.uniform(0.05, 0.9), rng.uniform(0.05, 0.9));
-            let (a, b) = if a + b > 0.95 { (1.0 - a, 1.0 - b) } else { (a, b) };
+            let (a, b) = if a + b > 0.95 {
+                (1.0 - a, 1.0 - b)
+            } else {
+                (a, b)
+            };
             let target = tri[0] + (tri[1] - tri[0]) * a * 0.9 + (tri[2] - tri[0]) * b * 0.9;
             let origin = target + rng.direction() * 30.0;
             let dir = (target - origin).normalize();
             let nearest = meshes
                 .iter()
-                .flat_map(|(n, ts)| ts.iter().filter_map(move |t| Some((n, ray_triangle(origin, dir, t)?))))
+                .flat_map(|(n, ts)| {
+                    ts.iter()
+                        .filter_map(move |t| Some((n, ray_triangle(origin, dir, t)?)))
+                })
                 .min_by(|x, y| x.1.total_cmp(&y.1));
             let sample = cast_one(scene, origin.to_array(), dir.to_array());
             let Some((expected, t)) = nearest else {
@@ -400,7 +407,11 @@ fn hits_agree(scene: &Scene, case: &Value, what: &str) -> usize {
                 continue;
             }
             assert_eq!(ours, expected, "{what}: ray aimed at {name}");
-            assert!((sample.depth - t).abs() <= 1e-9 * t, "{what}: {name}: depth {} vs {t}", sample.depth);
+            assert!(
+                (sample.depth - t).abs() <= 1e-9 * t,
+                "{what}: {name}: depth {} vs {t}",
+                sample.depth
+            );
             compared += 1;
         }
     }
@@ -435,21 +446,35 @@ fn skel_poses_as_usd_core_skins() {
             let ours = object_triangles(&scene, cube["path"].as_str().unwrap());
             let corners = cube_corners(&cube);
             for v in ours.iter().flatten() {
-                let nearest = corners.iter().map(|c| (*c - *v).length()).fold(f64::INFINITY, f64::min);
+                let nearest = corners
+                    .iter()
+                    .map(|c| (*c - *v).length())
+                    .fold(f64::INFINITY, f64::min);
                 from_bake = from_bake.max(nearest / scale);
             }
         }
         let rays = hits_agree(&scene, case, &what);
         eprintln!("{what}: vertices {vertices:.1e} (double), {from_bake:.1e} (BakeSkinning); {rays} rays agree");
-        assert!(vertices <= TOLERANCE, "{what}: vertices off by {vertices:e}");
+        assert!(
+            vertices <= TOLERANCE,
+            "{what}: vertices off by {vertices:e}"
+        );
         assert!(from_bake <= 1e-6, "{what}: {from_bake:e} from BakeSkinning");
         let skeletons = &scene.stage.as_ref().unwrap().skeletons;
-        let arm = skeletons.iter().find(|s| s.path == "/World/Arm/Skel").unwrap();
+        let arm = skeletons
+            .iter()
+            .find(|s| s.path == "/World/Arm/Skel")
+            .unwrap();
         assert_eq!(arm.joints, 3);
         assert_eq!(arm.animation.as_deref(), Some("/World/Arm/Skel/Anim"));
         assert_eq!(
             arm.skinned,
-            ["/World/Arm/ArmMesh", "/World/Arm/Prop", "/World/Arm/Rigid/Cube", "/World/Arm/Tip"]
+            [
+                "/World/Arm/ArmMesh",
+                "/World/Arm/Prop",
+                "/World/Arm/Rigid/Cube",
+                "/World/Arm/Tip"
+            ]
         );
     }
 }
@@ -467,10 +492,32 @@ fn unsupported_skinning_is_named() {
         .replace("uniform token[] joints = [\"Root\", \"Root/Tip\"]", "uniform token[] joints = [\"Root/Tip\", \"Root\"]");
     assert_ne!(edited, text);
     let path = temp_file("usd_skel_unsupported", "skel.usda", edited);
-    let scene = import::load(&path, &LoadOptions { time: Some(4.0), ..LoadOptions::default() }).unwrap();
+    let scene = import::load(
+        &path,
+        &LoadOptions {
+            time: Some(4.0),
+            ..LoadOptions::default()
+        },
+    )
+    .unwrap();
     let has = |needle: &str| scene.warnings.iter().filter(|w| w.contains(needle)).count();
-    assert_eq!(has("/World/Arm/ArmMesh: skel:skinningMethod dualQuaternion is not supported"), 1, "{:?}", scene.warnings);
-    assert_eq!(has("/World/Arm/ArmMesh: blend shapes are not applied"), 1, "{:?}", scene.warnings);
-    assert_eq!(has("/World/Rest/Skel: skeleton joint Root/Tip comes before its parent Root"), 1, "{:?}", scene.warnings);
+    assert_eq!(
+        has("/World/Arm/ArmMesh: skel:skinningMethod dualQuaternion is not supported"),
+        1,
+        "{:?}",
+        scene.warnings
+    );
+    assert_eq!(
+        has("/World/Arm/ArmMesh: blend shapes are not applied"),
+        1,
+        "{:?}",
+        scene.warnings
+    );
+    assert_eq!(
+        has("/World/Rest/Skel: skeleton joint Root/Tip comes before its parent Root"),
+        1,
+        "{:?}",
+        scene.warnings
+    );
     assert!(scene.warnings.iter().all(|w| !w.contains('\n')));
 }

@@ -593,7 +593,14 @@ impl Loader {
         let skel = skel.filter(|_| !skinnable);
         let children = prim.children().map_err(|e| err(prim, e))?;
         for child in children {
-            self.walk(&child, world, purpose.clone(), skel.clone(), instance, depth)?;
+            self.walk(
+                &child,
+                world,
+                purpose.clone(),
+                skel.clone(),
+                instance,
+                depth,
+            )?;
         }
         Ok(())
     }
@@ -624,9 +631,8 @@ impl Loader {
                 }
                 if let Some(points) = skinned {
                     let Some(posed) = mesh.mesh.with_positions(points) else {
-                        self.warnings.push(format!(
-                            "{source}: a skinned point is not finite: skipped"
-                        ));
+                        self.warnings
+                            .push(format!("{source}: a skinned point is not finite: skipped"));
                         return Ok(());
                     };
                     mesh.mesh = Arc::new(posed);

@@ -39,7 +39,9 @@ impl Influences {
             )));
         }
         if index_size < 1 {
-            return Ok(Err(format!("joint influences have elementSize {index_size}")));
+            return Ok(Err(format!(
+                "joint influences have elementSize {index_size}"
+            )));
         }
         if index_interp != weight_interp {
             return Ok(Err(format!(

@@ -43,7 +43,10 @@ pub(super) struct Binding {
 /// How a skinned prim is drawn.
 pub(super) enum Pose {
     /// A mesh's skinned points, in its skeleton's space, and the skeleton's world transform.
-    Points { points: Vec<DVec3>, skel_world: DMat4 },
+    Points {
+        points: Vec<DVec3>,
+        skel_world: DMat4,
+    },
     /// A rigidly bound prim's new world transform.
     Rigid(DMat4),
 }
@@ -174,10 +177,8 @@ impl Loader {
             }
         };
         let geom_bind = match &binding.geom_bind {
-            Some(owner) => {
-                value::matrix(owner, "primvars:skel:geomBindTransform", self.at)?
-                    .unwrap_or(DMat4::IDENTITY)
-            }
+            Some(owner) => value::matrix(owner, "primvars:skel:geomBindTransform", self.at)?
+                .unwrap_or(DMat4::IDENTITY),
             None => DMat4::IDENTITY,
         };
         let pose = if influences.rigid {
@@ -185,7 +186,9 @@ impl Loader {
                 .skin_transform(&joints, geom_bind)
                 .map(|m| Pose::Rigid(posed.world * m))
         } else if type_name != "Mesh" {
-            Err(format!("{type_name} prims with vertex influences are not skinned here"))
+            Err(format!(
+                "{type_name} prims with vertex influences are not skinned here"
+            ))
         } else {
             let Some(mesh) = self.mesh(prim)? else {
                 return Ok(None);
@@ -255,7 +258,9 @@ impl Loader {
     fn pose_skeleton(&mut self, prim: &Prim) -> Result<Result<Posed, String>, String> {
         let type_name = prim.type_name().map_err(|e| err(prim, e))?;
         if type_name.as_deref() != Some("Skeleton") {
-            return Ok(Err("skel:skeleton targets a prim that is not a Skeleton".into()));
+            return Ok(Err(
+                "skel:skeleton targets a prim that is not a Skeleton".into()
+            ));
         }
         let skeleton = match Skeleton::read(prim, self.at)? {
             Ok(skeleton) => skeleton,
@@ -283,7 +288,9 @@ impl Loader {
             SkeletonInfo {
                 path: prim.path().to_string(),
                 joints: skeleton.joints.len(),
-                animation: animation.map(|_| source.map(|s| s.path().to_string())).flatten(),
+                animation: animation
+                    .map(|_| source.map(|s| s.path().to_string()))
+                    .flatten(),
                 skinned: Vec::new(),
             },
         );

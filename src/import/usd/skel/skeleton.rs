@@ -48,7 +48,9 @@ impl Skeleton {
         for (m, joint) in bind.iter().zip(&joints) {
             let det = m.determinant();
             if !det.is_finite() || det == 0.0 {
-                return Ok(Err(format!("the bind transform of joint {joint} is singular")));
+                return Ok(Err(format!(
+                    "the bind transform of joint {joint} is singular"
+                )));
             }
             inverse_bind.push(m.inverse());
         }
@@ -247,7 +249,9 @@ mod tests {
             vec![None, Some(0), Some(1), None]
         );
         let misordered = ["a/b", "a"].map(String::from);
-        assert!(parents(&misordered).unwrap_err().contains("before its parent"));
+        assert!(parents(&misordered)
+            .unwrap_err()
+            .contains("before its parent"));
     }
 
     #[test]
