@@ -56,7 +56,7 @@ impl Influences {
         let per_point = index_size as usize;
         let rigid = index_interp == "constant";
         if indices.len() != weights.len()
-            || indices.len() % per_point != 0
+            || !indices.len().is_multiple_of(per_point)
             || (rigid && indices.len() != per_point)
         {
             return Ok(Err(format!(

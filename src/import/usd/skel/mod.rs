@@ -288,9 +288,7 @@ impl Loader {
             SkeletonInfo {
                 path: prim.path().to_string(),
                 joints: skeleton.joints.len(),
-                animation: animation
-                    .map(|_| source.map(|s| s.path().to_string()))
-                    .flatten(),
+                animation: animation.and(source).map(|s| s.path().to_string()),
                 skinned: Vec::new(),
             },
         );
