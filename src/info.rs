@@ -261,6 +261,20 @@ fn write_stage_time(f: &mut fmt::Formatter<'_>, stage: &StageInfo) -> fmt::Resul
         };
         writeln!(f, "  time: {range}, {rate} per second; {drawn}")?;
     }
+    for skel in &stage.skeletons {
+        let posed = match &skel.animation {
+            Some(anim) => format!("posed by {anim}"),
+            None => "at its rest transforms".into(),
+        };
+        writeln!(
+            f,
+            "  skeleton {}: {} joints, {posed}; skins {} prims: {}",
+            skel.path,
+            skel.joints,
+            skel.skinned.len(),
+            skel.skinned.join(", ")
+        )?;
+    }
     for v in &stage.variant_sets {
         let chosen = match (&v.selected, &v.authored) {
             (Some(s), Some(a)) if s != a => format!("{s} (chosen; authored {a})"),

@@ -152,3 +152,52 @@ fn unwritable_report_paths_are_refused_before_checking() {
     assert_eq!(file_names(&dir), ["a-file"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--golden --time T` renders the views at that pose: goldens stored at one time match a
+/// check at the same time and not one at another time, for an animated glTF (every animation
+/// played) and a UsdSkel stage (through the isolated USD child process).
+#[test]
+fn golden_views_are_rendered_at_the_time_given() {
+    let dir = temp_dir("cli_check_golden_time");
+    let assets = dir.join("assets");
+    std::fs::create_dir_all(&assets).unwrap();
+    std::fs::copy(fixture("posed/BoxAnimated.glb"), assets.join("box.glb")).unwrap();
+    std::fs::copy(fixture("usd/posed/skel.usda"), assets.join("skel.usda")).unwrap();
+    let golden = dir.join("golden");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["check", "--no-geometry", "--golden", arg(&golden)];
+        args.extend(extra);
+        args.push(arg(&assets));
+        raycast(&args)
+    };
+    let stored = run(&["--update-golden", "--time", "0.5"]);
+    assert_eq!(
+        stored.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&stored.stdout)
+    );
+    let same = run(&["--time", "0.5"]);
+    assert_eq!(
+        same.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&same.stdout)
+    );
+    let other = run(&["--time", "3", "--json"]);
+    assert_eq!(other.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&other.stdout);
+    for asset in ["box.glb", "skel.usda"] {
+        let mismatch = text
+            .lines()
+            .any(|l| l.contains(asset) && l.contains("GOLDEN_MISMATCH"));
+        assert!(mismatch, "{asset}: {text}");
+    }
+    let needs_golden = raycast(&["check", "--time", "1", arg(&assets)]);
+    assert_eq!(
+        needs_golden.status.code(),
+        Some(2),
+        "--time without --golden is a usage error"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

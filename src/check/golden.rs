@@ -19,6 +19,9 @@ pub struct GoldenOptions {
     pub dir: PathBuf,
     /// Store the current buffers instead of comparing.
     pub update: bool,
+    /// The pose rendered (`--time`): glTF seconds (every animation) or a USD time code;
+    /// `None`: the file's static pose, as a render without `--time` draws it.
+    pub time: Option<f64>,
 }
 
 /// Image side of each golden view.

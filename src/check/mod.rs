@@ -173,6 +173,13 @@ pub struct CheckOptions {
     pub golden: Option<golden::GoldenOptions>,
 }
 
+impl CheckOptions {
+    /// The time the assets are posed at: `--golden`'s `--time`.
+    pub fn time(&self) -> Option<f64> {
+        self.golden.as_ref().and_then(|g| g.time)
+    }
+}
+
 impl Default for CheckOptions {
     fn default() -> Self {
         CheckOptions {

@@ -89,6 +89,7 @@ pub fn usdz_problem(bytes: &[u8]) -> Option<String> {
 pub fn load(path: &Path, root: &Path, options: &CheckOptions, f: &mut Findings) -> Result<Scene> {
     let load = LoadOptions {
         allow_outside: true,
+        time: options.time(),
         ..LoadOptions::default()
     };
     if options.allow_outside {
@@ -178,6 +179,9 @@ pub fn check_isolated(
         command.arg("--golden").arg(&golden.dir);
         if golden.update {
             command.arg("--update-golden");
+        }
+        if let Some(time) = golden.time {
+            command.arg("--time").arg(time.to_string());
         }
     }
     command.arg(path);

@@ -94,6 +94,15 @@ pub struct CheckArgs {
     /// With --golden: store the current buffers as the golden ones instead of comparing
     #[arg(long, requires = "golden")]
     pub update_golden: bool,
+    /// With --golden: render the views at this pose (glTF: seconds, every animation played;
+    /// USD: a time code), for goldens and comparison alike
+    #[arg(
+        long,
+        requires = "golden",
+        value_name = "T",
+        allow_negative_numbers = true
+    )]
+    pub time: Option<f64>,
     /// List infos and assets without findings too.
     #[arg(long, short)]
     pub verbose: bool,
@@ -123,6 +132,7 @@ impl CheckArgs {
             golden: self.golden.clone().map(|dir| GoldenOptions {
                 dir,
                 update: self.update_golden,
+                time: self.time,
             }),
             usd_timeout,
             // The USD reader runs in a child process unless this already is one.

@@ -89,6 +89,13 @@ impl Mesh {
         })
     }
 
+    /// The same triangles over new vertices (a posed mesh): `None` when the vertex count
+    /// differs or a vertex is not finite.
+    pub fn with_positions(&self, positions: Vec<DVec3>) -> Option<Mesh> {
+        (positions.len() == self.positions.len()).then_some(())?;
+        Mesh::new(positions, self.triangles.clone())
+    }
+
     /// A mesh from stored vertices and index triples that are known to be in range.
     pub(crate) fn from_parts(positions: Positions, triangles: Vec<[u32; 3]>) -> Mesh {
         debug_assert!(triangles

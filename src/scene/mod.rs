@@ -125,6 +125,23 @@ pub struct StageInfo {
     /// Variant sets of the drawn prims, with their choices and selections.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub variant_sets: Vec<VariantSetInfo>,
+    /// UsdSkel skeletons that pose drawn prims, with what they skin.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub skeletons: Vec<SkeletonInfo>,
+}
+
+/// One UsdSkel skeleton met under a SkelRoot (see [`StageInfo`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct SkeletonInfo {
+    /// The Skeleton prim's path.
+    pub path: String,
+    /// How many joints it has.
+    pub joints: usize,
+    /// The SkelAnimation that poses it, `None`: its rest transforms.
+    pub animation: Option<String>,
+    /// The prims it skins, in walk order.
+    pub skinned: Vec<String>,
 }
 
 fn is_zero(n: &usize) -> bool {

@@ -47,6 +47,10 @@ COMMANDS = {
         "usd_pose_reference",
         "usd-core's reading of fixtures/usd/posed at time codes and variants (issue 28)",
     ),
+    "usd-skel-reference": (
+        "usd_skel_reference",
+        "fixtures/usd/posed/skel.usda and usd-core's skinning of it at time codes (issue 28)",
+    ),
     "thread-scaling": ("thread_scaling", "octree and BVH2 trace time from 1 to 16 threads"),
     "check-scale": (
         "check_scale",

@@ -113,7 +113,11 @@ pub fn check(
     if !walker.importable {
         return None;
     }
-    let built = scene::build(&doc, None, path);
+    let timing = scene::Timing {
+        time: options.time(),
+        animation: None,
+    };
+    let built = scene::build_at(&doc, None, &timing, path);
     // The walker does not decode: a decoder's error is reported with its own code.
     if let Err(e) = &built {
         if DECODE_ERRORS.contains(&e.code) {

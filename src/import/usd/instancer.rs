@@ -192,7 +192,7 @@ impl Loader {
                     object: None,
                 },
             });
-            self.walk(target, instance_world, None, &mut inner, depth + 1)?;
+            self.walk(target, instance_world, None, None, &mut inner, depth + 1)?;
             if let (Some(outer), Some(inner)) = (outer.as_mut(), inner) {
                 outer.object = inner.object;
             }

@@ -27,6 +27,7 @@ mod instancer;
 mod mesh;
 mod quadric;
 mod shapes;
+mod skel;
 mod value;
 mod variants;
 mod xform;
@@ -38,7 +39,7 @@ use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
 use crate::quadric::Quadric;
 use crate::scene::{Mesh, Scene, SceneBuilder, StageInfo};
-use glam::DMat4;
+use glam::{DMat4, DVec3};
 use openusd::sdf;
 use openusd::usd::{Prim, Stage};
 use shapes::Part;
@@ -214,11 +215,12 @@ fn load_stage(
         meshes: HashMap::new(),
         excluded: HashSet::new(),
         visits: 0,
+        skels: skel::Skels::default(),
     };
     let roots = loader.roots(options.scene.as_deref()).map_err(fail)?;
     for (root, world) in roots {
         loader
-            .walk(&root, world, None, &mut None, 0)
+            .walk(&root, world, None, None, &mut None, 0)
             .map_err(fail)?;
     }
     let mut builder = std::mem::take(&mut loader.builder);
@@ -262,6 +264,7 @@ fn load_stage(
     info.time = options.time;
     info.time_sampled_attributes = sampled;
     info.variant_sets = variant_sets;
+    info.skeletons = std::mem::take(&mut loader.skels).finish();
     builder.set_stage(info);
     Ok(builder.finish(path.to_path_buf()))
 }
@@ -312,6 +315,7 @@ fn stage_info(stage: &Stage) -> StageInfo {
         time: None,
         time_sampled_attributes: 0,
         variant_sets: Vec::new(),
+        skeletons: Vec::new(),
     }
 }
 
@@ -372,6 +376,8 @@ struct Loader {
     at: value::At,
     /// Variant sets met, and the `--variant` choices.
     variants: variants::Variants,
+    /// Skeletons met under SkelRoots, posed at `at`.
+    skels: skel::Skels,
 }
 
 /// `true` when the type carries a transform (UsdGeomXformable); the ops of untyped prims
@@ -442,22 +448,35 @@ impl Loader {
                     return Err(format!("no prim '{path}' in the stage"));
                 }
                 // The chosen prim keeps its ancestors' transforms.
-                let mut world = DMat4::IDENTITY;
-                let mut ancestors: Vec<Prim> = Vec::new();
-                let mut p = prim.path().parent();
-                while let Some(parent) = p {
-                    if parent.is_abs_root() {
-                        break;
-                    }
-                    p = parent.parent();
-                    ancestors.push(self.stage.prim(parent));
-                }
-                for ancestor in ancestors.iter().rev() {
-                    world = self.world_of(ancestor, world)?;
-                }
+                let world = self.parent_world_of(&prim)?;
                 Ok(vec![(prim, world)])
             }
         }
+    }
+
+    /// World transform of the parent of any prim: its ancestors' transforms composed from
+    /// the root.
+    fn parent_world_of(&mut self, prim: &Prim) -> std::result::Result<DMat4, String> {
+        let mut world = DMat4::IDENTITY;
+        let mut ancestors: Vec<Prim> = Vec::new();
+        let mut p = prim.path().parent();
+        while let Some(parent) = p {
+            if parent.is_abs_root() {
+                break;
+            }
+            p = parent.parent();
+            ancestors.push(self.stage.prim(parent));
+        }
+        for ancestor in ancestors.iter().rev() {
+            world = self.world_of(ancestor, world)?;
+        }
+        Ok(world)
+    }
+
+    /// World transform of any prim (a skeleton, wherever it is in namespace).
+    fn world_of_prim(&mut self, prim: &Prim) -> std::result::Result<DMat4, String> {
+        let parent = self.parent_world_of(prim)?;
+        self.world_of(prim, parent)
     }
 
     /// World transform of `prim` given its parent's.
@@ -493,12 +512,14 @@ impl Loader {
         }
     }
 
-    /// Walks `prim` and its descendants. `purpose` is the closest authored purpose above.
+    /// Walks `prim` and its descendants. `purpose` is the closest authored purpose above;
+    /// `skel` the skinning binding inherited under a SkelRoot.
     fn walk(
         &mut self,
         prim: &Prim,
         parent_world: DMat4,
         purpose: Option<Rc<str>>,
+        skel: Option<Rc<skel::Binding>>,
         instance: &mut Option<Instance>,
         depth: usize,
     ) -> std::result::Result<(), String> {
@@ -541,13 +562,25 @@ impl Loader {
         } else {
             self.world_of(prim, parent_world)?
         };
+        let skel = skel::Binding::below(skel.as_ref(), prim, &type_name)?;
+        let skinnable = skel.is_some() && skel::is_skinnable(&type_name);
+        let pose = match &skel {
+            Some(binding) if skinnable => self.skin(prim, &type_name, binding)?,
+            _ => None,
+        };
+        // A rigidly skinned prim moves with its children; skinned points move the mesh only.
+        let (world, drawn_world, skinned) = match pose {
+            None => (world, world, None),
+            Some(skel::Pose::Rigid(moved)) => (moved, moved, None),
+            Some(skel::Pose::Points { points, skel_world }) => (world, skel_world, Some(points)),
+        };
         let hidden_purpose = matches!(purpose.as_deref(), Some("guide") | Some("proxy"));
         let draws =
             type_name == "Mesh" || shapes::is_shape(&type_name) || quadric::has_quadric(prim)?;
         if hidden_purpose && draws {
             self.note("guide or proxy prims skipped", prim);
         } else {
-            self.draw(prim, &type_name, world, instance)?;
+            self.draw(prim, &type_name, drawn_world, skinned, instance)?;
         }
         if type_name == "PointInstancer" {
             if hidden_purpose {
@@ -556,20 +589,31 @@ impl Loader {
                 self.point_instancer(prim, world, instance, depth)?;
             }
         }
+        // Skinnable prims do not nest: nothing below one is skinned (as usd-core).
+        let skel = skel.filter(|_| !skinnable);
         let children = prim.children().map_err(|e| err(prim, e))?;
         for child in children {
-            self.walk(&child, world, purpose.clone(), instance, depth)?;
+            self.walk(
+                &child,
+                world,
+                purpose.clone(),
+                skel.clone(),
+                instance,
+                depth,
+            )?;
         }
         Ok(())
     }
 
-    /// Draws what the prim itself defines: a mesh, a gprim, a quadric, a camera. Everything
-    /// it draws is one object (inside a point instance, the instance's object).
+    /// Draws what the prim itself defines: a mesh (with `skinned` points in place of its own
+    /// when a skeleton poses it), a gprim, a quadric, a camera. Everything it draws is one
+    /// object (inside a point instance, the instance's object).
     fn draw(
         &mut self,
         prim: &Prim,
         type_name: &str,
         world: DMat4,
+        skinned: Option<Vec<DVec3>>,
         instance: &mut Option<Instance>,
     ) -> std::result::Result<(), String> {
         let name = Self::object_name(prim, instance);
@@ -581,9 +625,17 @@ impl Loader {
             object: None,
         };
         if type_name == "Mesh" {
-            if let Some(mesh) = self.mesh(prim)? {
+            if let Some(mut mesh) = self.mesh(prim)? {
                 if mesh.subdivided {
                     self.note("subdivision meshes drawn as their control cage", prim);
+                }
+                if let Some(points) = skinned {
+                    let Some(posed) = mesh.mesh.with_positions(points) else {
+                        self.warnings
+                            .push(format!("{source}: a skinned point is not finite: skipped"));
+                        return Ok(());
+                    };
+                    mesh.mesh = Arc::new(posed);
                 }
                 if mesh.mesh.places_finitely(&world) {
                     let id = target.id(&mut self.builder);

@@ -175,6 +175,48 @@ pub fn value_matrix4(value: &Value) -> Option<DMat4> {
     }
 }
 
+/// An array of `matrix4d` values as column-vector glam matrices (see [`value_matrix4`]).
+pub fn matrices(prim: &Prim, name: &str, at: At) -> ValueResult<Vec<DMat4>> {
+    let Some(value) = raw(prim, name, at)? else {
+        return Ok(None);
+    };
+    match value {
+        Value::Matrix4dVec(v) => Ok(Some(
+            v.iter().map(|m| DMat4::from_cols_array(&m.0)).collect(),
+        )),
+        other => Err(wrong_type(prim, name, "a matrix4d[]", &other)),
+    }
+}
+
+/// A `matrix4d` value as a column-vector glam matrix.
+pub fn matrix(prim: &Prim, name: &str, at: At) -> ValueResult<DMat4> {
+    let Some(value) = raw(prim, name, at)? else {
+        return Ok(None);
+    };
+    match value_matrix4(&value) {
+        Some(m) => Ok(Some(m)),
+        None => Err(wrong_type(prim, name, "a matrix4d", &value)),
+    }
+}
+
+/// An array of tokens (or strings).
+pub fn tokens(prim: &Prim, name: &str, at: At) -> ValueResult<Vec<String>> {
+    let Some(value) = raw(prim, name, at)? else {
+        return Ok(None);
+    };
+    match value {
+        Value::TokenVec(v) => Ok(Some(v.iter().map(|t| t.as_str().to_string()).collect())),
+        Value::StringVec(v) => Ok(Some(v)),
+        other => Err(wrong_type(prim, name, "a token[]", &other)),
+    }
+}
+
+/// True when `prim.name` has an authored value: a default or time samples (usd-core's
+/// `HasAuthoredValue`).
+pub fn is_authored(prim: &Prim, name: &str) -> Result<bool, String> {
+    Ok(raw(prim, name, At::new(None))?.is_some() || has_time_samples(prim, name))
+}
+
 /// A `matrix3d` value as its nine entries, row-major (as written in the file).
 pub fn matrix3_rows(prim: &Prim, name: &str, at: At) -> ValueResult<[f64; 9]> {
     let Some(value) = raw(prim, name, at)? else {
