@@ -69,7 +69,14 @@ fn each_view_equals_a_single_run_of_its_camera() {
     let dir = views.parent().unwrap();
     let all = dir.join("all");
     let scene = fixture("gltf/plane.gltf");
-    let mut args = vec![arg(&scene), "--views", arg(&views), "--out", arg(&all), "-q"];
+    let mut args = vec![
+        arg(&scene),
+        "--views",
+        arg(&views),
+        "--out",
+        arg(&all),
+        "-q",
+    ];
     args.extend(RENDER);
     raycast_ok(&args);
     let folders = ["0000-r_0", "0001-r_1", "0002-r_2"];
@@ -112,7 +119,10 @@ fn each_view_equals_a_single_run_of_its_camera() {
                 assert!(same, "{folder}/{name} differs from the single run's");
             }
         }
-        assert_eq!(sidecar_without_timings(&view), sidecar_without_timings(&single));
+        assert_eq!(
+            sidecar_without_timings(&view),
+            sidecar_without_timings(&single)
+        );
     }
     // The scene was read and its octree built once: every view records the same times.
     let timings: Vec<serde_json::Value> = folders
@@ -182,15 +192,27 @@ fn pinhole_depth_is_the_analytic_plane_depth() {
             if margin > 0.0 {
                 hits += 1;
                 let expected = t * d.length();
-                assert!((depth[i] - expected).abs() <= 1e-12 * expected, "depth at {u},{v}");
+                assert!(
+                    (depth[i] - expected).abs() <= 1e-12 * expected,
+                    "depth at {u},{v}"
+                );
                 let expected_z = (p - eye).dot(forward);
-                assert!((z[i] - expected_z).abs() <= 1e-12 * expected_z, "z at {u},{v}");
+                assert!(
+                    (z[i] - expected_z).abs() <= 1e-12 * expected_z,
+                    "z at {u},{v}"
+                );
             } else {
-                assert!(depth[i].is_infinite() && z[i].is_infinite(), "miss at {u},{v}");
+                assert!(
+                    depth[i].is_infinite() && z[i].is_infinite(),
+                    "miss at {u},{v}"
+                );
             }
         }
     }
-    assert!(hits > 100 && checked - hits > 100, "{hits} hits of {checked}");
+    assert!(
+        hits > 100 && checked - hits > 100,
+        "{hits} hits of {checked}"
+    );
 }
 
 /// OpenCV's axes are OpenGL's with Y and Z turned round: the same camera written either way
@@ -254,8 +276,15 @@ fn opencv_axes_draw_the_same_camera() {
     ]);
     for name in ["depth.npy", "normal.npy"] {
         let gl = std::fs::read(dir.join("gl").join(name)).unwrap();
-        assert_eq!(gl, std::fs::read(dir.join("cv").join(name)).unwrap(), "{name}");
-        assert_eq!(gl, std::fs::read(many.join("0000-front").join(name)).unwrap());
+        assert_eq!(
+            gl,
+            std::fs::read(dir.join("cv").join(name)).unwrap(),
+            "{name}"
+        );
+        assert_eq!(
+            gl,
+            std::fs::read(many.join("0000-front").join(name)).unwrap()
+        );
     }
 }
 
@@ -297,7 +326,10 @@ fn bad_view_files_are_one_line_errors_naming_the_frame() {
                 "views": [{"name": "v", "K": [[0, 0, 4], [0, 10, 4], [0, 0, 1]], "cam_to_world": identity}]}),
             "views[0] ('v'): K is not invertible",
         ),
-        (serde_json::json!({"frames": []}), "the views file lists no views"),
+        (
+            serde_json::json!({"frames": []}),
+            "the views file lists no views",
+        ),
     ];
     for (i, (json, expected)) in cases.iter().enumerate() {
         let views = temp_file(&format!("views-bad-{i}"), "views.json", json.to_string());
@@ -306,7 +338,10 @@ fn bad_view_files_are_one_line_errors_naming_the_frame() {
         let stderr = String::from_utf8_lossy(&result.stderr);
         assert_eq!(result.status.code(), Some(1), "{stderr}");
         assert_eq!(stderr.lines().count(), 1, "{stderr}");
-        assert!(stderr.contains("views.json") && stderr.contains(expected), "{stderr}");
+        assert!(
+            stderr.contains("views.json") && stderr.contains(expected),
+            "{stderr}"
+        );
         assert!(!out.exists(), "case {i} wrote {out:?}");
     }
 }
