@@ -33,7 +33,10 @@ def look_at(eye, target):
 
 
 FRAMES = [
-    {"file_path": "images/frame_00001.png", "transform_matrix": look_at([2.5, 1.5, 4.0], [0, 0, 0])},
+    {
+        "file_path": "images/frame_00001.png",
+        "transform_matrix": look_at([2.5, 1.5, 4.0], [0, 0, 0]),
+    },
     {
         "file_path": "images/frame_00002.png",
         "transform_matrix": look_at([-3.0, -1.0, 2.0], [0.2, 0.1, 0]),
@@ -63,7 +66,19 @@ def render_views(tmp_path):
     views.write_text(json.dumps({**INTRINSICS, "camera_model": "OPENCV", "frames": frames}))
     out = tmp_path / "out"
     subprocess.run(
-        [RAYCAST, SCENE, "--views", views, "--aov", "depth,z,id", "--format", "npy", "--out", out, "-q"],
+        [
+            RAYCAST,
+            SCENE,
+            "--views",
+            views,
+            "--aov",
+            "depth,z,id",
+            "--format",
+            "npy",
+            "--out",
+            out,
+            "-q",
+        ],
         check=True,
     )
     return out
@@ -78,7 +93,9 @@ def test_views_agree_with_nerfstudio_rays_and_trimesh(tmp_path):
         depth = np.load(folder / "depth.npy")
         origins, directions, shape = nerfstudio_rays(frame)
         assert depth.shape == shape
-        locations, rays, _ = RayMeshIntersector(mesh).intersects_location(origins, directions, multiple_hits=True)
+        locations, rays, _ = RayMeshIntersector(mesh).intersects_location(
+            origins, directions, multiple_hits=True
+        )
         expected = np.full(len(directions), np.inf)
         distances = np.linalg.norm(locations - origins[rays], axis=1)
         np.minimum.at(expected, rays, distances)
