@@ -29,7 +29,7 @@ fn codes(report: &AssetReport, severity: Severity) -> BTreeSet<&str> {
 
 #[test]
 fn errors_agree_with_the_validator() {
-    let cases: [(&str, &[&str]); 5] = [
+    let cases: [(&str, &[&str]); 12] = [
         // One POSITION accessor on a view without byteStride, read by two primitives.
         ("one_accessor_two_primitives.gltf", &[]),
         // Two accessors on that view.
@@ -50,6 +50,27 @@ fn errors_agree_with_the_validator() {
             "weights_three_sets_short.gltf",
             &["ACCESSOR_WEIGHTS_NON_NORMALIZED"],
         ),
+        // Materials (the validator's material.dart): a `normalTexture.scale` that is a
+        // string; a texture info without `index`.
+        ("normal_scale_string.gltf", &["TYPE_MISMATCH"]),
+        ("texture_info_without_index.gltf", &["UNDEFINED_PROPERTY"]),
+        // A normalTexture on a primitive without NORMAL and TANGENT: a viewer generates the
+        // tangents (MESH_PRIMITIVE_GENERATED_TANGENT_SPACE, a warning).
+        ("normal_texture_without_tangents.gltf", &[]),
+        // A clearcoat normal map without a normalTexture to generate tangents from.
+        (
+            "clearcoat_normal_without_tangents.gltf",
+            &["MESH_PRIMITIVE_NO_TANGENT_SPACE"],
+        ),
+        // Every index the UNSIGNED_SHORT restart value, past the last vertex too.
+        (
+            "all_indices_restart.gltf",
+            &["ACCESSOR_INDEX_OOB", "ACCESSOR_INDEX_PRIMITIVE_RESTART"],
+        ),
+        // `"scene": "hello"`.
+        ("scene_string.gltf", &["TYPE_MISMATCH"]),
+        // Shader techniques required: appearance only, the geometry is drawn.
+        ("techniques_webgl_required.gltf", &[]),
     ];
     for (name, validator) in cases {
         let report = report(name);
@@ -57,6 +78,27 @@ fn errors_agree_with_the_validator() {
         let expected: BTreeSet<&str> = validator.iter().copied().collect();
         assert_eq!(errors, expected, "{name}: {:?}", report.findings);
     }
+}
+
+#[test]
+fn required_shader_techniques_do_not_stop_a_render() {
+    let scene = import::load(
+        &fixture("techniques_webgl_required.gltf"),
+        &LoadOptions::default(),
+    )
+    .expect("loads");
+    assert_eq!(scene.objects.len(), 1);
+}
+
+#[test]
+fn a_generated_tangent_space_is_a_warning() {
+    let report = report("normal_texture_without_tangents.gltf");
+    let warnings = codes(&report, Severity::Warning);
+    assert!(
+        warnings.contains("MESH_PRIMITIVE_GENERATED_TANGENT_SPACE"),
+        "{:?}",
+        report.findings
+    );
 }
 
 #[test]

@@ -125,6 +125,17 @@ fn points_only_ply_is_an_empty_scene_with_the_gltf_warning() {
 }
 
 #[test]
+fn unread_triangle_strips_are_one_warning() {
+    // trimesh 5.2.0 reads the face and not the strip, too: one triangle.
+    let scene = load("ply/tristrips.ply");
+    assert_eq!(scene.objects[0].triangles, 1);
+    assert_eq!(
+        scene.warnings,
+        ["1 'tristrips' records not read: raycast reads the 'face' element only"]
+    );
+}
+
+#[test]
 fn every_stl_encoding_reads_the_cube_in_order() {
     for (name, object) in [
         ("cube_ascii", "cube"),

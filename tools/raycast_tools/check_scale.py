@@ -7,7 +7,7 @@ On an asset folder (default ../shared/assets; says so and exits 2 when it is mis
    (the same JSON records without `seconds`, in the same order; the same JUnit testcases
    without `time`; the same exit code);
 3. throughput on the glTF files alone, beside the Khronos glTF-Validator (npm
-   `gltf-validator`, pinned in tools/npm, run through tools/npm/gltf_helper.mjs) on the same
+   `gltf-validator`, pinned in tools/npm, run through tools/npm/validate_codes.mjs) on the same
    files when tools/npm/node_modules holds it; skipped with a message otherwise.
 
 Times are wall-clock seconds, the median of --runs runs; peak memory is GNU time's
@@ -33,25 +33,8 @@ from .paths import ROOT, raycast_or_exit
 
 ASSETS = ROOT.parent / "shared" / "assets"
 VALIDATOR = ROOT / "tools" / "npm" / "node_modules" / "gltf-validator"
-# Validates each file named on the command line with the validator's own API, one JSON line
-# per file; a file it throws on (not glTF at all) is reported as such, and the rest go on.
-VALIDATE_JS = """
-import { readFileSync } from 'node:fs';
-import { dirname, join } from 'node:path';
-import { createRequire } from 'node:module';
-const validator = createRequire(process.env.VALIDATOR_DIR + '/')('gltf-validator');
-for (const file of process.argv.slice(1)) {
-  const externalResourceFunction = async (uri) =>
-    new Uint8Array(readFileSync(join(dirname(file), decodeURIComponent(uri))));
-  try {
-    const r = await validator.validateBytes(new Uint8Array(readFileSync(file)),
-      { uri: file, externalResourceFunction });
-    console.log(JSON.stringify({ file, errors: r.issues.numErrors, version: r.validatorVersion }));
-  } catch (e) {
-    console.log(JSON.stringify({ file, exception: String(e) }));
-  }
-}
-"""
+# One JSON line per file: the validator's verdict (its error count, `errors`).
+VALIDATE_CODES = ROOT / "tools" / "npm" / "validate_codes.mjs"
 TIME = Path("/usr/bin/time")
 
 
@@ -173,8 +156,7 @@ def gltf_side_by_side(raycast: Path, files: list[Path], work: Path, runs: int) -
             f"skipped: no {VALIDATOR.relative_to(ROOT)} (cd tools/npm && npm ci) or no node"
         )
         return result
-    node = ["env", f"VALIDATOR_DIR={VALIDATOR.parent}", "node", "--input-type=module"]
-    theirs = median_run([*node, "-e", VALIDATE_JS, *files], work, runs, work / "v.jsonl")
+    theirs = median_run(["node", VALIDATE_CODES, *files], work, runs, work / "v.jsonl")
     errors, thrown = {}, 0
     for line in (work / "v.jsonl").read_text().splitlines():
         v = json.loads(line)

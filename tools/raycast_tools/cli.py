@@ -56,6 +56,10 @@ COMMANDS = {
         "exact_depth",
         "USD/glTF/OBJ depth against an outside float64 reading + ray/triangle test (1e-12)",
     ),
+    "corpus": (
+        "corpus",
+        "render, info and check every file of a corpus beside the validator, usd-core, trimesh",
+    ),
     "instancing-bench": (
         "instancing_bench",
         "memory and build time of instanced scenes, two binaries (reports/instancing.md)",

@@ -124,6 +124,15 @@ def make_ply() -> None:
     head = ply_header("ascii", [("double", "x"), ("double", "y"), ("double", "z")], 3, None, None)
     FILES.write_bytes(PLY_DIR / "points_only.ply", (head + "0 0 0\n1 0 0\n0 1 0\n").encode())
 
+    # A triangle face and a `tristrips` element (the square as one strip, -1 ending it),
+    # which raycast does not read (nor does trimesh): one triangle and a warning.
+    xyz = [("float", "x"), ("float", "y"), ("float", "z")]
+    head = ply_header("ascii", xyz, 4, [[0, 1, 2]], ("uchar", "int", "vertex_indices"))
+    strips = "element tristrips 1\nproperty list int int vertex_indices\nend_header\n"
+    head = head.replace("end_header\n", strips)
+    body = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n5 0 1 3 2 -1\n"
+    FILES.write_bytes(PLY_DIR / "tristrips.ply", (head + body).encode())
+
 
 def stl_facets(tris: np.ndarray) -> str:
     out = []

@@ -835,6 +835,14 @@ def validate_scene(path, raycast, nrays=2000, seed=0, max_f64=2000, camera=False
         return [dict(base, status="skip", reason=str(e))]
     except Exception as e:  # trimesh could not load it
         return [dict(base, status="skip", reason=f"trimesh cannot load: {type(e).__name__}: {e}")]
+    return validate_reference(ref, raycast, nrays, seed, max_f64, camera, keep)
+
+
+def validate_reference(ref, raycast, nrays=2000, seed=0, max_f64=2000, camera=False, keep=None):
+    """validate_scene on a reference already loaded (load_reference): the list of report
+    dicts (rays mode, camera mode), or one `skip` report when there is nothing to aim at."""
+    path = ref.path
+    base = {"scene": str(path)}
     if len(ref.tris) == 0 and not ref.quadrics:
         return [dict(base, status="skip", reason="no triangles or quadrics in the reference")]
     if ref.bounds() is None:

@@ -174,6 +174,7 @@ impl Walker<'_, '_> {
                 if let Some(material) =
                     index_of(prim, "material").and_then(|i| self.list("materials").get(i))
                 {
+                    self.tangent_space(&at, has("NORMAL") && has("TANGENT"), material);
                     let needed = max_tex_coord(material);
                     if needed.is_some_and(|n| n >= texcoords) {
                         self.f.error(
@@ -453,9 +454,12 @@ impl Walker<'_, '_> {
         let mut first_oob = None;
         let mut restarts = 0usize;
         for &v in values.iter() {
+            // The validator's two rules are independent: a restart value past the last
+            // vertex is also out of range.
             if v == restart {
                 restarts += 1;
-            } else if vertices.is_some_and(|n| v as usize >= n) {
+            }
+            if vertices.is_some_and(|n| v as usize >= n) {
                 oob += 1;
                 first_oob.get_or_insert(v);
             }

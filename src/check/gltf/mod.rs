@@ -13,6 +13,7 @@
 mod accessors;
 mod animations;
 mod buffers;
+mod materials;
 mod meshes;
 mod nodes;
 mod schema;
@@ -166,6 +167,7 @@ impl<'a> Walker<'a, '_> {
         self.buffers();
         self.buffer_views();
         self.accessors();
+        self.materials();
         self.meshes();
         let triangles = self.nodes_and_scenes();
         self.cameras();

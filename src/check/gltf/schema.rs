@@ -158,6 +158,24 @@ impl Walker<'_, '_> {
         }
     }
 
+    /// A value of an integer property that is no valid index: a number out of range, or
+    /// (outside extensions, whose schemas are their own) a string, boolean or array. An object
+    /// is left alone: a sparse accessor's `indices` is one.
+    fn integer(&mut self, item: &Value, at: &str) {
+        if let Some(x) = item.as_f64() {
+            self.f.error(
+                "VALUE_NOT_IN_RANGE",
+                at,
+                format!("{} is not a valid non-negative integer", readable(x)),
+            );
+        } else if matches!(item, Value::String(_) | Value::Bool(_) | Value::Array(_))
+            && !at.contains("/extensions/")
+        {
+            self.f
+                .error("TYPE_MISMATCH", at, format!("{item} is not an integer"));
+        }
+    }
+
     /// Empty arrays, integers out of range, and `extensions` objects with undeclared names,
     /// anywhere but in extras.
     fn tree(&mut self, v: &Value, at: &str, declared: &HashSet<&str>) {
@@ -183,13 +201,7 @@ impl Walker<'_, '_> {
                 continue;
             }
             if INTEGER_KEYS.contains(&key.as_str()) && as_index(item).is_none() {
-                if let Some(x) = item.as_f64() {
-                    self.f.error(
-                        "VALUE_NOT_IN_RANGE",
-                        here.clone(),
-                        format!("{} is not a valid non-negative integer", readable(x)),
-                    );
-                }
+                self.integer(item, &here);
             }
             if key != "extensions" {
                 self.tree(item, &here, declared);

@@ -57,9 +57,12 @@ const HONOURED_REQUIRED: &[&str] = &[
     decode::GPU_INSTANCING,
 ];
 
-/// Prefixes of extensions that only concern appearance (materials, textures, lights).
+/// Prefixes of extensions that only concern appearance (materials, textures, lights, shader
+/// techniques: KHR_techniques_webgl, and KHR_technique_webgl as older exporters spell it).
 const APPEARANCE_PREFIXES: &[&str] = &[
     "KHR_materials_",
+    "KHR_technique_webgl",
+    "KHR_techniques_webgl",
     "KHR_texture_",
     "KHR_lights_",
     "EXT_texture_",

@@ -208,6 +208,7 @@ pub fn read(bytes: &[u8]) -> std::result::Result<PlyMesh, PlyError> {
             out.short_faces
         ));
     }
+    warnings.extend(unread_strips(&header));
     let left = body.remaining();
     if left > 0 && !(header.format == Format::Ascii && body.rest_is_blank()) {
         warnings.push(format!("{left} bytes after the last element ignored"));
@@ -222,6 +223,19 @@ pub fn read(bytes: &[u8]) -> std::result::Result<PlyMesh, PlyError> {
         triangles: out.triangles,
         warnings,
     })
+}
+
+/// The warning for a `tristrips` element (triangle strips, strips ended by -1), which is
+/// not read: its records would be triangles the scene lacks.
+fn unread_strips(header: &Header) -> Option<String> {
+    let strips = header
+        .elements
+        .iter()
+        .find(|e| e.name == "tristrips" && e.count > 0)?;
+    Some(format!(
+        "{} 'tristrips' records not read: raycast reads the 'face' element only",
+        strips.count
+    ))
 }
 
 /// What an element is read for.
