@@ -182,6 +182,7 @@ impl SceneInfo {
             let projection = match c.projection {
                 Projection::Perspective { yfov } => format!("perspective yfov {yfov:.4} rad"),
                 Projection::Orthographic { ymag } => format!("orthographic ymag {ymag}"),
+                Projection::Pinhole(p) => format!("pinhole K {:?}", p.k),
             };
             writeln!(
                 f,

@@ -266,6 +266,8 @@ struct RenderArgs {
     paths: PathArgs,
     #[command(flatten)]
     pose: PoseArgs,
+    #[command(flatten)]
+    pinhole: cli::camera::PinholeArgs,
 }
 
 fn parse_vec3(text: &str) -> Result<DVec3, String> {
@@ -498,6 +500,8 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
             look_at,
             fov_degrees: args.fov,
             ortho_height: args.ortho,
+            intrinsics: args.pinhole.k,
+            to_world: args.pinhole.to_world(),
         },
         width: args.width,
         height: args.height,
@@ -512,6 +516,21 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         hits: args.hits,
     };
     let bar = Progress::new(args.quiet);
+    if let Some(path) = &args.pinhole.views {
+        if times.is_some() {
+            return Err(raycast::Error::usage(
+                "--views renders one time; give --time SECONDS, not START:STOP:STEP",
+            ));
+        }
+        let size = job.width.zip(job.height);
+        let views = raycast::camera::views::read(path, size)?;
+        let outcome = job::views::run(&job, &views, |_, event| bar.update(event))?;
+        bar.finish();
+        if !args.quiet {
+            say_views(&job, &outcome);
+        }
+        return Ok(());
+    }
     if let Some(times) = times {
         let outcome = sequence::run(&job, &times, |_, event| bar.update(event))?;
         bar.finish();
@@ -540,14 +559,43 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
     Ok(())
 }
 
-/// What a sequence wrote: its warnings (each once), then one line.
-fn say_sequence(job: &RenderJob, outcome: &sequence::Outcome) {
-    let mut warnings: Vec<&String> = outcome.sidecars.iter().flat_map(|s| &s.warnings).collect();
+/// The warnings of several renders' sidecars, each once.
+fn say_warnings(sidecars: &[raycast::output::sidecar::Sidecar]) {
+    let mut warnings: Vec<&String> = sidecars.iter().flat_map(|s| &s.warnings).collect();
     warnings.sort();
     warnings.dedup();
     for warning in warnings {
         eprintln!("raycast: warning: {warning}");
     }
+}
+
+/// What a run of many views wrote: its warnings (each once), then one line.
+fn say_views(job: &RenderJob, outcome: &job::views::Outcome) {
+    say_warnings(&outcome.sidecars);
+    let trace: f64 = outcome.sidecars.iter().map(|s| s.timings.trace).sum();
+    let write: f64 = outcome.sidecars.iter().map(|s| s.timings.write).sum();
+    let folder = |f: Option<&PathBuf>| {
+        f.and_then(|f| f.file_name())
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    eprintln!(
+        "raycast: wrote {} views to {} ({} … {}), each {} (load {:.3}s, build {:.3}s, once; in all: trace {:.3}s, write {:.3}s)",
+        outcome.folders.len(),
+        job.out_dir().display(),
+        folder(outcome.folders.first()),
+        folder(outcome.folders.last()),
+        outcome.sidecars.first().map(|s| s.files.join(", ")).unwrap_or_default(),
+        outcome.load,
+        outcome.build,
+        trace,
+        write,
+    );
+}
+
+/// What a sequence wrote: its warnings (each once), then one line.
+fn say_sequence(job: &RenderJob, outcome: &sequence::Outcome) {
+    say_warnings(&outcome.sidecars);
     let sum = |part: fn(&raycast::output::sidecar::Timings) -> f64| -> f64 {
         outcome.sidecars.iter().map(|s| part(&s.timings)).sum()
     };

@@ -1,34 +1,29 @@
 //! Cameras for `Scene.render`: the library's cameras (file cameras, look-at) and a pinhole
 //! camera given by an intrinsic matrix, in the computer-vision convention.
 
-use glam::{DMat3, DMat4, DVec3, DVec4};
+use glam::DVec3;
 use numpy::PyReadonlyArray2;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use raycast::camera::{Camera, Projection};
-use raycast::geometry::Ray;
-use raycast::render::{CameraView, RaySource};
+use raycast::camera::{camera_to_world, Camera, CameraAxes, Pinhole, Projection};
+use raycast::render::CameraView;
 
-/// How a [`PyCamera`] makes its rays.
-#[derive(Debug, Clone)]
-pub enum Kind {
-    /// A library camera (glTF/USD conventions: looks down -Z, +Y up, vertical field of view).
-    Scene(Camera),
-    /// A pinhole camera: pixel (u, v) looks along `rotation · K⁻¹ (u + ½, v + ½, 1)` (looks
-    /// down +Z, +Y down, as OpenCV and Open3D).
-    Pinhole {
-        k_inverse: DMat3,
-        to_world: DMat4,
-        width: usize,
-        height: usize,
-    },
-}
-
-/// A camera: from a scene file, `raycast.camera.look_at` or `raycast.camera.pinhole`.
+/// A camera: from a scene file, `raycast.camera.look_at` or `raycast.camera.pinhole` (a
+/// library camera with a pinhole projection: the command line's `--K` and `--cam-to-world`).
 #[pyclass(name = "Camera", module = "raycast", frozen)]
 #[derive(Debug, Clone)]
 pub struct PyCamera {
-    pub kind: Kind,
+    pub camera: Camera,
+}
+
+impl PyCamera {
+    /// The pinhole projection, for a pinhole camera.
+    fn pinhole(&self) -> Option<&Pinhole> {
+        match &self.camera.projection {
+            Projection::Pinhole(p) => Some(p),
+            _ => None,
+        }
+    }
 }
 
 #[pymethods]
@@ -36,18 +31,18 @@ impl PyCamera {
     /// Camera name (file cameras) or how it was made.
     #[getter]
     fn name(&self) -> String {
-        match &self.kind {
-            Kind::Scene(c) => c.name.clone(),
-            Kind::Pinhole { .. } => "pinhole".into(),
-        }
+        self.camera.name.clone()
     }
 
-    /// Camera-to-world matrix, (4, 4).
+    /// Camera-to-world matrix, (4, 4): in the axes the camera was given in (OpenCV's for a
+    /// pinhole camera, glTF's otherwise).
     #[getter]
     fn cam_to_world(&self) -> [[f64; 4]; 4] {
-        let m = match &self.kind {
-            Kind::Scene(c) => c.to_world,
-            Kind::Pinhole { to_world, .. } => *to_world,
+        let m = self.camera.to_world;
+        let m = match self.pinhole() {
+            // OpenCV's axes from OpenGL's: the Y and Z columns negated back (exactly).
+            Some(_) => CameraAxes::OpenCv.to_opengl(m),
+            None => m,
         };
         m.transpose().to_cols_array_2d()
     }
@@ -55,19 +50,16 @@ impl PyCamera {
     /// Image size (width, height) a pinhole camera was made for; None otherwise.
     #[getter]
     fn size(&self) -> Option<(usize, usize)> {
-        match &self.kind {
-            Kind::Pinhole { width, height, .. } => Some((*width, *height)),
-            Kind::Scene(_) => None,
-        }
+        self.pinhole().map(|p| (p.width, p.height))
     }
 
     fn __repr__(&self) -> String {
-        match &self.kind {
-            Kind::Scene(c) => format!(
+        match self.pinhole() {
+            Some(p) => format!("Camera(pinhole, {}x{})", p.width, p.height),
+            None => format!(
                 "Camera(name={:?}, source={:?}, projection={:?})",
-                c.name, c.source, c.projection
+                self.camera.name, self.camera.source, self.camera.projection
             ),
-            Kind::Pinhole { width, height, .. } => format!("Camera(pinhole, {width}x{height})"),
         }
     }
 }
@@ -108,9 +100,7 @@ pub fn look_at(
         projection,
     )
     .map_err(|e| crate::to_pyerr(py, e.as_usage()))?;
-    Ok(PyCamera {
-        kind: Kind::Scene(camera),
-    })
+    Ok(PyCamera { camera })
 }
 
 /// A pinhole camera from the 3×3 intrinsic matrix `K` and the 4×4 camera-to-world matrix.
@@ -129,23 +119,20 @@ pub fn pinhole(
             m.shape()
         )));
     }
-    let k = DMat3::from_cols_array_2d(&[0, 1, 2].map(|c| [0, 1, 2].map(|r| k[[r, c]])));
-    let to_world =
-        DMat4::from_cols_array_2d(&[0, 1, 2, 3].map(|c| [0, 1, 2, 3].map(|r| m[[r, c]])));
-    let k_inverse = k.inverse();
-    let affine = to_world.row(3) == DVec4::W;
-    if !k_inverse.is_finite() || !to_world.is_finite() || !affine || to_world.determinant() == 0.0 {
-        return Err(PyValueError::new_err(
-            "K must be invertible and cam_to_world a finite invertible affine matrix (last row 0 0 0 1)",
-        ));
-    }
     check_size(width, height)?;
+    let k_rows = [0, 1, 2].map(|r| [0, 1, 2].map(|c| k[[r, c]]));
+    let m_rows = [0, 1, 2, 3].map(|r| [0, 1, 2, 3].map(|c| m[[r, c]]));
+    let pinhole = Pinhole::new(k_rows, width, height).map_err(PyValueError::new_err)?;
+    let to_world = camera_to_world(m_rows).map_err(PyValueError::new_err)?;
     Ok(PyCamera {
-        kind: Kind::Pinhole {
-            k_inverse,
-            to_world,
-            width,
-            height,
+        camera: Camera {
+            name: "pinhole".into(),
+            source: "raycast.camera.pinhole".into(),
+            projection: Projection::Pinhole(pinhole),
+            aspect_ratio: None,
+            znear: 0.0,
+            zfar: None,
+            to_world: CameraAxes::OpenCv.to_opengl(to_world),
         },
     })
 }
@@ -161,80 +148,16 @@ fn check_size(width: usize, height: usize) -> PyResult<()> {
     Ok(())
 }
 
-/// The pixels of a pinhole camera as rays, row-major from the top row.
-pub struct PinholeView {
-    k_inverse: DMat3,
-    to_world: DMat4,
-    width: usize,
-    height: usize,
-}
-
-impl RaySource for PinholeView {
-    fn len(&self) -> usize {
-        self.width * self.height
-    }
-
-    fn ray(&self, index: usize) -> Ray {
-        let (u, v) = (
-            (index % self.width) as f64 + 0.5,
-            (index / self.width) as f64 + 0.5,
-        );
-        let local = self.k_inverse * DVec3::new(u, v, 1.0);
-        Ray::new(
-            self.to_world.w_axis.truncate(),
-            self.to_world.transform_vector3(local),
-        )
-    }
-
-    fn row_width(&self) -> Option<usize> {
-        Some(self.width)
-    }
-
-    fn view_axis(&self) -> Option<(DVec3, DVec3)> {
-        let forward = self
-            .to_world
-            .transform_vector3(DVec3::Z)
-            .normalize_or_zero();
-        Some((self.to_world.w_axis.truncate(), forward))
-    }
-}
-
-/// The rays of `camera` for a `width`×`height` image.
-pub enum View {
-    Scene(CameraView),
-    Pinhole(PinholeView),
-}
-
-impl View {
-    pub fn new(camera: &PyCamera, width: usize, height: usize) -> PyResult<View> {
-        check_size(width, height)?;
-        Ok(match &camera.kind {
-            Kind::Scene(c) => View::Scene(CameraView::new(c.clone(), width, height)),
-            Kind::Pinhole {
-                k_inverse,
-                to_world,
-                width: w,
-                height: h,
-            } => {
-                if (*w, *h) != (width, height) {
-                    return Err(PyValueError::new_err(format!(
-                        "this pinhole camera was made for {w}x{h} pixels, not {width}x{height}"
-                    )));
-                }
-                View::Pinhole(PinholeView {
-                    k_inverse: *k_inverse,
-                    to_world: *to_world,
-                    width,
-                    height,
-                })
-            }
-        })
-    }
-
-    pub fn source(&self) -> &(dyn RaySource + Sync) {
-        match self {
-            View::Scene(v) => v,
-            View::Pinhole(v) => v,
+/// The rays of `camera` for a `width`×`height` image (a pinhole camera's own size only).
+pub fn view(camera: &PyCamera, width: usize, height: usize) -> PyResult<CameraView> {
+    check_size(width, height)?;
+    if let Some(p) = camera.pinhole() {
+        if (p.width, p.height) != (width, height) {
+            return Err(PyValueError::new_err(format!(
+                "this pinhole camera was made for {}x{} pixels, not {width}x{height}",
+                p.width, p.height
+            )));
         }
     }
+    Ok(CameraView::new(camera.camera.clone(), width, height))
 }

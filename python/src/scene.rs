@@ -1,7 +1,7 @@
 //! `Scene`: a loaded scene with its octree, and the queries on it.
 
 use crate::arrays::RayArrays;
-use crate::camera::{Kind, PyCamera, View};
+use crate::camera::PyCamera;
 use crate::fill::{array, trace_dict};
 use glam::DVec3;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
@@ -299,10 +299,9 @@ impl PyScene {
         outputs: Vec<String>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let outputs = parse_outputs(&outputs, true)?;
-        let view = View::new(camera, width, height)?;
-        let source = view.source();
+        let view = crate::camera::view(camera, width, height)?;
         let rays = Rays {
-            source,
+            source: &view,
             range: |_| (0.0, f64::INFINITY),
             refuse_untraceable: false,
         };
@@ -354,11 +353,7 @@ impl PyScene {
     /// The file's cameras.
     fn cameras(&self) -> Vec<PyCamera> {
         let cameras = self.scene.cameras.iter().cloned();
-        cameras
-            .map(|c| PyCamera {
-                kind: Kind::Scene(c),
-            })
-            .collect()
+        cameras.map(|camera| PyCamera { camera }).collect()
     }
 
     /// The same file posed at `time` (glTF seconds, USD time code), as `load(..., time=time)`

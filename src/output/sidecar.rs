@@ -113,7 +113,8 @@ pub struct CameraInfo {
     pub source: String,
     /// Its name.
     pub name: String,
-    /// Projection type and its parameter (`yfov` or `ymag`).
+    /// Projection type and its parameters (`yfov`, `ymag`, or a pinhole's `k`, `width` and
+    /// `height`).
     #[serde(flatten)]
     pub projection: Projection,
     /// Image width / height used for the rays.
@@ -141,7 +142,7 @@ impl CameraInfo {
             aspect_ratio,
             xmag: match camera.projection {
                 Projection::Orthographic { ymag } => Some(ymag * aspect_ratio),
-                Projection::Perspective { .. } => None,
+                Projection::Perspective { .. } | Projection::Pinhole(_) => None,
             },
             znear: camera.znear,
             zfar: camera.zfar,

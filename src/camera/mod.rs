@@ -6,6 +6,10 @@ use crate::geometry::{Aabb, Ray};
 use glam::{DMat4, DVec3, DVec4};
 use serde::Serialize;
 
+mod pinhole;
+pub mod views;
+pub use pinhole::{camera_to_world, CameraAxes, Pinhole};
+
 /// How a camera projects.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(tag = "type", rename_all = "lowercase")]
@@ -20,6 +24,8 @@ pub enum Projection {
         /// Half the view height in scene units.
         ymag: f64,
     },
+    /// A pinhole camera given by its intrinsic matrix, for an image of a fixed size.
+    Pinhole(Pinhole),
 }
 
 /// A camera placed in the world.
@@ -37,7 +43,8 @@ pub struct Camera {
     pub znear: f64,
     /// Far clipping distance, `None` for infinite (reported only).
     pub zfar: Option<f64>,
-    /// Camera-to-world matrix with an orthonormal rotation part.
+    /// Camera-to-world matrix in raycast's axes (+Y up, looking down -Z), with an
+    /// orthonormal rotation part, except for a pinhole camera (whose matrix is used as given).
     pub to_world: DMat4,
 }
 
@@ -168,9 +175,13 @@ impl Camera {
         self.to_world.w_axis.truncate()
     }
 
-    /// Unit viewing direction (the camera's -Z axis in the world).
+    /// Unit viewing direction (the camera's -Z axis in the world; normalised for a pinhole
+    /// camera, whose matrix may scale).
     pub fn forward(&self) -> DVec3 {
-        -self.to_world.z_axis.truncate()
+        match self.projection {
+            Projection::Pinhole(_) => -self.to_world.z_axis.truncate().normalize_or_zero(),
+            _ => -self.to_world.z_axis.truncate(),
+        }
     }
 
     /// The ray through the centre of pixel (`column`, `row`) of a `width`×`height` image;
@@ -180,11 +191,13 @@ impl Camera {
     }
 
     /// Half the view height at unit distance (`tan(yfov / 2)`) for a perspective camera, or in
-    /// scene units (`ymag`) for an orthographic one: the constant of [`Camera::screen_ray`].
+    /// scene units (`ymag`) for an orthographic one: the constant of [`Camera::screen_ray`]
+    /// (1, unused, for a pinhole camera).
     pub fn half_height(&self) -> f64 {
         match self.projection {
             Projection::Perspective { yfov } => (yfov * 0.5).tan(),
             Projection::Orthographic { ymag } => ymag,
+            Projection::Pinhole(_) => 1.0,
         }
     }
 
@@ -209,6 +222,11 @@ impl Camera {
                 let local = DVec4::new(sx * half_height * aspect, sy * half_height, 0.0, 1.0);
                 Ray::new((self.to_world * local).truncate(), self.forward())
             }
+            Projection::Pinhole(pinhole) => Ray::new(
+                self.eye(),
+                self.to_world
+                    .transform_vector3(pinhole.direction(column, row)),
+            ),
         }
     }
 }
