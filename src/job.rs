@@ -6,7 +6,7 @@ use crate::error::{Error, Result};
 use crate::import::{self, LoadOptions};
 use crate::output::request::{self};
 use crate::output::sidecar::Sidecar;
-use crate::output::{self, ownership, Format};
+use crate::output::{self, ownership, Format, PngOptions};
 use crate::render::{AccelKind, Aov};
 use glam::{DMat4, DVec3};
 use stages::run_checked;
@@ -64,9 +64,9 @@ pub struct RenderJob {
     /// A ray that cannot be traced (non-finite origin or direction, zero direction) is an
     /// error, not a miss with a warning.
     pub strict_rays: bool,
-    /// The distance range mapped into the depth and z previews, near to far; `None` for the
-    /// 1st to 99th percentile of the hits.
-    pub depth_range: Option<[f64; 2]>,
+    /// How depth and z PNGs are written: previews over a range of distances, or 16-bit
+    /// integers.
+    pub pngs: PngOptions,
     /// Refuse a run whose buffers need more bytes than this; `None`: the memory the system
     /// reports available.
     pub max_memory: Option<u64>,

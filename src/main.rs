@@ -10,7 +10,8 @@ use raycast::import::{self, LoadOptions};
 use raycast::info::{AllObjects, SceneInfo};
 use raycast::job::sequence::{self, Times};
 use raycast::job::{self, CameraChoice, HitLimit, RenderJob};
-use raycast::output::Format;
+use raycast::output::png::DistancePng;
+use raycast::output::{Format, PngOptions};
 use raycast::render::{AccelKind, Aov};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -253,8 +254,13 @@ struct RenderArgs {
     max_memory: Option<u64>,
     /// Distances mapped to the depth and z previews, NEAR,FAR (default: the 1st to 99th
     /// percentile of the hits).
-    #[arg(long, value_name = "NEAR,FAR", value_parser = parse_range, allow_hyphen_values = true)]
+    #[arg(long, value_name = "NEAR,FAR", value_parser = parse_range, allow_hyphen_values = true, conflicts_with = "depth_scale")]
     depth_range: Option<[f64; 2]>,
+    /// Write depth.png and z.png as 16-bit integers of this many scene units each (0.001:
+    /// millimetres of a scene in metres; 0 = no data), as TUM, ScanNet and BOP store depth,
+    /// instead of 8-bit previews.
+    #[arg(long, value_name = "UNITS", value_parser = parse_positive)]
+    depth_scale: Option<f64>,
     /// Seconds the USD reader may take on the scene (it reads it in a child process first,
     /// so that a reader crash or hang ends with a one-line error).
     #[arg(long, value_name = "SECS", default_value_t = 120.0, value_parser = parse_positive)]
@@ -512,7 +518,13 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         accel: args.accel,
         max_memory: args.max_memory,
         strict_rays: args.strict_rays,
-        depth_range: args.depth_range,
+        pngs: PngOptions {
+            depth_range: args.depth_range,
+            distances: match args.depth_scale {
+                Some(scale) => DistancePng::U16 { scale },
+                None => DistancePng::Preview,
+            },
+        },
         hits: args.hits,
     };
     let bar = Progress::new(args.quiet);

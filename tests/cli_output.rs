@@ -502,7 +502,7 @@ fn progress_covers_tracing_and_writing() {
         octree: Default::default(),
         accel: Default::default(),
         strict_rays: false,
-        depth_range: None,
+        pngs: Default::default(),
         max_memory: None,
         hits: None,
     };
@@ -575,4 +575,65 @@ fn the_default_memory_limit_refuses_a_render_that_would_take_the_machine() {
     assert!(stderr.contains("--max-memory"), "{stderr}");
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     assert!(!out.exists());
+}
+
+/// `--depth-scale`: depth.png and z.png hold 16-bit integers of that many scene units (the
+/// distance divided by the scale and rounded, within half a step of the float64 buffer), 0
+/// for a miss and for a distance past 65535 steps; the sidecar records the scale.
+#[test]
+fn depth_scale_writes_16_bit_depth() {
+    let out = temp_dir("depth-u16");
+    let scene = fixture("gltf/plane.gltf");
+    let run = |out: &std::path::Path, scale: &str| {
+        raycast_ok(&[
+            arg(&scene),
+            "--eye",
+            "0.3,0.2,4",
+            "--target",
+            "0,0,0",
+            "--width",
+            "40",
+            "--height",
+            "30",
+            "--aov",
+            "depth,z",
+            "--format",
+            "npy,png",
+            "--depth-scale",
+            scale,
+            "--out",
+            arg(out),
+            "-q",
+        ]);
+    };
+    run(&out, "0.0001");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("raycast.json")).unwrap()).unwrap();
+    assert_eq!(json["depth_png_scale"], serde_json::json!(0.0001));
+    assert!(json.get("depth_png_range").is_none());
+    for aov in ["depth", "z"] {
+        let (_, values) = read_f64(&out.join(format!("{aov}.npy")));
+        let png = image::open(out.join(format!("{aov}.png"))).unwrap();
+        let png = png.as_luma16().expect("a 16-bit grey PNG");
+        let (mut hits, mut misses) = (0, 0);
+        for (v, p) in values.iter().zip(png.pixels()) {
+            let step = p.0[0];
+            if v.is_finite() {
+                hits += 1;
+                assert!(
+                    (f64::from(step) * 0.0001 - v).abs() <= 0.00005 + 1e-12,
+                    "{aov} {v} {step}"
+                );
+            } else {
+                misses += 1;
+                assert_eq!(step, 0);
+            }
+        }
+        assert!(hits > 100 && misses > 100, "{hits} {misses}");
+    }
+    // At 1e-5 units per step every hit (about 4 units away) is past 65535 steps: no data.
+    let far = temp_dir("depth-u16-far");
+    run(&far, "0.00001");
+    let png = image::open(far.join("depth.png")).unwrap();
+    assert!(png.as_luma16().unwrap().pixels().all(|p| p.0[0] == 0));
 }

@@ -151,7 +151,7 @@ fn compare(dir: &Path, index: usize, buffers: &Buffers, size: f64) -> Result<(),
 /// The current depth preview with every differing pixel drawn red.
 fn write_difference(path: &Path, depth: &[f64], differs: &[bool]) -> crate::Result<()> {
     let range = png::finite_range(depth).unwrap_or([0.0, 1.0]);
-    let mut image = png::distance_image(depth, SIZE, range);
+    let mut image = image::DynamicImage::from(png::distance_image(depth, SIZE, range)).to_rgb8();
     for (i, _) in differs.iter().enumerate().filter(|(_, &d)| d) {
         image.put_pixel(
             (i % SIZE) as u32,
@@ -164,6 +164,6 @@ fn write_difference(path: &Path, depth: &[f64], differs: &[bool]) -> crate::Resu
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    staging.write(&name, |out| png::write(out, &image))?;
+    staging.write(&name, |out| png::write(out, image))?;
     staging.commit()
 }

@@ -8,6 +8,7 @@ use super::{HitLimit, Progress, RenderJob};
 use crate::error::{Error, Result};
 use crate::import;
 use crate::output::npy::RayFile;
+use crate::output::png::DistancePng;
 use crate::output::request::{self, buffer_bytes, check_memory};
 use crate::output::sidecar::{self, CameraInfo, HitsInfo, Sidecar, Stats, Timings};
 use crate::output::{self, npz, ownership, Format, Layout, Staging};
@@ -189,7 +190,7 @@ pub(super) fn trace_and_write(
         &buffers,
         layout,
         formats,
-        job.depth_range,
+        job.pngs,
         |done, files| report(Progress::Writing { done, total: files }),
     )?;
     if let Some(hits) = &hits {
@@ -265,6 +266,10 @@ fn sidecar(
             crossings: lists.t.len(),
         }),
         depth_png_range,
+        depth_png_scale: match job.pngs.distances {
+            DistancePng::U16 { scale } => Some(scale),
+            DistancePng::Preview => None,
+        },
         objects: scene.objects.clone(),
         stats: Stats {
             triangles: scene.triangle_count(),

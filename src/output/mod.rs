@@ -318,15 +318,16 @@ impl Drop for Staging {
 
 /// Writes every buffer of `buffers` in every format of `formats` (EXR and PNG only for
 /// images), encoding the files in parallel; `written(done, total)` is called as files complete.
-/// The distance previews map `depth_range` (default: the 1st to 99th percentile of the finite
-/// values, see [`png::percentile_range`]). Returns the depth range mapped into `depth.png`, if
-/// one was written.
+/// The distance previews map `pngs.depth_range` (default: the 1st to 99th percentile of the
+/// finite values, see [`png::percentile_range`]); depth and z are 16-bit integers instead
+/// with [`png::DistancePng::U16`]. Returns the depth range mapped into `depth.png`, if one
+/// was written as a preview.
 pub fn write_buffers(
     staging: &mut Staging,
     buffers: &Buffers,
     layout: Layout,
     formats: &[Format],
-    depth_range: Option<[f64; 2]>,
+    pngs: PngOptions,
     written: impl Fn(usize, usize) + Sync,
 ) -> Result<Option<[f64; 2]>> {
     let mut written_range = None;
@@ -342,7 +343,7 @@ pub fn write_buffers(
                     Some(exr_job(values, aov, width, height))
                 }
                 (Format::Png, Layout::Image { width, .. }) => {
-                    let (job, range) = png_job(values, aov, width, depth_range);
+                    let (job, range) = png_job(values, aov, width, pngs);
                     written_range = written_range.or(range);
                     job
                 }
@@ -440,10 +441,40 @@ fn exr_job(values: Values<'_>, aov: Aov, width: usize, height: usize) -> FileJob
     })
 }
 
+/// How the PNG files of distances are written.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PngOptions {
+    /// The distances the depth and z previews map, near to far; `None` for the 1st to 99th
+    /// percentile of the hits.
+    pub depth_range: Option<[f64; 2]>,
+    /// Previews, or 16-bit integers, for depth and z.
+    pub distances: png::DistancePng,
+}
+
 /// The `.png` preview of `aov` (position and bary have none), and for depth the range it maps.
-/// `depth_range` (scene units) applies to depth and z; `t`, in units of each ray's direction,
-/// maps its own percentile range.
+/// `pngs.depth_range` (scene units) applies to depth and z; `t`, in units of each ray's
+/// direction, maps its own percentile range. Depth and z are 16-bit integers with
+/// [`png::DistancePng::U16`].
 fn png_job(
+    values: Values<'_>,
+    aov: Aov,
+    width: usize,
+    pngs: PngOptions,
+) -> (Option<FileJob<'_>>, Option<[f64; 2]>) {
+    let name = format!("{aov}.png");
+    match (values, pngs.distances) {
+        (Values::Distances(v), png::DistancePng::U16 { scale }) if aov != Aov::T => {
+            let job = FileJob::new(name, move |out| {
+                png::write(out, png::distance_u16(v, width, scale))
+            });
+            (Some(job), None)
+        }
+        (values, _) => preview_job(values, aov, width, pngs.depth_range),
+    }
+}
+
+/// The `.png` preview of `aov`, and for depth the range it maps (see [`png_job`]).
+fn preview_job(
     values: Values<'_>,
     aov: Aov,
     width: usize,
@@ -457,21 +488,21 @@ fn png_job(
                 .or_else(|| png::percentile_range(v))
                 .unwrap_or([0.0, 1.0]);
             let job = FileJob::new(name, move |out| {
-                png::write(out, &png::distance_image(v, width, range))
+                png::write(out, png::distance_image(v, width, range))
             });
             (Some(job), (aov == Aov::Depth).then_some(range))
         }
         Values::Vectors(_) if aov != Aov::Normal => (None, None),
         Values::Vectors(v) => {
             let job = FileJob::new(name, move |out| {
-                png::write(out, &png::normal_image(v, width))
+                png::write(out, png::normal_image(v, width))
             });
             (Some(job), None)
         }
         Values::Labels(v) => {
             let miss = if aov == Aov::Id { 0 } else { u32::MAX };
             let job = FileJob::new(name, move |out| {
-                png::write(out, &png::label_image(v, width, miss))
+                png::write(out, png::label_image(v, width, miss))
             });
             (Some(job), None)
         }

@@ -122,3 +122,28 @@ def test_views_equal_the_python_pinhole_bit_for_bit(tmp_path):
         for aov in ("depth", "z", "id"):
             assert np.array_equal(image[aov], np.load(folder / f"{aov}.npy")), aov
         assert np.array_equal(np.asarray(camera.cam_to_world), cv)
+
+
+@needs_binary
+def test_16_bit_depth_reads_back_in_pillow(tmp_path):
+    """`--depth-scale 0.001` writes z.png as millimetres (a scene in metres), read by Pillow
+    (an independent PNG decoder) as 16-bit grey: within half a millimetre of z.npy, 0 where
+    nothing is hit."""
+    from PIL import Image
+
+    views = tmp_path / "transforms.json"
+    frame = {**FRAMES[0], "transform_matrix": np.asarray(FRAMES[0]["transform_matrix"]).tolist()}
+    views.write_text(json.dumps({**INTRINSICS, "frames": [frame]}))
+    out = tmp_path / "out"
+    command = [RAYCAST, SCENE, "--views", views, "--aov", "z", "--format", "npy,png"]
+    subprocess.run([*command, "--depth-scale", "0.001", "--out", out, "-q"], check=True)
+    folder = out / "0000-frame_00001"
+    image = Image.open(folder / "z.png")
+    assert image.mode in ("I;16", "I;16B", "I")
+    mm = np.asarray(image, dtype=np.int64)
+    z = np.load(folder / "z.npy")
+    hit = np.isfinite(z)
+    assert hit.sum() > 300 and (~hit).sum() > 100
+    assert (mm[~hit] == 0).all()
+    assert np.abs(mm[hit] * 0.001 - z[hit]).max() <= 0.0005 + 1e-12
+    assert json.loads((folder / "raycast.json").read_text())["depth_png_scale"] == 0.001
