@@ -18,6 +18,7 @@ pub struct WatertightRay {
 
 impl WatertightRay {
     /// Prepares `origin + t * dir` (same coordinates as the triangles; `dir` non-zero).
+    #[inline]
     pub fn new(origin: DVec3, dir: DVec3) -> Self {
         let abs = dir.abs();
         let kz = if abs.x >= abs.y && abs.x >= abs.z {
