@@ -322,6 +322,21 @@ class Scene:
         """
         return self._scene.render(camera, int(width), int(height), _names(aovs))
 
+    def render_views(self, views, aovs=("depth",)):
+        """Renders each of ``views`` (from :func:`raycast.camera.read_views`) at its own size,
+        one after another over this scene's one octree.
+
+        Yields
+        ------
+        (str or None, dict of numpy.ndarray)
+            The view's name and its images, as :meth:`render` gives them; one view at a time,
+            so that a long list does not hold every image in memory.
+        """
+        names = _names(aovs)
+        for name, view in views:
+            width, height = view.size
+            yield name, self._scene.render(view, width, height, names)
+
     def __repr__(self) -> str:
         data, name, *_ = self._scene.source()
         where = data if name is None else f"{name} (bytes)"

@@ -19,7 +19,7 @@ from . import _raycast
 
 Camera = _raycast.Camera
 
-__all__ = ["Camera", "look_at", "pinhole"]
+__all__ = ["Camera", "look_at", "pinhole", "read_views"]
 
 
 def look_at(eye, target, up=(0.0, 1.0, 0.0), yfov_deg: float = 45.0) -> Camera:
@@ -67,3 +67,31 @@ def pinhole(K, cam_to_world, width: int, height: int) -> Camera:
     k = np.ascontiguousarray(K, dtype=np.float64)
     m = np.ascontiguousarray(cam_to_world, dtype=np.float64)
     return _raycast.pinhole(k, m, int(width), int(height))
+
+
+def read_views(path, width: int | None = None, height: int | None = None) -> list:
+    """The cameras of a views file, as the command line's ``--views`` reads it.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A nerfstudio / instant-ngp ``transforms.json`` (``frames``, OpenGL axes) or a plain
+        list ``{"axes": "opencv"|"opengl", "K": ..., "width": ..., "height": ..., "views":
+        [{"name": ..., "cam_to_world": ...}]}`` (docs/buffers-and-cli.md).
+    width, height : int, optional
+        The image size for frames that do not give one.
+
+    Returns
+    -------
+    list of (str or None, Camera)
+        Each view's name (a frame's image stem) and its pinhole camera; ``camera.size`` is
+        the size to render it at, and the images equal the command line's, bit for bit.
+
+    Raises
+    ------
+    raycast.errors.SceneError
+        The file is not a views file, or a frame is wrong (the message names it).
+    """
+    if (width is None) != (height is None):
+        raise ValueError("give both width and height, or neither")
+    return _raycast.read_views(path, width, height)

@@ -137,6 +137,33 @@ pub fn pinhole(
     })
 }
 
+/// The views of a camera file (`--views`: a nerfstudio / instant-ngp `transforms.json` or a
+/// plain list of K and cam_to_world), each as (name, pinhole camera); `width` and `height`
+/// stand in for an image size the file does not give.
+#[pyfunction]
+#[pyo3(signature = (path, width = None, height = None))]
+pub fn read_views(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    width: Option<usize>,
+    height: Option<usize>,
+) -> PyResult<Vec<(Option<String>, PyCamera)>> {
+    let views = raycast::camera::views::read(&path, width.zip(height))
+        .map_err(|e| crate::to_pyerr(py, e))?;
+    let camera = |view: &raycast::camera::views::View| PyCamera {
+        camera: Camera {
+            name: view.name.clone().unwrap_or_else(|| "pinhole".into()),
+            source: format!("views file {}", path.display()),
+            projection: Projection::Pinhole(view.pinhole),
+            aspect_ratio: None,
+            znear: 0.0,
+            zfar: None,
+            to_world: view.to_world,
+        },
+    };
+    Ok(views.iter().map(|v| (v.name.clone(), camera(v))).collect())
+}
+
 /// Refuses an image side of 0 or more than the command line's largest.
 fn check_size(width: usize, height: usize) -> PyResult<()> {
     let max = raycast::job::MAX_SIDE;

@@ -11,6 +11,7 @@ import json
 import subprocess
 
 import numpy as np
+import pytest
 import trimesh
 from binary import RAYCAST, ROOT, needs_binary
 from trimesh.ray.ray_triangle import RayMeshIntersector
@@ -147,3 +148,23 @@ def test_16_bit_depth_reads_back_in_pillow(tmp_path):
     assert (mm[~hit] == 0).all()
     assert np.abs(mm[hit] * 0.001 - z[hit]).max() <= 0.0005 + 1e-12
     assert json.loads((folder / "raycast.json").read_text())["depth_png_scale"] == 0.001
+
+
+@needs_binary
+def test_python_reads_the_views_file_as_the_command_line(tmp_path):
+    """`camera.read_views` and `Scene.render_views` give the command line's folders bit for
+    bit; a bad frame is an error naming it."""
+    out = render_views(tmp_path)
+    views = raycast.camera.read_views(tmp_path / "transforms.json")
+    assert [name for name, _ in views] == ["frame_00001", "frame_00002"]
+    assert views[1][1].size == (40, 30)
+    scene = raycast.load(SCENE)
+    rendered = list(scene.render_views(views, aovs=("depth", "z", "id")))
+    for index, (name, images) in enumerate(rendered):
+        folder = out / f"{index:04d}-{name}"
+        for aov in ("depth", "z", "id"):
+            assert np.array_equal(images[aov], np.load(folder / f"{aov}.npy")), (name, aov)
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"fl_x": 10, "frames": [{"file_path": "x.png"}]}))
+    with pytest.raises(raycast.SceneError, match=r"frames\[0\] \('x.png'\)"):
+        raycast.camera.read_views(bad, 8, 8)
