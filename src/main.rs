@@ -235,7 +235,8 @@ struct RenderArgs {
     /// Output folder (default: <scene stem>.raycast).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Output formats: exr, png, npy (default exr,png; npy with --rays).
+    /// Output formats: exr, png, npy, ply (a point cloud of the hits, with --aov position;
+    /// default exr,png; npy with --rays).
     #[arg(long, value_delimiter = ',')]
     format: Option<Vec<Format>>,
     /// glTF scene by index or name.

@@ -637,3 +637,69 @@ fn depth_scale_writes_16_bit_depth() {
     let png = image::open(far.join("depth.png")).unwrap();
     assert!(png.as_luma16().unwrap().pixels().all(|p| p.0[0] == 0));
 }
+
+/// `--format ply`: position.ply holds one vertex per hit, in ray order, with the position,
+/// normal, id and prim buffers' values exactly (read back from the binary records here) and
+/// the ray's index; without `position` asked the format is a usage error.
+#[test]
+fn point_clouds_hold_the_hits() {
+    let out = temp_dir("points");
+    let scene = fixture("gltf/cube.gltf");
+    let args = [
+        arg(&scene),
+        "--width",
+        "24",
+        "--height",
+        "18",
+        "--aov",
+        "position,normal,id,prim",
+        "--format",
+        "ply,npy",
+        "--out",
+        arg(&out),
+        "-q",
+    ];
+    raycast_ok(&args);
+    let bytes = std::fs::read(out.join("position.ply")).unwrap();
+    let end = b"end_header\n";
+    let split = bytes.windows(end.len()).position(|w| w == end).unwrap() + end.len();
+    let header = String::from_utf8(bytes[..split].to_vec()).unwrap();
+    let (_, positions) = read_f64(&out.join("position.npy"));
+    let (_, normals) = read_f64(&out.join("normal.npy"));
+    let (_, ids) = read_u32(&out.join("id.npy"));
+    let (_, prims) = read_u32(&out.join("prim.npy"));
+    let hits: Vec<usize> = (0..ids.len()).filter(|&i| ids[i] != 0).collect();
+    assert!(
+        header.contains(&format!("element vertex {}\n", hits.len())),
+        "{header}"
+    );
+    assert!(header.contains("property double nx\n") && header.contains("property uint ray\n"));
+    let record = 6 * 8 + 3 * 4;
+    let body = &bytes[split..];
+    assert_eq!(body.len(), hits.len() * record);
+    let f64_at = |r: &[u8], k: usize| f64::from_le_bytes(r[8 * k..8 * k + 8].try_into().unwrap());
+    let u32_at =
+        |r: &[u8], k: usize| u32::from_le_bytes(r[48 + 4 * k..52 + 4 * k].try_into().unwrap());
+    for (r, &i) in body.chunks_exact(record).zip(&hits) {
+        for c in 0..3 {
+            assert_eq!(f64_at(r, c).to_bits(), positions[3 * i + c].to_bits());
+            assert_eq!(f64_at(r, 3 + c).to_bits(), normals[3 * i + c].to_bits());
+        }
+        assert_eq!(
+            [u32_at(r, 0), u32_at(r, 1), u32_at(r, 2)],
+            [ids[i], prims[i], i as u32]
+        );
+    }
+    assert!(hits.len() > 50 && hits.len() < ids.len());
+    let refused = raycast(&[
+        arg(&scene),
+        "--aov",
+        "depth",
+        "--format",
+        "ply",
+        "--out",
+        arg(&out),
+    ]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("add position to --aov"));
+}

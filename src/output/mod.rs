@@ -10,6 +10,7 @@ pub mod npz;
 pub mod ownership;
 pub mod palette;
 pub mod png;
+pub mod points;
 pub mod request;
 pub mod sidecar;
 
@@ -103,6 +104,8 @@ pub enum Format {
     Png,
     /// NumPy array at full precision.
     Npy,
+    /// A PLY point cloud of the hits ([`points`]).
+    Ply,
 }
 
 impl FromStr for Format {
@@ -112,7 +115,10 @@ impl FromStr for Format {
             "exr" => Ok(Format::Exr),
             "png" => Ok(Format::Png),
             "npy" => Ok(Format::Npy),
-            _ => Err(format!("unknown format '{s}' (choose from exr, png, npy)")),
+            "ply" => Ok(Format::Ply),
+            _ => Err(format!(
+                "unknown format '{s}' (choose from exr, png, npy, ply)"
+            )),
         }
     }
 }
@@ -348,6 +354,12 @@ pub fn write_buffers(
                     job
                 }
                 (Format::Exr | Format::Png, Layout::Rays(_)) => None,
+                (Format::Ply, _) if aov == Aov::Position => {
+                    Some(FileJob::new(points::FILE.to_string(), move |out| {
+                        points::write(out, buffers)
+                    }))
+                }
+                (Format::Ply, _) => None,
             };
             jobs.extend(job);
         }

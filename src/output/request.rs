@@ -34,24 +34,37 @@ impl Format {
             Format::Exr => "exr",
             Format::Png => "png",
             Format::Npy => "npy",
+            Format::Ply => "ply",
         }
     }
 
-    /// Whether this format writes a file for `aov`: NPY always; EXR for images; PNG previews
+    /// Whether this format writes `aov` into a file: NPY always; EXR for images; PNG previews
     /// for images, except positions and barycentric weights (which have no meaningful
-    /// preview).
+    /// preview); the PLY point cloud holds positions and, beside them, normals, ids and prims.
     pub fn holds(self, aov: Aov, rays_mode: bool) -> bool {
         match self {
             Format::Npy => true,
             Format::Exr => !rays_mode,
             Format::Png => !rays_mode && !matches!(aov, Aov::Position | Aov::Bary),
+            Format::Ply => matches!(aov, Aov::Position | Aov::Normal | Aov::Id | Aov::Prim),
         }
+    }
+
+    /// Whether this format writes a file of its own for `aov` (the point cloud is one file,
+    /// named for `position`).
+    fn names_file(self, aov: Aov, rays_mode: bool) -> bool {
+        self.holds(aov, rays_mode) && (self != Format::Ply || aov == Aov::Position)
     }
 }
 
 /// Refuses a request in which a format writes no file, or an AOV gets no file: nothing must
 /// be skipped silently.
 pub fn check_files(aovs: &[Aov], formats: &[Format], rays_mode: bool) -> Result<()> {
+    if formats.contains(&Format::Ply) && !aovs.contains(&Aov::Position) {
+        return Err(Error::usage(
+            "--format ply writes the hits as a point cloud: add position to --aov",
+        ));
+    }
     for &format in formats {
         if aovs.iter().all(|&aov| !format.holds(aov, rays_mode)) {
             let reason = if rays_mode {
@@ -91,7 +104,7 @@ pub fn file_names(aovs: &[Aov], formats: &[Format], rays_mode: bool, hits: bool)
         .flat_map(|format| {
             Aov::ALL
                 .into_iter()
-                .filter(move |aov| aovs.contains(aov) && format.holds(*aov, rays_mode))
+                .filter(move |aov| aovs.contains(aov) && format.names_file(*aov, rays_mode))
                 .map(move |aov| format!("{aov}.{}", format.name()))
         })
         .collect();
@@ -171,6 +184,8 @@ fn encoding_bytes(aov: Aov, format: Format) -> u64 {
             _ => aov_bytes(aov) / 2,
         },
         Format::Png => 4,
+        // The point cloud is streamed; it keeps the index of each hit.
+        Format::Ply => 8,
     }
 }
 

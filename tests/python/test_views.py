@@ -168,3 +168,20 @@ def test_python_reads_the_views_file_as_the_command_line(tmp_path):
     bad.write_text(json.dumps({"fl_x": 10, "frames": [{"file_path": "x.png"}]}))
     with pytest.raises(raycast.SceneError, match=r"frames\[0\] \('x.png'\)"):
         raycast.camera.read_views(bad, 8, 8)
+
+
+@needs_binary
+def test_point_clouds_read_in_trimesh(tmp_path):
+    """`--format ply`: trimesh's PLY reader (independent of raycast's writer) gives the hit
+    positions of position.npy, in ray order, and the ids as a vertex attribute."""
+    out = tmp_path / "out"
+    command = [RAYCAST, SCENE, "--width", "32", "--height", "24", "--format", "ply,npy"]
+    subprocess.run([*command, "--aov", "position,id", "--out", out, "-q"], check=True)
+    cloud = trimesh.load(out / "position.ply")
+    positions = np.load(out / "position.npy").reshape(-1, 3)
+    ids = np.load(out / "id.npy").reshape(-1)
+    hit = ids != 0
+    assert np.array_equal(np.asarray(cloud.vertices), positions[hit])
+    attributes = cloud.metadata["_ply_raw"]["vertex"]["data"]
+    assert np.array_equal(attributes["id"], ids[hit])
+    assert np.array_equal(attributes["ray"], np.flatnonzero(hit))

@@ -51,6 +51,10 @@ COMMANDS = {
         "usd_skel_reference",
         "fixtures/usd/posed/skel.usda and usd-core's skinning of it at time codes (issue 28)",
     ),
+    "views-bench": (
+        "views_bench",
+        "N views in one --views run against N single runs (reports/views.md)",
+    ),
     "thread-scaling": ("thread_scaling", "octree and BVH2 trace time from 1 to 16 threads"),
     "check-scale": (
         "check_scale",
