@@ -146,3 +146,40 @@ def test_contains_matches_the_convex_reference(points_inside):
     keep = clear & (reference == points_inside)
     assert keep.sum() > 100
     assert (ours[keep] == reference[keep]).all()
+
+
+def test_untraceable_rays_are_misses_as_in_trimesh():
+    # Issue 33: embree (trimesh's default intersector) answers [-1, hit] for a zero and a
+    # proper direction; a NaN origin is a miss too. The proper rays' answers are those of
+    # trimesh's own numpy intersector, ray indices those of the rays given.
+    mesh = trimesh.creation.box()
+    reference = trimesh.ray.ray_triangle.RayMeshIntersector(mesh)
+    mesh = drop_in(mesh)
+    origins = [[0, 0, 5], [0, 0, 5], [np.nan, 0, 5], [0.1, 0.2, 5], [0, 0, 5]]
+    directions = [[0, 0, 0], [0, 0, -1], [0, 0, -1], [0, 0, -1], [np.inf, 0, -1]]
+    good = [1, 3]
+    expected = reference.intersects_first(np.asarray(origins)[good], np.asarray(directions)[good])
+    first = mesh.ray.intersects_first(origins, directions)
+    assert first.tolist() == [-1, expected[0], -1, expected[1], -1]
+    assert mesh.ray.intersects_any(origins, directions).tolist() == [0, 1, 0, 1, 0]
+    locations, index_ray, index_tri = mesh.ray.intersects_location(origins, directions)
+    assert sorted(set(index_ray.tolist())) == good
+    tri, rays = mesh.ray.intersects_id(origins, directions, multiple_hits=False)
+    assert rays.tolist() == good and tri.tolist() == expected.tolist()
+    assert mesh.ray.intersects_first([], []).shape == (0,)
+
+
+def test_unused_bad_vertices_and_scale_to_box_are_accepted():
+    # Issue 33: trimesh's RayMeshIntersector takes scale_to_box (the tests pass it); a
+    # non-finite vertex that no face uses does not stop a query (it raised SceneError).
+    box = trimesh.creation.box()
+    vertices = np.vstack([box.vertices, [[np.nan, 0.0, 0.0]]])
+    mesh = trimesh.Trimesh(vertices, box.faces, process=False)
+    mesh.ray = raycast.trimesh.RayMeshIntersector(mesh, scale_to_box=False)
+    plain = drop_in(trimesh.creation.box())
+    rng = np.random.default_rng(3)
+    origins = rng.uniform(-2, 2, (200, 3)) + [0, 0, 5]
+    directions = np.tile([0.0, 0.0, -1.0], (200, 1)) + rng.uniform(-0.2, 0.2, (200, 3))
+    a = mesh.ray.intersects_first(origins, directions)
+    assert (a == plain.ray.intersects_first(origins, directions)).all()
+    assert (a >= 0).sum() > 20
