@@ -12,6 +12,7 @@ use glam::{DMat4, DVec3};
 use stages::run_checked;
 use std::path::{Path, PathBuf};
 
+mod cryptomatte;
 pub mod sequence;
 mod stages;
 mod view;
@@ -72,6 +73,9 @@ pub struct RenderJob {
     pub max_memory: Option<u64>,
     /// List every surface crossing of each ray (or the nearest few) into `hits.npz`.
     pub hits: Option<HitLimit>,
+    /// Write Cryptomatte object mattes into `cryptomatte.exr`, from this many stratified
+    /// samples per pixel (a square: 1, 4, 9, 16, …); camera mode only.
+    pub cryptomatte: Option<usize>,
 }
 
 /// How many crossings `--hits` lists per ray.
@@ -115,6 +119,16 @@ const DEFAULT_SIZE: usize = 512;
 pub const MAX_SIDE: usize = 1 << 15;
 
 impl RenderJob {
+    /// The names of the files this job writes in `formats`, `raycast.json` last.
+    pub fn file_names(&self, formats: &[Format]) -> Vec<String> {
+        let rays_mode = self.rays.is_some();
+        let mut names = request::file_names(&self.aovs, formats, rays_mode, self.hits.is_some());
+        if self.cryptomatte.is_some() {
+            names.insert(names.len() - 1, output::cryptomatte::FILE.to_string());
+        }
+        names
+    }
+
     /// The output folder this job writes to.
     pub fn out_dir(&self) -> PathBuf {
         self.out.clone().unwrap_or_else(|| {
@@ -173,7 +187,7 @@ fn into_folder(
 ) -> Result<Sidecar> {
     let out = job.out_dir();
     let created = output::prepare_tracked_folder(&out)?;
-    let names = request::file_names(&job.aovs, formats, job.rays.is_some(), job.hits.is_some());
+    let names = job.file_names(formats);
     let inputs: Vec<&Path> = std::iter::once(job.scene.as_path())
         .chain(job.rays.as_deref())
         .collect();
@@ -207,6 +221,14 @@ fn check_request(job: &RenderJob) -> Result<Vec<Format>> {
         None => vec![Format::Exr, Format::Png],
     };
     request::check_files(&job.aovs, &formats, rays_mode)?;
+    if let Some(spp) = job.cryptomatte {
+        if rays_mode {
+            return Err(Error::usage(
+                "--cryptomatte makes image mattes; it is not available with --rays",
+            ));
+        }
+        cryptomatte::side(spp)?;
+    }
     if job.hits.is_some() && job.accel != AccelKind::Octree {
         return Err(stages::hits_need_octree());
     }

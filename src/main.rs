@@ -266,6 +266,14 @@ struct RenderArgs {
     /// so that a reader crash or hang ends with a one-line error).
     #[arg(long, value_name = "SECS", default_value_t = 120.0, value_parser = parse_positive)]
     usd_timeout: f64,
+    /// Also write Cryptomatte object mattes (the objects' names hashed, ranked by coverage,
+    /// six per pixel) into cryptomatte.exr, from --spp samples per pixel.
+    #[arg(long, conflicts_with = "rays")]
+    cryptomatte: bool,
+    /// Samples per pixel for --cryptomatte, a square (1, 4, 9, 16, ...); every other buffer
+    /// stays one exact ray through each pixel's centre.
+    #[arg(long, value_name = "N", default_value_t = 16, requires = "cryptomatte")]
+    spp: usize,
     /// Print nothing but errors.
     #[arg(long, short)]
     quiet: bool,
@@ -527,6 +535,7 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
             },
         },
         hits: args.hits,
+        cryptomatte: args.cryptomatte.then_some(args.spp),
     };
     let bar = Progress::new(args.quiet);
     if let Some(path) = &args.pinhole.views {

@@ -503,6 +503,7 @@ fn progress_covers_tracing_and_writing() {
         accel: Default::default(),
         strict_rays: false,
         pngs: Default::default(),
+        cryptomatte: None,
         max_memory: None,
         hits: None,
     };

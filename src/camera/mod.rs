@@ -210,9 +210,17 @@ impl Camera {
         height: usize,
         half_height: f64,
     ) -> Ray {
+        let (x, y) = (column as f64 + 0.5, row as f64 + 0.5);
+        self.image_ray(x, y, width, height, half_height)
+    }
+
+    /// The ray through image point (`x`, `y`) of a `width`×`height` image, in pixels from the
+    /// top left corner (pixel (u, v) spans [u, u + 1] × [v, v + 1]; its centre is
+    /// [`Camera::screen_ray`]'s).
+    pub fn image_ray(&self, x: f64, y: f64, width: usize, height: usize, half_height: f64) -> Ray {
         let aspect = width as f64 / height as f64;
-        let sx = 2.0 * (column as f64 + 0.5) / width as f64 - 1.0;
-        let sy = 1.0 - 2.0 * (row as f64 + 0.5) / height as f64;
+        let sx = 2.0 * x / width as f64 - 1.0;
+        let sy = 1.0 - 2.0 * y / height as f64;
         match self.projection {
             Projection::Perspective { .. } => {
                 let dir = DVec4::new(sx * half_height * aspect, sy * half_height, -1.0, 0.0);
@@ -224,8 +232,7 @@ impl Camera {
             }
             Projection::Pinhole(pinhole) => Ray::new(
                 self.eye(),
-                self.to_world
-                    .transform_vector3(pinhole.direction(column, row)),
+                self.to_world.transform_vector3(pinhole.direction(x, y)),
             ),
         }
     }

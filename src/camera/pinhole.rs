@@ -60,10 +60,11 @@ impl Pinhole {
         )
     }
 
-    /// The direction of pixel (`column`, `row`)'s ray in the camera's frame, in raycast's
-    /// axes (+Y up, looking down -Z): K⁻¹ (u + ½, v + ½, 1) with Y and Z negated.
-    pub(super) fn direction(&self, column: usize, row: usize) -> DVec3 {
-        let local = self.k_inverse * DVec3::new(column as f64 + 0.5, row as f64 + 0.5, 1.0);
+    /// The direction of the ray through image point (`x`, `y`) (pixel (u, v) spans
+    /// [u, u + 1] × [v, v + 1]) in the camera's frame, in raycast's axes (+Y up, looking down
+    /// -Z): K⁻¹ (x, y, 1) with Y and Z negated.
+    pub(super) fn direction(&self, x: f64, y: f64) -> DVec3 {
+        let local = self.k_inverse * DVec3::new(x, y, 1.0);
         DVec3::new(local.x, -local.y, -local.z)
     }
 }

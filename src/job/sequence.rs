@@ -9,7 +9,6 @@
 use super::{check_request, run_from, Progress, RenderJob};
 use crate::error::{Error, Result};
 use crate::import::{self, LoadOptions};
-use crate::output::request;
 use crate::output::{ownership, sidecar::Sidecar};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -152,7 +151,7 @@ pub fn run(
 ) -> Result<Outcome> {
     let formats = check_request(job)?;
     let frames = frames(job, times);
-    let names = request::file_names(&job.aovs, &formats, job.rays.is_some(), job.hits.is_some());
+    let names = job.file_names(&formats);
     let inputs: Vec<&Path> = std::iter::once(job.scene.as_path())
         .chain(job.rays.as_deref())
         .collect();

@@ -7,6 +7,7 @@ use super::view::camera_view;
 use super::{HitLimit, Progress, RenderJob};
 use crate::error::{Error, Result};
 use crate::import;
+use crate::output::cryptomatte;
 use crate::output::npy::RayFile;
 use crate::output::png::DistancePng;
 use crate::output::request::{self, buffer_bytes, check_memory};
@@ -196,6 +197,13 @@ pub(super) fn trace_and_write(
     if let Some(hits) = &hits {
         staging.write(npz::HITS_FILE, |out| npz::write_hits(out, hits))?;
     }
+    if let (Some(spp), Some(view)) = (job.cryptomatte, view) {
+        let ranked = super::cryptomatte::mattes(&tracer, view, spp)?;
+        let names = cryptomatte::object_names(scene.objects.iter().map(|o| o.name.clone()));
+        staging.write(cryptomatte::FILE, |out| {
+            cryptomatte::write(out, view.width, view.height, &ranked, &names)
+        })?;
+    }
     let mut files = staging.names();
     files.push("raycast.json".into());
     let timings = Timings {
@@ -270,6 +278,7 @@ fn sidecar(
             DistancePng::U16 { scale } => Some(scale),
             DistancePng::Preview => None,
         },
+        cryptomatte_spp: job.cryptomatte.filter(|_| view.is_some()),
         objects: scene.objects.clone(),
         stats: Stats {
             triangles: scene.triangle_count(),

@@ -12,7 +12,7 @@ use super::{check_request, into_folder, Progress, RenderJob};
 use crate::camera::views::View;
 use crate::error::{Error, Result};
 use crate::output::sidecar::Sidecar;
-use crate::output::{ownership, request, Layout};
+use crate::output::{ownership, Layout};
 use std::path::PathBuf;
 
 /// Most characters of a view's name kept in its folder's name.
@@ -81,7 +81,7 @@ pub fn run(
         .enumerate()
         .map(|(i, v)| view_job(job, v, out.join(folder_name(i, v))))
         .collect();
-    let names = request::file_names(&job.aovs, &formats, false, job.hits.is_some());
+    let names = job.file_names(&formats);
     ownership::claim(&out, &job.scene, &[])?;
     for one in &jobs {
         ownership::refuse_inputs(&one.out_dir(), &names, &[job.scene.as_path()])?;

@@ -7,9 +7,9 @@ use std::io::{Seek, Write};
 /// One channel of an image to write.
 pub enum ExrChannel {
     /// A FLOAT channel.
-    Float(&'static str, Vec<f32>),
+    Float(String, Vec<f32>),
     /// A UINT channel.
-    Uint(&'static str, Vec<u32>),
+    Uint(String, Vec<u32>),
 }
 
 /// Writes one layer holding `channels` and the text attributes `notes` (name, value) to `out`.
@@ -18,19 +18,19 @@ pub fn write(
     width: usize,
     height: usize,
     channels: Vec<ExrChannel>,
-    notes: &[(&str, String)],
+    notes: &[(String, String)],
 ) -> std::result::Result<(), String> {
     let list: Vec<AnyChannel<FlatSamples>> = channels
         .into_iter()
         .map(|c| match c {
-            ExrChannel::Float(name, v) => AnyChannel::new(name, FlatSamples::F32(v)),
-            ExrChannel::Uint(name, v) => AnyChannel::new(name, FlatSamples::U32(v)),
+            ExrChannel::Float(name, v) => AnyChannel::new(name.as_str(), FlatSamples::F32(v)),
+            ExrChannel::Uint(name, v) => AnyChannel::new(name.as_str(), FlatSamples::U32(v)),
         })
         .collect();
     let mut attributes = LayerAttributes::default();
     for (name, value) in notes {
         attributes.other.insert(
-            Text::from(*name),
+            Text::from(name.as_str()),
             AttributeValue::Text(Text::from(value.as_str())),
         );
     }

@@ -4,6 +4,7 @@
 //! the same scene file listed in the folder's `raycast.json` ([`ownership`]): those it does not
 //! write again are removed; other files in the folder are never touched.
 
+pub mod cryptomatte;
 pub mod exr;
 pub mod npy;
 pub mod npz;
@@ -90,6 +91,7 @@ fn untrack_partial(path: &Path) {
 fn is_output_name(name: &str) -> bool {
     name == "raycast.json"
         || name == npz::HITS_FILE
+        || name == cryptomatte::FILE
         || name
             .split_once('.')
             .is_some_and(|(aov, ext)| aov.parse::<Aov>().is_ok() && ext.parse::<Format>().is_ok())
@@ -435,7 +437,7 @@ fn exr_job(values: Values<'_>, aov: Aov, width: usize, height: usize) -> FileJob
     use exr::ExrChannel::{Float, Uint};
     FileJob::new(format!("{aov}.exr"), move |out| {
         let channels = match values {
-            Values::Distances(v) => vec![Float("Z", v.iter().map(|&x| x as f32).collect())],
+            Values::Distances(v) => vec![Float("Z".into(), v.iter().map(|&x| x as f32).collect())],
             Values::Vectors(v) => {
                 let names = match aov {
                     Aov::Normal => ["N.X", "N.Y", "N.Z"],
@@ -443,12 +445,15 @@ fn exr_job(values: Values<'_>, aov: Aov, width: usize, height: usize) -> FileJob
                     _ => ["P.X", "P.Y", "P.Z"],
                 };
                 (0..3)
-                    .map(|c| Float(names[c], v.iter().map(|p| p[c] as f32).collect()))
+                    .map(|c| Float(names[c].into(), v.iter().map(|p| p[c] as f32).collect()))
                     .collect()
             }
-            Values::Labels(v) => vec![Uint(if aov == Aov::Id { "id" } else { "prim" }, v.to_vec())],
+            Values::Labels(v) => {
+                let name = if aov == Aov::Id { "id" } else { "prim" };
+                vec![Uint(name.into(), v.to_vec())]
+            }
         };
-        let note = [("raycast/convention", exr_note(aov).to_string())];
+        let note = [("raycast/convention".to_string(), exr_note(aov).to_string())];
         exr::write(out, width, height, channels, &note)
     })
 }

@@ -46,6 +46,9 @@ pub struct Sidecar {
     /// units (distance / scale, rounded); 0 is no data (a miss, or out of range).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub depth_png_scale: Option<f64>,
+    /// With `--cryptomatte`: the samples per pixel of `cryptomatte.exr`'s object mattes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cryptomatte_spp: Option<usize>,
     /// The object table; `id` indexes it from 1.
     pub objects: Vec<Object>,
     /// Totals.

@@ -4,6 +4,7 @@
 //! bit-identical for any thread count. Only the requested AOVs are computed.
 
 mod fill;
+pub mod samples;
 
 pub use fill::{trace, Buffers, Column, Rays};
 
@@ -115,7 +116,7 @@ pub struct CameraView {
     /// Image height in pixels.
     pub height: usize,
     /// The camera's [`Camera::half_height`], computed once rather than per pixel.
-    half_height: f64,
+    pub(crate) half_height: f64,
 }
 
 impl CameraView {

@@ -1,0 +1,57 @@
+//! The Cryptomatte pass of a camera run (`--cryptomatte --spp N`): N stratified samples per
+//! pixel, traced for the object id only, band of rows by band of rows (so that no more than
+//! about a million samples are held at a time), ranked per pixel by coverage
+//! ([`crate::output::cryptomatte`]).
+
+use crate::error::{Error, Result};
+use crate::output::cryptomatte;
+use crate::render::samples::PixelSamples;
+use crate::render::{self, Aov, CameraView, Rays, Tracer};
+
+/// Most samples traced at once.
+const BAND_SAMPLES: usize = 1 << 20;
+
+/// Most samples per pixel.
+pub const MAX_SPP: usize = 1024;
+
+/// The side of the grid of `spp` samples per pixel, or a usage error when `spp` is not a
+/// square from 1 to [`MAX_SPP`].
+pub(super) fn side(spp: usize) -> Result<usize> {
+    let side = (1..=32).find(|s| s * s >= spp).unwrap_or(usize::MAX);
+    if side.checked_mul(side) == Some(spp) && spp <= MAX_SPP {
+        Ok(side)
+    } else {
+        Err(Error::usage(format!(
+            "--spp {spp}: give a square number of samples per pixel (1, 4, 9, 16, … up to \
+             {MAX_SPP}): they lie on a regular grid over each pixel"
+        )))
+    }
+}
+
+/// Each pixel's objects of `view` by coverage, from `spp` samples per pixel.
+pub(super) fn mattes(
+    tracer: &Tracer,
+    view: &CameraView,
+    spp: usize,
+) -> Result<Vec<Vec<(u32, f32)>>> {
+    let side = side(spp)?;
+    let band = (BAND_SAMPLES / (view.width * spp)).max(1);
+    let mut ranked = Vec::with_capacity(view.width * view.height);
+    for start in (0..view.height).step_by(band) {
+        let samples = PixelSamples {
+            view,
+            side,
+            rows: start..(start + band).min(view.height),
+        };
+        let rays = Rays {
+            source: &samples,
+            range: |_| (0.0, f64::INFINITY),
+            refuse_untraceable: false,
+        };
+        let buffers = render::trace(tracer, &rays, &[Aov::Id], |_| {})
+            .map_err(|i| Error::msg(format!("cryptomatte sample {i} cannot be traced")))?;
+        let ids = buffers.labels(Aov::Id).unwrap_or_default();
+        ranked.extend(cryptomatte::rank(ids, spp));
+    }
+    Ok(ranked)
+}

@@ -1,0 +1,204 @@
+//! Cryptomatte object mattes (`--cryptomatte`), as the Cryptomatte specification (v1.2.0,
+//! Psyop) defines them, in `cryptomatte.exr`:
+//!
+//! - each object's name is hashed with MurmurHash3_32 (seed 0) and the hash stored as the
+//!   float32 of the same bits, its exponent clamped to 1..=254 so that no id is a NaN, an
+//!   infinity, zero or a denormal;
+//! - each pixel's objects are ranked by coverage (the share of its `spp` stratified samples
+//!   that hit them; misses are background and not ranked), and rank pairs are written as the
+//!   channels `CryptoObject00.R` (rank 0 id), `.G` (its coverage), `.B`, `.A` (rank 1), then
+//!   `CryptoObject01` for ranks 2 and 3, and so on, empty ranks 0;
+//! - the header says `cryptomatte/KEY/name` (`CryptoObject`), `/hash` (`MurmurHash3_32`),
+//!   `/conversion` (`uint32_to_float32`) and `/manifest` (JSON: each name and its hash in
+//!   eight hex digits), KEY being the first seven hex digits of the layer name's hash.
+
+use super::exr::{self, ExrChannel};
+use std::io::{Seek, Write};
+
+/// The layer name: object mattes.
+pub const LAYER: &str = "CryptoObject";
+
+/// The file written.
+pub const FILE: &str = "cryptomatte.exr";
+
+/// Rank pairs written: `CryptoObject00` … `CryptoObject02`, six objects per pixel.
+pub const LEVELS: usize = 3;
+
+/// MurmurHash3's 32-bit hash of `bytes` with seed 0 (Austin Appleby's x86_32 variant).
+pub fn murmur3_32(bytes: &[u8]) -> u32 {
+    const C1: u32 = 0xcc9e_2d51;
+    const C2: u32 = 0x1b87_3593;
+    let mut h: u32 = 0;
+    let blocks = bytes.chunks_exact(4);
+    let tail = blocks.remainder();
+    for block in blocks {
+        let k = u32::from_le_bytes([block[0], block[1], block[2], block[3]]);
+        h ^= k.wrapping_mul(C1).rotate_left(15).wrapping_mul(C2);
+        h = h.rotate_left(13).wrapping_mul(5).wrapping_add(0xe654_6b64);
+    }
+    if !tail.is_empty() {
+        let k = tail
+            .iter()
+            .rev()
+            .fold(0u32, |k, &b| (k << 8) | u32::from(b));
+        h ^= k.wrapping_mul(C1).rotate_left(15).wrapping_mul(C2);
+    }
+    h ^= bytes.len() as u32;
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x85eb_ca6b);
+    h ^= h >> 13;
+    h = h.wrapping_mul(0xc2b2_ae35);
+    h ^ (h >> 16)
+}
+
+/// The float32 id of `hash`: the same bits, the exponent clamped to 1..=254.
+pub fn hash_to_float(hash: u32) -> f32 {
+    let exponent = ((hash >> 23) & 0xff).clamp(1, 254);
+    f32::from_bits((hash & 0x807f_ffff) | (exponent << 23))
+}
+
+/// The manifest key of a layer: the first seven hex digits of its name's hash.
+fn layer_key(layer: &str) -> String {
+    format!("{:08x}", murmur3_32(layer.as_bytes()))[..7].to_string()
+}
+
+/// The JSON manifest of `names`: `{"name": "hash in eight hex digits", …}`.
+fn manifest(names: &[String]) -> String {
+    let entries: serde_json::Map<String, serde_json::Value> = names
+        .iter()
+        .map(|n| {
+            (
+                n.clone(),
+                format!("{:08x}", murmur3_32(n.as_bytes())).into(),
+            )
+        })
+        .collect();
+    serde_json::Value::Object(entries).to_string()
+}
+
+/// Each pixel's objects (1-based ids, as the `id` AOV) by coverage, most first (ties: the
+/// lower id first), at most `2 · LEVELS`: `samples` holds `spp` ids per pixel, 0 for a miss.
+pub fn rank(samples: &[u32], spp: usize) -> Vec<Vec<(u32, f32)>> {
+    samples
+        .chunks_exact(spp)
+        .map(|pixel| {
+            let mut counts: Vec<(u32, usize)> = Vec::new();
+            for &id in pixel.iter().filter(|&&id| id != 0) {
+                match counts.iter_mut().find(|(i, _)| *i == id) {
+                    Some((_, n)) => *n += 1,
+                    None => counts.push((id, 1)),
+                }
+            }
+            counts.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+            counts.truncate(2 * LEVELS);
+            counts
+                .into_iter()
+                .map(|(id, n)| (id, (n as f64 / spp as f64) as f32))
+                .collect()
+        })
+        .collect()
+}
+
+/// Writes the object mattes of `ranked` (per pixel, from [`rank`]) for objects named `names`
+/// (`names[id - 1]`) as a `width`×`height` EXR to `out`.
+pub fn write(
+    out: &mut (impl Write + Seek),
+    width: usize,
+    height: usize,
+    ranked: &[Vec<(u32, f32)>],
+    names: &[String],
+) -> Result<(), String> {
+    let ids: Vec<f32> = names
+        .iter()
+        .map(|n| hash_to_float(murmur3_32(n.as_bytes())))
+        .collect();
+    let mut channels = Vec::with_capacity(4 * LEVELS);
+    for level in 0..LEVELS {
+        for (c, channel) in ["R", "G", "B", "A"].iter().enumerate() {
+            let rank = 2 * level + c / 2;
+            let values = ranked
+                .iter()
+                .map(|pixel| match pixel.get(rank) {
+                    Some(&(id, _)) if c % 2 == 0 => ids[id as usize - 1],
+                    Some(&(_, coverage)) => coverage,
+                    None => 0.0,
+                })
+                .collect();
+            channels.push(ExrChannel::Float(
+                format!("{LAYER}{level:02}.{channel}"),
+                values,
+            ));
+        }
+    }
+    let key = layer_key(LAYER);
+    let notes = [
+        (format!("cryptomatte/{key}/name"), LAYER.to_string()),
+        (
+            format!("cryptomatte/{key}/hash"),
+            "MurmurHash3_32".to_string(),
+        ),
+        (
+            format!("cryptomatte/{key}/conversion"),
+            "uint32_to_float32".to_string(),
+        ),
+        (format!("cryptomatte/{key}/manifest"), manifest(names)),
+    ];
+    exr::write(out, width, height, channels, &notes)
+}
+
+/// The names objects are matted by: each object's name, made unique by ` #ID` where two
+/// objects share one (or it is empty), so that every object has a matte of its own.
+pub fn object_names(names: impl Iterator<Item = String>) -> Vec<String> {
+    let names: Vec<String> = names.collect();
+    names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| {
+            let shared = n.is_empty() || names.iter().filter(|m| *m == n).count() > 1;
+            if shared {
+                format!("{n} #{}", i + 1)
+            } else {
+                n.clone()
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn murmur3_matches_published_values() {
+        // Reference values of MurmurHash3_x86_32 with seed 0 (SMHasher's verification set).
+        assert_eq!(murmur3_32(b""), 0);
+        assert_eq!(murmur3_32(b"hello"), 0x248b_fa47);
+        assert_eq!(murmur3_32(b"Hello, world!"), 0xc036_3e43);
+        assert_eq!(
+            murmur3_32(b"The quick brown fox jumps over the lazy dog"),
+            0x2e4f_f723
+        );
+    }
+
+    #[test]
+    fn ids_are_never_special_floats() {
+        for hash in [0u32, 0x7f80_0000, 0xff80_0001, 0x0000_0001, 0x7fff_ffff] {
+            let f = hash_to_float(hash);
+            assert!(f.is_normal(), "{hash:#x} -> {f}");
+        }
+        assert_eq!(hash_to_float(0x4000_0000).to_bits(), 0x4000_0000);
+    }
+
+    #[test]
+    fn ranks_by_coverage_then_id() {
+        let ranked = rank(&[2, 2, 1, 0, 3, 3, 3, 3], 4);
+        assert_eq!(ranked[0], vec![(2, 0.5), (1, 0.25)]);
+        assert_eq!(ranked[1], vec![(3, 1.0)]);
+    }
+
+    #[test]
+    fn shared_names_get_their_id() {
+        let names = object_names(["a", "b", "a", ""].map(String::from).into_iter());
+        assert_eq!(names, ["a #1", "b", "a #3", " #4"]);
+    }
+}
