@@ -70,6 +70,49 @@ fn usda_number_literals_read_as_usd_core_reads_them() {
     assert_hit(&s, "/World/quad", 5.0, [0.0, 0.0, 1.0], &[0, 1]);
 }
 
+/// `fixtures/usd/type_names.usda` writes types with Sdf's legacy names (`Vec3d`, `Vec3f[]`,
+/// `PointFloat[]`, `PointIndex[]`, `ColorFloat[]`, `Normal`, `Matrix4d`, `Vec2i`) and two
+/// attributes of the unknown type `flaot`. usd-core 26.11 opens it without a diagnostic, reads the
+/// legacy names as `double3`, `float3[]`, `point3f[]`, `int[]`, ... and the world points of
+/// `/World/tri` as (1, 2, -5), (3, 2, -5), (1, 4, -5) and of `/World/quad` as (4, 2, -5) ..
+/// (5, 3, -5), and keeps the `flaot` values unread (`Sdf.UnregisteredValue`). openusd 0.6 refused
+/// the layer (`Cannot parse value for unrecognized type: Vec3d`) before vendor/openusd's patch.
+#[test]
+fn legacy_and_unknown_type_names_read_as_usd_core_reads_them() {
+    let scene = load("usd/type_names.usda");
+    assert_eq!(
+        scene.warnings,
+        [
+            "2 attributes of value types USD does not know, values not read (as usd-core leaves \
+             them): /World/tri.primvars:skel:jointWeights (flaot), /World/tri.raycast_test:typo \
+             (flaot)"
+        ]
+    );
+    let objects: Vec<(&str, u32)> = scene
+        .objects
+        .iter()
+        .map(|o| (o.name.as_str(), o.triangles))
+        .collect();
+    assert_eq!(objects, [("/World/tri", 1), ("/World/quad", 2)]);
+    let bounds = |name: &str| {
+        let object = scene.objects.iter().find(|o| o.name == name).unwrap();
+        let b = scene.object_bounds(object);
+        (b.min.to_array(), b.max.to_array())
+    };
+    assert_eq!(bounds("/World/tri"), ([1.0, 2.0, -5.0], [3.0, 4.0, -5.0]));
+    assert_eq!(bounds("/World/quad"), ([4.0, 2.0, -5.0], [5.0, 3.0, -5.0]));
+    let s = cast_one(&scene, [1.5, 2.5, 0.0], [0.0, 0.0, -1.0]);
+    assert_hit(&s, "/World/tri", 5.0, [0.0, 0.0, 1.0], &[0]);
+    let check = common::raycast(&[
+        "check",
+        "--json",
+        common::arg(&common::fixture("usd/type_names.usda")),
+    ]);
+    let stdout = String::from_utf8_lossy(&check.stdout);
+    assert_eq!(check.status.code(), Some(0), "{stdout}");
+    assert!(stdout.contains("\"USD_UNKNOWN_VALUE_TYPE\""), "{stdout}");
+}
+
 /// `fixtures/gltf/cube_unpadded.glb`: the cube with a 746-byte JSON chunk (not padded to a
 /// multiple of 4, as older trimesh exporters wrote GLBs). trimesh 5.2.0 reads it as `cube`,
 /// 12 triangles; the Khronos glTF-Validator 2.0.0-dev.3.10 reports GLB_CHUNK_LENGTH_UNALIGNED
