@@ -145,3 +145,70 @@ fn unpadded_glb_chunks_render_with_a_warning_and_fail_check() {
         "{stdout}"
     );
 }
+
+/// The quad (0, 0, 0) .. (2, 1, 0) that every lenient PLY and OBJ fixture below draws as two
+/// triangles, as trimesh 5.2.0 reads them (`trimesh.load(..., process=False)`: those four
+/// vertices, 2 faces), with the one warning of its kind.
+fn assert_quad(relative: &str, warning: &str) {
+    let scene = load(relative);
+    assert_eq!(scene.warnings, [warning], "{relative}");
+    assert_eq!(scene.objects.len(), 1, "{relative}");
+    assert_eq!(scene.triangle_count(), 2, "{relative}");
+    let bounds = scene.object_bounds(&scene.objects[0]);
+    assert_eq!(bounds.min.to_array(), [0.0, 0.0, 0.0], "{relative}");
+    assert_eq!(bounds.max.to_array(), [2.0, 1.0, 0.0], "{relative}");
+    let name = scene.objects[0].name.clone();
+    for (x, y) in [(1.5, 0.25), (0.5, 0.75)] {
+        let s = cast_one(&scene, [x, y, 3.0], [0.0, 0.0, -1.0]);
+        assert_hit(&s, &name, 3.0, [0.0, 0.0, 1.0], &[0, 1]);
+    }
+}
+
+/// Free-text header lines (assimp's Wuson.ply: `Created by Blender3D 247 ...`): trimesh skips
+/// every header line that is not `element` or `property`.
+#[test]
+fn ply_free_text_header_lines_are_skipped_as_trimesh_skips_them() {
+    assert_quad(
+        "ply/free_text_header.ply",
+        "PLY header line 3: 'Created by a hand-writte…' is not a PLY header line: skipped, as \
+         trimesh skips it (and 1 more line)",
+    );
+}
+
+/// Face lines with values the header does not declare (trimesh's fuze_ascii.ply, written by
+/// VCG: a 9-value list after the declared properties) and a vertex list property no line holds
+/// (assimp's issue623.ply): trimesh reads an ASCII body one record per line, ignoring values
+/// past the declared properties and leaving out those a line lacks.
+#[test]
+fn ply_ascii_records_that_do_not_match_the_header_are_read_by_lines_as_trimesh() {
+    assert_quad(
+        "ply/extra_values.ply",
+        "ASCII records do not follow the header as one stream of values (2 records end before \
+         their line does (first: 'face' record 0)): read one record per line, as trimesh reads \
+         them; 2 records do not fill their line exactly (first: 'face' record 0): values past \
+         their properties ignored, missing values left out",
+    );
+    assert_quad(
+        "ply/list_in_vertex.ply",
+        "ASCII records do not follow the header as one stream of values (truncated: the file \
+         ends in 'face' record 0 of 2): read one record per line, as trimesh reads them; 4 \
+         records do not fill their line exactly (first: 'vertex' record 0): values past their \
+         properties ignored, missing values left out",
+    );
+}
+
+/// Exponents written with their sign before the `e` (assimp's number_formats.obj: `3.1+e2`),
+/// which trimesh reads after deleting `+e` and `-e` signs, and vertex colours on only some
+/// vertices (assimp's only_a_part_of_vertexcolors.obj), which trimesh drops; tobj refused both.
+#[test]
+fn obj_misspelt_exponents_and_partial_colours_read_as_trimesh() {
+    assert_quad(
+        "obj/number_formats.obj",
+        "line 4: '1.0+e0' is not a number: read as 1.0e0, as trimesh reads it (and 1 more line)",
+    );
+    let scene = load("obj/partial_colours.obj");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.triangle_count(), 2);
+    let s = cast_one(&scene, [1.5, 0.25, 3.0], [0.0, 0.0, -1.0]);
+    assert_hit(&s, "quad", 3.0, [0.0, 0.0, 1.0], &[0]);
+}
