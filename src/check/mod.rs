@@ -620,6 +620,11 @@ fn importer_warning(format: &str, warning: &str, findings: &mut Findings) {
             usd::composition_finding(rest, findings);
             return;
         }
+        if warning.contains(crate::import::usd::UNKNOWN_VALUE_TYPE) {
+            // usd-core opens such a layer too, and leaves the values unread.
+            findings.warn("USD_UNKNOWN_VALUE_TYPE", "", warning.to_string());
+            return;
+        }
         if let Some((location, _)) = warning.split_once(": cannot be read: ") {
             // A value the file holds but the reader cannot decode (a corrupt crate field):
             // the file is broken there, though the render skips the prim and goes on.

@@ -1,6 +1,7 @@
 //! The OBJ text as `tobj` and the checker read it: `\` line continuations joined, empty and
-//! unknown statements blanked out with one warning per kind, `#` comments dropped, every line
-//! kept at its number.
+//! unknown statements blanked out with one warning per kind, `#` comments dropped, `v` lines
+//! cut to their position (vertex colours, which no ray needs, dropped: tobj refuses a file
+//! where only some vertices have them, trimesh reads it), every line kept at its number.
 //!
 //! `tobj` reads one physical line per statement and refuses an empty `usemtl` (a material
 //! must never stop a render), so the text is rewritten first. A joined statement stands on
@@ -40,6 +41,7 @@ pub fn normalise(text: &str) -> ObjText {
     let mut out = String::with_capacity(text.len());
     let mut empty: BTreeMap<String, Skipped> = BTreeMap::new();
     let mut unknown: BTreeMap<String, Skipped> = BTreeMap::new();
+    let mut misspelt = Misspelt::default();
     let mut lines = text.lines().enumerate();
     while let Some((n, first)) = lines.next() {
         let mut statement = first.to_string();
@@ -66,6 +68,7 @@ pub fn normalise(text: &str) -> ObjText {
             Some(keyword) if words.next().is_none() && !BARE_STATEMENTS.contains(&keyword) => {
                 note(&mut empty, keyword, line)
             }
+            Some("v") => out.push_str(&vertex_line(content, line, &mut misspelt)),
             Some("usemtl") => {
                 // tobj takes the name after the first space; a tab is a word break too.
                 let name = content["usemtl".len()..].trim();
@@ -79,7 +82,7 @@ pub fn normalise(text: &str) -> ObjText {
             out.push('\n');
         }
     }
-    let mut warnings = Vec::new();
+    let mut warnings: Vec<String> = misspelt.warning().into_iter().collect();
     for (keyword, s) in &empty {
         warnings.push(format!(
             "line {}: empty '{keyword}' statement skipped{}",
@@ -99,6 +102,62 @@ pub fn normalise(text: &str) -> ObjText {
         text: out,
         warnings,
     }
+}
+
+/// Numbers in `v` lines that Rust cannot read but trimesh does: an exponent with its sign
+/// before the `e` (`3.1+e2`, `3.1-e2`), which trimesh reads after deleting the `+e` and `-e`
+/// signs (so both are 3.1e2). The first one, and on how many lines.
+#[derive(Default)]
+struct Misspelt {
+    first: Option<(usize, String, String)>,
+    lines: usize,
+}
+
+impl Misspelt {
+    fn warning(&self) -> Option<String> {
+        let (line, written, read) = self.first.as_ref()?;
+        Some(format!(
+            "line {line}: '{}' is not a number: read as {read}, as trimesh reads it{}",
+            super::obj::quoted(written),
+            more(self.lines)
+        ))
+    }
+}
+
+/// A `v` statement as tobj is to read it: `v X Y Z`, with `W` where the line has exactly
+/// four numbers; colours after the position dropped; a number misspelt as [`Misspelt`]
+/// says read as trimesh reads it. A line with fewer than three numbers is left for tobj to
+/// refuse.
+fn vertex_line(content: &str, line: usize, misspelt: &mut Misspelt) -> String {
+    let values: Vec<&str> = content.split_whitespace().skip(1).collect();
+    let kept = if values.len() == 4 { 4 } else { 3 };
+    let mut out = String::from("v");
+    let mut fixed = false;
+    for &value in values.iter().take(kept) {
+        out.push(' ');
+        match trimesh_number(value) {
+            Some(read) => {
+                fixed = true;
+                if misspelt.first.is_none() {
+                    misspelt.first = Some((line, value.to_string(), read.clone()));
+                }
+                out.push_str(&read);
+            }
+            None => out.push_str(value),
+        }
+    }
+    misspelt.lines += usize::from(fixed);
+    out
+}
+
+/// The number trimesh reads for `word` where Rust reads none but deleting a sign before
+/// an `e` makes one (`3.1+e2` → `3.1e2`).
+fn trimesh_number(word: &str) -> Option<String> {
+    if word.parse::<f64>().is_ok() {
+        return None;
+    }
+    let read = word.replace("+e", "e").replace("-e", "e");
+    read.parse::<f64>().is_ok().then_some(read)
 }
 
 fn note(kinds: &mut BTreeMap<String, Skipped>, keyword: &str, line: usize) {
@@ -144,6 +203,22 @@ mod tests {
                 "line 2: 'vc' is not an OBJ statement: skipped (and 2 more lines)",
             ]
         );
+    }
+
+    #[test]
+    fn vertex_lines_keep_their_position_as_trimesh_reads_it() {
+        let t =
+            normalise("v 1 2 3 0.5 0.5 0.5\nv 1 2 3\nv 1 2 3 2\nv 3.1+e2 -1-e1 1e2\nv 1+e1 0 0\n");
+        assert_eq!(
+            t.text,
+            "v 1 2 3\nv 1 2 3\nv 1 2 3 2\nv 3.1e2 -1e1 1e2\nv 1e1 0 0\n"
+        );
+        assert_eq!(
+            t.warnings,
+            ["line 4: '3.1+e2' is not a number: read as 3.1e2, as trimesh reads it (and 1 more line)"]
+        );
+        // Not numbers however read: left for tobj's "position parse error".
+        assert_eq!(normalise("v 1 x 3\n").text, "v 1 x 3\n");
     }
 
     #[test]

@@ -104,3 +104,19 @@ def test_report_summary_and_list(corpus):
         in report
     )
     assert "mesh/cube_binary_le.ply\t" in listing and "\tfixtures\t" in listing
+
+
+def test_depth_verdicts_tell_geometry_from_numbering():
+    from raycast_tools.corpus_report import depth_verdict
+
+    def record(**depth):
+        return {"reference": {"depth": depth}}
+
+    assert depth_verdict(record(compared=False)) is None
+    assert depth_verdict(record(compared=True, ok=True)) == "agrees"
+    numbering = ["prim_agreement", "normal_flipped_max", "object agreement 0.4094"]
+    assert depth_verdict(record(compared=True, ok=False, failed_checks=numbering)) == "numbering"
+    geometry = ["prim_agreement", "depth_rel_p99"]
+    assert depth_verdict(record(compared=True, ok=False, failed_checks=geometry)) == "geometry"
+    hits = ["hitmiss_agreement"]
+    assert depth_verdict(record(compared=True, ok=False, failed_checks=hits)) == "geometry"

@@ -55,6 +55,24 @@ def triangles_differ(record: dict) -> bool:
     return ours is not None and theirs is not None and ours != theirs
 
 
+# Checks of validate.py (and validate_usd.py's failure lines) that judge the geometry: whether a
+# ray hits, and how far. The others judge numbering (prim, id, object agreement: trimesh and
+# usd-core reorder and regroup faces) and normals (their sign follows the face order).
+GEOMETRY_CHECKS = ("hitmiss", "quadric_hitmiss", "depth", "quadric_depth", "hit/miss")
+
+
+def depth_verdict(record: dict) -> str | None:
+    """`geometry` when a hit/miss or depth check failed, `numbering` when only prim, id,
+    object or normal checks did, `agrees`, or None when depth was not compared."""
+    depth = record["reference"].get("depth") or {}
+    if not depth.get("compared"):
+        return None
+    if depth.get("ok"):
+        return "agrees"
+    failed = depth.get("failed_checks", [])
+    return "geometry" if any(c.startswith(GEOMETRY_CHECKS) for c in failed) else "numbering"
+
+
 def corpus_of(record: dict) -> str:
     return Path(record["file"]).parts[0]
 
@@ -75,9 +93,10 @@ def summarize(records: list, too_large: list) -> dict:
         c["check errors on readable files"] += bool(r["kind"] != "gltf" and false_errors(r))
         c["missed codes"] += len(missed(r))
         c["triangle counts differ"] += triangles_differ(r)
-        depth = r["reference"].get("depth", {})
-        c["depth compared"] += bool(depth.get("compared"))
-        c["depth disagrees"] += bool(depth.get("compared") and not depth.get("ok"))
+        verdict = depth_verdict(r)
+        c["depth compared"] += verdict is not None
+        c["geometry differs"] += verdict == "geometry"
+        c["numbering or normals differ"] += verdict == "numbering"
     missed_codes = Counter(code for r in records for code in missed(r))
     return {
         "per_corpus": per,
@@ -103,7 +122,8 @@ SUMMARY_COLUMNS = (
     "timeouts",
     "triangle counts differ",
     "depth compared",
-    "depth disagrees",
+    "geometry differs",
+    "numbering or normals differ",
 )
 
 
@@ -168,7 +188,12 @@ def _depth_cell(r: dict) -> str:
         hits += f", rel depth max {d['depth_rel_max']:.1e}"
     if d.get("depth_abs_max") is not None:
         hits += f", depth err max {d['depth_abs_max']:.1e}"
-    verdict = "agrees" if d["ok"] else f"**differs** ({', '.join(d['failed_checks'])})"
+    failed = ", ".join(d.get("failed_checks", []))
+    verdict = {
+        "agrees": "agrees",
+        "geometry": f"**geometry differs** ({failed})",
+        "numbering": f"numbering or normals differ ({failed})",
+    }[depth_verdict(r)]
     return f"{verdict}: {hits}"
 
 
@@ -265,7 +290,9 @@ def markdown(records: list, summary: dict, sources: dict, opts) -> str:
         "A file is valid when the validator finds no error (glTF), usd-core opens it (USD) or "
         "trimesh loads it (OBJ, PLY, STL). *false check errors*: glTF files the validator passes "
         "that check gives an error; *missed codes*: (file, code) pairs of validator errors that "
-        "check does not give; *depth disagrees*: validate.py's tolerances broken.",
+        "check does not give; *geometry differs*: validate.py's hit/miss or depth tolerances "
+        "broken; *numbering or normals differ*: only its prim, id, object or normal checks broken "
+        "(trimesh and usd-core number and orient faces their own way).",
         "",
         "## Sources",
         "",

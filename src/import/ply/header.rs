@@ -124,6 +124,9 @@ pub struct Header {
     pub elements: Vec<Element>,
     /// The offset of the body's first byte.
     pub body_start: usize,
+    /// Lines that are no PLY header line (free text, as some exporters write), skipped as
+    /// trimesh skips them: each line's number and text.
+    pub unknown_lines: Vec<(usize, String)>,
 }
 
 impl Header {
@@ -146,6 +149,7 @@ pub fn parse(bytes: &[u8]) -> Result<Header, PlyError> {
     }
     let mut format = None;
     let mut elements: Vec<Element> = Vec::new();
+    let mut unknown_lines = Vec::new();
     let mut offset = 0;
     for number in 1.. {
         let Some(length) = bytes[offset..].iter().position(|&b| b == b'\n') else {
@@ -184,10 +188,10 @@ pub fn parse(bytes: &[u8]) -> Result<Header, PlyError> {
                     .ok_or_else(|| error(number, "a property before any element".to_string()))?;
                 element.properties.push(property);
             }
-            _ => {
-                let shown = super::super::obj::quoted(text.trim());
-                return Err(error(number, format!("'{shown}' is not a PLY header line")));
+            ["ply" | "format" | "end_header", ..] => {
+                return Err(error(number, format!("a bad '{}' line", words[0])));
             }
+            _ => unknown_lines.push((number, super::super::obj::quoted(text.trim()))),
         }
     }
     let format = format.ok_or_else(|| error(2, "the header has no 'format' line".into()))?;
@@ -195,7 +199,24 @@ pub fn parse(bytes: &[u8]) -> Result<Header, PlyError> {
         format,
         elements,
         body_start: offset,
+        unknown_lines,
     })
+}
+
+/// The one warning for the header's unknown lines, naming the first.
+pub fn warnings(header: &Header) -> Vec<String> {
+    let Some((line, text)) = header.unknown_lines.first() else {
+        return Vec::new();
+    };
+    let more = match header.unknown_lines.len() - 1 {
+        0 => String::new(),
+        1 => " (and 1 more line)".to_string(),
+        n => format!(" (and {n} more lines)"),
+    };
+    vec![format!(
+        "PLY header line {line}: '{text}' is not a PLY header line: skipped, as trimesh skips \
+         it{more}"
+    )]
 }
 
 fn parse_format(encoding: &str, version: &str) -> Result<Format, String> {
@@ -258,8 +279,27 @@ mod tests {
     }
 
     #[test]
+    fn unknown_header_lines_are_skipped_with_one_warning() {
+        let text = b"ply\nformat ascii 1.0\nCreated by hand\nelement vertex 0\nmade 2024\n\
+                     end_header\n";
+        let h = parse(text).unwrap();
+        assert_eq!(h.elements.len(), 1);
+        assert_eq!(
+            warnings(&h),
+            [
+                "PLY header line 3: 'Created by hand' is not a PLY header line: skipped, as \
+              trimesh skips it (and 1 more line)"
+            ]
+        );
+    }
+
+    #[test]
     fn bad_headers_name_their_line() {
-        let cases: [(&[u8], &str); 6] = [
+        let cases: [(&[u8], &str); 7] = [
+            (
+                b"ply\nformat ascii 1.0\nformat ascii 1.0\nend_header\n",
+                "line 3: a bad 'format' line",
+            ),
             (
                 b"plyx\n",
                 "line 1: the file does not start with a 'ply' line",

@@ -4,6 +4,9 @@
 //! `vertex_index`) lists of any integer type are read; polygons are fanned into triangles
 //! from their first corner, as the OBJ reader triangulates them. Other properties and
 //! elements are read past and dropped. The file is one scene object named after the file.
+//! Header lines that are no PLY statement are skipped with one warning ([`header::warnings`]);
+//! an ASCII body whose records do not fit the header as one stream of values is read one
+//! record per line, as trimesh reads it, with one warning ([`read`]).
 //!
 //! The reader is written here rather than taken from `ply-rs` 0.1.3, the one PLY crate: its
 //! last release is from 2020, it needs `peg` and a `skeptic` build script, and it keeps every
@@ -18,7 +21,7 @@ pub mod header;
 
 use crate::error::{Error, Result};
 use crate::scene::{Mesh, Positions, Scene};
-use body::{Body, Fault};
+use body::{Body, Fault, Layout, RecordEnd};
 use glam::DVec3;
 use header::{Element, Format, Header, Kind, Scalar};
 use std::fmt;
@@ -191,26 +194,116 @@ pub fn scene(mesh: PlyMesh, path: &Path) -> Scene {
     super::mesh_file_scene(path, "ply", mesh.warnings, objects)
 }
 
-/// Reads a PLY file held in `bytes`.
+/// Reads a PLY file held in `bytes`. An ASCII body is read as one stream of values (as rply
+/// reads it); when that fails, or its records do not end with their lines, it is read again
+/// one record per line, as trimesh reads ASCII PLY, and that reading is kept (with a warning)
+/// if it succeeds.
 pub fn read(bytes: &[u8]) -> std::result::Result<PlyMesh, PlyError> {
     let header = header::parse(bytes)?;
-    let mut body = Body::new(&bytes[header.body_start..], header.format);
     let roles = Roles::of(&header)?;
+    let body = &bytes[header.body_start..];
+    let stream = read_body(body, &header, &roles, Layout::Stream);
+    let stream_problem = match &stream {
+        _ if header.format != Format::Ascii => None,
+        Ok(out) if out.off_line.records == 0 => None,
+        Ok(out) => Some(out.off_line.describe("end before their line does")),
+        Err(e) => Some(e.to_string()),
+    };
+    let Some(problem) = stream_problem else {
+        return finish(stream?, &header);
+    };
+    match read_body(body, &header, &roles, Layout::Lines) {
+        Ok(out) => {
+            let warning = lines_warning(&problem, &out.off_line);
+            let mut mesh = finish(out, &header)?;
+            mesh.warnings.insert(0, warning);
+            Ok(mesh)
+        }
+        Err(_) => stream.and_then(|out| finish(out, &header)),
+    }
+}
+
+/// The one warning for an ASCII body read one record per line.
+fn lines_warning(problem: &str, off_line: &OffLine) -> String {
+    format!(
+        "ASCII records do not follow the header as one stream of values ({problem}): read one \
+         record per line, as trimesh reads them; {}: values past their properties ignored, \
+         missing values left out",
+        off_line.describe("do not fill their line exactly")
+    )
+}
+
+/// The body read in one layout: the geometry and the bytes left after the last element.
+struct Read {
+    out: Collected,
+    left: u64,
+    blank_rest: bool,
+    off_line: OffLine,
+}
+
+/// ASCII records that did not end with their lines: how many, and the first.
+#[derive(Default)]
+struct OffLine {
+    records: u64,
+    first: Option<(String, u64)>,
+}
+
+impl OffLine {
+    fn note(&mut self, element: &str, record: u64) {
+        self.records += 1;
+        if self.first.is_none() {
+            self.first = Some((element.to_string(), record));
+        }
+    }
+
+    /// "N records {what} (first: 'face' record 3)".
+    fn describe(&self, what: &str) -> String {
+        let (element, record) = self.first.clone().unwrap_or_default();
+        format!(
+            "{} records {what} (first: '{element}' record {record})",
+            self.records
+        )
+    }
+}
+
+fn read_body(
+    bytes: &[u8],
+    header: &Header,
+    roles: &Roles,
+    layout: Layout,
+) -> std::result::Result<Read, PlyError> {
+    let mut body = Body::new(bytes, header.format, layout);
     let mut out = Collected::default();
+    let mut off_line = OffLine::default();
     for (k, element) in header.elements.iter().enumerate() {
         let role = roles.of_element(k);
-        read_element(element, role, header.format, &mut body, &mut out)?;
+        read_element(element, role, &mut body, &mut out, &mut off_line)?;
     }
-    let mut warnings = Vec::new();
+    Ok(Read {
+        out,
+        left: body.remaining(),
+        blank_rest: body.rest_is_blank(),
+        off_line,
+    })
+}
+
+/// The mesh of a body read by [`read_body`], with the warnings of what was read past.
+fn finish(read: Read, header: &Header) -> std::result::Result<PlyMesh, PlyError> {
+    let Read {
+        mut out,
+        left,
+        blank_rest,
+        ..
+    } = read;
+    let mut warnings = header::warnings(header);
     if out.short_faces > 0 {
         warnings.push(format!(
             "{} faces with fewer than 3 corners skipped",
             out.short_faces
         ));
     }
-    warnings.extend(unread_strips(&header));
-    let left = body.remaining();
-    if left > 0 && !(header.format == Format::Ascii && body.rest_is_blank()) {
+    warnings.extend(unread_strips(header));
+    if left > 0 && !(header.format == Format::Ascii && blank_rest) {
         warnings.push(format!("{left} bytes after the last element ignored"));
     }
     if out.triangles.is_empty() {
@@ -320,14 +413,16 @@ struct Collected {
     short_faces: u64,
 }
 
-/// Reads the `element.count` records of `element`, keeping what `role` asks for.
+/// Reads the `element.count` records of `element`, keeping what `role` asks for, and notes
+/// the ASCII records that do not end with their lines.
 fn read_element(
     element: &Element,
     role: Role,
-    format: Format,
     body: &mut Body<'_>,
     out: &mut Collected,
+    off_line: &mut OffLine,
 ) -> std::result::Result<(), PlyError> {
+    let format = body.format();
     if element.properties.is_empty() {
         return Ok(());
     }
@@ -351,7 +446,7 @@ fn read_element(
     let mut corners = Vec::new();
     for record in 0..element.count {
         let fault = |fault: Fault| match fault {
-            Fault::End => PlyError::Truncated {
+            Fault::End | Fault::LineEnd => PlyError::Truncated {
                 element: element.name.clone(),
                 record,
                 count: element.count,
@@ -364,15 +459,29 @@ fn read_element(
             },
         };
         values.clear();
+        body.start_record();
         for (k, property) in element.properties.iter().enumerate() {
-            match property.kind {
-                Kind::Scalar(s) => values.push(body.read(s).map_err(fault)?),
+            // A value missing at the end of its line (Layout::Lines) is left out: NaN, or
+            // an empty list.
+            let value = match property.kind {
+                Kind::Scalar(s) => body.read(s),
                 Kind::List { count, item } => {
                     let keep = matches!(role, Role::Face { list, .. } if list == k);
-                    read_list(body, count, item, keep, &mut corners).map_err(fault)?;
-                    values.push(f64::NAN);
+                    let list = read_list(body, count, item, keep, &mut corners);
+                    if keep && list.is_err() {
+                        corners.clear();
+                    }
+                    list.map(|()| f64::NAN)
                 }
+            };
+            match value {
+                Ok(v) => values.push(v),
+                Err(Fault::LineEnd) => values.push(f64::NAN),
+                Err(other) => return Err(fault(other)),
             }
+        }
+        if body.end_record() != RecordEnd::Clean {
+            off_line.note(&element.name, record);
         }
         match role {
             Role::Vertex([x, y, z]) => out

@@ -18,7 +18,7 @@
 //! them, or at the default time code, as usd-core does for `UsdTimeCode::Default()`
 //! ([`value`]); `--variant SET=NAME` selections are authored in memory as the walk meets
 //! their prims ([`variants`]); point instancers are in [`instancer`]. Composition problems (a missing referenced file, an unresolved
-//! payload) are warnings. The file format is read by openusd; docs/usd.md has the details.
+//! payload) and attributes of unknown value types ([`read_warnings`]) are warnings. The file format is read by openusd; docs/usd.md has the details.
 
 mod composition;
 pub use composition::{UNREAD_LAYER, UNREAD_NOTE};
@@ -26,6 +26,8 @@ mod confine;
 mod instancer;
 mod mesh;
 mod quadric;
+mod read_warnings;
+pub use read_warnings::UNKNOWN_VALUE_TYPE;
 mod shapes;
 mod skel;
 mod value;
@@ -227,7 +229,10 @@ fn load_stage(
     let variant_sets = std::mem::replace(&mut loader.variants, variants::Variants::new(Vec::new()))
         .finish()
         .map_err(fail)?;
-    for warning in composition::warnings(&stage) {
+    for warning in composition::warnings(&stage)
+        .into_iter()
+        .chain(read_warnings::warnings(&stage))
+    {
         builder.warn(warning);
     }
     for warning in loader.warnings.drain(..) {

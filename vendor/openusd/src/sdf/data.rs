@@ -64,6 +64,12 @@ pub trait AbstractData {
     /// rely on this for reproducible output.
     fn spec_paths(&self) -> Vec<Path>;
 
+    /// What the reader read past without failing the layer (see [`ReadWarning`]), in the
+    /// order met. Empty for data not read from a file.
+    fn read_warnings(&self) -> &[ReadWarning] {
+        &[]
+    }
+
     /// Creates an empty spec of type `ty` at `path`, replacing any existing
     /// spec there. Mirrors C++ `SdfAbstractData::CreateSpec`. Fields are
     /// authored separately via [`set_field`](Self::set_field).
@@ -128,10 +134,28 @@ pub enum DataError {
     },
 }
 
+/// Something a reader read past without failing the layer, as Sdf reads the same input.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReadWarning {
+    /// An attribute whose type name is not in Sdf's value type registry (a typo such as
+    /// `flaot`): its spec is kept with that type name and its authored values (default,
+    /// time samples) are not read. Sdf keeps them as unread `SdfUnregisteredValue`s and
+    /// opens the layer.
+    #[error("{path}: unknown value type '{type_name}': its value is not read")]
+    UnknownValueType {
+        /// The attribute's path.
+        path: Path,
+        /// The type name as written, without `[]`.
+        type_name: String,
+    },
+}
+
 /// In-memory mutable layer data.
 #[derive(Default, Debug, Clone)]
 pub struct Data {
     specs: HashMap<Path, SpecData>,
+    warnings: Vec<ReadWarning>,
 }
 
 impl Data {
@@ -143,7 +167,17 @@ impl Data {
     /// Build a container from a map of pre-parsed spec records, the form a
     /// reader (e.g. the usda parser) produces.
     pub fn from_specs(specs: HashMap<Path, SpecData>) -> Self {
-        Self { specs }
+        Self {
+            specs,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// The same data with the reader's warnings, returned by
+    /// [`AbstractData::read_warnings`].
+    pub fn with_read_warnings(mut self, warnings: Vec<ReadWarning>) -> Self {
+        self.warnings = warnings;
+        self
     }
 
     /// Copy every spec and field from `src` into a new `Data`.
@@ -234,6 +268,10 @@ impl AbstractData for Data {
         paths
     }
 
+    fn read_warnings(&self) -> &[ReadWarning] {
+        self.warnings.as_slice()
+    }
+
     fn create_spec(&mut self, path: Path, ty: SpecType) {
         self.specs.insert(path, SpecData::new(ty));
     }
@@ -279,6 +317,10 @@ impl<T: AbstractData + ?Sized> AbstractData for Box<T> {
 
     fn spec_paths(&self) -> Vec<Path> {
         (**self).spec_paths()
+    }
+
+    fn read_warnings(&self) -> &[ReadWarning] {
+        (**self).read_warnings()
     }
 
     fn create_spec(&mut self, path: Path, ty: SpecType) {
@@ -545,6 +587,10 @@ impl<T: AbstractData> AbstractData for CowData<T> {
         }
         paths.sort_by(|a, b| a.as_str().cmp(b.as_str()));
         paths
+    }
+
+    fn read_warnings(&self) -> &[ReadWarning] {
+        self.base.read_warnings()
     }
 
     fn create_spec(&mut self, path: Path, ty: SpecType) {

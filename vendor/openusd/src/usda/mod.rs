@@ -15,11 +15,12 @@ pub use writer::TextWriter;
 
 use crate::{ar, sdf, tf};
 
-/// Parse `usda` text into an in-memory [`sdf::Data`] store.
+/// Parse `usda` text into an in-memory [`sdf::Data`] store, with the parser's
+/// [`sdf::ReadWarning`]s.
 pub fn parse(text: &str) -> Result<sdf::Data> {
     let mut parser = Parser::new(text);
     let specs = parser.parse()?;
-    Ok(sdf::Data::from_specs(specs))
+    Ok(sdf::Data::from_specs(specs).with_read_warnings(parser.take_warnings()))
 }
 
 /// Read a `usda` file from disk into an in-memory [`sdf::Data`] store.
@@ -32,7 +33,7 @@ pub fn read_file(path: impl AsRef<Path>) -> Result<sdf::Data> {
         Some(h) => e.context(format!("{}:{}: {}", path.display(), h.line, h.column)),
         None => e.context(format!("{}: parse error", path.display())),
     })?;
-    Ok(sdf::Data::from_specs(specs))
+    Ok(sdf::Data::from_specs(specs).with_read_warnings(parser.take_warnings()))
 }
 
 /// Text format (`.usda`) as an [`sdf::FileFormat`], wrapping [`parse`] and

@@ -21,6 +21,7 @@ pub struct Parser<'a> {
     iter: Peekable<logos::SpannedIter<'a, Token<'a>>>,
     source: &'a str,
     last_span: Option<Range<usize>>,
+    warnings: Vec<sdf::ReadWarning>,
 }
 
 /// Captures the line context for the most recent token consumed by the parser.
@@ -48,7 +49,14 @@ impl<'a> Parser<'a> {
             iter: Token::lexer(data).spanned().peekable(),
             source: data,
             last_span: None,
+            warnings: Vec::new(),
         }
+    }
+
+    /// What the parser has read past without failing (attributes of unknown value types),
+    /// in the order met; drained by the call.
+    pub fn take_warnings(&mut self) -> Vec<sdf::ReadWarning> {
+        std::mem::take(&mut self.warnings)
     }
 
     /// Returns a highlight for the most recent token span processed by the parser.
@@ -615,13 +623,15 @@ impl<'a> Parser<'a> {
         if matches!(suffix, Some(Token::TimeSamples)) {
             push_unique(suffixed_properties, name);
             self.ensure_pun('=')?;
-            let samples = self.parse_time_samples(type_info)?;
             let path = current_path.append_property(name)?;
+            let samples = self.parse_attribute_time_samples(type_info, &path)?;
 
             let spec = data
                 .entry(path)
                 .or_insert_with(|| Self::make_attribute_spec(&type_info, custom, variability));
-            spec.add(FieldKey::TimeSamples, sdf::Value::TimeSamples(samples));
+            if let Some(samples) = samples {
+                spec.add(FieldKey::TimeSamples, sdf::Value::TimeSamples(samples));
+            }
             return Ok(());
         }
 
@@ -654,8 +664,8 @@ impl<'a> Parser<'a> {
         }
 
         self.ensure_pun('=')?;
-        let value = self.parse_value(type_info)?;
         let path = current_path.append_property(name)?;
+        let value = self.parse_attribute_value(type_info, &path)?;
 
         if self.is_next(Token::Punctuation('(')) {
             self.parse_property_metadata(&mut spec)
@@ -666,10 +676,80 @@ impl<'a> Parser<'a> {
 
         let mut base = Self::make_attribute_spec(&type_info, custom, variability);
         base.extend_from(spec);
-        base.add(FieldKey::Default, value);
+        if let Some(value) = value {
+            base.add(FieldKey::Default, value);
+        }
         Self::merge_spec(data, path, base);
 
         Ok(())
+    }
+
+    /// Reads the default value of the attribute at `path`. For a type name Sdf's value type
+    /// registry does not know, the value is consumed unread and a
+    /// [`sdf::ReadWarning::UnknownValueType`] recorded: Sdf keeps such a value as an
+    /// `SdfUnregisteredValue` and opens the layer.
+    fn parse_attribute_value(&mut self, info: TypeInfo<'a>, path: &sdf::Path) -> Result<Option<sdf::Value>> {
+        if info.ty != Type::Custom {
+            return self.parse_value(info).map(Some);
+        }
+        self.skip_value()?;
+        self.warn_unknown_type(info, path);
+        Ok(None)
+    }
+
+    /// Reads the time samples of the attribute at `path`; for an unknown type name they are
+    /// consumed unread, as [`Self::parse_attribute_value`] does with a default value.
+    fn parse_attribute_time_samples(
+        &mut self,
+        info: TypeInfo<'a>,
+        path: &sdf::Path,
+    ) -> Result<Option<sdf::TimeSampleMap>> {
+        if info.ty != Type::Custom {
+            return self.parse_time_samples(info).map(Some);
+        }
+        self.parse_block('{', '}', |this| {
+            this.fetch_next()?;
+            this.ensure_pun(':')?;
+            this.skip_value()
+        })?;
+        self.warn_unknown_type(info, path);
+        Ok(None)
+    }
+
+    fn warn_unknown_type(&mut self, info: TypeInfo<'a>, path: &sdf::Path) {
+        self.warnings.push(sdf::ReadWarning::UnknownValueType {
+            path: path.clone(),
+            type_name: info.type_name.to_owned(),
+        });
+    }
+
+    /// Consumes one value without reading it, as Sdf's grammar allows any value after an
+    /// unknown type name: an atom (number, string, identifier, asset or path reference,
+    /// `None`), a signed atom (`-inf`), or a `( … )` or `[ … ]` group of values, nested to
+    /// any depth (iteratively: the depth costs no stack).
+    fn skip_value(&mut self) -> Result<()> {
+        let mut open = Vec::new();
+        loop {
+            match self.fetch_next()? {
+                Token::Punctuation(c @ ('(' | '[')) => open.push(if c == '(' { ')' } else { ']' }),
+                Token::Punctuation(c @ (')' | ']')) if open.last() == Some(&c) => {
+                    open.pop();
+                }
+                Token::Punctuation(c @ ('-' | '+')) if open.is_empty() => {
+                    let next = self.fetch_next()?;
+                    if matches!(next, Token::Punctuation(_)) {
+                        bail!("Expected a value after '{c}', got {next:?}");
+                    }
+                }
+                Token::Punctuation(c) if open.is_empty() || !matches!(c, ',' | '-' | '+') => {
+                    bail!("Expected a value, got '{c}'")
+                }
+                _ => {}
+            }
+            if open.is_empty() {
+                return Ok(());
+            }
+        }
     }
     /// Parses a connection target list into USD paths.
     fn parse_connection_targets(&mut self) -> Result<Vec<sdf::Path>> {
@@ -1597,6 +1677,27 @@ impl<'a> Parser<'a> {
             "quatd" => Type::Quatd,
             "quatf" => Type::Quatf,
             "quath" => Type::Quath,
+            // Sdf's legacy names (`_AddLegacyTypesToRegistry` in `pxr/usd/sdf/schema.cpp`),
+            // which usd-core still reads as aliases of the types above.
+            "Vec2i" => Type::Int2,
+            "Vec3i" => Type::Int3,
+            "Vec4i" => Type::Int4,
+            "Vec2h" => Type::Half2,
+            "Vec3h" => Type::Half3,
+            "Vec4h" => Type::Half4,
+            "Vec2f" => Type::Float2,
+            "Vec3f" | "PointFloat" | "NormalFloat" | "VectorFloat" | "ColorFloat" => Type::Float3,
+            "Vec4f" => Type::Float4,
+            "Vec2d" => Type::Double2,
+            "Vec3d" | "Point" | "Normal" | "Vector" | "Color" => Type::Double3,
+            "Vec4d" => Type::Double4,
+            "Quath" => Type::Quath,
+            "Quatf" => Type::Quatf,
+            "Quatd" => Type::Quatd,
+            "Matrix2d" => Type::Matrix2d,
+            "Matrix3d" => Type::Matrix3d,
+            "Matrix4d" | "Frame" | "Transform" => Type::Matrix4d,
+            "PointIndex" | "EdgeIndex" | "FaceIndex" => Type::Int,
             "string" => Type::String,
             "token" => Type::Token,
             "asset" => Type::Asset,
@@ -3327,6 +3428,57 @@ def Xform "X"
         let info = parser.try_parse_type().unwrap().unwrap();
         assert_eq!(info.ty, Type::Custom);
         assert_eq!(info.type_name, "foobar");
+    }
+
+    #[test]
+    fn legacy_type_names_read_as_their_types() {
+        let data = Parser::new(
+            "#usda 1.0\ndef \"M\" {\n    Vec3f[] points = [(0, 1, 2)]\n    PointFloat p = (1, 2, 3)\n    \
+             ColorFloat c = (0.5, 0.25, 1)\n    PointIndex i = 7\n    Color d = (1, 2, 3)\n}\n",
+        )
+        .parse()
+        .unwrap();
+        let value = |name: &str| {
+            let path = sdf::path("/M").unwrap().append_property(name).unwrap();
+            data[&path].get(FieldKey::Default.as_str()).cloned().unwrap()
+        };
+        assert_eq!(value("points"), sdf::Value::Vec3fVec(vec![gf::vec3f(0.0, 1.0, 2.0)]));
+        assert_eq!(value("p"), sdf::Value::Vec3f(gf::vec3f(1.0, 2.0, 3.0)));
+        assert_eq!(value("c"), sdf::Value::Vec3f(gf::vec3f(0.5, 0.25, 1.0)));
+        assert_eq!(value("i"), sdf::Value::Int(7));
+        assert_eq!(value("d"), sdf::Value::Vec3d(gf::vec3d(1.0, 2.0, 3.0)));
+    }
+
+    #[test]
+    fn unknown_type_names_skip_the_value_with_a_warning() {
+        let mut parser = Parser::new(
+            "#usda 1.0\ndef \"M\" {\n    flaot[] w = [(1, [2]), -inf, \"x\", @a@, <p>]\n    \
+             flaot s.timeSamples = { 0: (1, 2), 1: None }\n    int after = 3\n}\n",
+        );
+        let data = parser.parse().unwrap();
+        let attr = |name: &str| sdf::path("/M").unwrap().append_property(name).unwrap();
+        let w = &data[&attr("w")];
+        assert_eq!(w.get(FieldKey::TypeName.as_str()), Some(&sdf::Value::token("flaot[]")));
+        assert!(w.get(FieldKey::Default.as_str()).is_none());
+        assert!(data[&attr("s")].get(FieldKey::TimeSamples.as_str()).is_none());
+        assert_eq!(
+            data[&attr("after")].get(FieldKey::Default.as_str()),
+            Some(&sdf::Value::Int(3))
+        );
+        let warnings = parser.take_warnings();
+        assert_eq!(warnings.len(), 2);
+        assert_eq!(
+            warnings[0].to_string(),
+            "/M.w: unknown value type 'flaot': its value is not read"
+        );
+    }
+
+    #[test]
+    fn unknown_type_names_still_need_a_well_formed_value() {
+        for text in ["flaot x = { 1 }", "flaot x = (1, 2]", "flaot x = - ,", "flaot x = (1, 2"] {
+            let layer = format!("#usda 1.0\ndef \"M\" {{\n    {text}\n}}\n");
+            assert!(Parser::new(&layer).parse().is_err(), "{text}");
+        }
     }
 
     #[test]
