@@ -193,6 +193,9 @@ fn usd_reader_crashes_and_hangs_end_with_one_line() {
         "fuzz/usd/openusd_usdc_lz4_count_3.usdc",
         "fuzz/usd/openusd_usdc_lz4_count_4.usdc",
         "fuzz/usd/openusd_usdc_lz4_count_5.usdc",
+        // tobj's unchecked texture coordinate index (an overflow panic with debug assertions;
+        // in a release build, the out-of-bounds error).
+        "fuzz/obj/tobj_texcoord_index_overflow.obj",
     ];
     for file in files {
         let scene = fixture(file);
