@@ -591,53 +591,66 @@ fn say_warnings(sidecars: &[raycast::output::sidecar::Sidecar]) {
     }
 }
 
-/// What a run of many views wrote: its warnings (each once), then one line.
-fn say_views(job: &RenderJob, outcome: &job::views::Outcome) {
-    say_warnings(&outcome.sidecars);
-    let trace: f64 = outcome.sidecars.iter().map(|s| s.timings.trace).sum();
-    let write: f64 = outcome.sidecars.iter().map(|s| s.timings.write).sum();
-    let folder = |f: Option<&PathBuf>| {
+/// The total of one timing over several renders' sidecars.
+fn total(
+    sidecars: &[raycast::output::sidecar::Sidecar],
+    part: fn(&raycast::output::sidecar::Timings) -> f64,
+) -> f64 {
+    sidecars.iter().map(|s| part(&s.timings)).sum()
+}
+
+/// `FIRST … LAST`, the names of the first and last of several output folders, and the files
+/// each holds (the first's list).
+fn span(
+    first: Option<&Path>,
+    last: Option<&Path>,
+    sidecars: &[raycast::output::sidecar::Sidecar],
+) -> String {
+    let name = |f: Option<&Path>| {
         f.and_then(|f| f.file_name())
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     };
+    let files = sidecars
+        .first()
+        .map(|s| s.files.join(", "))
+        .unwrap_or_default();
+    format!("({} … {}), each {files}", name(first), name(last))
+}
+
+/// What a run of many views wrote: its warnings (each once), then one line.
+fn say_views(job: &RenderJob, outcome: &job::views::Outcome) {
+    let sidecars = &outcome.sidecars;
+    say_warnings(sidecars);
+    let folders = &outcome.folders;
     eprintln!(
-        "raycast: wrote {} views to {} ({} … {}), each {} (load {:.3}s, build {:.3}s, once; in all: trace {:.3}s, write {:.3}s)",
-        outcome.folders.len(),
+        "raycast: wrote {} views to {} {} (load {:.3}s, build {:.3}s, once; in all: trace {:.3}s, write {:.3}s)",
+        folders.len(),
         job.out_dir().display(),
-        folder(outcome.folders.first()),
-        folder(outcome.folders.last()),
-        outcome.sidecars.first().map(|s| s.files.join(", ")).unwrap_or_default(),
+        span(folders.first().map(PathBuf::as_path), folders.last().map(PathBuf::as_path), sidecars),
         outcome.load,
         outcome.build,
-        trace,
-        write,
+        total(sidecars, |t| t.trace),
+        total(sidecars, |t| t.write),
     );
 }
 
 /// What a sequence wrote: its warnings (each once), then one line.
 fn say_sequence(job: &RenderJob, outcome: &sequence::Outcome) {
-    say_warnings(&outcome.sidecars);
-    let sum = |part: fn(&raycast::output::sidecar::Timings) -> f64| -> f64 {
-        outcome.sidecars.iter().map(|s| part(&s.timings)).sum()
-    };
-    let folder = |f: Option<&sequence::Frame>| {
-        f.and_then(|f| f.folder.file_name())
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default()
-    };
+    let sidecars = &outcome.sidecars;
+    say_warnings(sidecars);
+    let first = outcome.frames.first().map(|f| f.folder.as_path());
+    let last = outcome.frames.last().map(|f| f.folder.as_path());
     eprintln!(
-        "raycast: wrote {} times to {} ({} … {}), each {} (open {:.3}s; in all: pose {:.3}s, build {:.3}s, trace {:.3}s, write {:.3}s)",
+        "raycast: wrote {} times to {} {} (open {:.3}s; in all: pose {:.3}s, build {:.3}s, trace {:.3}s, write {:.3}s)",
         outcome.frames.len(),
         job.out_dir().display(),
-        folder(outcome.frames.first()),
-        folder(outcome.frames.last()),
-        outcome.sidecars.first().map(|s| s.files.join(", ")).unwrap_or_default(),
+        span(first, last, sidecars),
         outcome.open,
-        sum(|t| t.load),
-        sum(|t| t.build),
-        sum(|t| t.trace),
-        sum(|t| t.write),
+        total(sidecars, |t| t.load),
+        total(sidecars, |t| t.build),
+        total(sidecars, |t| t.trace),
+        total(sidecars, |t| t.write),
     );
 }
 
