@@ -313,8 +313,14 @@ impl Walker<'_, '_> {
             return;
         };
         let comps = layout.comps;
+        let vector = name == "NORMAL" || name == "TANGENT";
+        if vector && comps < 3 {
+            // A wrong type: the format rule reports it
+            // (MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT).
+            return;
+        }
         for (e, v) in values.chunks_exact(comps).enumerate() {
-            let problem = if name == "NORMAL" || name == "TANGENT" {
+            let problem = if vector {
                 let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
                 if (len - 1.0).abs() > super::UNIT_VECTOR_TOLERANCE {
                     Some((
