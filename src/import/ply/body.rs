@@ -227,7 +227,7 @@ mod tests {
     fn records_by_lines_skip_extra_values_and_stop_at_short_lines() {
         let text = b"1 2 3 4\n\n5 6\n7 8";
         let mut b = Body::new(text, Format::Ascii, Layout::Lines);
-        let mut record = |b: &mut Body| {
+        let record = |b: &mut Body| {
             b.start_record();
             let values = [b.read(Scalar::U8), b.read(Scalar::U8), b.read(Scalar::U8)];
             (values, b.end_record())
