@@ -169,6 +169,20 @@ impl<R: io::Read + io::Seek> CrateFile<R> {
 
         self.sections = self.reader.read_vec::<Section>(count)?;
 
+        // Every section lies within the file: the sizes bound the counts read from them.
+        let here = self.reader.stream_position()?;
+        let len = self.reader.seek(io::SeekFrom::End(0))?;
+        self.reader.seek(io::SeekFrom::Start(here))?;
+        for section in &self.sections {
+            ensure!(
+                section.start.checked_add(section.size).is_some_and(|end| end <= len),
+                "section {} ({} bytes at {}) runs past the end of the {len}-byte file",
+                section.name(),
+                section.size,
+                section.start
+            );
+        }
+
         Ok(())
     }
 
