@@ -163,7 +163,40 @@ class Scene:
     def __init__(self, compiled: _raycast._Scene):
         self._scene = compiled
 
+    @staticmethod
+    def from_arrays(vertices, faces) -> Scene:
+        """A scene of one mesh from arrays, without a file.
+
+        Parameters
+        ----------
+        vertices : array_like, shape (N, 3)
+            Vertex positions (float64; every vertex finite).
+        faces : array_like, shape (M, 3)
+            Triangles as indices into ``vertices`` (each in 0..N).
+
+        Returns
+        -------
+        Scene
+            One object, ``mesh``; ``prim`` is the face's row in ``faces``. Pickles as its
+            arrays.
+
+        Raises
+        ------
+        ValueError
+            A wrong shape, a face index outside 0..N, or a vertex that is not finite (the
+            message names the first).
+        """
+        v = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
+        f = np.asarray(faces)
+        if f.size and not np.issubdtype(f.dtype, np.integer):
+            raise ValueError(f"faces must be integers, got {f.dtype}")
+        f = np.ascontiguousarray(f, dtype=np.int64).reshape(-1, 3)
+        return Scene(_raycast.load_arrays(v, f))
+
     def __reduce__(self):
+        arrays = self._scene.arrays()
+        if arrays is not None:
+            return (Scene.from_arrays, arrays)
         data, name, choice, time, animation, variants = self._scene.source()
         if name is None:
             return (load, (data, choice, time, animation, dict(variants) or None))
@@ -338,6 +371,8 @@ class Scene:
             yield name, self._scene.render(view, width, height, names)
 
     def __repr__(self) -> str:
+        if self._scene.arrays() is not None:
+            return f"<raycast.Scene from arrays: {len(self.objects)} objects>"
         data, name, *_ = self._scene.source()
         where = data if name is None else f"{name} (bytes)"
         return f"<raycast.Scene {where!s}: {len(self.objects)} objects>"

@@ -6,9 +6,9 @@
 
 Triangle indices are indices into ``mesh.faces``; hits need ``t > 0`` along the ray. A ray
 through an edge shared by two faces reports one of them, never both and never neither; with
-``multiple_hits`` each surface crossing is listed once. The mesh is passed to raycast as an
-in-memory OBJ file with its vertices written in full float64 precision; it is rebuilt when the
-mesh changes (by its hash, as trimesh's own intersectors do).
+``multiple_hits`` each surface crossing is listed once. The mesh is handed to raycast as its
+float64 arrays (:meth:`raycast.Scene.from_arrays`); the scene is rebuilt when the mesh changes
+(by its hash, as trimesh's own intersectors do).
 
 As trimesh's Embree intersector does, a ray with a non-finite origin or direction, or a zero
 direction, is a miss (raycast's own ``cast`` refuses it), and vertices that no face uses are
@@ -19,11 +19,9 @@ needs no scaling.
 
 from __future__ import annotations
 
-import io
-
 import numpy as np
 
-from . import load_bytes
+from . import Scene
 
 __all__ = ["RayMeshIntersector"]
 
@@ -36,18 +34,6 @@ def _used(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarr
     if used.all():
         return vertices, faces
     return vertices[used], (np.cumsum(used) - 1)[faces]
-
-
-def _obj_bytes(vertices: np.ndarray, faces: np.ndarray) -> bytes:
-    """An OBJ file holding one object with ``vertices`` (repr precision, so they read back
-    exactly) and triangle ``faces`` (0-based, written 1-based)."""
-    out = io.StringIO()
-    out.write("o mesh\n")
-    for x, y, z in vertices.tolist():
-        out.write(f"v {x!r} {y!r} {z!r}\n")
-    for a, b, c in (faces + 1).tolist():
-        out.write(f"f {a} {b} {c}\n")
-    return out.getvalue().encode()
 
 
 class RayMeshIntersector:
@@ -75,7 +61,7 @@ class RayMeshIntersector:
             faces = np.asarray(self.mesh.faces, dtype=np.int64)
             if len(faces) and 0 <= faces.min() and faces.max() < len(vertices):
                 vertices, faces = _used(vertices, faces)
-            self._scene = load_bytes(_obj_bytes(vertices, faces), "mesh.obj")
+            self._scene = Scene.from_arrays(vertices, faces)
             self._key = key
         return self._scene
 

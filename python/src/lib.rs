@@ -41,6 +41,7 @@ fn _raycast(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<camera::PyCamera>()?;
     m.add_function(wrap_pyfunction!(scene::load_path, m)?)?;
     m.add_function(wrap_pyfunction!(scene::load_bytes, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::load_arrays, m)?)?;
     m.add_function(wrap_pyfunction!(camera::look_at, m)?)?;
     m.add_function(wrap_pyfunction!(camera::pinhole, m)?)?;
     m.add_function(wrap_pyfunction!(camera::read_views, m)?)?;

@@ -120,10 +120,11 @@ fn load_whole(path: &Path, load_bytes: fn(&[u8], &Path) -> Result<Scene>) -> Res
     load_bytes(&bytes, path)
 }
 
-/// The scene of a mesh file (PLY, STL): its reader's `warnings`, then one object per
-/// `(name, mesh)` with source `<kind>:<name>`, placed as stored; an empty scene with the
-/// readers' [`EMPTY_SCENE`] warning when there is none.
-fn mesh_file_scene(
+/// The scene of a mesh file (PLY, STL) or of arrays (the Python package's
+/// `Scene.from_arrays`): its reader's `warnings`, then one object per `(name, mesh)` with
+/// source `<kind>:<name>`, placed as stored; an empty scene with the readers'
+/// [`EMPTY_SCENE`] warning when there is none.
+pub fn mesh_file_scene(
     path: &Path,
     kind: &str,
     warnings: Vec<String>,

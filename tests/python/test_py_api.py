@@ -260,3 +260,33 @@ def test_load_reads_usd_at_a_time_code_and_with_variants():
     assert [o["name"] for o in again.objects] == ["/World/Thing/Tri"]
     with pytest.raises(raycast.SceneError, match="choices: ball, box, tri"):
         raycast.load(folder / "variants.usda", variants={"shape": "cone"})
+
+
+def test_scene_from_arrays_equals_the_same_mesh_read_from_a_file(tmp_path):
+    """`Scene.from_arrays` (issue 33): the hits of the same triangles written as an OBJ file
+    and loaded, bit for bit; it pickles as its arrays; bad arrays are ValueErrors naming the
+    first bad vertex or face."""
+    rng = np.random.default_rng(7)
+    vertices = rng.uniform(-1, 1, (60, 3))
+    faces = rng.integers(0, 60, (40, 3))
+    text = "".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in vertices.tolist())
+    text += "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces.tolist())
+    (tmp_path / "m.obj").write_text(text)
+    from_file = raycast.load(tmp_path / "m.obj")
+    scene = raycast.Scene.from_arrays(vertices, faces)
+    o = rng.uniform(-2, 2, (500, 3))
+    d = rng.uniform(-1, 1, (500, 3))
+    a = scene.cast(o, d, aovs=("t", "prim", "normal"))
+    b = from_file.cast(o, d, aovs=("t", "prim", "normal"))
+    assert (np.isfinite(a["t"])).sum() > 50
+    for key in a:
+        assert np.array_equal(a[key], b[key]), key
+    again = pickle.loads(pickle.dumps(scene))
+    assert np.array_equal(again.cast(o, d, aovs=("t",))["t"], a["t"])
+    assert "from arrays" in repr(scene)
+    with pytest.raises(ValueError, match=r"face 1 is \[0, 1, 60\]"):
+        raycast.Scene.from_arrays(vertices, [[0, 1, 2], [0, 1, 60]])
+    with pytest.raises(ValueError, match="vertex 2 is not finite"):
+        raycast.Scene.from_arrays([[0, 0, 0], [1, 0, 0], [np.nan, 1, 0]], [[0, 1, 2]])
+    with pytest.raises(ValueError, match="faces must be integers"):
+        raycast.Scene.from_arrays(vertices, [[0.0, 1.0, 2.0]])
