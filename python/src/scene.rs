@@ -22,9 +22,15 @@ use std::sync::Arc;
 #[derive(Debug, Clone)]
 enum Source {
     Path(PathBuf),
-    Bytes { data: Vec<u8>, name: PathBuf },
+    Bytes {
+        data: Vec<u8>,
+        name: PathBuf,
+    },
     /// `Scene.from_arrays`: the arrays, kept for pickling.
-    Arrays { vertices: Vec<[f64; 3]>, faces: Vec<[u32; 3]> },
+    Arrays {
+        vertices: Vec<[f64; 3]>,
+        faces: Vec<[u32; 3]>,
+    },
 }
 
 /// What poses a scene: the glTF animation time and animation (`--time`, `--animation`), or
@@ -154,7 +160,9 @@ impl PyScene {
 fn arrays_source(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> import::Source {
     let positions = vertices.iter().map(|&v| DVec3::from_array(v)).collect();
     let mesh = raycast::scene::Mesh::new(positions, faces.to_vec());
-    let objects = mesh.map(|m| vec![("mesh".to_string(), m)]).unwrap_or_default();
+    let objects = mesh
+        .map(|m| vec![("mesh".to_string(), m)])
+        .unwrap_or_default();
     let scene = import::mesh_file_scene(Path::new("arrays"), "arrays", Vec::new(), objects);
     import::Source::Fixed(Box::new(scene))
 }
@@ -177,8 +185,14 @@ pub fn load_arrays(
         )));
     }
     let vertices: Vec<[f64; 3]> = v.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
-    if let Some(i) = vertices.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
-        return Err(PyValueError::new_err(format!("vertex {i} is not finite: {:?}", vertices[i])));
+    if let Some(i) = vertices
+        .iter()
+        .position(|p| p.iter().any(|c| !c.is_finite()))
+    {
+        return Err(PyValueError::new_err(format!(
+            "vertex {i} is not finite: {:?}",
+            vertices[i]
+        )));
     }
     let n = vertices.len() as i64;
     let index = |i: i64| u32::try_from(i).ok().filter(|_| i < n);
