@@ -156,6 +156,9 @@ impl PyScene {
     }
 }
 
+/// A mesh as numpy arrays: (N, 3) float64 vertices and (M, 3) int64 faces.
+type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
+
 /// The one-mesh scene of `vertices` and `faces` (checked by [`load_arrays`]).
 fn arrays_source(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> import::Source {
     let positions = vertices.iter().map(|&v| DVec3::from_array(v)).collect();
@@ -479,10 +482,7 @@ impl PyScene {
 
     /// The (vertices, faces) a scene made by `Scene.from_arrays` was made from; None for a
     /// scene loaded from a file.
-    fn arrays<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> Option<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>)> {
+    fn arrays<'py>(&self, py: Python<'py>) -> Option<MeshArrays<'py>> {
         let Source::Arrays { vertices, faces } = &self.source else {
             return None;
         };
