@@ -4,7 +4,7 @@
                                    [--max-rays-f64 N] [--camera] [--keep DIR]
 
 For each scene (.gltf/.glb/.obj/.ply/.stl; directories are searched recursively; files in a
-`bad/` folder, files trimesh cannot load and files trimesh is known to load wrongly
+`bad/` and `fuzz/` folders, files trimesh cannot load and files trimesh is known to load wrongly
 are skipped with a stated reason) this generates N deterministic rays, runs
 `raycast SCENE --rays rays.npy --aov depth,normal,id,prim --out TMP --quiet` and
 compares its depth, normal, id and prim per ray against
@@ -161,6 +161,10 @@ def find_scenes(paths):
         for f in files:
             if "bad" in f.parts[:-1]:
                 out.append((f, "in a bad/ folder (expected to fail)"))
+            elif {"fuzz", "fuzz-hang"} & set(f.parts[:-1]):
+                # Inputs that once crashed a reader; tests/check.rs and tests/cli_messages.rs
+                # hold what raycast must say about them.
+                out.append((f, "in a fuzz/ folder (a fuzzing regression input)"))
             elif "posed" in f.parts[:-1]:
                 # trimesh draws neither skins nor morph targets; three.js is the reference
                 # for these (tests/gltf_pose.rs, fixtures/posed/three).
