@@ -371,7 +371,7 @@ class Scene:
             yield name, self._scene.render(view, width, height, names)
 
     def __repr__(self) -> str:
-        if self._scene.arrays() is not None:
+        if self._scene.is_arrays():
             return f"<raycast.Scene from arrays: {len(self.objects)} objects>"
         data, name, *_ = self._scene.source()
         where = data if name is None else f"{name} (bytes)"

@@ -124,17 +124,14 @@ pub fn pinhole(
     let m_rows = [0, 1, 2, 3].map(|r| [0, 1, 2, 3].map(|c| m[[r, c]]));
     let pinhole = Pinhole::new(k_rows, width, height).map_err(PyValueError::new_err)?;
     let to_world = camera_to_world(m_rows).map_err(PyValueError::new_err)?;
-    Ok(PyCamera {
-        camera: Camera {
-            name: "pinhole".into(),
-            source: "raycast.camera.pinhole".into(),
-            projection: Projection::Pinhole(pinhole),
-            aspect_ratio: None,
-            znear: 0.0,
-            zfar: None,
-            to_world: CameraAxes::OpenCv.to_opengl(to_world),
-        },
-    })
+    let to_world = CameraAxes::OpenCv.to_opengl(to_world);
+    let camera = Camera::pinhole(
+        pinhole,
+        to_world,
+        "pinhole".into(),
+        "raycast.camera.pinhole".into(),
+    );
+    Ok(PyCamera { camera })
 }
 
 /// The views of a camera file (`--views`: a nerfstudio / instant-ngp `transforms.json` or a
@@ -151,15 +148,12 @@ pub fn read_views(
     let views = raycast::camera::views::read(&path, width.zip(height))
         .map_err(|e| crate::to_pyerr(py, e))?;
     let camera = |view: &raycast::camera::views::View| PyCamera {
-        camera: Camera {
-            name: view.name.clone().unwrap_or_else(|| "pinhole".into()),
-            source: format!("views file {}", path.display()),
-            projection: Projection::Pinhole(view.pinhole),
-            aspect_ratio: None,
-            znear: 0.0,
-            zfar: None,
-            to_world: view.to_world,
-        },
+        camera: Camera::pinhole(
+            view.pinhole,
+            view.to_world,
+            view.name.clone().unwrap_or_else(|| "pinhole".into()),
+            format!("views file {}", path.display()),
+        ),
     };
     Ok(views.iter().map(|v| (v.name.clone(), camera(v))).collect())
 }

@@ -480,6 +480,11 @@ impl PyScene {
         }
     }
 
+    /// Whether `Scene.from_arrays` made this scene (without copying its arrays out).
+    fn is_arrays(&self) -> bool {
+        matches!(self.source, Source::Arrays { .. })
+    }
+
     /// The (vertices, faces) a scene made by `Scene.from_arrays` was made from; None for a
     /// scene loaded from a file.
     fn arrays<'py>(&self, py: Python<'py>) -> Option<MeshArrays<'py>> {

@@ -49,6 +49,20 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// A pinhole camera of intrinsics `pinhole` placed by `to_world` (raycast's axes, used as
+    /// given), named `name`, from `source`.
+    pub fn pinhole(pinhole: Pinhole, to_world: DMat4, name: String, source: String) -> Camera {
+        Camera {
+            name,
+            source,
+            projection: Projection::Pinhole(pinhole),
+            aspect_ratio: None,
+            znear: 0.0,
+            zfar: None,
+            to_world,
+        }
+    }
+
     /// A camera at `eye` looking at `target`, with `up` giving the vertical.
     pub fn look_at(eye: DVec3, target: DVec3, up: DVec3, projection: Projection) -> Result<Camera> {
         let back = (eye - target).try_normalize().ok_or_else(|| {

@@ -36,7 +36,7 @@ impl Pinhole {
             return Err(format!("K's last row must be 0, 0, 1, not {:?}", k[2]));
         }
         let k_inverse = DMat3::from_cols_array_2d(&k).transpose().inverse();
-        if !k_inverse.is_finite() || k[0][0] == 0.0 || k[1][1] == 0.0 {
+        if !k_inverse.is_finite() {
             return Err("K is not invertible (a focal length is zero)".into());
         }
         Ok(Pinhole {

@@ -136,15 +136,12 @@ fn pinhole_view(job: &RenderJob) -> Result<Option<CameraView>> {
             "--K needs the image size: give --width and --height",
         ));
     };
-    let camera = Camera {
-        name: job.camera.name.clone().unwrap_or_else(|| "pinhole".into()),
-        source: "command line (--K, --cam-to-world)".into(),
-        projection: Projection::Pinhole(pinhole(k, width, height)?),
-        aspect_ratio: None,
-        znear: 0.0,
-        zfar: None,
+    let camera = Camera::pinhole(
+        pinhole(k, width, height)?,
         to_world,
-    };
+        job.camera.name.clone().unwrap_or_else(|| "pinhole".into()),
+        "command line (--K, --cam-to-world)".into(),
+    );
     Ok(Some(CameraView::new(camera, width, height)))
 }
 

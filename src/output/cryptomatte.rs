@@ -62,16 +62,12 @@ fn layer_key(layer: &str) -> String {
     format!("{:08x}", murmur3_32(layer.as_bytes()))[..7].to_string()
 }
 
-/// The JSON manifest of `names`: `{"name": "hash in eight hex digits", …}`.
-fn manifest(names: &[String]) -> String {
+/// The JSON manifest of `names` and their `hashes`: `{"name": "hash in eight hex digits", …}`.
+fn manifest(names: &[String], hashes: &[u32]) -> String {
     let entries: serde_json::Map<String, serde_json::Value> = names
         .iter()
-        .map(|n| {
-            (
-                n.clone(),
-                format!("{:08x}", murmur3_32(n.as_bytes())).into(),
-            )
-        })
+        .zip(hashes)
+        .map(|(n, h)| (n.clone(), format!("{h:08x}").into()))
         .collect();
     serde_json::Value::Object(entries).to_string()
 }
@@ -108,10 +104,8 @@ pub fn write(
     ranked: &[Vec<(u32, f32)>],
     names: &[String],
 ) -> Result<(), String> {
-    let ids: Vec<f32> = names
-        .iter()
-        .map(|n| hash_to_float(murmur3_32(n.as_bytes())))
-        .collect();
+    let hashes: Vec<u32> = names.iter().map(|n| murmur3_32(n.as_bytes())).collect();
+    let ids: Vec<f32> = hashes.iter().map(|&h| hash_to_float(h)).collect();
     let mut channels = Vec::with_capacity(4 * LEVELS);
     for level in 0..LEVELS {
         for (c, channel) in ["R", "G", "B", "A"].iter().enumerate() {
@@ -141,7 +135,10 @@ pub fn write(
             format!("cryptomatte/{key}/conversion"),
             "uint32_to_float32".to_string(),
         ),
-        (format!("cryptomatte/{key}/manifest"), manifest(names)),
+        (
+            format!("cryptomatte/{key}/manifest"),
+            manifest(names, &hashes),
+        ),
     ];
     exr::write(out, width, height, channels, &notes)
 }
@@ -150,11 +147,15 @@ pub fn write(
 /// objects share one (or it is empty), so that every object has a matte of its own.
 pub fn object_names(names: impl Iterator<Item = String>) -> Vec<String> {
     let names: Vec<String> = names.collect();
+    let mut uses: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
+    for n in &names {
+        *uses.entry(n.as_str()).or_default() += 1;
+    }
     names
         .iter()
         .enumerate()
         .map(|(i, n)| {
-            let shared = n.is_empty() || names.iter().filter(|m| *m == n).count() > 1;
+            let shared = n.is_empty() || uses[n.as_str()] > 1;
             if shared {
                 format!("{n} #{}", i + 1)
             } else {
