@@ -27,6 +27,12 @@ const FILES: &[&str] = &[
     "morph-sparse.meshopt.glb",
     "skins-shared.gltf",
     "skins-shared.draco.glb",
+    "morph-animated.gltf",
+    "morph-animated.draco.glb",
+    "morph-animated.meshopt.glb",
+    "skins-animated.gltf",
+    "skins-animated.draco.glb",
+    "skins-animated.meshopt.glb",
 ];
 
 /// Largest vertex difference allowed, relative to the scene's size.

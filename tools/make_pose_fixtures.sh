@@ -27,14 +27,17 @@ rm -f "$out"/*.glb "$out"/*.gltf "$out"/*.bin "$out"/three/*.json
 
 cp "$assets"/*.glb "$assets"/*.gltf "$out/" && chmod 644 "$out"/*
 node "$npm_dir/make_pose_fixtures.mjs" "$out"
-for name in morph-sparse skins-shared; do
+for name in morph-sparse skins-shared morph-animated skins-animated; do
   "$transform" draco "$out/$name.gltf" "$out/$name.draco.glb"
   helper plain "$out/$name.draco.glb" "$out/$name.draco.plain.glb"
 done
-"$gltfpack" -i "$out/morph-sparse.gltf" -o "$out/morph-sparse.meshopt.glb" -cc -noq
+# gltfpack also compresses the animations' keyframes (resampled at 30 Hz, meshopt filters).
+for name in morph-sparse morph-animated skins-animated; do
+  "$gltfpack" -i "$out/$name.gltf" -o "$out/$name.meshopt.glb" -cc -noq
+done
 # The plain decodes are left out: Draco quantizes the float weights (lossily, as it may), so
 # their sums miss 1 by 2e-4, which the validator reports; the compressed files pass.
-helper validate "$out"/morph-sparse.gltf "$out"/morph-sparse.*[^n].glb "$out"/skins-shared.gltf "$out"/skins-shared.draco.glb
+helper validate "$out"/morph-*.gltf "$out"/morph-*.*[^n].glb "$out"/skins-*.gltf "$out"/skins-*.draco.glb "$out"/skins-animated.meshopt.glb
 
 for file in "$out"/*.glb "$out"/*.gltf; do
   case "$file" in *.plain.glb) continue ;; esac
@@ -47,12 +50,15 @@ done
 # animation together, except Fox, whose three animations move the same joints (three.js would
 # blend them): its Walk at the three times, Survey and Run at one.
 timed() { # FILE TIME [ANIMATION]
-  local suffix=".t$2"
+  local suffix=".t$2" source="$out/$1"
   [ $# -gt 2 ] && suffix=".a$3$suffix"
-  node "$npm_dir/pose_reference.mjs" "$out/$1" "$out/three/$1$suffix.json" "${@:2}"
+  [ -f "${source%.glb}.plain.glb" ] && source="${source%.glb}.plain.glb"
+  node "$npm_dir/pose_reference.mjs" "$source" "$out/three/$1$suffix.json" "${@:2}"
 }
 for file in AnimatedMorphCube.glb AnimatedTriangle.gltf BoxAnimated.glb CesiumMan.glb \
-  InterpolationTest.glb RiggedFigure.glb SimpleSkin.gltf; do
+  InterpolationTest.glb RiggedFigure.glb SimpleSkin.gltf \
+  morph-animated.gltf morph-animated.draco.glb morph-animated.meshopt.glb \
+  skins-animated.gltf skins-animated.draco.glb skins-animated.meshopt.glb; do
   for time in 0.3 0.65 5; do timed "$file" "$time"; done
 done
 for time in 0.3 0.65 5; do timed Fox.glb "$time" 1; done

@@ -8,6 +8,12 @@
 // - skins-shared.gltf: a joint chain J0 → J1 → J2 with non-uniform scales and rotations, two
 //   skins sharing J1 (one without inverseBindMatrices), skinned mesh nodes with transforms of
 //   their own (which the specification says to ignore), float and normalized ubyte weights.
+// - morph-animated.gltf: morph-sparse with its weights animated, CUBICSPLINE on one node and
+//   STEP on the other, and a CUBICSPLINE translation (one animation).
+// - skins-animated.gltf: skins-shared with its joints animated (J0 rotation CUBICSPLINE, J1
+//   scale STEP, J2 translation LINEAR) and, in a second animation, the rig's rotation LINEAR.
+//   The skinned mesh nodes are not animated: three.js binds a skinned mesh to the node's
+//   transform at load time, where the specification ignores that transform.
 import { Document, NodeIO } from '@gltf-transform/core';
 import { KHRMeshQuantization } from '@gltf-transform/extensions';
 import { mkdirSync } from 'node:fs';
@@ -118,5 +124,58 @@ function skinsShared() {
   return doc;
 }
 
+// Adds to `animation` a sampler over float keyframe `times` and `values` (of accessor `type`)
+// driving `path` of `node`.
+function animate(doc, animation, node, path, interpolation, times, values, type) {
+  const buffer = doc.getRoot().listBuffers()[0];
+  const acc = (t, array) => doc.createAccessor().setType(t).setArray(new Float32Array(array)).setBuffer(buffer);
+  const sampler = doc
+    .createAnimationSampler()
+    .setInput(acc('SCALAR', times))
+    .setOutput(acc(type, values))
+    .setInterpolation(interpolation);
+  const channel = doc.createAnimationChannel().setTargetNode(node).setTargetPath(path).setSampler(sampler);
+  animation.addSampler(sampler).addChannel(channel);
+}
+
+const nodeNamed = (doc, name) => doc.getRoot().listNodes().find((n) => n.getName() === name);
+
+function morphAnimated() {
+  const doc = morphSparse();
+  const animation = doc.createAnimation('Morph');
+  // CUBICSPLINE weights: per keyframe the in-tangents, the values, the out-tangents (2 targets).
+  animate(doc, animation, nodeNamed(doc, 'node_weights'), 'weights', 'CUBICSPLINE', [0, 0.5, 1], [
+    0, 0, 1, -0.5, 0.5, -1,
+    2, 0.25, 0.2, 0.8, -1.5, 0.75,
+    0.25, 1, -0.3, 1.2, 0, 0,
+  ], 'SCALAR');
+  animate(doc, animation, nodeNamed(doc, 'mesh_weights'), 'weights', 'STEP', [0.25, 0.6], [0, 1, 0.75, -0.25], 'SCALAR');
+  animate(doc, animation, nodeNamed(doc, 'mesh_weights'), 'translation', 'CUBICSPLINE', [0.1, 0.9], [
+    0, 0, 0, -4, 0, 0, 1, 2, -1,
+    -2, 0.5, 3, -3.5, 1, 0.5, 0, 0, 0,
+  ], 'VEC3');
+  return doc;
+}
+
+function skinsAnimated() {
+  const doc = skinsShared();
+  const joints = doc.createAnimation('Joints');
+  const s = Math.SQRT1_2;
+  // CUBICSPLINE rotation: in-tangent, unit value, out-tangent per keyframe (the result is
+  // normalized, as the specification says).
+  animate(doc, joints, nodeNamed(doc, 'J0'), 'rotation', 'CUBICSPLINE', [0, 0.4, 1.2], [
+    0, 0, 0, 0, 0, 0, 0.19509032201612825, 0.9807852804032304, 0.5, -0.25, 0, 0.1,
+    0.3, 0, -0.2, 0.1, 0, s, 0, s, -0.4, 0.2, 0.6, 0,
+    0, 0.1, 0, -0.1, 0.5, 0.5, 0.5, 0.5, 0, 0, 0, 0,
+  ], 'VEC4');
+  animate(doc, joints, nodeNamed(doc, 'J1'), 'scale', 'STEP', [0.2, 0.5], [1, 0.75, 1.25, 0.5, 2, 1.5], 'VEC3');
+  animate(doc, joints, nodeNamed(doc, 'J2'), 'translation', 'LINEAR', [0, 1], [0.25, 1, -0.5, -0.75, 2, 0.5], 'VEC3');
+  const rig = doc.createAnimation('Rig');
+  animate(doc, rig, nodeNamed(doc, 'rig'), 'rotation', 'LINEAR', [0, 0.8], [0, 0, 0, 1, 0, 0.9238795325112867, 0, 0.3826834323650898], 'VEC4');
+  return doc;
+}
+
 await io.write(join(out, 'morph-sparse.gltf'), morphSparse());
 await io.write(join(out, 'skins-shared.gltf'), skinsShared());
+await io.write(join(out, 'morph-animated.gltf'), morphAnimated());
+await io.write(join(out, 'skins-animated.gltf'), skinsAnimated());

@@ -24,6 +24,9 @@
 //   spherical interpolation (three's lerps and normalizes keyframes closer than acos(0.9995));
 // - animation tracks hold and interpolate f64 (KeyframeTrack's ValueBufferType, Float32Array by
 //   default, would round every interpolated value to f32: 1e-7 of the scene size);
+// - normalized keyframe values (meshopt-compressed animations) are dequantized in f64 as the
+//   specification writes it, max(c / (2^(b-1) - 1), -1) or c / (2^b - 1): three.js stores
+//   c · (1 / max) in a Float32Array (3e-8 relative);
 // - SkinnedMesh.normalizeSkinWeights is switched off: GLTFLoader rescales float weights whose
 //   sum is not 1 "to fix malformed assets", the glTF specification uses the weights as stored.
 import * as THREE from 'three';
@@ -90,6 +93,21 @@ const data = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteL
 const loader = new GLTFLoader();
 loader.setMeshoptDecoder(MeshoptDecoder);
 loader.register(() => ({ name: 'raycast_no_textures', loadTexture: () => Promise.resolve(null) }));
+const NORMALIZED_MAX = new Map([
+  [Int8Array, 127],
+  [Uint8Array, 255],
+  [Int16Array, 32767],
+  [Uint16Array, 65535],
+]);
+loader.register((parser) => {
+  parser._getArrayFromAccessor = (accessor) => {
+    const array = accessor.array;
+    if (!accessor.normalized) return array;
+    const max = NORMALIZED_MAX.get(array.constructor);
+    return Float64Array.from(array, (c) => Math.max(c / max, -1));
+  };
+  return { name: 'raycast_f64_keyframes' };
+});
 
 const gltf = await new Promise((resolve, reject) =>
   loader.parse(data, dirname(input) + '/', resolve, reject),
