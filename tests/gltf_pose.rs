@@ -3,7 +3,8 @@
 //! vertices in fixtures/posed/three/*.json are three.js's world-space vertices of every mesh
 //! (tools/npm/pose_reference.mjs, made by tools/make_pose_fixtures.sh); nothing here computes a
 //! pose with raycast's code. Ray answers are checked against a plain ray-triangle test over
-//! three.js's triangles.
+//! three.js's triangles, ids and prims included: a hit must name, by its object's glTF node and
+//! its prim, a triangle of the file's numbering that the ray crosses at that depth.
 
 mod common;
 use common::*;
@@ -144,35 +145,37 @@ fn vertex_difference(scene: &Scene, reference: &[(usize, Vec<[DVec3; 3]>)]) -> f
     largest / scale
 }
 
-/// The nearest hit of `ray` on `triangles` (Möller–Trumbore in f64), and whether the ray
-/// passes within `margin` (in barycentric terms) of some triangle's edge.
+/// The ray parameter where `ray` crosses triangle `[a, b, c]` (Möller–Trumbore in f64), and
+/// its least barycentric coordinate (negative outside), if the ray is not parallel to it.
+fn crossing([a, b, c]: &[DVec3; 3], origin: DVec3, dir: DVec3) -> Option<(f64, f64)> {
+    let (e1, e2) = (*b - *a, *c - *a);
+    let p = dir.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-300 {
+        return None;
+    }
+    let s = origin - *a;
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let v = dir.dot(q) / det;
+    let t = e2.dot(q) / det;
+    Some((t, u.min(v).min(1.0 - u - v)))
+}
+
+/// The nearest hit's ray parameter on the reference's triangles, and whether the ray passes
+/// within `margin` (in barycentric terms) of some triangle's edge.
 fn reference_hit(
-    triangles: &[[DVec3; 3]],
+    reference: &[(usize, Vec<[DVec3; 3]>)],
     origin: DVec3,
     dir: DVec3,
     margin: f64,
 ) -> (Option<f64>, bool) {
     let (mut nearest, mut near_edge) = (None::<f64>, false);
-    for [a, b, c] in triangles {
-        let (e1, e2) = (*b - *a, *c - *a);
-        let p = dir.cross(e2);
-        let det = e1.dot(p);
-        if det.abs() < 1e-300 {
+    for triangle in reference.iter().flat_map(|(_, t)| t) {
+        let Some((t, least)) = crossing(triangle, origin, dir).filter(|c| c.0 > 0.0) else {
             continue;
-        }
-        let s = origin - *a;
-        let u = s.dot(p) / det;
-        let q = s.cross(e1);
-        let v = dir.dot(q) / det;
-        let t = e2.dot(q) / det;
-        if t <= 0.0 {
-            continue;
-        }
-        let w = 1.0 - u - v;
-        let least = u.min(v).min(w);
-        if least.abs() <= margin {
-            near_edge = true;
-        }
+        };
+        near_edge |= least.abs() <= margin;
         if least >= 0.0 && nearest.is_none_or(|n| t < n) {
             nearest = Some(t);
         }
@@ -180,9 +183,35 @@ fn reference_hit(
     (nearest, near_edge)
 }
 
+/// Whether the sample's object and prim name a reference triangle (the object drawn from its
+/// glTF node, the prim its index among that node's triangles: the file's numbering, which
+/// posing must not change) that the ray crosses at the sample's depth.
+fn names_the_hit_triangle(
+    scene: &Scene,
+    reference: &[(usize, Vec<[DVec3; 3]>)],
+    sample: &Sample,
+    (origin, dir): (DVec3, DVec3),
+    tolerance: f64,
+) -> bool {
+    let Some(source) = source_of(scene, sample) else {
+        return false;
+    };
+    let triangle = reference
+        .iter()
+        .find(|(node, _)| format!("/nodes/{node}") == source)
+        .and_then(|(_, triangles)| triangles.get(sample.prim as usize));
+    triangle
+        .and_then(|triangle| crossing(triangle, origin, dir))
+        .is_some_and(|(t, least)| {
+            least >= -1e-9 && (t * dir.length() - sample.depth).abs() <= tolerance
+        })
+}
+
 /// 2000 rays from a sphere around the reference bounds toward points inside them: how many
 /// agree in hit or miss and depth (to 1e-9 of the scene size) with the reference, how many were left out for passing
-/// within 1e-9 of an edge, and the hits among the agreeing rays.
+/// within 1e-9 of an edge, and the hits among the agreeing rays. A hit agrees only where its
+/// object and prim name a reference triangle the ray crosses at that depth (coincident
+/// triangles, as BoxAnimated's two-sided faces, tie: either is the hit).
 fn ray_agreement(scene: &Scene, reference: &[(usize, Vec<[DVec3; 3]>)]) -> (usize, usize, usize) {
     let all: Vec<[DVec3; 3]> = reference.iter().flat_map(|(_, t)| t.clone()).collect();
     let corners = all.iter().flatten();
@@ -210,20 +239,30 @@ fn ray_agreement(scene: &Scene, reference: &[(usize, Vec<[DVec3; 3]>)]) -> (usiz
     );
     let (mut agree, mut skipped, mut hits) = (0, 0, 0);
     for ((origin, dir), sample) in rays.iter().zip(&samples) {
-        let (expected, near_edge) = reference_hit(&all, *origin, *dir, 1e-9);
+        let (expected, near_edge) = reference_hit(reference, *origin, *dir, 1e-9);
         if near_edge {
             skipped += 1;
             continue;
         }
-        let depth = expected.map_or(f64::INFINITY, |t| t * dir.length());
         let same = match expected {
             None => sample.depth == f64::INFINITY,
-            Some(_) => (sample.depth - depth).abs() <= TOLERANCE * radius,
+            Some(t) => {
+                let tolerance = TOLERANCE * radius;
+                (sample.depth - t * dir.length()).abs() <= tolerance
+                    && names_the_hit_triangle(scene, reference, sample, (*origin, *dir), tolerance)
+            }
         };
         agree += same as usize;
         hits += (same && expected.is_some()) as usize;
     }
     (agree, skipped, hits)
+}
+
+/// The source (`/nodes/N`) of the object a sample hit.
+fn source_of(scene: &Scene, sample: &Sample) -> Option<String> {
+    let name = sample.object.as_deref()?;
+    let object = scene.objects.iter().find(|o| o.name == name)?;
+    Some(object.source.clone())
 }
 
 #[test]
