@@ -212,7 +212,9 @@ fn load(file: &str, time: Option<f64>, variants: &[(&str, &str)]) -> Scene {
 /// Time-sampled xformOps of every kind (translate, rotateXYZ, rotateY, scale in float and
 /// half, translateX, orient as quatf, quatd and quath, transform, an inverted pivot), points,
 /// a cube's size, a sphere's radius and a PointInstancer's positions, orientations and scales,
-/// at the default time code and five time codes (before, between, on and after the samples).
+/// one moved on by its velocities, accelerations and angular velocities and one whose
+/// velocities are not aligned with its positions (left out, with usd-core's warning), at the
+/// default time code and five time codes (before, between, on and after the samples).
 #[test]
 fn time_samples_read_as_usd_core_reads_them() {
     let reference = reference("time_samples");
@@ -238,6 +240,15 @@ fn time_samples_read_as_usd_core_reads_them() {
         );
         let range = numbers(&usd["timeCodeRange"]);
         assert_eq!(stage.time_code_range, Some([range[0], range[1]]));
+        let misaligned = scene.warnings.iter().filter(|w| {
+            w.starts_with("/World/Drift: velocities samples are not aligned with positions")
+        });
+        assert_eq!(
+            misaligned.count(),
+            time.is_some() as usize,
+            "{:?}",
+            scene.warnings
+        );
     }
 }
 

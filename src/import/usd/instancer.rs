@@ -2,11 +2,10 @@
 //! instance transform, read as usd-core's `ComputeInstanceTransformsAtTime` reads it.
 //!
 //! At a time code, `positions`, `orientations` (or `orientationsf`) and `scales` are read at
-//! that time (interpolated, as usd-core reads them when no velocities apply). Authored
-//! `velocities`, `accelerations` and `angularVelocities`, with which usd-core instead moves
-//! the lower bracketing sample on to the time, are not applied: a warning says so when they
-//! would have moved something.
+//! that time (interpolated), unless `velocities` or `angularVelocities` apply: then the lower
+//! bracketing samples are moved on by them, as usd-core moves them (the `motion` module).
 
+use super::motion::Motion;
 use super::value::{self, At};
 use super::{err, Instance, Loader, MAX_INSTANCER_DEPTH};
 use glam::{DMat4, DQuat, DVec3};
@@ -22,16 +21,35 @@ struct Arrays {
     ids: Option<Vec<i64>>,
     /// Ids neither drawn nor counted (usd-core's `ComputeMaskAtTime`: invisible or inactive).
     hidden: HashSet<i64>,
+    /// The velocities that move the instances on from their held samples, where they apply.
+    motion: Option<Motion>,
 }
 
 impl Arrays {
-    /// Reads the arrays at `at`; `Ok(Err(why))` when the instancer draws nothing (a warning).
-    fn read(prim: &Prim, at: At) -> Result<Result<Arrays, String>, String> {
+    /// Reads the arrays at `at` (a stage of `per_second` time codes per second), and warnings
+    /// into `notes`; `Ok(Err(why))` when the instancer draws nothing (a warning).
+    fn read(
+        prim: &Prim,
+        at: At,
+        per_second: f64,
+        notes: &mut Vec<String>,
+    ) -> Result<Result<Arrays, String>, String> {
         let Some(indices) = value::ints(prim, "protoIndices", at)? else {
             return Ok(Err("has no protoIndices".into()));
         };
         let n = indices.len();
-        let Some(positions) = value::vec3s(prim, "positions", at)? else {
+        let motion = match at.time() {
+            Some(time) => Some(Motion::read(prim, time, n, per_second)?),
+            None => None,
+        };
+        notes.extend(motion.iter().flat_map(|m| m.notes.iter().cloned()));
+        let motion = motion.filter(Motion::applies);
+        // With motion, usd-core holds every array at its lower sample.
+        let at_of = |name: &str| match motion {
+            Some(_) => at.held_sample(prim, name),
+            None => Ok(at),
+        };
+        let Some(positions) = value::vec3s(prim, "positions", at_of("positions")?)? else {
             return Ok(Err("has no positions".into()));
         };
         if positions.len() != n {
@@ -40,11 +58,11 @@ impl Arrays {
                 positions.len()
             )));
         }
-        let orientations = match value::quats(prim, "orientations", at)? {
+        let orientations = match value::quats(prim, "orientations", at_of("orientations")?)? {
             Some(q) => Some(q),
-            None => value::quats(prim, "orientationsf", at)?,
+            None => value::quats(prim, "orientationsf", at_of("orientationsf")?)?,
         };
-        let scales = value::vec3s(prim, "scales", at)?;
+        let scales = value::vec3s(prim, "scales", at_of("scales")?)?;
         for (what, len) in [
             ("orientations", orientations.as_ref().map(Vec::len)),
             ("scales", scales.as_ref().map(Vec::len)),
@@ -70,35 +88,7 @@ impl Arrays {
             scales,
             ids,
             hidden,
-        }))
-    }
-
-    /// A warning when motion attributes that usd-core would apply at this time are authored:
-    /// at a time code between or off the samples of `positions` (`orientations`), authored
-    /// `velocities` (`angularVelocities`) move usd-core's instances on from the lower sample;
-    /// raycast interpolates the samples instead.
-    fn unused_motion(&self, prim: &Prim, at: At) -> Result<Option<String>, String> {
-        let Some(time) = at.time() else {
-            return Ok(None);
-        };
-        let mut unused = Vec::new();
-        for (motion, moved) in [
-            ("velocities", "positions"),
-            ("angularVelocities", "orientations"),
-        ] {
-            let held = at.held_sample(prim, moved)?.time();
-            let authored = value::raw(prim, motion, at)?.is_some();
-            if authored && held.is_some_and(|sample| sample != time) {
-                unused.push(motion);
-            }
-        }
-        Ok((!unused.is_empty()).then(|| {
-            format!(
-                "{}: point instancer {} not applied: instances drawn with the samples \
-                 interpolated to time {time} (usd-core moves the lower sample on by them)",
-                prim.path(),
-                unused.join(" and ")
-            )
+            motion,
         }))
     }
 }
@@ -132,7 +122,8 @@ impl Loader {
                 self.excluded.insert(target_path);
             }
         }
-        let arrays = match Arrays::read(prim, self.at)? {
+        let per_second = self.stage.time_codes_per_second();
+        let arrays = match Arrays::read(prim, self.at, per_second, &mut self.warnings)? {
             Ok(arrays) => arrays,
             Err(why) => {
                 self.warnings
@@ -140,9 +131,6 @@ impl Loader {
                 return Ok(());
             }
         };
-        if let Some(note) = arrays.unused_motion(prim, self.at)? {
-            self.warnings.push(note);
-        }
         let Arrays {
             indices,
             positions,
@@ -150,6 +138,7 @@ impl Loader {
             scales,
             ids,
             hidden,
+            motion,
         } = arrays;
         let n = indices.len();
         let base_name = Self::object_name(prim, outer);
@@ -175,8 +164,11 @@ impl Loader {
                 .filter(|q| q.is_finite())
                 .unwrap_or(glam::DQuat::IDENTITY);
             let scale = scales.as_ref().map_or(DVec3::ONE, |s| s[i]);
-            let instance_world =
-                world * DMat4::from_scale_rotation_translation(scale, rotation, positions[i]);
+            let local = match &motion {
+                Some(motion) => motion.instance(i, positions[i], rotation, scale),
+                None => DMat4::from_scale_rotation_translation(scale, rotation, positions[i]),
+            };
+            let instance_world = world * local;
             // Nested in an outer instance, this instance draws into the outer one's object.
             let mut inner = Some(match outer {
                 Some(outer) => Instance {

@@ -25,6 +25,7 @@ pub use composition::{UNREAD_LAYER, UNREAD_NOTE};
 mod confine;
 mod instancer;
 mod mesh;
+mod motion;
 mod quadric;
 mod read_warnings;
 pub use read_warnings::UNKNOWN_VALUE_TYPE;
