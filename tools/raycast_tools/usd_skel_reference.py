@@ -15,6 +15,10 @@ and several time codes, what usd-core poses from it, in world space:
   * skelLocalToWorld), in numpy float64. For a rigidly bound prim (constant influences) the
   matrix is G * sum_k w_k X_k, its last column reset to (0, 0, 0, 1), as `SkinTransformLBS`.
   Prims that usd-core does not skin are read as usd_pose_reference reads them.
+  Blend shapes move the rest points first, from usd-core's pieces too: the animation's
+  `ComputeBlendShapeWeights(time)` through the mesh's `GetBlendShapeMapper()`, then
+  `BlendShapeQuery.ComputeSubShapeWeights` (float weights, as usd-core computes them),
+  `ComputeSubShapePointOffsets` and `ComputeBlendShapePointIndices`, summed in float64.
 
 The fixture covers: a 3-joint arm whose SkelAnimation lists two of the joints in another order
 (the third falls back to restTransforms), time-sampled translations, quatf rotations and half3
@@ -23,7 +27,9 @@ vertex influences and a non-identity geomBindTransform; a constant-interpolation
 a Cube inheriting constant influences from its parent Xform; a mesh with its own `skel:joints`
 subset; a mesh under an untyped prim (not Imageable: usd-core does not skin it); a second
 SkelRoot whose skeleton has no animation (rest pose) and a mesh whose weights do not sum to one;
-and a bound mesh outside any SkelRoot (not skinned).
+a bound mesh outside any SkelRoot (not skinned); and blend shapes on the arm: a sparse one
+(pointIndices) with two inbetweens, one at a negative weight, and a dense one without, weighed
+by the animation in another order than the mesh's, with a third name the mesh does not have.
 
 Usage:
     .venv/bin/python -m raycast_tools usd-skel-reference [FIXTURE_DIR]
@@ -165,6 +171,29 @@ def author(path):
     binding = bind(arm.GetPrim(), *arm_weights(mesh[0]), 2, "vertex")
     binding.CreateGeomBindTransformAttr(rotate((0, 1, 0), 10) * translate(0.1, -0.2, 0.05))
 
+    # Blend shapes on the arm, weighed by the animation (in another order, with a name the
+    # mesh does not have), at weights inside, between and past the sub-shapes.
+    points = mesh[0]
+    bulge = UsdSkel.BlendShape.Define(stage, "/World/Arm/ArmMesh/Bulge")
+    tip_points = [i for i, p in enumerate(points) if p[0] > 3.0]
+    bulge.CreatePointIndicesAttr(tip_points)
+    bulge.CreateOffsetsAttr([Gf.Vec3f(0.0, 0.4 + 0.05 * k, -0.2) for k in range(len(tip_points))])
+    half = bulge.CreateInbetween("half")
+    half.SetWeight(0.5)
+    half.SetOffsets([Gf.Vec3f(0.1, 0.1 * (k % 3), 0.3) for k in range(len(tip_points))])
+    under = bulge.CreateInbetween("under")
+    under.SetWeight(-0.4)
+    under.SetOffsets([Gf.Vec3f(-0.25, 0.0, 0.05 * k) for k in range(len(tip_points))])
+    stretch = UsdSkel.BlendShape.Define(stage, "/World/Arm/ArmMesh/Stretch")
+    stretch.CreateOffsetsAttr([Gf.Vec3f(0.1 * p[0], 0.0, 0.02 * p[1]) for p in points])
+    binding.CreateBlendShapesAttr(["Bulge", "Stretch"])
+    binding.CreateBlendShapeTargetsRel().SetTargets([bulge.GetPath(), stretch.GetPath()])
+    anim.CreateBlendShapesAttr(["Stretch", "Other", "Bulge"])
+    bw = anim.CreateBlendShapeWeightsAttr()
+    bw.Set(Vt.FloatArray([0.0, 1.0, 0.25]), 0)
+    bw.Set(Vt.FloatArray([0.6, 0.0, 0.8]), 4)
+    bw.Set(Vt.FloatArray([-0.5, 0.3, 1.7]), 10)
+
     # A rigid prop on the hand: constant influences, its points about its own origin.
     prop = define_mesh(stage, "/World/Arm/Prop", bar(-0.4, 0.4, 2, 0.2), translate(0, 3, 0))
     prop_binding = bind(prop.GetPrim(), [2], [1.0], 1, "constant")
@@ -229,8 +258,38 @@ def world_points(points, matrix):
     return (p @ matrix)[:, :3]
 
 
+def blended(query, skel_query, points, code):
+    """The rest points moved by the mesh's blend shapes (usd-core's weights), in float64."""
+    anim = skel_query.GetAnimQuery()
+    points = np.asarray(points, dtype=np.float64)
+    if not anim or not query.HasBlendShapes():
+        return points
+    weights = anim.ComputeBlendShapeWeights(code)
+    if not weights:
+        return points
+    mapper = query.GetBlendShapeMapper()
+    if mapper is not None and not mapper.IsNull():
+        weights = mapper.Remap(weights)
+    shapes = UsdSkel.BlendShapeQuery(UsdSkel.BindingAPI(query.GetPrim()))
+    sub_weights, shape_indices, sub_indices = shapes.ComputeSubShapeWeights(weights)
+    offsets = shapes.ComputeSubShapePointOffsets()
+    point_indices = shapes.ComputeBlendShapePointIndices()
+    moved = points.copy()
+    for w, shape, sub in zip(sub_weights, shape_indices, sub_indices):
+        delta = np.asarray(offsets[sub], dtype=np.float64) * float(w)
+        if len(delta) == 0:
+            continue
+        indices = list(point_indices[shape])
+        if indices:
+            moved[indices] += delta
+        else:
+            moved += delta
+    return moved
+
+
 def lbs(query, skel_query, skel_world, points, code):
     """usd-core's pieces combined by linear blend skinning in float64: world-space points."""
+    points = blended(query, skel_query, points, code)
     xforms = skel_query.ComputeSkinningTransforms(code)
     mapper = query.GetJointMapper()
     if mapper is not None and not mapper.IsNull():

@@ -14,19 +14,24 @@
 //!   influences (any drawn prim) is moved rigidly: its world transform becomes the skinned
 //!   transform under the skeleton's ([`influences`]). The prim's own transform is ignored.
 //!
-//! Blend shapes and dual-quaternion skinning are not applied: a warning names each prim that
-//! has them.
+//! - A skinned mesh's blend shapes move its rest points first, at the weights of the
+//!   skeleton's animation ([`blend_shapes`]).
+//!
+//! Dual-quaternion skinning is not applied, nor are blend shapes on a prim that is not skinned
+//! as a mesh: a warning names each prim that has them.
 
+mod blend_shapes;
 mod influences;
 mod skeleton;
 
 use super::value;
 use super::{err, Loader};
 use crate::scene::SkeletonInfo;
+use blend_shapes::BlendShapes;
 use glam::{DMat4, DVec3};
 use influences::Influences;
 use openusd::usd::Prim;
-use skeleton::{Animation, Skeleton};
+use skeleton::{Animation, BlendWeights, Skeleton};
 use std::collections::{BTreeMap, HashMap};
 use std::rc::Rc;
 
@@ -56,6 +61,8 @@ struct Posed {
     joints: Vec<String>,
     skinning: Vec<DMat4>,
     world: DMat4,
+    /// The animation's blend shape weights at the time, if it has any.
+    blend_weights: Option<BlendWeights>,
 }
 
 /// The skeletons met while walking, posed once each, and what they skin (for `info`).
@@ -182,10 +189,12 @@ impl Loader {
             None => DMat4::IDENTITY,
         };
         let pose = if influences.rigid {
+            self.warn_unapplied_blend_shapes(prim)?;
             influences
                 .skin_transform(&joints, geom_bind)
                 .map(|m| Pose::Rigid(posed.world * m))
         } else if type_name != "Mesh" {
+            self.warn_unapplied_blend_shapes(prim)?;
             Err(format!(
                 "{type_name} prims with vertex influences are not skinned here"
             ))
@@ -193,9 +202,10 @@ impl Loader {
             let Some(mesh) = self.mesh(prim)? else {
                 return Ok(None);
             };
-            let rest: Vec<DVec3> = (0..mesh.mesh.positions().len() as u32)
+            let mut rest: Vec<DVec3> = (0..mesh.mesh.positions().len() as u32)
                 .map(|i| mesh.mesh.positions().get(i))
                 .collect();
+            self.blend(prim, posed.blend_weights.as_ref(), &mut rest)?;
             influences
                 .skin_points(&rest, &joints, geom_bind)
                 .map(|points| Pose::Points {
@@ -226,9 +236,41 @@ impl Loader {
                 prim.path()
             ));
         }
+        Ok(())
+    }
+
+    /// Moves a skinned mesh's rest `points` by its blend shapes at the animation's `weights`;
+    /// a warning when usd-core would not apply them (the mesh is skinned without them).
+    fn blend(
+        &mut self,
+        prim: &Prim,
+        weights: Option<&BlendWeights>,
+        points: &mut [DVec3],
+    ) -> Result<(), String> {
+        let Some(shapes) = BlendShapes::read(prim, self.at)? else {
+            return Ok(());
+        };
+        let Some(weights) = weights else {
+            return Ok(());
+        };
+        let applied = shapes.and_then(|shapes| {
+            let mut moved = points.to_vec();
+            shapes.apply((&weights.names, &weights.weights), &mut moved)?;
+            points.copy_from_slice(&moved);
+            Ok(())
+        });
+        if let Err(why) = applied {
+            self.warnings
+                .push(format!("{}: {why}: blend shapes not applied", prim.path()));
+        }
+        Ok(())
+    }
+
+    /// A warning for blend shapes on a prim skinned rigidly or not as a mesh.
+    fn warn_unapplied_blend_shapes(&mut self, prim: &Prim) -> Result<(), String> {
         if value::is_authored(prim, "skel:blendShapes")? {
             self.warnings.push(format!(
-                "{}: blend shapes are not applied (drawn without them)",
+                "{}: blend shapes are applied to meshes with vertex influences only (drawn without them)",
                 prim.path()
             ));
         }
@@ -283,6 +325,10 @@ impl Loader {
             Err(why) => return Ok(Err(format!("skeleton {why}"))),
         };
         let world = self.world_of_prim(prim)?;
+        let blend_weights = match &animation {
+            Some(animation) => animation.blend_shape_weights(self.at)?,
+            None => None,
+        };
         self.skels.info.insert(
             prim.path().to_string(),
             SkeletonInfo {
@@ -296,6 +342,7 @@ impl Loader {
             joints: skeleton.joints,
             skinning,
             world,
+            blend_weights,
         }))
     }
 }

@@ -131,6 +131,13 @@ impl Skeleton {
     }
 }
 
+/// An animation's blend shape weights at a time: names and weights, in its order.
+#[derive(Debug, Clone)]
+pub struct BlendWeights {
+    pub names: Vec<String>,
+    pub weights: Vec<f32>,
+}
+
 impl Animation {
     /// The SkelAnimation at `prim`, `None` when the prim is not one.
     pub fn read(prim: &Prim, at: At) -> Result<Option<Animation>, String> {
@@ -143,6 +150,22 @@ impl Animation {
             prim: prim.clone(),
             joints,
         }))
+    }
+
+    /// The animation's blend shape names and weights at `at` (`None` when it weighs none, or
+    /// when the two lengths differ: usd-core's mapper then fails).
+    pub fn blend_shape_weights(&self, at: At) -> Result<Option<BlendWeights>, String> {
+        let names = value::tokens(&self.prim, "blendShapes", at)?;
+        let weights = value::numbers(&self.prim, "blendShapeWeights", at)?;
+        let (Some(names), Some(weights)) = (names, weights) else {
+            return Ok(None);
+        };
+        if names.len() != weights.len() {
+            return Ok(None);
+        }
+        // float[] values: exact in f32.
+        let weights = weights.into_iter().map(|w| w as f32).collect();
+        Ok(Some(BlendWeights { names, weights }))
     }
 
     /// The animation's joint-local transforms at `at` in its own joint order; `None` when
