@@ -247,7 +247,10 @@ fn specific_codes_on_bad_fixtures() {
         ("bad/quadric_not_symmetric.gltf", "QUADRIC_INVALID"),
         ("bad/quadric_missing_r.gltf", "QUADRIC_INVALID"),
         ("bad/empty.gltf", "EMPTY_SCENE"),
-        ("malformed/integer-out-of-bounds.gltf", "VALUE_NOT_IN_RANGE"),
+        (
+            "malformed/integer-out-of-bounds.gltf",
+            "BUFFER_VIEW_TOO_LONG",
+        ),
         (
             "gltf-validator/mesh/unresolved_positions.gltf",
             "UNRESOLVED_REFERENCE",

@@ -29,7 +29,7 @@ fn codes(report: &AssetReport, severity: Severity) -> BTreeSet<&str> {
 
 #[test]
 fn errors_agree_with_the_validator() {
-    let cases: [(&str, &[&str]); 12] = [
+    let cases: [(&str, &[&str]); 18] = [
         // One POSITION accessor on a view without byteStride, read by two primitives.
         ("one_accessor_two_primitives.gltf", &[]),
         // Two accessors on that view.
@@ -71,6 +71,29 @@ fn errors_agree_with_the_validator() {
         ("scene_string.gltf", &["TYPE_MISMATCH"]),
         // Shader techniques required: appearance only, the geometry is drawn.
         ("techniques_webgl_required.gltf", &[]),
+        // The codes check missed on the public corpora (reports/corpus.md), one file each.
+        ("primitives_object.gltf", &["TYPE_MISMATCH"]),
+        ("name_number.gltf", &["TYPE_MISMATCH"]),
+        ("texture_index_negative.gltf", &["INVALID_INDEX"]),
+        (
+            "texcoord_1_only.gltf",
+            &[
+                "MESH_PRIMITIVE_INDEXED_SEMANTIC_CONTINUITY",
+                "MESH_PRIMITIVE_TOO_FEW_TEXCOORDS",
+            ],
+        ),
+        (
+            "indices_without_attributes.gltf",
+            &[
+                "ACCESSOR_INDEX_OOB",
+                "BUFFER_VIEW_TARGET_OVERRIDE",
+                "EMPTY_ENTITY",
+            ],
+        ),
+        (
+            "keyframes_on_vertex_view.gltf",
+            &["BUFFER_VIEW_TARGET_OVERRIDE"],
+        ),
     ];
     for (name, validator) in cases {
         let report = report(name);
@@ -78,6 +101,20 @@ fn errors_agree_with_the_validator() {
         let expected: BTreeSet<&str> = validator.iter().copied().collect();
         assert_eq!(errors, expected, "{name}: {:?}", report.findings);
     }
+}
+
+/// A structural property of the wrong JSON type (primitives an object) drops geometry if read
+/// as absent: render refuses the file, naming the property, as check reports it.
+#[test]
+fn a_structural_type_mismatch_stops_a_render() {
+    let Err(err) = import::load(&fixture("primitives_object.gltf"), &LoadOptions::default()) else {
+        panic!("primitives_object.gltf was loaded");
+    };
+    let message = err.to_string();
+    assert!(
+        message.contains("/meshes/0/primitives") && message.contains("expected an array"),
+        "{message}"
+    );
 }
 
 #[test]

@@ -2,7 +2,7 @@
 //! reading them (it reports URIs, data: URIs, missing files and byte lengths shorter than
 //! declared). Images are never decoded; their first bytes are sniffed.
 
-use super::Walker;
+use super::{readable, Walker};
 use crate::import::gltf::buffers::{resolve, Resource};
 use crate::import::gltf::document::index_of;
 use serde_json::Value;
@@ -43,29 +43,33 @@ impl Walker<'_, '_> {
         let views = self.list("bufferViews");
         for (i, view) in views.iter().enumerate() {
             let at = format!("/bufferViews/{i}");
-            let length = view.get("byteLength").and_then(Value::as_u64);
-            if length == Some(0) {
+            // As numbers: an integer past 2^53 (1e300) is an integer to the validator too,
+            // and too long for any buffer.
+            let length = view.get("byteLength").and_then(whole);
+            if length == Some(0.0) {
                 self.f.error(
                     "VALUE_NOT_IN_RANGE",
                     format!("{at}/byteLength"),
                     "must be at least 1",
                 );
             }
-            let offset = view.get("byteOffset").and_then(Value::as_u64).unwrap_or(0);
+            let offset = view.get("byteOffset").and_then(whole).unwrap_or(0.0);
             if let (Some(length), Some(buffer)) = (length, index_of(view, "buffer")) {
                 if let Some(declared) = self
                     .list("buffers")
                     .get(buffer)
                     .and_then(|b| b.get("byteLength"))
-                    .and_then(Value::as_u64)
+                    .and_then(whole)
                 {
-                    if offset.checked_add(length).is_none_or(|end| end > declared) {
+                    if offset + length > declared {
                         self.f.error(
                             "BUFFER_VIEW_TOO_LONG",
                             format!("{at}/byteLength"),
                             format!(
-                                "bytes {offset}..{} do not fit buffer {buffer} of {declared} bytes",
-                                offset.saturating_add(length)
+                                "bytes {}..{} do not fit buffer {buffer} of {} bytes",
+                                readable(offset),
+                                readable(offset + length),
+                                readable(declared)
                             ),
                         );
                     }
@@ -86,7 +90,7 @@ impl Walker<'_, '_> {
                         format!("byteStride {stride} is not a multiple of 4"),
                     );
                 }
-                if length.is_some_and(|l| stride > l) {
+                if length.is_some_and(|l| stride as f64 > l) {
                     self.f.error(
                         "BUFFER_VIEW_TOO_BIG_BYTE_STRIDE",
                         sat.clone(),
@@ -216,4 +220,9 @@ impl Walker<'_, '_> {
             );
         }
     }
+}
+
+/// A non-negative whole number, of any size.
+fn whole(v: &Value) -> Option<f64> {
+    v.as_f64().filter(|x| *x >= 0.0 && x.fract() == 0.0)
 }

@@ -3,7 +3,7 @@
 
 use super::Walker;
 use crate::import::gltf::accessor::Layout;
-use crate::import::gltf::document::{array, escape, index_of};
+use crate::import::gltf::document::{array, as_index, escape, index_of};
 use serde_json::Value;
 use std::collections::{HashMap, HashSet};
 
@@ -18,7 +18,6 @@ impl Walker<'_, '_> {
         // byteStride only where two or more accessors share a view, not where one accessor
         // is used by several primitives.
         let mut vertex_views: HashMap<usize, HashSet<usize>> = HashMap::new();
-        let mut index_views: HashSet<usize> = HashSet::new();
         for (m, mesh) in meshes.iter().enumerate() {
             let prims = array(mesh, "primitives");
             let mut targets_count = None;
@@ -115,18 +114,21 @@ impl Walker<'_, '_> {
                                     "vertex attribute data must start on a 4-byte boundary",
                                 );
                             }
-                            if view.get("target").and_then(Value::as_u64) == Some(34963) {
-                                self.f.error(
-                                    "BUFFER_VIEW_TARGET_OVERRIDE",
-                                    aat.clone(),
-                                    "an index buffer view is used for vertex data",
-                                );
-                            }
                         }
                     }
                     self.attribute_data(name, acc, &layout, &aat);
                 }
                 self.weight_sums(attributes, &at);
+                // As the validator counts them: the TEXCOORD_n sets if numbered 0, 1, 2, ...,
+                // none otherwise.
+                let texcoords = sets.get("TEXCOORD").map_or(0, |ns| {
+                    let continuous = ns.iter().max().is_some_and(|&m| m + 1 == ns.len());
+                    if continuous {
+                        ns.len()
+                    } else {
+                        0
+                    }
+                });
                 for (base, mut ns) in sets {
                     ns.sort_unstable();
                     if ns.iter().enumerate().any(|(i, &n)| i != n) {
@@ -167,10 +169,6 @@ impl Walker<'_, '_> {
                         "TANGENT without NORMAL",
                     );
                 }
-                let texcoords = attributes
-                    .keys()
-                    .filter(|k| k.starts_with("TEXCOORD_"))
-                    .count();
                 if let Some(material) =
                     index_of(prim, "material").and_then(|i| self.list("materials").get(i))
                 {
@@ -186,14 +184,14 @@ impl Walker<'_, '_> {
                 }
                 let mode = index_of(prim, "mode").unwrap_or(4) as u64;
                 if let Some(indices) = index_of(prim, "indices") {
-                    if let Some(view) = self
-                        .list("accessors")
-                        .get(indices)
-                        .and_then(|a| index_of(a, "bufferView"))
-                    {
-                        index_views.insert(view);
-                    }
-                    self.indices(indices, count, mode, &format!("{at}/indices"));
+                    // Without an attribute accessor there are no vertices to index (the
+                    // validator's vertex count of -1: every index is out of range).
+                    let accessors = self.list("accessors").len();
+                    let resolvable = attributes
+                        .values()
+                        .any(|a| as_index(a).is_some_and(|a| a < accessors));
+                    let vertices = if resolvable { count } else { Some(0) };
+                    self.indices(indices, vertices, mode, &format!("{at}/indices"));
                 } else if let Some(count) = count {
                     self.mode_count(mode, count, &at);
                 }
@@ -241,15 +239,6 @@ impl Walker<'_, '_> {
                                 "morph POSITION accessors must have min and max",
                             );
                         }
-                        if let Some(view) = self.view_of(acc) {
-                            if view.get("target").and_then(Value::as_u64) == Some(34963) {
-                                self.f.error(
-                                    "BUFFER_VIEW_TARGET_OVERRIDE",
-                                    tat.clone(),
-                                    "an index buffer view is used for vertex data",
-                                );
-                            }
-                        }
                     }
                 }
             }
@@ -276,26 +265,6 @@ impl Walker<'_, '_> {
                     format!("/bufferViews/{view}"),
                     format!("a buffer view shared by {users} vertex accessors needs a byteStride"),
                 );
-            }
-            if index_views.contains(&view)
-                || v.get("target").and_then(Value::as_u64) == Some(34963) && users > 0
-            {
-                self.f.error(
-                    "BUFFER_VIEW_TARGET_OVERRIDE",
-                    format!("/bufferViews/{view}"),
-                    "the view is used both for vertices and for indices",
-                );
-            }
-        }
-        for view in index_views {
-            if let Some(v) = self.list("bufferViews").get(view) {
-                if v.get("target").and_then(Value::as_u64) == Some(34962) {
-                    self.f.error(
-                        "BUFFER_VIEW_TARGET_OVERRIDE",
-                        format!("/bufferViews/{view}"),
-                        "a vertex buffer view is used for indices",
-                    );
-                }
             }
         }
     }

@@ -18,6 +18,7 @@ mod meshes;
 mod nodes;
 mod schema;
 mod skins;
+mod usage;
 
 use super::{CheckOptions, Findings, Severity};
 use crate::import::gltf::accessor::Layout;
@@ -178,6 +179,7 @@ impl<'a> Walker<'a, '_> {
         self.images();
         self.animations();
         self.skins();
+        self.buffer_view_usage();
         let estimate = triangles.saturating_mul(BYTES_PER_TRIANGLE);
         if estimate > self.options.max_bytes {
             self.f.error(

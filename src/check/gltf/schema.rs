@@ -1,6 +1,7 @@
-//! Shape rules that need no meaning: collection types, empty arrays, required properties,
-//! integer properties, extension objects and lists (the asset version is the document
-//! layer's rule: [`crate::import::gltf::integrity`]).
+//! Shape rules that need no meaning: empty arrays, required properties, integer and string
+//! properties, extension objects and lists (the asset version and the JSON types of
+//! collections and structural properties are the document layer's rules:
+//! [`crate::import::gltf::integrity`], [`crate::import::gltf::structure`]).
 
 use super::{readable, Walker};
 use crate::import::gltf::can_honour_required;
@@ -8,15 +9,11 @@ use crate::import::gltf::document::{array, as_index, escape};
 use serde_json::{Map, Value};
 use std::collections::HashSet;
 
-/// Properties that hold non-negative integers wherever they appear.
-const INTEGER_KEYS: &[&str] = &[
+/// Properties that hold an index (a reference to an object) wherever they appear: the
+/// validator's `getIndex`, where a negative integer is INVALID_INDEX.
+const INDEX_KEYS: &[&str] = &[
     "buffer",
     "bufferView",
-    "byteLength",
-    "byteOffset",
-    "byteStride",
-    "count",
-    "componentType",
     "mesh",
     "skin",
     "camera",
@@ -24,53 +21,36 @@ const INTEGER_KEYS: &[&str] = &[
     "input",
     "output",
     "source",
-    "texCoord",
+    "sampler",
+    "index",
     "scene",
     "material",
     "indices",
-    "mode",
     "inverseBindMatrices",
     "skeleton",
 ];
 
+/// Properties that hold other non-negative integers wherever they appear: the validator's
+/// `getUint`, where a negative integer is VALUE_NOT_IN_RANGE.
+const UINT_KEYS: &[&str] = &[
+    "byteLength",
+    "byteOffset",
+    "byteStride",
+    "count",
+    "componentType",
+    "texCoord",
+    "mode",
+];
+
+/// Properties that hold a string wherever they appear outside extensions.
+const STRING_KEYS: &[&str] = &["name", "uri", "mimeType", "generator", "copyright"];
+
 impl Walker<'_, '_> {
-    /// Shape checks that need no meaning: collection types, empty arrays, required
-    /// properties, extension objects.
+    /// Shape checks that need no meaning: empty arrays, required properties, integer and
+    /// string properties, extension objects.
     pub(super) fn schema(&mut self) {
-        const COLLECTIONS: &[&str] = &[
-            "accessors",
-            "animations",
-            "buffers",
-            "bufferViews",
-            "cameras",
-            "images",
-            "materials",
-            "meshes",
-            "nodes",
-            "samplers",
-            "scenes",
-            "skins",
-            "textures",
-        ];
-        for &key in COLLECTIONS {
-            match self.root.get(key) {
-                None => {}
-                Some(Value::Array(items)) => {
-                    for (i, item) in items.iter().enumerate() {
-                        if !item.is_object() {
-                            self.f.error(
-                                "TYPE_MISMATCH",
-                                format!("/{key}/{i}"),
-                                "expected an object",
-                            );
-                        }
-                    }
-                }
-                Some(_) => self
-                    .f
-                    .error("TYPE_MISMATCH", format!("/{key}"), "expected an array"),
-            }
-        }
+        // Collections and properties of the wrong JSON type: the document layer's rule
+        // (crate::import::gltf::structure).
         let declared: HashSet<&str> = self.doc.extension_names("extensionsUsed").collect();
         self.tree_object(self.root, "", &declared);
         let required: &[(&str, &[&str])] = &[
@@ -158,21 +138,56 @@ impl Walker<'_, '_> {
         }
     }
 
-    /// A value of an integer property that is no valid index: a number out of range, or
-    /// (outside extensions, whose schemas are their own) a string, boolean or array. An object
-    /// is left alone: a sparse accessor's `indices` is one.
-    fn integer(&mut self, item: &Value, at: &str) {
+    /// A value of integer property `key` that is no valid index, as the validator's
+    /// `getIndex` and `getUint` read it: a negative integer (INVALID_INDEX for a reference,
+    /// VALUE_NOT_IN_RANGE otherwise), a number with a fraction, or (outside extensions, whose
+    /// schemas are their own) a string, boolean or array. An integer past 2⁵³ is an integer
+    /// too (the rules of what it counts say what is wrong with it); an object is left alone:
+    /// a sparse accessor's `indices` is one.
+    fn integer(&mut self, key: &str, item: &Value, at: &str) {
+        let index = INDEX_KEYS.contains(&key);
         if let Some(x) = item.as_f64() {
-            self.f.error(
-                "VALUE_NOT_IN_RANGE",
-                at,
-                format!("{} is not a valid non-negative integer", readable(x)),
-            );
+            if x.fract() != 0.0 || !x.is_finite() {
+                self.f.error(
+                    "TYPE_MISMATCH",
+                    at,
+                    format!("{} is not an integer", readable(x)),
+                );
+            } else if x < 0.0 && index {
+                self.f.error(
+                    "INVALID_INDEX",
+                    at,
+                    format!(
+                        "{} is not a valid index: it must be a non-negative integer",
+                        readable(x)
+                    ),
+                );
+            } else if x < 0.0 {
+                self.f.error(
+                    "VALUE_NOT_IN_RANGE",
+                    at,
+                    format!("{} is not a valid non-negative integer", readable(x)),
+                );
+            } else if index {
+                self.f.error(
+                    "UNRESOLVED_REFERENCE",
+                    at,
+                    format!("refers to {}, which does not exist", readable(x)),
+                );
+            }
         } else if matches!(item, Value::String(_) | Value::Bool(_) | Value::Array(_))
             && !at.contains("/extensions/")
         {
             self.f
                 .error("TYPE_MISMATCH", at, format!("{item} is not an integer"));
+        }
+    }
+
+    /// A value of string property `key` (outside extensions) that is not a string.
+    fn string(&mut self, item: &Value, at: &str) {
+        if !item.is_string() && !at.contains("/extensions/") {
+            self.f
+                .error("TYPE_MISMATCH", at, format!("{item} is not a string"));
         }
     }
 
@@ -200,8 +215,12 @@ impl Walker<'_, '_> {
             if key == "extras" {
                 continue;
             }
-            if INTEGER_KEYS.contains(&key.as_str()) && as_index(item).is_none() {
-                self.integer(item, &here);
+            let integer = INDEX_KEYS.contains(&key.as_str()) || UINT_KEYS.contains(&key.as_str());
+            if integer && as_index(item).is_none() {
+                self.integer(key, item, &here);
+            }
+            if STRING_KEYS.contains(&key.as_str()) {
+                self.string(item, &here);
             }
             if key != "extensions" {
                 self.tree(item, &here, declared);

@@ -193,21 +193,39 @@ impl Document {
                 format!("buffer {buffer} has no data that raycast can read"),
             )
         })?;
+        let too_long = |what: String| {
+            Diagnostic::error(
+                "BUFFER_VIEW_TOO_LONG",
+                format!("{at}/byteLength"),
+                format!("{what} do not fit buffer {buffer} ({} bytes)", bytes.len()),
+            )
+        };
+        let length = match (json.get("byteLength"), index_of(json, "byteLength")) {
+            (_, Some(length)) => length,
+            (None, None) => {
+                return Err(Diagnostic::error(
+                    "UNDEFINED_PROPERTY",
+                    format!("{at}/byteLength"),
+                    "no byteLength",
+                ))
+            }
+            // A whole number past 2^53, as tinygltf's bounds test has (1e300).
+            (Some(v), None) if v.as_f64().is_some_and(|x| x > 0.0 && x.fract() == 0.0) => {
+                return Err(too_long(format!("{v} bytes")));
+            }
+            (Some(v), None) => {
+                return Err(Diagnostic::error(
+                    "TYPE_MISMATCH",
+                    format!("{at}/byteLength"),
+                    format!("{v} is not a length in bytes"),
+                ))
+            }
+        };
         let offset = index_of(json, "byteOffset").unwrap_or(0);
-        let length = index_of(json, "byteLength").unwrap_or(0);
         offset
             .checked_add(length)
             .and_then(|end| bytes.get(offset..end))
-            .ok_or_else(|| {
-                Diagnostic::error(
-                    "BUFFER_VIEW_TOO_LONG",
-                    format!("{at}/byteLength"),
-                    format!(
-                        "bytes {offset}..+{length} do not fit buffer {buffer} ({} bytes)",
-                        bytes.len()
-                    ),
-                )
-            })
+            .ok_or_else(|| too_long(format!("bytes {offset}..+{length}")))
     }
 
     /// Limits what accessors without a buffer view (zeros of any length, which the file's

@@ -1,5 +1,6 @@
 //! Rules about the document as a whole, broken anywhere in it, also in parts a ray caster
-//! never reads: the asset's glTF version and references to objects that do not exist.
+//! never reads: the asset's glTF version, the JSON types of its structure
+//! ([`super::structure`]) and references to objects that do not exist.
 //!
 //! A document that breaks them is not a glTF 2.0 document (an unknown major version must
 //! not be loaded; a dangling index means the file is corrupt or cut), so the importer
@@ -11,9 +12,11 @@ use super::diagnostics::Sink;
 use super::document::{array, escape, index_of, Document};
 use serde_json::Value;
 
-/// Reports the asset rules and every unresolved reference of `doc`.
+/// Reports the asset rules, structural type mismatches and every unresolved reference of
+/// `doc`.
 pub fn check(doc: &Document, sink: &mut dyn Sink) {
     asset(doc, sink);
+    super::structure::check(doc, sink);
     references(doc, sink);
     animation_targets(doc, sink);
 }
