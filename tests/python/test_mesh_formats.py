@@ -22,6 +22,8 @@ import numpy as np
 import pytest
 import trimesh
 
+from raycast_tools.open3d_meshes import canonical
+
 raycast = pytest.importorskip("raycast")
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -53,17 +55,6 @@ def trimesh_objects(path: Path) -> list[tuple[str, np.ndarray]]:
 def raycast_objects(path: Path) -> list[tuple[str, np.ndarray]]:
     scene = raycast.load(path)
     return [(o["name"], scene.triangles(o["id"])) for o in scene.objects]
-
-
-def canonical(tris: np.ndarray) -> np.ndarray:
-    """Each triangle rotated to start at its lexicographically smallest corner, then the
-    triangles sorted: equal for two lists of the same triangles in any order."""
-    out = np.empty_like(tris)
-    for i, t in enumerate(tris):
-        first = min(range(3), key=lambda k: tuple(t[k]))
-        out[i] = np.roll(t, -first, axis=0)
-    flat = out.reshape(len(out), 9)
-    return flat[np.lexsort(flat.T[::-1])]
 
 
 def assert_same(path: Path, ordered: bool) -> int:

@@ -68,6 +68,10 @@ COMMANDS = {
         "corpus",
         "render, info and check every file of a corpus beside the validator, usd-core, trimesh",
     ),
+    "open3d-meshes": (
+        "open3d_meshes",
+        "PLY/STL triangles beside Open3D's reader: dump (here), compare (Open3D's venv)",
+    ),
     "instancing-bench": (
         "instancing_bench",
         "memory and build time of instanced scenes, two binaries (reports/instancing.md)",
