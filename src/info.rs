@@ -267,7 +267,7 @@ fn write_stage_time(f: &mut fmt::Formatter<'_>, stage: &StageInfo) -> fmt::Resul
             Some(anim) => format!("posed by {anim}"),
             None => "at its rest transforms".into(),
         };
-        writeln!(
+        write!(
             f,
             "  skeleton {}: {} joints, {posed}; skins {} prims: {}",
             skel.path,
@@ -275,6 +275,10 @@ fn write_stage_time(f: &mut fmt::Formatter<'_>, stage: &StageInfo) -> fmt::Resul
             skel.skinned.len(),
             skel.skinned.join(", ")
         )?;
+        if !skel.blend_shaped.is_empty() {
+            write!(f, "; blend shapes on {}", skel.blend_shaped.join(", "))?;
+        }
+        writeln!(f)?;
     }
     for v in &stage.variant_sets {
         let chosen = match (&v.selected, &v.authored) {

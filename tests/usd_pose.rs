@@ -488,6 +488,13 @@ fn skel_poses_as_usd_core_skins() {
                 "/World/Arm/Tip"
             ]
         );
+        // The weights are time samples only: none at the default time code.
+        let blended: &[&str] = if time.is_some() {
+            &["/World/Arm/ArmMesh"]
+        } else {
+            &[]
+        };
+        assert_eq!(arm.blend_shaped, blended, "{what}");
     }
 }
 

@@ -142,6 +142,9 @@ pub struct SkeletonInfo {
     pub animation: Option<String>,
     /// The prims it skins, in walk order.
     pub skinned: Vec<String>,
+    /// The skinned meshes its animation's blend shapes moved, in walk order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub blend_shaped: Vec<String>,
 }
 
 fn is_zero(n: &usize) -> bool {

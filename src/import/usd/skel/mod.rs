@@ -205,7 +205,7 @@ impl Loader {
             let mut rest: Vec<DVec3> = (0..mesh.mesh.positions().len() as u32)
                 .map(|i| mesh.mesh.positions().get(i))
                 .collect();
-            self.blend(prim, posed.blend_weights.as_ref(), &mut rest)?;
+            self.blend((prim, skel), posed.blend_weights.as_ref(), &mut rest)?;
             influences
                 .skin_points(&rest, &joints, geom_bind)
                 .map(|points| Pose::Points {
@@ -243,7 +243,7 @@ impl Loader {
     /// a warning when usd-core would not apply them (the mesh is skinned without them).
     fn blend(
         &mut self,
-        prim: &Prim,
+        (prim, skel): (&Prim, &Prim),
         weights: Option<&BlendWeights>,
         points: &mut [DVec3],
     ) -> Result<(), String> {
@@ -259,9 +259,15 @@ impl Loader {
             points.copy_from_slice(&moved);
             Ok(())
         });
-        if let Err(why) = applied {
-            self.warnings
-                .push(format!("{}: {why}: blend shapes not applied", prim.path()));
+        match applied {
+            Ok(()) => {
+                if let Some(info) = self.skels.info.get_mut(&skel.path().to_string()) {
+                    info.blend_shaped.push(prim.path().to_string());
+                }
+            }
+            Err(why) => self
+                .warnings
+                .push(format!("{}: {why}: blend shapes not applied", prim.path())),
         }
         Ok(())
     }
@@ -336,6 +342,7 @@ impl Loader {
                 joints: skeleton.joints.len(),
                 animation: animation.and(source).map(|s| s.path().to_string()),
                 skinned: Vec::new(),
+                blend_shaped: Vec::new(),
             },
         );
         Ok(Ok(Posed {
