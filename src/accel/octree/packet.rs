@@ -360,8 +360,8 @@ where
                 let i = rays.trailing_zeros() as usize;
                 let ray = Lanes::new(origins[i], dirs[i] + DVec3::ZERO, scale);
                 let limit = limits[i];
-                let alone = |refs: &[u32], _, _| {
-                    visit(rays, refs, &mut limits);
+                let alone = |leaf: u32, _, _| {
+                    visit(rays, layout.leaf(leaf), &mut limits);
                     limits[i]
                 };
                 let (start, observer) = (entry.child as usize, &mut Unobserved);

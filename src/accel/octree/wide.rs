@@ -13,6 +13,7 @@
 //! node's box (or 2⁻¹⁹ of its coordinates' magnitude, which keeps `k` small).
 
 use super::build::{Node, INTERIOR};
+use super::leaf::{self, HEADER};
 use rayon::prelude::*;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -42,7 +43,7 @@ pub(super) struct Wide {
 
 /// The quantisation frame of one axis: planes `(k + q) · step` for `q = 0..=255`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Frame {
+pub(super) struct Frame {
     k: f64,
     step: f64,
 }
@@ -71,12 +72,12 @@ impl Frame {
     }
 
     /// The byte of a lower plane `lo`: the largest `q` with `(k + q) · step <= lo`.
-    fn below(&self, lo: f32) -> u8 {
+    pub fn below(&self, lo: f32) -> u8 {
         (floor_multiple(f64::from(lo), self.step) - self.k).clamp(0.0, 255.0) as u8
     }
 
     /// The byte of an upper plane `hi`: the smallest `q` with `(k + q) · step >= hi`.
-    fn above(&self, hi: f32) -> u8 {
+    pub fn above(&self, hi: f32) -> u8 {
         (-floor_multiple(-f64::from(hi), self.step) - self.k).clamp(0.0, 255.0) as u8
     }
 }
@@ -189,15 +190,35 @@ impl Wide {
     #[target_feature(enable = "avx2,fma")]
     #[inline]
     pub unsafe fn row_avx2(&self, row: usize) -> __m256 {
-        let axis = row % 3;
-        // SAFETY: a row is eight bytes, the size of the unaligned load.
-        let bytes = unsafe { _mm_loadl_epi64(self.planes[row].as_ptr().cast()) };
+        // SAFETY: this function's own requirement.
+        unsafe { self.decode_avx2(row % 3, self.planes[row]) }
+    }
+
+    /// Eight bytes `q` on the frame of `axis`, decoded to their planes at once: one FMA,
+    /// exact.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    pub unsafe fn decode_avx2(&self, axis: usize, q: [u8; 8]) -> __m256 {
+        let bytes = _mm_cvtsi64_si128(i64::from_le_bytes(q));
         let q = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
         _mm256_fmadd_ps(
             q,
             _mm256_set1_ps(self.step[axis]),
             _mm256_set1_ps(self.origin[axis]),
         )
+    }
+
+    /// The frame of `axis` (exact: the stored origin is `k · step` with both factors exact).
+    pub fn frame(&self, axis: usize) -> Frame {
+        let step = f64::from(self.step[axis]);
+        Frame {
+            k: f64::from(self.origin[axis]) / step,
+            step,
+        }
     }
 
     /// Lane `lane`'s stored box, decoded: rows as in `planes`.
@@ -207,11 +228,14 @@ impl Wide {
 }
 
 /// The traversed arrays: the nodes, node 0 the root (none for an empty tree), and each leaf as
-/// its reference count followed by its references, in `refs`.
+/// its header (reference count, parent node, offset of its boxes in `boxes`) followed by its
+/// references, in `refs`.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Layout {
     pub nodes: Vec<Wide>,
     pub refs: Vec<u32>,
+    /// The leaves' reference boxes (module `leaf`), followed by [`leaf::SLACK`] bytes.
+    pub boxes: Vec<u8>,
     /// The largest magnitude of any stored plane, or `None` when some node's boxes could not
     /// be quantised.
     pub largest: Option<f64>,
@@ -229,18 +253,20 @@ impl Layout {
             cells,
             refs,
             nodes: Vec::with_capacity(interior),
-            // Each leaf's references and its count.
-            leaves: Vec::with_capacity(refs.len() + cells.len() - interior),
+            // Each leaf's references and its header.
+            leaves: Vec::with_capacity(refs.len() + HEADER * (cells.len() - interior)),
+            boxes: 0,
         };
         if cells[0].count & INTERIOR != 0 {
-            order.place(0);
+            order.place(0, 0);
         } else if cells[0].count != 0 {
             // A root leaf waits in lane 0 of a node of its own.
             let mut lanes = [None; 8];
-            lanes[0] = Some((cells[0].bounds, order.place(0)));
+            lanes[0] = Some((cells[0].bounds, order.place(0, 0)));
             let mut layout = Layout {
                 nodes: Vec::new(),
                 refs: order.leaves,
+                boxes: vec![0; order.boxes + leaf::SLACK],
                 largest: Some(0.0),
             };
             let node = layout.wide(&lanes);
@@ -256,6 +282,7 @@ impl Layout {
         let mut layout = Layout {
             nodes,
             refs: order.leaves,
+            boxes: vec![0; order.boxes + leaf::SLACK],
             largest: Some(0.0),
         };
         for node in largest {
@@ -281,12 +308,20 @@ impl Layout {
     pub fn leaf(&self, child: u32) -> &[u32] {
         let at = (child & !LEAF) as usize;
         let count = self.refs[at] as usize;
-        &self.refs[at + 1..at + 1 + count]
+        &self.refs[at + HEADER..at + HEADER + count]
     }
 
-    /// Bytes of the nodes and the leaves' counts and references.
+    /// The header of the leaf `child` names: its reference count, parent node and the offset
+    /// of its boxes.
+    #[inline(always)]
+    pub fn header(&self, child: u32) -> [usize; HEADER] {
+        let at = (child & !LEAF) as usize;
+        [0, 1, 2].map(|i| self.refs[at + i] as usize)
+    }
+
+    /// Bytes of the nodes, the leaves' headers and references, and their boxes.
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * size_of::<Wide>() + self.refs.len() * size_of::<u32>()
+        self.nodes.len() * size_of::<Wide>() + self.refs.len() * size_of::<u32>() + self.boxes.len()
     }
 }
 
@@ -297,16 +332,21 @@ struct Order<'c> {
     refs: &'c [u32],
     nodes: Vec<(usize, [u32; 8])>,
     leaves: Vec<u32>,
+    /// Bytes of the leaves' boxes so far.
+    boxes: usize,
 }
 
 impl Order<'_> {
-    /// Places cell `index` and everything below it; returns its reference.
-    fn place(&mut self, index: usize) -> u32 {
+    /// Places cell `index`, a child of node `parent`, and everything below it; returns its
+    /// reference.
+    fn place(&mut self, index: usize, parent: usize) -> u32 {
         let cell = self.cells[index];
         if cell.count & INTERIOR == 0 {
             let at = self.leaves.len();
             let first = cell.first as usize;
-            self.leaves.push(cell.count);
+            let header = [cell.count, parent as u32, self.boxes as u32];
+            self.leaves.extend_from_slice(&header);
+            self.boxes += leaf::ROWS * cell.count as usize;
             self.leaves
                 .extend_from_slice(&self.refs[first..first + cell.count as usize]);
             return LEAF | at as u32;
@@ -316,7 +356,7 @@ impl Order<'_> {
         let mut next = cell.first as usize;
         for lane in 0..8 {
             if cell.count & (1 << lane) != 0 {
-                self.nodes[at].1[lane] = self.place(next);
+                self.nodes[at].1[lane] = self.place(next, at);
                 next += 1;
             }
         }
