@@ -160,16 +160,25 @@ impl Rows<'_> {
         }
     }
 
-    /// The eight bytes of plane row `row`.
+    /// The eight bytes of each plane row, checked against the array's end once.
     #[inline(always)]
-    fn bytes(&self, row: usize) -> [u8; 8] {
-        let at = self.at + row * self.count;
-        self.boxes[at..at + 8].try_into().expect("eight bytes")
+    fn load(&self) -> [[u8; 8]; ROWS] {
+        let last = self.at + (ROWS - 1) * self.count;
+        assert!(
+            last + 8 <= self.boxes.len(),
+            "a leaf's boxes end inside the array"
+        );
+        let start = self.boxes[self.at..].as_ptr();
+        // SAFETY: row `r` starts at `at + r · count <= last`, and eight bytes from `last` lie
+        // in `boxes` (checked above); `[u8; 8]` may be read from any address.
+        std::array::from_fn(|r| unsafe {
+            start.add(r * self.count).cast::<[u8; 8]>().read_unaligned()
+        })
     }
 
     /// [`Rows::test`] by the portable kernel.
     fn test_portable(&self, ray: &Lanes, t_best: f32) -> u32 {
-        let rows: [[u8; 8]; ROWS] = std::array::from_fn(|row| self.bytes(row));
+        let rows = self.load();
         let plane = |row: usize, lane: usize| self.node.plane(row % 3, rows[row][lane]);
         lanes::slabs_portable(plane, ray, t_best).2
     }
@@ -181,10 +190,12 @@ impl Rows<'_> {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     unsafe fn test_avx2(&self, ray: &Lanes, t_best: f32) -> u32 {
+        let bytes = self.load();
         // SAFETY: this function's own requirement.
-        let planes = |row: usize| unsafe { self.node.decode_avx2(row % 3, self.bytes(row)) };
+        let rows: [__m256; ROWS] =
+            std::array::from_fn(|r| unsafe { self.node.decode_avx2(r % 3, bytes[r]) });
         // SAFETY: as above.
-        let (_, _, hit) = unsafe { lanes::slabs_avx2(planes, ray, t_best) };
+        let (_, _, hit) = unsafe { lanes::slabs_avx2(|row| rows[row], ray, t_best) };
         _mm256_movemask_ps(hit) as u32
     }
 }
