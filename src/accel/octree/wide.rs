@@ -205,6 +205,19 @@ impl Wide {
     pub unsafe fn decode_avx2(&self, axis: usize, q: [u8; 8]) -> __m256 {
         let bytes = _mm_cvtsi64_si128(i64::from_le_bytes(q));
         let q = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
+        // SAFETY: this function's own requirement.
+        unsafe { self.decode_q_avx2(axis, q) }
+    }
+
+    /// Eight integers `q` from 0 to 255 (as f32) on the frame of `axis`, decoded to their
+    /// planes: one FMA, exact.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    pub unsafe fn decode_q_avx2(&self, axis: usize, q: __m256) -> __m256 {
         _mm256_fmadd_ps(
             q,
             _mm256_set1_ps(self.step[axis]),
@@ -228,14 +241,11 @@ impl Wide {
 }
 
 /// The traversed arrays: the nodes, node 0 the root (none for an empty tree), and each leaf as
-/// its header (reference count, parent node, offset of its boxes in `boxes`) followed by its
-/// references, in `refs`.
+/// its header, references and reference boxes (module `leaf`), in `refs`.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Layout {
     pub nodes: Vec<Wide>,
     pub refs: Vec<u32>,
-    /// The leaves' reference boxes (module `leaf`), followed by [`leaf::SLACK`] bytes.
-    pub boxes: Vec<u8>,
     /// The largest magnitude of any stored plane, or `None` when some node's boxes could not
     /// be quantised.
     pub largest: Option<f64>,
@@ -255,18 +265,16 @@ impl Layout {
             nodes: Vec::with_capacity(interior),
             // Each leaf's references and its header.
             leaves: Vec::with_capacity(refs.len() + HEADER * (cells.len() - interior)),
-            boxes: 0,
         };
         if cells[0].count & INTERIOR != 0 {
-            order.place(0, 0);
+            order.place(0, 0, 0);
         } else if cells[0].count != 0 {
             // A root leaf waits in lane 0 of a node of its own.
             let mut lanes = [None; 8];
-            lanes[0] = Some((cells[0].bounds, order.place(0, 0)));
+            lanes[0] = Some((cells[0].bounds, order.place(0, 0, 0)));
             let mut layout = Layout {
                 nodes: Vec::new(),
-                refs: order.leaves,
-                boxes: vec![0; order.boxes + leaf::SLACK],
+                refs: order.finish(),
                 largest: Some(0.0),
             };
             let node = layout.wide(&lanes);
@@ -281,8 +289,7 @@ impl Layout {
             .unzip();
         let mut layout = Layout {
             nodes,
-            refs: order.leaves,
-            boxes: vec![0; order.boxes + leaf::SLACK],
+            refs: order.finish(),
             largest: Some(0.0),
         };
         for node in largest {
@@ -311,17 +318,16 @@ impl Layout {
         &self.refs[at + HEADER..at + HEADER + count]
     }
 
-    /// The header of the leaf `child` names: its reference count, parent node and the offset
-    /// of its boxes.
+    /// The header of the leaf `child` names (see module `leaf`).
     #[inline(always)]
-    pub fn header(&self, child: u32) -> [usize; HEADER] {
+    pub fn header(&self, child: u32) -> [u32; HEADER] {
         let at = (child & !LEAF) as usize;
-        [0, 1, 2].map(|i| self.refs[at + i] as usize)
+        [0, 1, 2].map(|i| self.refs[at + i])
     }
 
-    /// Bytes of the nodes, the leaves' headers and references, and their boxes.
+    /// Bytes of the nodes and the leaves.
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * size_of::<Wide>() + self.refs.len() * size_of::<u32>() + self.boxes.len()
+        self.nodes.len() * size_of::<Wide>() + self.refs.len() * size_of::<u32>()
     }
 }
 
@@ -332,23 +338,24 @@ struct Order<'c> {
     refs: &'c [u32],
     nodes: Vec<(usize, [u32; 8])>,
     leaves: Vec<u32>,
-    /// Bytes of the leaves' boxes so far.
-    boxes: usize,
 }
 
 impl Order<'_> {
-    /// Places cell `index`, a child of node `parent`, and everything below it; returns its
-    /// reference.
-    fn place(&mut self, index: usize, parent: usize) -> u32 {
+    /// Places cell `index`, in lane `lane` of node `parent`, and everything below it;
+    /// returns its reference.
+    fn place(&mut self, index: usize, parent: usize, lane: usize) -> u32 {
         let cell = self.cells[index];
         if cell.count & INTERIOR == 0 {
             let at = self.leaves.len();
             let first = cell.first as usize;
-            let header = [cell.count, parent as u32, self.boxes as u32];
-            self.leaves.extend_from_slice(&header);
-            self.boxes += leaf::ROWS * cell.count as usize;
+            let count = cell.count as usize;
             self.leaves
-                .extend_from_slice(&self.refs[first..first + cell.count as usize]);
+                .extend_from_slice(&leaf::header(count, parent, lane));
+            self.leaves
+                .extend_from_slice(&self.refs[first..first + count]);
+            // The boxes, filled by `leaf::fill`.
+            self.leaves
+                .resize(self.leaves.len() + leaf::box_words(count), 0);
             return LEAF | at as u32;
         }
         let at = self.nodes.len();
@@ -356,11 +363,19 @@ impl Order<'_> {
         let mut next = cell.first as usize;
         for lane in 0..8 {
             if cell.count & (1 << lane) != 0 {
-                self.nodes[at].1[lane] = self.place(next, at);
+                self.nodes[at].1[lane] = self.place(next, at, lane);
                 next += 1;
             }
         }
         at as u32
+    }
+}
+
+impl Order<'_> {
+    /// The leaves' array, with the slack the leaf filter's loads need.
+    fn finish(mut self) -> Vec<u32> {
+        self.leaves.resize(self.leaves.len() + leaf::SLACK_WORDS, 0);
+        self.leaves
     }
 }
 
