@@ -6,73 +6,72 @@
 //! leaf holding the primitive tests it again.
 //!
 //! # Layout
-//! A leaf in [`Layout::refs`] is a header of three words (reference count `n`; parent node
-//! times eight plus the leaf's lane in it; per axis a step `s`, one byte each), its `n`
-//! references, then its boxes: three rows (`x, y, z`) of `n` bytes, byte `j` of a row for
-//! reference `j`, padded to a whole word. With `L` and `H` the bytes of the leaf's own box on
-//! that axis in the parent node (its lane's planes), a byte's low four bits `a` stand for the
-//! lower plane `L + a · s` and its high four bits `b` for the upper plane `H − b · s`, in units
-//! of the parent's grid (`s = ⌈(H − L) / 15⌉`, at least 1). `SLACK_WORDS` after the last leaf
-//! let a kernel load eight bytes from any row.
+//! A leaf in [`Layout::refs`] is a header of two words (reference count `n`; parent node
+//! times eight plus the leaf's lane in it), its `n` references, then its boxes: six rows (`lo
+//! x, lo y, lo z, hi x, hi y, hi z`, as a node's planes) of `n` bytes, byte `j` of a row for
+//! reference `j`, each standing for the plane `(k + q) · step` of the parent node's frame on
+//! that axis, padded to a whole word. `SLACK_WORDS` after the last leaf let a kernel load
+//! eight bytes from any row.
 //!
 //! # Why no hit is lost
-//! A reference's box is its primitive's bounds ([`PrimitiveSet::bounds`], in the octree's
-//! coordinates) grown by the build margin, clamped to the leaf's stored box, rounded outward
-//! onto the parent's grid ([`Frame::below`] and [`Frame::above`], checked in exact arithmetic)
-//! and then outward again onto the leaf's coarser grid (integer arithmetic: `a` rounds down,
-//! `b` rounds down from the top); so it contains every point of the primitive that lies in
-//! the leaf's stored box (within the margin, which covers the octree's coordinates, as it does
-//! for the occupied boxes). Its planes are planes `L ≤ q ≤ H` of the parent's frame, decoded
-//! exactly (the integers `L + a · s` and `H − b · s` are exact in f32, and then `q · step +
-//! origin` is, as for the node's own planes), so they are f32 values no larger than the
-//! largest stored plane: the node test's rounding argument (module `lanes`) holds for them
-//! unchanged, and the computed slab interval of each box contains the exact one. A reference
-//! is therefore dropped only when the ray meets the primitive nowhere in the leaf's box with
-//! `0 <= t <= best` (the best hit rounded up to f32, compared non-strictly, so an equal `t`
-//! still reaches the tie rule). A hit outside the leaf's box lies in the box of another leaf
-//! holding the primitive (see the module docs of `super`), which the traversal reaches unless
-//! its entry lies beyond the best hit; there the primitive is still new to the mailbox. The
-//! answer is the least `(t, primitive)` over every primitive brute force would find, bit for
-//! bit, for either kernel.
+//! A reference's box is the bounds of its primitive's part in the leaf's stored box grown by
+//! the build margin ([`PrimitiveSet::clipped_bounds`]), grown by the margin again, clamped to
+//! the leaf's stored box and rounded outward onto the parent's grid ([`Frame::below`] and
+//! [`Frame::above`], checked in exact arithmetic); so it contains every point of the primitive
+//! that lies in the leaf's stored box (within the margin, which covers the octree's coordinates
+//! and the clipping's rounding, as it does for the occupied boxes). Its planes are planes of
+//! the parent's frame within the leaf's lane, so they decode exactly to f32 values no larger
+//! than the largest stored plane: the node test's rounding argument (module `lanes`) holds for
+//! them unchanged, and the computed slab interval of each box contains the exact one. A
+//! reference is therefore dropped only when the ray meets the primitive nowhere in the leaf's
+//! box with `0 <= t <= best` (the best hit rounded up to f32, compared non-strictly, so an
+//! equal `t` still reaches the tie rule). A hit outside the leaf's box lies in the box of
+//! another leaf holding the primitive (see the module docs of `super`), which the traversal
+//! reaches unless its entry lies beyond the best hit; there the primitive is still new to the
+//! mailbox. The answer is the least `(t, primitive)` over every primitive brute force would
+//! find, bit for bit, for either kernel.
 
 use super::lanes::{self, Kernel, Lanes};
 use super::wide::{Layout, Wide, LEAF};
-use crate::accel::{f32_above, f32_below};
+use crate::accel::{f32_above, f32_below, PrimitiveSet};
 use crate::geometry::Aabb;
+use glam::DVec3;
 use rayon::prelude::*;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
-/// Words of a leaf's header in [`Layout::refs`]: count, parent and lane, steps.
-pub(super) const HEADER: usize = 3;
+/// Words of a leaf's header in [`Layout::refs`]: count, parent and lane.
+pub(super) const HEADER: usize = 2;
+
+/// Bytes per reference: six planes.
+const ROWS: usize = 6;
 
 /// Words after the last leaf: an eight-byte load from any row of its boxes stays in the array.
 pub(super) const SLACK_WORDS: usize = 2;
 
-/// The header of a leaf of `count` references in lane `lane` of node `parent`, its steps not
-/// yet known.
+/// The header of a leaf of `count` references in lane `lane` of node `parent`.
 pub(super) fn header(count: usize, parent: usize, lane: usize) -> [u32; HEADER] {
     assert!(
         parent < 1 << 28,
         "{parent} nodes: too many for a leaf's header"
     );
-    [count as u32, (parent << 3 | lane) as u32, 0]
+    [count as u32, (parent << 3 | lane) as u32]
 }
 
 /// Words of the boxes of a leaf of `count` references.
 pub(super) fn box_words(count: usize) -> usize {
-    (3 * count).div_ceil(4)
+    (ROWS * count).div_ceil(4)
 }
 
-/// Fills the steps and boxes of every leaf of `layout` from the primitives' `bounds`, grown by
+/// Fills the boxes of every leaf of `layout` from the primitives' `bounds`, grown by
 /// `margin`. A layout whose planes could not all be quantised keeps them zero: its octree
 /// never culls, so no kernel reads them.
-pub(super) fn fill(layout: &mut Layout, bounds: &[Aabb], margin: f64) {
+pub(super) fn fill<P: PrimitiveSet>(layout: &mut Layout, set: &P, margin: f64) {
     if layout.largest.is_none() {
         return;
     }
     let view: &Layout = layout;
-    let leaves: Vec<[(usize, Vec<u32>); 2]> = view
+    let leaves: Vec<(usize, Vec<u32>)> = view
         .nodes
         .par_iter()
         .with_min_len(64)
@@ -80,61 +79,58 @@ pub(super) fn fill(layout: &mut Layout, bounds: &[Aabb], margin: f64) {
             let leaf = |lane: &usize| node.children[*lane] & LEAF != 0;
             (0..8)
                 .filter(move |lane| node.children[*lane] != Wide::EMPTY && leaf(lane))
-                .map(|lane| leaf_words(view, node, lane, bounds, margin))
+                .map(|lane| leaf_words(view, node, lane, set, margin))
         })
         .collect();
-    for (at, words) in leaves.into_iter().flatten() {
+    for (at, words) in leaves {
         layout.refs[at..at + words.len()].copy_from_slice(&words);
     }
 }
 
-/// The steps word and the boxes of the leaf in lane `lane` of `node`, each with its place in
-/// [`Layout::refs`].
-fn leaf_words(
+/// The boxes of the leaf in lane `lane` of `node`, and where they go in [`Layout::refs`].
+fn leaf_words<P: PrimitiveSet>(
     layout: &Layout,
     node: &Wide,
     lane: usize,
-    bounds: &[Aabb],
+    set: &P,
     margin: f64,
-) -> [(usize, Vec<u32>); 2] {
+) -> (usize, Vec<u32>) {
     let child = node.children[lane];
     let prims = layout.leaf(child);
     let count = prims.len();
-    let steps: [u8; 3] = std::array::from_fn(|axis| {
-        let (lo_q, hi_q) = (node.planes[axis][lane], node.planes[axis + 3][lane]);
-        hi_q.saturating_sub(lo_q).div_ceil(15).max(1)
-    });
+    let planes = node.bounds(lane).map(f64::from);
+    let lane_box = Aabb::new(
+        DVec3::new(planes[0], planes[1], planes[2]),
+        DVec3::new(planes[3], planes[4], planes[5]),
+    );
     let mut bytes = vec![0u8; 4 * box_words(count)];
     for (j, &prim) in prims.iter().enumerate() {
-        for (axis, &s) in steps.iter().enumerate() {
-            bytes[axis * count + j] =
-                reference_byte(node, lane, axis, s, &bounds[prim as usize], margin);
+        // The primitive's part in the leaf's box (none: an empty box, stored inverted).
+        let part = set.clipped_bounds(prim as usize, &lane_box.expanded(margin));
+        let part = part.map_or(Aabb::EMPTY, |part| part.expanded(margin));
+        for axis in 0..3 {
+            let (lo, hi) = reference_planes(node, lane, axis, &part);
+            bytes[axis * count + j] = lo;
+            bytes[(axis + 3) * count + j] = hi;
         }
     }
     let words = bytes
         .chunks_exact(4)
         .map(|w| u32::from_ne_bytes([w[0], w[1], w[2], w[3]]));
-    let at = (child & !LEAF) as usize;
-    let steps = u32::from_le_bytes([steps[0], steps[1], steps[2], 0]);
-    [
-        (at + 2, vec![steps]),
-        (at + HEADER + count, words.collect()),
-    ]
+    ((child & !LEAF) as usize + HEADER + count, words.collect())
 }
 
-/// The byte of a reference whose primitive has bounds `b` on `axis`, in the leaf in lane
-/// `lane` of `node` whose step on that axis is `s` (see the module docs).
-fn reference_byte(node: &Wide, lane: usize, axis: usize, s: u8, b: &Aabb, margin: f64) -> u8 {
+/// The bytes of the planes on `axis` of the box `part`, clamped to the box of the leaf in lane
+/// `lane` of `node` and rounded outward onto its grid.
+fn reference_planes(node: &Wide, lane: usize, axis: usize, part: &Aabb) -> (u8, u8) {
     let frame = node.frame(axis);
     let (lo_q, hi_q) = (node.planes[axis][lane], node.planes[axis + 3][lane]);
     let (lane_lo, lane_hi) = (node.plane(axis, lo_q), node.plane(axis, hi_q));
     let (lane_lo, lane_hi) = (f64::from(lane_lo), f64::from(lane_hi));
     // Clamped into the lane's box (f64::max and min also drop a NaN).
-    let lo = (b.min[axis] - margin).max(lane_lo).min(lane_hi);
-    let hi = (b.max[axis] + margin).min(lane_hi).max(lane_lo);
-    let below = (frame.below(f32_below(lo)) - lo_q) / s;
-    let above = (hi_q - frame.above(f32_above(hi))) / s;
-    below | above << 4
+    let lo = part.min[axis].max(lane_lo).min(lane_hi);
+    let hi = part.max[axis].min(lane_hi).max(lane_lo);
+    (frame.below(f32_below(lo)), frame.above(f32_above(hi)))
 }
 
 /// The references of the leaf `child` names whose boxes the ray `ray` may enter with `0 <= t
@@ -146,40 +142,62 @@ pub(super) fn survivors<'a>(
     child: u32,
     ray: &'a Lanes,
     t_best: f32,
-) -> impl Iterator<Item = u32> + 'a {
-    let [count, place, steps] = layout.header(child);
+) -> Survivors<'a> {
+    let [count, place] = layout.header(child);
     let count = count as usize;
-    let prims = layout.leaf(child);
-    let boxes = Boxes {
-        node: &layout.nodes[(place >> 3) as usize],
-        lane: (place & 7) as usize,
-        steps: steps.to_le_bytes(),
-        refs: &layout.refs,
-        at: 4 * ((child & !LEAF) as usize + HEADER + count),
-        count,
-    };
-    let (mut next, mut mask) = (0usize, 0u32);
-    std::iter::from_fn(move || loop {
-        if mask != 0 {
-            let lane = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            return Some(prims[next - 8 + lane]);
-        }
-        if next >= count {
-            return None;
-        }
-        let left = u32::MAX >> 32usize.saturating_sub(count - next);
-        mask = boxes.test(next, kernel, ray, t_best) & left;
-        next += 8;
-    })
+    Survivors {
+        prims: layout.leaf(child),
+        boxes: Boxes {
+            node: &layout.nodes[(place >> 3) as usize],
+            refs: &layout.refs,
+            at: 4 * ((child & !LEAF) as usize + HEADER + count),
+            count,
+        },
+        kernel,
+        ray,
+        t_best,
+        next: 0,
+        mask: 0,
+    }
 }
 
-/// A leaf's boxes as the filter reads them: its parent `node` and lane there, its steps, and
-/// its rows from byte `at` of `refs`, a row every `count` bytes.
+/// The iterator of [`survivors`]: the leaf's references tested eight at a time.
+pub(super) struct Survivors<'a> {
+    prims: &'a [u32],
+    boxes: Boxes<'a>,
+    kernel: Kernel,
+    ray: &'a Lanes,
+    t_best: f32,
+    /// The first reference not yet tested.
+    next: usize,
+    /// The kept ones of the eight before `next` not yet returned.
+    mask: u32,
+}
+
+impl Iterator for Survivors<'_> {
+    type Item = u32;
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<u32> {
+        loop {
+            if self.mask != 0 {
+                let lane = self.mask.trailing_zeros() as usize;
+                self.mask &= self.mask - 1;
+                return Some(self.prims[self.next - 8 + lane]);
+            }
+            let left = self.prims.len().checked_sub(self.next).filter(|&n| n > 0)?;
+            let lanes = u32::MAX >> 32usize.saturating_sub(left);
+            let (kernel, ray) = (self.kernel, self.ray);
+            self.mask = self.boxes.test(self.next, kernel, ray, self.t_best) & lanes;
+            self.next += 8;
+        }
+    }
+}
+
+/// A leaf's boxes as the filter reads them: its parent `node`, and its rows from byte `at` of
+/// `refs`, a row every `count` bytes.
 struct Boxes<'a> {
     node: &'a Wide,
-    lane: usize,
-    steps: [u8; 4],
     refs: &'a [u32],
     at: usize,
     count: usize,
@@ -205,10 +223,10 @@ impl Boxes<'_> {
     /// The eight bytes of each row from reference `first` on, checked against the array's end
     /// once.
     #[inline(always)]
-    fn load(&self, first: usize) -> [[u8; 8]; 3] {
+    fn load(&self, first: usize) -> [[u8; 8]; ROWS] {
         let start = self.at + first;
         assert!(
-            start + 2 * self.count + 8 <= 4 * self.refs.len(),
+            start + (ROWS - 1) * self.count + 8 <= 4 * self.refs.len(),
             "a leaf's boxes end inside the array"
         );
         let bytes = self.refs.as_ptr().cast::<u8>();
@@ -222,30 +240,9 @@ impl Boxes<'_> {
         })
     }
 
-    /// The parent's bytes of the leaf's own box on `axis`, `L` and `H`.
-    #[inline(always)]
-    fn bounds(&self, axis: usize) -> (u8, u8) {
-        (
-            self.node.planes[axis][self.lane],
-            self.node.planes[axis + 3][self.lane],
-        )
-    }
-
     /// [`Boxes::test`] by the portable kernel.
-    fn test_portable(&self, bytes: &[[u8; 8]; 3], ray: &Lanes, t_best: f32) -> u32 {
-        let plane = |row: usize, lane: usize| {
-            let axis = row % 3;
-            let ((lo, hi), s) = (self.bounds(axis), self.steps[axis]);
-            let byte = bytes[axis][lane];
-            // Within `lo..=hi` for a stored byte (see the module docs); the lanes past the
-            // leaf's end, which wrap, are masked.
-            let q = if row < 3 {
-                lo.wrapping_add((byte & 15).wrapping_mul(s))
-            } else {
-                hi.wrapping_sub((byte >> 4).wrapping_mul(s))
-            };
-            self.node.plane(axis, q)
-        };
+    fn test_portable(&self, bytes: &[[u8; 8]; ROWS], ray: &Lanes, t_best: f32) -> u32 {
+        let plane = |row: usize, lane: usize| self.node.plane(row % 3, bytes[row][lane]);
         lanes::slabs_portable(plane, ray, t_best).2
     }
 
@@ -255,24 +252,10 @@ impl Boxes<'_> {
     /// The CPU must support AVX2 and FMA.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn test_avx2(&self, bytes: &[[u8; 8]; 3], ray: &Lanes, t_best: f32) -> u32 {
-        let mut rows = [_mm256_setzero_ps(); 6];
-        for axis in 0..3 {
-            let v = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(i64::from_le_bytes(bytes[axis])));
-            let below = _mm256_cvtepi32_ps(_mm256_and_si256(v, _mm256_set1_epi32(15)));
-            let above = _mm256_cvtepi32_ps(_mm256_srli_epi32::<4>(v));
-            let ((lo, hi), s) = (
-                self.bounds(axis),
-                _mm256_set1_ps(f32::from(self.steps[axis])),
-            );
-            // Exact: small integers.
-            let lo = _mm256_fmadd_ps(below, s, _mm256_set1_ps(f32::from(lo)));
-            let hi = _mm256_fnmadd_ps(above, s, _mm256_set1_ps(f32::from(hi)));
-            // SAFETY: this function's own requirement.
-            rows[axis] = unsafe { self.node.decode_q_avx2(axis, lo) };
-            // SAFETY: as above.
-            rows[axis + 3] = unsafe { self.node.decode_q_avx2(axis, hi) };
-        }
+    unsafe fn test_avx2(&self, bytes: &[[u8; 8]; ROWS], ray: &Lanes, t_best: f32) -> u32 {
+        // SAFETY: this function's own requirement.
+        let rows: [__m256; ROWS] =
+            std::array::from_fn(|r| unsafe { self.node.decode_avx2(r % 3, bytes[r]) });
         // SAFETY: as above.
         let (_, _, hit) = unsafe { lanes::slabs_avx2(|row| rows[row], ray, t_best) };
         _mm256_movemask_ps(hit) as u32

@@ -173,7 +173,7 @@ impl Octree {
         let budget = build::MAX_REFERENCES_PER_PRIMITIVE * all.len() as f64;
         let tree = builder.subtree(&root, all, 0, budget);
         let mut layout = Layout::new(&tree.nodes, &tree.refs);
-        leaf::fill(&mut layout, &builder.bounds, margin);
+        leaf::fill(&mut layout, set, margin);
         // The largest stored plane bounds the node test's rounding; a tree whose planes could
         // not all be quantised does not cull.
         let scale = layout

@@ -205,19 +205,6 @@ impl Wide {
     pub unsafe fn decode_avx2(&self, axis: usize, q: [u8; 8]) -> __m256 {
         let bytes = _mm_cvtsi64_si128(i64::from_le_bytes(q));
         let q = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
-        // SAFETY: this function's own requirement.
-        unsafe { self.decode_q_avx2(axis, q) }
-    }
-
-    /// Eight integers `q` from 0 to 255 (as f32) on the frame of `axis`, decoded to their
-    /// planes: one FMA, exact.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 and FMA.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    #[inline]
-    pub unsafe fn decode_q_avx2(&self, axis: usize, q: __m256) -> __m256 {
         _mm256_fmadd_ps(
             q,
             _mm256_set1_ps(self.step[axis]),
@@ -322,7 +309,7 @@ impl Layout {
     #[inline(always)]
     pub fn header(&self, child: u32) -> [u32; HEADER] {
         let at = (child & !LEAF) as usize;
-        [0, 1, 2].map(|i| self.refs[at + i])
+        std::array::from_fn(|i| self.refs[at + i])
     }
 
     /// Bytes of the nodes and the leaves.
