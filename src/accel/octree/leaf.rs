@@ -143,21 +143,51 @@ pub(super) fn survivors<'a>(
     ray: &'a Lanes,
     t_best: f32,
 ) -> Survivors<'a> {
-    let [count, place] = layout.header(child);
-    let count = count as usize;
     Survivors {
         prims: layout.leaf(child),
-        boxes: Boxes {
-            node: &layout.nodes[(place >> 3) as usize],
-            refs: &layout.refs,
-            at: 4 * ((child & !LEAF) as usize + HEADER + count),
-            count,
-        },
+        boxes: Boxes::of(layout, child),
         kernel,
         ray,
         t_best,
         next: 0,
         mask: 0,
+    }
+}
+
+/// Bit `j` set when the ray `ray` may enter the box of reference `first + j` of the leaf
+/// `child` with `0 <= t <= t_best` (`first` a multiple of eight; bits past the leaf's end
+/// clear).
+#[inline(always)]
+pub(super) fn chunk_mask(
+    layout: &Layout,
+    kernel: Kernel,
+    child: u32,
+    first: usize,
+    ray: &Lanes,
+    t_best: f32,
+) -> u32 {
+    let boxes = Boxes::of(layout, child);
+    boxes.test(first, kernel, ray, t_best) & boxes.lanes(first)
+}
+
+/// The boxes of references `first..first + 8` of the leaf `child` as the lanes of a node on
+/// its parent's frames (lanes past the leaf's end empty), for the packet test.
+#[inline(always)]
+pub(super) fn chunk_node(layout: &Layout, child: u32, first: usize) -> Wide {
+    let boxes = Boxes::of(layout, child);
+    let prims = layout.leaf(child);
+    let lanes = boxes.lanes(first);
+    Wide {
+        origin: boxes.node.origin,
+        step: boxes.node.step,
+        planes: boxes.load(first),
+        children: std::array::from_fn(|j| {
+            if lanes & (1 << j) != 0 {
+                prims[first + j]
+            } else {
+                Wide::EMPTY
+            }
+        }),
     }
 }
 
@@ -185,9 +215,11 @@ impl Iterator for Survivors<'_> {
                 self.mask &= self.mask - 1;
                 return Some(self.prims[self.next - 8 + lane]);
             }
-            let left = self.prims.len().checked_sub(self.next).filter(|&n| n > 0)?;
-            let lanes = u32::MAX >> 32usize.saturating_sub(left);
+            if self.next >= self.prims.len() {
+                return None;
+            }
             let (kernel, ray) = (self.kernel, self.ray);
+            let lanes = self.boxes.lanes(self.next);
             self.mask = self.boxes.test(self.next, kernel, ray, self.t_best) & lanes;
             self.next += 8;
         }
@@ -204,6 +236,25 @@ struct Boxes<'a> {
 }
 
 impl Boxes<'_> {
+    /// The boxes of the leaf `child`.
+    #[inline(always)]
+    fn of(layout: &Layout, child: u32) -> Boxes<'_> {
+        let [count, place] = layout.header(child);
+        let count = count as usize;
+        Boxes {
+            node: &layout.nodes[(place >> 3) as usize],
+            refs: &layout.refs,
+            at: 4 * ((child & !LEAF) as usize + HEADER + count),
+            count,
+        }
+    }
+
+    /// Bit `j` set when reference `first + j` is in the leaf.
+    #[inline(always)]
+    fn lanes(&self, first: usize) -> u32 {
+        0xff >> (first + 8).saturating_sub(self.count).min(8)
+    }
+
     /// Bit `i` set when the ray may enter the box of reference `first + i` with `0 <= t <=
     /// t_best` (all bits when the ray does not cull).
     #[inline(always)]

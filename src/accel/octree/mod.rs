@@ -350,25 +350,25 @@ impl Octree {
             dirs,
             self.scale,
             *t_max,
-            |rays, refs, limits| {
+            |rays, refs, reach, limits| {
                 let prepared = given.unwrap_or_else(|| {
                     own.get_or_insert_with(|| {
                         std::array::from_fn(|i| prepare_ray(set, local_origins[i], dirs[i]))
                     })
                 });
+                let kept = refs.iter().zip(reach).filter(|(_, &rays)| rays != 0);
                 if rays.is_power_of_two() {
                     // A ray alone: its primitives in groups, as in `intersect_ray`.
                     let i = rays.trailing_zeros() as usize;
-                    let new = refs
-                        .iter()
-                        .copied()
+                    let new = kept
+                        .map(|(&prim, _)| prim)
                         .filter(|&prim| tested.check_in(prim, rays) != 0);
                     test_leaf(set, new, &prepared[i], t_max[i], &mut best[i]);
                     limits[i] = best[i].map_or(t_max[i], |b| b.t);
                     return;
                 }
                 let packet = packet_data.get_or_insert_with(|| set.prepare_packet(prepared));
-                for &prim in refs {
+                for (&prim, &rays) in kept {
                     let active = tested.check_in(prim, rays);
                     if active == 0 {
                         continue;
