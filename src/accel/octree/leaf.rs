@@ -14,28 +14,29 @@
 //! eight bytes from any row.
 //!
 //! # Why no hit is lost
-//! A reference's box is the bounds of its primitive's part in the leaf's stored box grown by
-//! the build margin ([`PrimitiveSet::clipped_bounds`]), grown by the margin again, clamped to
-//! the leaf's stored box and rounded outward onto the parent's grid ([`Frame::below`] and
-//! [`Frame::above`], checked in exact arithmetic); so it contains every point of the primitive
-//! that lies in the leaf's stored box (within the margin, which covers the octree's coordinates
-//! and the clipping's rounding, as it does for the occupied boxes). Its planes are planes of
-//! the parent's frame within the leaf's lane, so they decode exactly to f32 values no larger
-//! than the largest stored plane: the node test's rounding argument (module `lanes`) holds for
-//! them unchanged, and the computed slab interval of each box contains the exact one. A
-//! reference is therefore dropped only when the ray meets the primitive nowhere in the leaf's
-//! box with `0 <= t <= best` (the best hit rounded up to f32, compared non-strictly, so an
-//! equal `t` still reaches the tie rule). A hit outside the leaf's box lies in the box of
-//! another leaf holding the primitive (see the module docs of `super`), which the traversal
-//! reaches unless its entry lies beyond the best hit; there the primitive is still new to the
-//! mailbox. The answer is the least `(t, primitive)` over every primitive brute force would
-//! find, bit for bit, for either kernel.
+//! A reference's box is the bounds of its primitive's part in the leaf's cell grown by the
+//! build margin (the part the build clipped for the leaf's occupied box, or the primitive's
+//! bounds within that cell where it did not clip), grown by the margin again, rounded outward
+//! to f32, clamped to the leaf's stored box and rounded outward onto the parent's grid
+//! ([`Frame::below`] and [`Frame::above`], checked in exact arithmetic). So it holds whatever
+//! this primitive adds to the leaf's occupied box, with the same margin (which covers the
+//! octree's coordinates and the clipping's rounding). Its planes are planes of the parent's
+//! frame within the leaf's lane, so they decode exactly to f32 values no larger than the
+//! largest stored plane: the node test's rounding argument (module `lanes`) holds for them
+//! unchanged, and the computed slab interval of each box contains the exact one.
+//!
+//! Take a hit point of a primitive with `t` not beyond the best hit. It lies in the cell of
+//! some leaf holding the primitive, inside that leaf's occupied box (the module docs of
+//! `super`), so the traversal reaches that leaf unless its entry lies beyond the best hit; and
+//! there the point lies in the reference's box, so the filter keeps the reference (it drops a
+//! reference only when the ray meets its box nowhere with `0 <= t <= best`, the best hit
+//! rounded up to f32 and compared non-strictly, so that an equal `t` still reaches the tie
+//! rule). A leaf that drops the reference earlier does not check it into the mailbox, so it is
+//! still new there. The answer is therefore the least `(t, primitive)` over every primitive
+//! brute force would find, bit for bit, for either kernel.
 
 use super::lanes::{self, Kernel, Lanes};
 use super::wide::{Layout, Wide, LEAF};
-use crate::accel::{f32_above, f32_below, PrimitiveSet};
-use crate::geometry::Aabb;
-use glam::DVec3;
 use rayon::prelude::*;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -63,74 +64,49 @@ pub(super) fn box_words(count: usize) -> usize {
     (ROWS * count).div_ceil(4)
 }
 
-/// Fills the boxes of every leaf of `layout` from the primitives' `bounds`, grown by
-/// `margin`. A layout whose planes could not all be quantised keeps them zero: its octree
-/// never culls, so no kernel reads them.
-pub(super) fn fill<P: PrimitiveSet>(layout: &mut Layout, set: &P, margin: f64) {
+/// Fills the boxes of every leaf of `layout`, each at `sources` (where it starts in the
+/// layout, and where its references' `parts`, the boxes of their primitives' parts in it,
+/// start). A layout whose planes could not all be quantised keeps them zero: its octree never
+/// culls, so no kernel reads them.
+pub(super) fn fill(layout: &mut Layout, sources: &[(usize, usize)], parts: &[[f32; 6]]) {
     if layout.largest.is_none() {
         return;
     }
     let view: &Layout = layout;
-    let leaves: Vec<(usize, Vec<u32>)> = view
-        .nodes
+    let leaves: Vec<(usize, Vec<u32>)> = sources
         .par_iter()
-        .with_min_len(64)
-        .flat_map_iter(|node| {
-            let leaf = |lane: &usize| node.children[*lane] & LEAF != 0;
-            (0..8)
-                .filter(move |lane| node.children[*lane] != Wide::EMPTY && leaf(lane))
-                .map(|lane| leaf_words(view, node, lane, set, margin))
-        })
+        .with_min_len(256)
+        .map(|&(at, first)| leaf_words(view, at, &parts[first..]))
         .collect();
     for (at, words) in leaves {
         layout.refs[at..at + words.len()].copy_from_slice(&words);
     }
 }
 
-/// The boxes of the leaf in lane `lane` of `node`, and where they go in [`Layout::refs`].
-fn leaf_words<P: PrimitiveSet>(
-    layout: &Layout,
-    node: &Wide,
-    lane: usize,
-    set: &P,
-    margin: f64,
-) -> (usize, Vec<u32>) {
-    let child = node.children[lane];
-    let prims = layout.leaf(child);
-    let count = prims.len();
-    let planes = node.bounds(lane).map(f64::from);
-    let lane_box = Aabb::new(
-        DVec3::new(planes[0], planes[1], planes[2]),
-        DVec3::new(planes[3], planes[4], planes[5]),
-    );
+/// The boxes of the leaf at `at` in [`Layout::refs`] from its references' `parts`, and where
+/// they go.
+fn leaf_words(layout: &Layout, at: usize, parts: &[[f32; 6]]) -> (usize, Vec<u32>) {
+    let child = LEAF | at as u32;
+    let [count, place] = layout.header(child);
+    let (count, lane) = (count as usize, (place & 7) as usize);
+    let node = &layout.nodes[(place >> 3) as usize];
     let mut bytes = vec![0u8; 4 * box_words(count)];
-    for (j, &prim) in prims.iter().enumerate() {
-        // The primitive's part in the leaf's box (none: an empty box, stored inverted).
-        let part = set.clipped_bounds(prim as usize, &lane_box.expanded(margin));
-        let part = part.map_or(Aabb::EMPTY, |part| part.expanded(margin));
-        for axis in 0..3 {
-            let (lo, hi) = reference_planes(node, lane, axis, &part);
-            bytes[axis * count + j] = lo;
-            bytes[(axis + 3) * count + j] = hi;
+    for axis in 0..3 {
+        let frame = node.frame(axis);
+        let (lo_q, hi_q) = (node.planes[axis][lane], node.planes[axis + 3][lane]);
+        let (lane_lo, lane_hi) = (node.plane(axis, lo_q), node.plane(axis, hi_q));
+        for (j, part) in parts[..count].iter().enumerate() {
+            // Clamped into the lane's box (f32::max and min also drop a NaN).
+            let lo = part[axis].max(lane_lo).min(lane_hi);
+            let hi = part[axis + 3].min(lane_hi).max(lane_lo);
+            bytes[axis * count + j] = frame.below(lo);
+            bytes[(axis + 3) * count + j] = frame.above(hi);
         }
     }
     let words = bytes
         .chunks_exact(4)
         .map(|w| u32::from_ne_bytes([w[0], w[1], w[2], w[3]]));
-    ((child & !LEAF) as usize + HEADER + count, words.collect())
-}
-
-/// The bytes of the planes on `axis` of the box `part`, clamped to the box of the leaf in lane
-/// `lane` of `node` and rounded outward onto its grid.
-fn reference_planes(node: &Wide, lane: usize, axis: usize, part: &Aabb) -> (u8, u8) {
-    let frame = node.frame(axis);
-    let (lo_q, hi_q) = (node.planes[axis][lane], node.planes[axis + 3][lane]);
-    let (lane_lo, lane_hi) = (node.plane(axis, lo_q), node.plane(axis, hi_q));
-    let (lane_lo, lane_hi) = (f64::from(lane_lo), f64::from(lane_hi));
-    // Clamped into the lane's box (f64::max and min also drop a NaN).
-    let lo = part.min[axis].max(lane_lo).min(lane_hi);
-    let hi = part.max[axis].min(lane_hi).max(lane_lo);
-    (frame.below(f32_below(lo)), frame.above(f32_above(hi)))
+    (at + HEADER + count, words.collect())
 }
 
 /// The references of the leaf `child` names whose boxes the ray `ray` may enter with `0 <= t

@@ -172,8 +172,8 @@ impl Octree {
         let all: Vec<u32> = (0..set.len() as u32).collect();
         let budget = build::MAX_REFERENCES_PER_PRIMITIVE * all.len() as f64;
         let tree = builder.subtree(&root, all, 0, budget);
-        let mut layout = Layout::new(&tree.nodes, &tree.refs);
-        leaf::fill(&mut layout, set, margin);
+        let (mut layout, sources) = Layout::new(&tree.nodes, &tree.refs);
+        leaf::fill(&mut layout, &sources, &tree.parts);
         // The largest stored plane bounds the node test's rounding; a tree whose planes could
         // not all be quantised does not cull.
         let scale = layout

@@ -244,7 +244,9 @@ impl Layout {
     /// occupied box is not stored (its children's lie within it). The order is fixed in one
     /// pass; the nodes themselves (quantising their children's boxes) are then made in
     /// parallel.
-    pub fn new(cells: &[Node], refs: &[u32]) -> Layout {
+    /// Also returns, per leaf, where it starts in [`Layout::refs`] and where its references
+    /// start in `refs`.
+    pub fn new(cells: &[Node], refs: &[u32]) -> (Layout, Vec<(usize, usize)>) {
         let interior = cells.iter().filter(|c| c.count & INTERIOR != 0).count();
         let mut order = Order {
             cells,
@@ -252,6 +254,7 @@ impl Layout {
             nodes: Vec::with_capacity(interior),
             // Each leaf's references and its header.
             leaves: Vec::with_capacity(refs.len() + HEADER * (cells.len() - interior)),
+            sources: Vec::with_capacity(cells.len() - interior),
         };
         if cells[0].count & INTERIOR != 0 {
             order.place(0, 0, 0);
@@ -259,14 +262,15 @@ impl Layout {
             // A root leaf waits in lane 0 of a node of its own.
             let mut lanes = [None; 8];
             lanes[0] = Some((cells[0].bounds, order.place(0, 0, 0)));
+            let (refs, sources) = order.finish();
             let mut layout = Layout {
                 nodes: Vec::new(),
-                refs: order.finish(),
+                refs,
                 largest: Some(0.0),
             };
             let node = layout.wide(&lanes);
             layout.nodes.push(node);
-            return layout;
+            return (layout, sources);
         }
         let (nodes, largest): (Vec<Wide>, Vec<Option<f64>>) = order
             .nodes
@@ -274,15 +278,16 @@ impl Layout {
             .with_min_len(64)
             .map(|&(cell, children)| Wide::new(&lanes(cells, cell, &children)))
             .unzip();
+        let (refs, sources) = order.finish();
         let mut layout = Layout {
             nodes,
-            refs: order.finish(),
+            refs,
             largest: Some(0.0),
         };
         for node in largest {
             layout.fold_largest(node);
         }
-        layout
+        (layout, sources)
     }
 
     /// The node for `lanes`, its largest plane folded into [`Layout::largest`].
@@ -325,6 +330,8 @@ struct Order<'c> {
     refs: &'c [u32],
     nodes: Vec<(usize, [u32; 8])>,
     leaves: Vec<u32>,
+    /// Per leaf, where it starts in `leaves` and where its references start in `refs`.
+    sources: Vec<(usize, usize)>,
 }
 
 impl Order<'_> {
@@ -336,6 +343,7 @@ impl Order<'_> {
             let at = self.leaves.len();
             let first = cell.first as usize;
             let count = cell.count as usize;
+            self.sources.push((at, first));
             self.leaves
                 .extend_from_slice(&leaf::header(count, parent, lane));
             self.leaves
@@ -359,10 +367,11 @@ impl Order<'_> {
 }
 
 impl Order<'_> {
-    /// The leaves' array, with the slack the leaf filter's loads need.
-    fn finish(mut self) -> Vec<u32> {
+    /// The leaves' array, with the slack the leaf filter's loads need, and the leaves'
+    /// sources.
+    fn finish(mut self) -> (Vec<u32>, Vec<(usize, usize)>) {
         self.leaves.resize(self.leaves.len() + leaf::SLACK_WORDS, 0);
-        self.leaves
+        (self.leaves, self.sources)
     }
 }
 
