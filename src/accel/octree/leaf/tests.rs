@@ -23,7 +23,7 @@ fn kernels() -> Vec<Kernel> {
 fn grid(rng: &mut Rng) -> (Scene, Vec<[DVec3; 3]>) {
     let n = 24;
     let mut h = |i: usize, j: usize| {
-        if (i + j) % 7 == 0 {
+        if (i + j).is_multiple_of(7) {
             0.0
         } else {
             rng.uniform(-0.3, 0.3)
