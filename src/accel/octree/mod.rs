@@ -56,6 +56,11 @@
 //! primitives four at a time ([`PrimitiveSet::intersect_group`]). Every ray still gets exactly
 //! its own answer.
 //!
+//! A leaf also stores, per reference, the box of its primitive's part in the leaf (module
+//! `leaf`): the node test run over those boxes, eight references at a time and with the best
+//! hit as the limit, drops the primitives a ray (or each ray of a packet) cannot hit there
+//! before its best hit, so that the exact tests run on the others only.
+//!
 //! The lecture's boundary trap: a primitive stored in an early cell can be hit beyond that cell's
 //! exit while a nearer primitive waits in a later cell. The traversal therefore never stops at
 //! the first hit: it keeps the best `t` and skips only cells whose entry lies beyond it. A hit
