@@ -1,7 +1,7 @@
 //! The leaves' filter: per reference, the box its primitive can occupy in the leaf, stored as
-//! four bits per plane inside the leaf's box on the parent node's grid, so that the node test
-//! (module `lanes`), run over a leaf's references eight at a time, drops the primitives a ray
-//! cannot hit inside the leaf before its best hit. The exact primitive test then runs on the
+//! one byte per plane on the parent node's grid, so that the node test (module `lanes`), run
+//! over a leaf's references eight at a time, drops the primitives a ray cannot hit inside the
+//! leaf before its best hit. The exact primitive test then runs on the
 //! references it keeps only; a reference it drops is not checked into the mailbox, so a later
 //! leaf holding the primitive tests it again.
 //!
