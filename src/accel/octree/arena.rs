@@ -19,6 +19,8 @@ pub(super) struct Arena<'b, 'a, P> {
     builder: &'b Builder<'a, P>,
     nodes: Vec<Node>,
     refs: Vec<u32>,
+    /// Per reference, its box in its leaf.
+    parts: Vec<[f32; 6]>,
     /// The children's references of the cell being split at each depth below the subtree's
     /// root (reused by its siblings and cousins).
     levels: Vec<Children>,
@@ -32,6 +34,7 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
             builder,
             nodes: vec![VACANT],
             refs: Vec::new(),
+            parts: Vec::new(),
             levels: Vec::new(),
             masks: Vec::new(),
         }
@@ -54,9 +57,11 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
     fn finish(mut self, stats: OctreeStats, occupied: Aabb) -> Subtree {
         self.nodes.shrink_to_fit();
         self.refs.shrink_to_fit();
+        self.parts.shrink_to_fit();
         Subtree {
             nodes: self.nodes,
             refs: self.refs,
+            parts: self.parts,
             stats,
             occupied,
         }
@@ -127,6 +132,7 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
                 // Left without references: dropped, and its slot goes to the next child.
                 self.nodes.truncate(nodes);
                 self.refs.truncate(refs_len);
+                self.parts.truncate(refs_len);
                 continue;
             }
             mask |= 1 << i;
@@ -139,7 +145,7 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
 
     /// Writes `cell` as a leaf holding `refs` into node `slot`.
     fn leaf(&mut self, slot: usize, cell: &Aabb, refs: &[u32], depth: u32) -> (OctreeStats, Aabb) {
-        let occupied = self.builder.occupied(cell, refs);
+        let occupied = self.builder.occupied(cell, refs, &mut self.parts);
         self.nodes[slot] = Node::leaf(self.refs.len(), refs.len(), &occupied);
         self.refs.extend_from_slice(refs);
         let stats = OctreeStats {

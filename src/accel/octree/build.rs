@@ -85,6 +85,8 @@ fn outward(occupied: &Aabb) -> [f32; 6] {
 pub(super) struct Subtree {
     pub nodes: Vec<Node>,
     pub refs: Vec<u32>,
+    /// Per reference, the box of its primitive's part in its leaf (see [`Builder::occupied`]).
+    pub parts: Vec<[f32; 6]>,
     pub stats: OctreeStats,
     pub occupied: Aabb,
 }
@@ -302,20 +304,24 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     /// The box the primitives `refs` occupy inside `cell`: their parts inside the cell grown
     /// by the margin, bounded and grown by the margin again. A primitive whose bounds within
     /// the grown cell already lie inside the box so far is not clipped: its part there lies
-    /// inside those bounds, so it cannot add to the box.
-    pub fn occupied(&self, cell: &Aabb, refs: &[u32]) -> Aabb {
+    /// inside those bounds, so it cannot add to the box. Each reference's own box (its part,
+    /// or those bounds where it was not clipped, grown by the margin and rounded outward; an
+    /// empty box for a primitive with nothing there) goes to `parts`.
+    pub fn occupied(&self, cell: &Aabb, refs: &[u32], parts: &mut Vec<[f32; 6]>) -> Aabb {
         let grown = cell.expanded(self.margin);
         let mut occupied = Aabb::EMPTY;
         for &prim in refs {
-            let Some(within) = self.bounds[prim as usize].common(grown) else {
-                continue;
-            };
-            if occupied.holds(&within) {
-                continue;
-            }
-            if let Some(part) = self.set.clipped_bounds(prim as usize, &grown) {
+            let part = self.bounds[prim as usize].common(grown).and_then(|within| {
+                if occupied.holds(&within) {
+                    return Some(within);
+                }
+                let part = self.set.clipped_bounds(prim as usize, &grown)?;
                 occupied = occupied.union(part);
-            }
+                Some(part)
+            });
+            parts.push(outward(
+                &part.map_or(Aabb::EMPTY, |p| p.expanded(self.margin)),
+            ));
         }
         occupied.expanded(self.margin)
     }
@@ -366,6 +372,7 @@ fn join(parts: Vec<Subtree>) -> Subtree {
     let mut nodes = Vec::with_capacity(total + 1);
     nodes.push(Node::interior(1, mask, &occupied));
     let mut refs = Vec::with_capacity(stats.references);
+    let mut parts = Vec::with_capacity(stats.references);
     // Where each child's non-root nodes start, and where its references start.
     let mut node_base = 1 + kept.len();
     let mut bases = Vec::with_capacity(kept.len());
@@ -373,6 +380,7 @@ fn join(parts: Vec<Subtree>) -> Subtree {
         bases.push((node_base, refs.len()));
         node_base += part.nodes.len() - 1;
         refs.extend_from_slice(&part.refs);
+        parts.extend_from_slice(&part.parts);
     }
     let relocate = |node: &Node, (node_base, ref_base): (usize, usize)| match node.count & INTERIOR
     {
@@ -394,6 +402,7 @@ fn join(parts: Vec<Subtree>) -> Subtree {
     Subtree {
         nodes,
         refs,
+        parts,
         stats,
         occupied,
     }

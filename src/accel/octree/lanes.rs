@@ -163,17 +163,33 @@ fn rows(ray: &Lanes, axis: usize) -> (usize, usize) {
 /// The portable kernel.
 #[inline(always)]
 pub(super) fn test_portable(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
+    let plane = |row: usize, lane: usize| node.plane(row % 3, node.planes[row][lane]);
+    let (enter, exit, hit) = slabs_portable(plane, ray, t_best);
+    Tested {
+        enter,
+        exit,
+        hit: hit & node.occupancy(),
+    }
+}
+
+/// The conservative slab test of eight boxes, `plane(row, lane)` giving plane row `row` (rows
+/// as in [`Wide::planes`]) of lane `lane`, exactly decoded: per lane the entry and exit
+/// parameters and bit `lane` of the mask when the lane is entered before `t_best`. Lanes that
+/// hold no box must be masked by the caller.
+#[inline(always)]
+pub(super) fn slabs_portable(
+    plane: impl Fn(usize, usize) -> f32,
+    ray: &Lanes,
+    t_best: f32,
+) -> ([f32; 8], [f32; 8], u32) {
     let mut enter = [0.0f32; 8];
     let mut exit = [t_best; 8];
     for axis in 0..3 {
         let (near, far) = rows(ray, axis);
-        let (near, far) = (&node.planes[near], &node.planes[far]);
-        let (step, origin) = (node.step[axis], node.origin[axis]);
         let (r, c_near, c_far) = (ray.r[axis], ray.c_near[axis], ray.c_far[axis]);
         for lane in 0..8 {
-            // Exact decoding (see `super::wide`), then the slab parameters.
-            let n = (f32::from(near[lane]) * step + origin) * r + c_near;
-            let f = (f32::from(far[lane]) * step + origin) * r + c_far;
+            let n = plane(near, lane) * r + c_near;
+            let f = plane(far, lane) * r + c_far;
             enter[lane] = if n > enter[lane] { n } else { enter[lane] };
             exit[lane] = if f < exit[lane] { f } else { exit[lane] };
         }
@@ -182,20 +198,16 @@ pub(super) fn test_portable(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
     for lane in 0..8 {
         hit |= u32::from(enter[lane] <= exit[lane]) << lane;
     }
-    hit &= node.occupancy();
     if ray.parallel {
         for axis in 0..3 {
-            let (lo, hi) = (&node.planes[axis], &node.planes[axis + 3]);
-            let (step, origin) = (node.step[axis], node.origin[axis]);
             for lane in 0..8 {
-                let lo = f32::from(lo[lane]) * step + origin;
-                let hi = f32::from(hi[lane]) * step + origin;
-                let inside = lo <= ray.o_hi[axis] && hi >= ray.o_lo[axis];
+                let inside =
+                    plane(axis, lane) <= ray.o_hi[axis] && plane(axis + 3, lane) >= ray.o_lo[axis];
                 hit &= !(u32::from(!inside) << lane);
             }
         }
     }
-    Tested { enter, exit, hit }
+    (enter, exit, hit)
 }
 
 /// The AVX2 kernel: per plane row, one FMA decodes the quantised planes and one computes
@@ -209,6 +221,36 @@ pub(super) fn test_portable(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
 pub(super) unsafe fn test_avx2(node: &Wide, ray: &Lanes, t_best: f32) -> Tested {
     // SAFETY: this function's own requirement.
     let planes = |row: usize| unsafe { node.row_avx2(row) };
+    // SAFETY: as above.
+    let (enter, exit, mut hit) = unsafe { slabs_avx2(planes, ray, t_best) };
+    // SAFETY: `children` is eight u32, the size of the unaligned load.
+    let children = unsafe { _mm256_loadu_si256(node.children.as_ptr().cast()) };
+    let empty = _mm256_cmpeq_epi32(children, _mm256_set1_epi32(-1));
+    hit = _mm256_andnot_ps(_mm256_castsi256_ps(empty), hit);
+    let mut out = Tested {
+        enter: [0.0; 8],
+        exit: [0.0; 8],
+        hit: _mm256_movemask_ps(hit) as u32,
+    };
+    _mm256_store_ps(out.enter.as_mut_ptr(), enter);
+    _mm256_store_ps(out.exit.as_mut_ptr(), exit);
+    out
+}
+
+/// [`slabs_portable`] in AVX2 registers, `planes(row)` giving a decoded plane row: the entry
+/// and exit parameters and the mask of lanes entered before `t_best` (all ones or zeros per
+/// lane).
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+pub(super) unsafe fn slabs_avx2(
+    planes: impl Fn(usize) -> __m256,
+    ray: &Lanes,
+    t_best: f32,
+) -> (__m256, __m256, __m256) {
     let mut enter = _mm256_setzero_ps();
     let mut exit = _mm256_set1_ps(t_best);
     for axis in 0..3 {
@@ -227,16 +269,5 @@ pub(super) unsafe fn test_avx2(node: &Wide, ray: &Lanes, t_best: f32) -> Tested 
             hit = _mm256_and_ps(hit, _mm256_and_ps(lo, hi));
         }
     }
-    // SAFETY: `children` is eight u32, the size of the unaligned load.
-    let children = unsafe { _mm256_loadu_si256(node.children.as_ptr().cast()) };
-    let empty = _mm256_cmpeq_epi32(children, _mm256_set1_epi32(-1));
-    hit = _mm256_andnot_ps(_mm256_castsi256_ps(empty), hit);
-    let mut out = Tested {
-        enter: [0.0; 8],
-        exit: [0.0; 8],
-        hit: _mm256_movemask_ps(hit) as u32,
-    };
-    _mm256_store_ps(out.enter.as_mut_ptr(), enter);
-    _mm256_store_ps(out.exit.as_mut_ptr(), exit);
-    out
+    (enter, exit, hit)
 }

@@ -56,6 +56,11 @@
 //! primitives four at a time ([`PrimitiveSet::intersect_group`]). Every ray still gets exactly
 //! its own answer.
 //!
+//! A leaf also stores, per reference, the box of its primitive's part in the leaf (module
+//! `leaf`): the node test run over those boxes, eight references at a time and with the best
+//! hit as the limit, drops the primitives a ray (or each ray of a packet) cannot hit there
+//! before its best hit, so that the exact tests run on the others only.
+//!
 //! The lecture's boundary trap: a primitive stored in an early cell can be hit beyond that cell's
 //! exit while a nearer primitive waits in a later cell. The traversal therefore never stops at
 //! the first hit: it keeps the best `t` and skips only cells whose entry lies beyond it. A hit
@@ -66,11 +71,12 @@
 mod arena;
 mod build;
 mod lanes;
+mod leaf;
 mod packet;
 mod traverse;
 mod wide;
 
-use super::{prepare_ray, set_bits, Hit, PreparedRay, PrimitiveSet, GROUP};
+use super::{f32_above, prepare_ray, set_bits, Hit, PreparedRay, PrimitiveSet, GROUP};
 use crate::geometry::Aabb;
 use build::{cube_around, Builder};
 use glam::DVec3;
@@ -171,7 +177,8 @@ impl Octree {
         let all: Vec<u32> = (0..set.len() as u32).collect();
         let budget = build::MAX_REFERENCES_PER_PRIMITIVE * all.len() as f64;
         let tree = builder.subtree(&root, all, 0, budget);
-        let layout = Layout::new(&tree.nodes, &tree.refs);
+        let (mut layout, sources) = Layout::new(&tree.nodes, &tree.refs);
+        leaf::fill(&mut layout, &sources, &tree.parts);
         // The largest stored plane bounds the node test's rounding; a tree whose planes could
         // not all be quantised does not cull.
         let scale = layout
@@ -254,13 +261,29 @@ impl Octree {
         let mut best: Option<Hit> = None;
         let mut own = None;
         let mut tested = Mailbox::default();
-        self.traverse(local_origin, dir, t_max, |refs, _, _| {
+        let lanes = Lanes::new(local_origin, dir + DVec3::ZERO, self.scale);
+        let visit = |child, _, _| {
             let ray = given
                 .unwrap_or_else(|| own.get_or_insert_with(|| prepare_ray(set, local_origin, dir)));
-            let new = |prim| tested.check_in(prim);
-            test_leaf(set, refs, new, ray, t_max, &mut best);
+            let bound = f32_above(best.map_or(t_max, |b| b.t));
+            let kept = leaf::survivors(&self.layout, self.kernel, child, &lanes, bound);
+            test_leaf(
+                set,
+                kept.filter(|&prim| tested.check_in(prim)),
+                ray,
+                t_max,
+                &mut best,
+            );
             best.map_or(t_max, |b| b.t)
-        });
+        };
+        traverse::run(
+            &self.layout,
+            self.kernel,
+            &lanes,
+            t_max,
+            visit,
+            &mut Unobserved,
+        );
         best
     }
 
@@ -332,22 +355,25 @@ impl Octree {
             dirs,
             self.scale,
             *t_max,
-            |rays, refs, limits| {
+            |rays, refs, reach, limits| {
                 let prepared = given.unwrap_or_else(|| {
                     own.get_or_insert_with(|| {
                         std::array::from_fn(|i| prepare_ray(set, local_origins[i], dirs[i]))
                     })
                 });
+                let kept = refs.iter().zip(reach).filter(|(_, &rays)| rays != 0);
                 if rays.is_power_of_two() {
                     // A ray alone: its primitives in groups, as in `intersect_ray`.
                     let i = rays.trailing_zeros() as usize;
-                    let new = |prim| tested.check_in(prim, rays) != 0;
-                    test_leaf(set, refs, new, &prepared[i], t_max[i], &mut best[i]);
+                    let new = kept
+                        .map(|(&prim, _)| prim)
+                        .filter(|&prim| tested.check_in(prim, rays) != 0);
+                    test_leaf(set, new, &prepared[i], t_max[i], &mut best[i]);
                     limits[i] = best[i].map_or(t_max[i], |b| b.t);
                     return;
                 }
                 let packet = packet_data.get_or_insert_with(|| set.prepare_packet(prepared));
-                for &prim in refs {
+                for (&prim, &rays) in kept {
                     let active = tested.check_in(prim, rays);
                     if active == 0 {
                         continue;
@@ -388,12 +414,14 @@ impl Octree {
         visit: impl FnMut(&[u32], f64, f64) -> f64,
     ) {
         let ray = Lanes::new(origin, dir + DVec3::ZERO, self.scale);
+        let mut visit = visit;
+        let leaf = |child, enter, exit| visit(self.layout.leaf(child), enter, exit);
         traverse::run(
             &self.layout,
             self.kernel,
             &ray,
             t_max,
-            visit,
+            leaf,
             &mut Unobserved,
         );
     }
@@ -431,27 +459,24 @@ impl Mailbox {
     }
 }
 
-/// Tests the primitives of a leaf, `refs`, that `new` says the ray has not met yet against
-/// `ray`, [`GROUP`] at a time ([`test_group`]).
+/// Tests the primitives `prims` of a leaf (those the ray has not met yet) against `ray`,
+/// [`GROUP`] at a time ([`test_group`]).
 #[inline(always)]
 fn test_leaf<P: PrimitiveSet>(
     set: &P,
-    refs: &[u32],
-    mut new: impl FnMut(u32) -> bool,
+    prims: impl Iterator<Item = u32>,
     ray: &PreparedRay<P::RayData>,
     t_max: f64,
     best: &mut Option<Hit>,
 ) {
     let mut group = [0; GROUP];
     let mut len = 0;
-    for &prim in refs {
-        if new(prim) {
-            group[len] = prim;
-            len += 1;
-            if len == GROUP {
-                test_group(set, &group, ray, t_max, best);
-                len = 0;
-            }
+    for prim in prims {
+        group[len] = prim;
+        len += 1;
+        if len == GROUP {
+            test_group(set, &group, ray, t_max, best);
+            len = 0;
         }
     }
     test_group(set, &group[..len], ray, t_max, best);

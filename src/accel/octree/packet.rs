@@ -13,6 +13,7 @@
 //! octant; and the boundary-trap rule is applied per ray.
 
 use super::lanes::{Kernel, Lanes, LIMIT, TINY, UNIT};
+use super::leaf;
 use super::traverse::{self, Unobserved, STACK};
 use super::wide::{Layout, Wide, LEAF};
 use crate::accel::{f32_above, set_bits as bits};
@@ -238,9 +239,10 @@ struct Entry {
 
 /// Visits, for each ray `origins[i] + t · dirs[i]` of a packet, the leaves it may reach before
 /// `limits[i]`, front to back, in a tree whose planes are at most `scale` in magnitude;
-/// `visit(rays, refs, limits)` gets the rays that reach the leaf (bit `i` for ray `i`), the
-/// leaf's primitive indices and the rays' limits, and lowers the limits of those rays to their
-/// best hits so far. Returns false, having visited nothing, when the rays cannot go as one
+/// `visit(rays, refs, reach, limits)` gets the rays that reach the leaf (bit `i` for ray `i`),
+/// up to eight of the leaf's primitive indices at a time, for each of them the rays that may
+/// hit it there (the leaf filter, module `leaf`), and the rays' limits, and lowers the limits
+/// of those rays to their best hits so far. Returns false, having visited nothing, when the rays cannot go as one
 /// packet ([`Bundle::set`]).
 pub(super) fn run<F>(
     layout: &Layout,
@@ -252,7 +254,7 @@ pub(super) fn run<F>(
     visit: F,
 ) -> bool
 where
-    F: FnMut(u32, &[u32], &mut [f64; WIDTH]),
+    F: FnMut(u32, &[u32], &[u32], &mut [f64; WIDTH]),
 {
     let rays = (origins, dirs, scale);
     match kernel {
@@ -275,7 +277,7 @@ type Rays<'r> = (&'r [DVec3; WIDTH], &'r [DVec3; WIDTH], f64);
 #[target_feature(enable = "avx2,fma")]
 unsafe fn run_avx2<F>(layout: &Layout, rays: Rays, limits: [f64; WIDTH], visit: F) -> bool
 where
-    F: FnMut(u32, &[u32], &mut [f64; WIDTH]),
+    F: FnMut(u32, &[u32], &[u32], &mut [f64; WIDTH]),
 {
     run_with::<true, F>(layout, rays, limits, visit)
 }
@@ -289,7 +291,7 @@ fn run_with<const AVX2: bool, F>(
     mut visit: F,
 ) -> bool
 where
-    F: FnMut(u32, &[u32], &mut [f64; WIDTH]),
+    F: FnMut(u32, &[u32], &[u32], &mut [f64; WIDTH]),
 {
     let mut bundle = Bundle::EMPTY;
     let set = if AVX2 {
@@ -360,8 +362,16 @@ where
                 let i = rays.trailing_zeros() as usize;
                 let ray = Lanes::new(origins[i], dirs[i] + DVec3::ZERO, scale);
                 let limit = limits[i];
-                let alone = |refs: &[u32], _, _| {
-                    visit(rays, refs, &mut limits);
+                let kernel = if AVX2 { Kernel::Avx2 } else { Kernel::Portable };
+                let alone = |leaf: u32, _, _| {
+                    let prims = layout.leaf(leaf);
+                    for first in (0..prims.len()).step_by(8) {
+                        let t_best = f32_above(limits[i]);
+                        let kept = leaf::chunk_mask(layout, kernel, leaf, first, &ray, t_best);
+                        let masks: [u32; 8] = std::array::from_fn(|j| rays * (kept >> j & 1));
+                        let chunk = &prims[first..prims.len().min(first + 8)];
+                        visit(rays, chunk, &masks[..chunk.len()], &mut limits);
+                    }
                     limits[i]
                 };
                 let (start, observer) = (entry.child as usize, &mut Unobserved);
@@ -369,9 +379,24 @@ where
                 t_best[i] = f32_above(limits[i]);
                 continue;
             }
-            visit(rays, layout.leaf(entry.child), &mut limits);
-            for i in bits(rays) {
-                t_best[i] = f32_above(limits[i]);
+            let prims = layout.leaf(entry.child);
+            for first in (0..prims.len()).step_by(8) {
+                let boxes = leaf::chunk_node(layout, entry.child, first);
+                if AVX2 {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: only reached through `run_avx2`.
+                    unsafe {
+                        bundle.test_avx2(&boxes, &t_best, &mut tested)
+                    }
+                } else {
+                    bundle.test_portable(&boxes, &t_best, &mut tested)
+                }
+                let masks = tested.hit.map(|hit| hit & rays);
+                let chunk = &prims[first..prims.len().min(first + 8)];
+                visit(rays, chunk, &masks[..chunk.len()], &mut limits);
+                for i in bits(rays) {
+                    t_best[i] = f32_above(limits[i]);
+                }
             }
         }
     }

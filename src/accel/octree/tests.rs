@@ -124,8 +124,8 @@ fn no_kernel_culls_a_lane_the_exact_slab_test_enters() {
                 kernel,
                 &lanes,
                 f64::INFINITY,
-                |refs, _, _| {
-                    for &prim in refs {
+                |leaf, _, _| {
+                    for &prim in octree.layout.leaf(leaf) {
                         test_primitive(&scene, prim, &ray, f64::INFINITY, &mut best);
                     }
                     best.map_or(f64::INFINITY, |b| b.t)

@@ -56,7 +56,7 @@ pub(super) fn run<F, O>(
     visit: F,
     observer: &mut O,
 ) where
-    F: FnMut(&[u32], f64, f64) -> f64,
+    F: FnMut(u32, f64, f64) -> f64,
     O: Observer,
 {
     match kernel {
@@ -75,7 +75,7 @@ pub(super) fn run<F, O>(
 #[target_feature(enable = "avx2,fma")]
 unsafe fn run_avx2<F, O>(layout: &Layout, ray: &Lanes, limit: f64, visit: F, observer: &mut O)
 where
-    F: FnMut(&[u32], f64, f64) -> f64,
+    F: FnMut(u32, f64, f64) -> f64,
     O: Observer,
 {
     run_with::<true, F, O>(layout, ray, limit, visit, observer)
@@ -83,8 +83,8 @@ where
 
 /// The traversal: test a node's eight lanes, push the hit children far to near with their
 /// entry parameters, pop the nearest. A popped entry is skipped only when it is entered beyond
-/// the best hit so far (the boundary trap rule); a leaf goes to `visit`, which returns the new
-/// limit.
+/// the best hit so far (the boundary trap rule); a leaf goes to `visit` (as its child
+/// reference), which returns the new limit.
 #[inline(always)]
 fn run_with<const AVX2: bool, F, O>(
     layout: &Layout,
@@ -93,7 +93,7 @@ fn run_with<const AVX2: bool, F, O>(
     visit: F,
     observer: &mut O,
 ) where
-    F: FnMut(&[u32], f64, f64) -> f64,
+    F: FnMut(u32, f64, f64) -> f64,
     O: Observer,
 {
     if !layout.nodes.is_empty() {
@@ -111,7 +111,7 @@ pub(super) fn from_node<const AVX2: bool, F, O>(
     mut visit: F,
     observer: &mut O,
 ) where
-    F: FnMut(&[u32], f64, f64) -> f64,
+    F: FnMut(u32, f64, f64) -> f64,
     O: Observer,
 {
     let mut node = start;
@@ -161,7 +161,7 @@ pub(super) fn from_node<const AVX2: bool, F, O>(
                 continue;
             }
             let (enter, exit) = (tested.enter[near], tested.exit[near]);
-            limit = limit.min(visit(layout.leaf(child), f64::from(enter), f64::from(exit)));
+            limit = limit.min(visit(child, f64::from(enter), f64::from(exit)));
             t_best = f32_above(limit);
         }
         loop {
@@ -178,8 +178,7 @@ pub(super) fn from_node<const AVX2: bool, F, O>(
                 node = child as usize;
                 break;
             }
-            let leaf = layout.leaf(child);
-            limit = limit.min(visit(leaf, f64::from(enter), f64::from(exit)));
+            limit = limit.min(visit(child, f64::from(enter), f64::from(exit)));
             t_best = f32_above(limit);
         }
     }

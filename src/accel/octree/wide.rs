@@ -13,6 +13,7 @@
 //! node's box (or 2⁻¹⁹ of its coordinates' magnitude, which keeps `k` small).
 
 use super::build::{Node, INTERIOR};
+use super::leaf::{self, HEADER};
 use rayon::prelude::*;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -42,7 +43,7 @@ pub(super) struct Wide {
 
 /// The quantisation frame of one axis: planes `(k + q) · step` for `q = 0..=255`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Frame {
+pub(super) struct Frame {
     k: f64,
     step: f64,
 }
@@ -71,12 +72,12 @@ impl Frame {
     }
 
     /// The byte of a lower plane `lo`: the largest `q` with `(k + q) · step <= lo`.
-    fn below(&self, lo: f32) -> u8 {
+    pub fn below(&self, lo: f32) -> u8 {
         (floor_multiple(f64::from(lo), self.step) - self.k).clamp(0.0, 255.0) as u8
     }
 
     /// The byte of an upper plane `hi`: the smallest `q` with `(k + q) · step >= hi`.
-    fn above(&self, hi: f32) -> u8 {
+    pub fn above(&self, hi: f32) -> u8 {
         (-floor_multiple(-f64::from(hi), self.step) - self.k).clamp(0.0, 255.0) as u8
     }
 }
@@ -189,15 +190,35 @@ impl Wide {
     #[target_feature(enable = "avx2,fma")]
     #[inline]
     pub unsafe fn row_avx2(&self, row: usize) -> __m256 {
-        let axis = row % 3;
-        // SAFETY: a row is eight bytes, the size of the unaligned load.
-        let bytes = unsafe { _mm_loadl_epi64(self.planes[row].as_ptr().cast()) };
+        // SAFETY: this function's own requirement.
+        unsafe { self.decode_avx2(row % 3, self.planes[row]) }
+    }
+
+    /// Eight bytes `q` on the frame of `axis`, decoded to their planes at once: one FMA,
+    /// exact.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    pub unsafe fn decode_avx2(&self, axis: usize, q: [u8; 8]) -> __m256 {
+        let bytes = _mm_cvtsi64_si128(i64::from_le_bytes(q));
         let q = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(bytes));
         _mm256_fmadd_ps(
             q,
             _mm256_set1_ps(self.step[axis]),
             _mm256_set1_ps(self.origin[axis]),
         )
+    }
+
+    /// The frame of `axis` (exact: the stored origin is `k · step` with both factors exact).
+    pub fn frame(&self, axis: usize) -> Frame {
+        let step = f64::from(self.step[axis]);
+        Frame {
+            k: f64::from(self.origin[axis]) / step,
+            step,
+        }
     }
 
     /// Lane `lane`'s stored box, decoded: rows as in `planes`.
@@ -207,7 +228,7 @@ impl Wide {
 }
 
 /// The traversed arrays: the nodes, node 0 the root (none for an empty tree), and each leaf as
-/// its reference count followed by its references, in `refs`.
+/// its header, references and reference boxes (module `leaf`), in `refs`.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Layout {
     pub nodes: Vec<Wide>,
@@ -223,29 +244,33 @@ impl Layout {
     /// occupied box is not stored (its children's lie within it). The order is fixed in one
     /// pass; the nodes themselves (quantising their children's boxes) are then made in
     /// parallel.
-    pub fn new(cells: &[Node], refs: &[u32]) -> Layout {
+    /// Also returns, per leaf, where it starts in [`Layout::refs`] and where its references
+    /// start in `refs`.
+    pub fn new(cells: &[Node], refs: &[u32]) -> (Layout, Vec<(usize, usize)>) {
         let interior = cells.iter().filter(|c| c.count & INTERIOR != 0).count();
         let mut order = Order {
             cells,
             refs,
             nodes: Vec::with_capacity(interior),
-            // Each leaf's references and its count.
-            leaves: Vec::with_capacity(refs.len() + cells.len() - interior),
+            // Each leaf's references and its header.
+            leaves: Vec::with_capacity(refs.len() + HEADER * (cells.len() - interior)),
+            sources: Vec::with_capacity(cells.len() - interior),
         };
         if cells[0].count & INTERIOR != 0 {
-            order.place(0);
+            order.place(0, 0, 0);
         } else if cells[0].count != 0 {
             // A root leaf waits in lane 0 of a node of its own.
             let mut lanes = [None; 8];
-            lanes[0] = Some((cells[0].bounds, order.place(0)));
+            lanes[0] = Some((cells[0].bounds, order.place(0, 0, 0)));
+            let (refs, sources) = order.finish();
             let mut layout = Layout {
                 nodes: Vec::new(),
-                refs: order.leaves,
+                refs,
                 largest: Some(0.0),
             };
             let node = layout.wide(&lanes);
             layout.nodes.push(node);
-            return layout;
+            return (layout, sources);
         }
         let (nodes, largest): (Vec<Wide>, Vec<Option<f64>>) = order
             .nodes
@@ -253,15 +278,16 @@ impl Layout {
             .with_min_len(64)
             .map(|&(cell, children)| Wide::new(&lanes(cells, cell, &children)))
             .unzip();
+        let (refs, sources) = order.finish();
         let mut layout = Layout {
             nodes,
-            refs: order.leaves,
+            refs,
             largest: Some(0.0),
         };
         for node in largest {
             layout.fold_largest(node);
         }
-        layout
+        (layout, sources)
     }
 
     /// The node for `lanes`, its largest plane folded into [`Layout::largest`].
@@ -281,10 +307,17 @@ impl Layout {
     pub fn leaf(&self, child: u32) -> &[u32] {
         let at = (child & !LEAF) as usize;
         let count = self.refs[at] as usize;
-        &self.refs[at + 1..at + 1 + count]
+        &self.refs[at + HEADER..at + HEADER + count]
     }
 
-    /// Bytes of the nodes and the leaves' counts and references.
+    /// The header of the leaf `child` names (see module `leaf`).
+    #[inline(always)]
+    pub fn header(&self, child: u32) -> [u32; HEADER] {
+        let at = (child & !LEAF) as usize;
+        std::array::from_fn(|i| self.refs[at + i])
+    }
+
+    /// Bytes of the nodes and the leaves.
     pub fn bytes(&self) -> usize {
         self.nodes.len() * size_of::<Wide>() + self.refs.len() * size_of::<u32>()
     }
@@ -297,18 +330,27 @@ struct Order<'c> {
     refs: &'c [u32],
     nodes: Vec<(usize, [u32; 8])>,
     leaves: Vec<u32>,
+    /// Per leaf, where it starts in `leaves` and where its references start in `refs`.
+    sources: Vec<(usize, usize)>,
 }
 
 impl Order<'_> {
-    /// Places cell `index` and everything below it; returns its reference.
-    fn place(&mut self, index: usize) -> u32 {
+    /// Places cell `index`, in lane `lane` of node `parent`, and everything below it;
+    /// returns its reference.
+    fn place(&mut self, index: usize, parent: usize, lane: usize) -> u32 {
         let cell = self.cells[index];
         if cell.count & INTERIOR == 0 {
             let at = self.leaves.len();
             let first = cell.first as usize;
-            self.leaves.push(cell.count);
+            let count = cell.count as usize;
+            self.sources.push((at, first));
             self.leaves
-                .extend_from_slice(&self.refs[first..first + cell.count as usize]);
+                .extend_from_slice(&leaf::header(count, parent, lane));
+            self.leaves
+                .extend_from_slice(&self.refs[first..first + count]);
+            // The boxes, filled by `leaf::fill`.
+            self.leaves
+                .resize(self.leaves.len() + leaf::box_words(count), 0);
             return LEAF | at as u32;
         }
         let at = self.nodes.len();
@@ -316,11 +358,20 @@ impl Order<'_> {
         let mut next = cell.first as usize;
         for lane in 0..8 {
             if cell.count & (1 << lane) != 0 {
-                self.nodes[at].1[lane] = self.place(next);
+                self.nodes[at].1[lane] = self.place(next, at, lane);
                 next += 1;
             }
         }
         at as u32
+    }
+}
+
+impl Order<'_> {
+    /// The leaves' array, with the slack the leaf filter's loads need, and the leaves'
+    /// sources.
+    fn finish(mut self) -> (Vec<u32>, Vec<(usize, usize)>) {
+        self.leaves.resize(self.leaves.len() + leaf::SLACK_WORDS, 0);
+        (self.leaves, self.sources)
     }
 }
 
