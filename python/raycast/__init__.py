@@ -118,36 +118,67 @@ def load_bytes(
     return Scene(_raycast.load_bytes(bytes(data), os.fspath(name), choice, time, which))
 
 
-def _floats(value, name: str, shape: tuple) -> np.ndarray:
-    """``value`` as a float64 array of ``shape`` (-1: any length), read in place when it is
-    one already."""
+def _batch(value, name: str, width: int) -> np.ndarray:
+    """``value`` as a float64 array of shape ``(..., width)``."""
     array = np.asarray(value)
     if array.dtype.kind not in "fiu":
         raise TypeError(f"{name} must hold real numbers, got dtype {array.dtype}")
-    if array.ndim != len(shape) or any(s not in (-1, n) for s, n in zip(shape, array.shape)):
-        want = (
-            "("
-            + ", ".join("N" if s == -1 else str(s) for s in shape)
-            + ("," if len(shape) == 1 else "")
-            + ")"
-        )
-        raise ValueError(f"{name} must have shape {want}, got {array.shape}")
+    if array.ndim == 0 or array.shape[-1] != width:
+        raise ValueError(f"{name} must have shape (..., {width}), got {array.shape}")
     return array.astype(np.float64, copy=False)
 
 
-def _rays(origins, directions, tmin, tmax):
-    o = _floats(origins, "origins", (-1, 3))
-    d = _floats(directions, "directions", (-1, 3))
-    if o.shape != d.shape:
-        raise ValueError(
-            f"origins and directions must have the same shape, got {o.shape} and {d.shape}"
+class _Rays:
+    """Rays of any batch shape, flattened for the compiled scene: ``flat`` is (origins
+    (N, 3), directions (N, 3), tmin, tmax (N,) or (1,)) and ``shape`` the batch shape the
+    results take again (:meth:`shaped`)."""
+
+    def __init__(self, origins, directions, tmin, tmax):
+        if directions is None:
+            rays = _batch(origins, "rays", 6)
+            o, d = rays[..., :3], rays[..., 3:]
+        else:
+            o, d = _batch(origins, "origins", 3), _batch(directions, "directions", 3)
+        try:
+            shape = np.broadcast_shapes(o.shape[:-1], d.shape[:-1])
+        except ValueError:
+            raise ValueError(
+                "origins and directions must have the same shape (or shapes that broadcast),"
+                f" got {o.shape} and {d.shape}"
+            ) from None
+        self.shape = shape
+        flat = (
+            np.ascontiguousarray(np.broadcast_to(x, shape + (3,)).reshape(-1, 3)) for x in (o, d)
         )
-    lo = _floats(np.atleast_1d(tmin), "tmin", (-1,))
-    hi = _floats(np.atleast_1d(tmax), "tmax", (-1,))
-    for name, t in (("tmin", lo), ("tmax", hi)):
-        if len(t) not in (1, len(o)):
-            raise ValueError(f"{name} must be a number or have shape ({len(o)},), got {t.shape}")
-    return o, d, lo, hi
+        self.flat = (*flat, self._range(tmin, "tmin"), self._range(tmax, "tmax"))
+
+    def _range(self, t, name: str) -> np.ndarray:
+        """A range bound: one number for all rays, or one per ray (broadcast to the batch)."""
+        array = np.asarray(t)
+        if array.dtype.kind not in "fiu":
+            raise TypeError(f"{name} must hold real numbers, got dtype {array.dtype}")
+        if array.ndim == 0:
+            return array.astype(np.float64).reshape(1)
+        try:
+            full = np.broadcast_to(array, self.shape)
+        except ValueError:
+            raise ValueError(
+                f"{name} must be a number or have shape {self.shape}, got {array.shape}"
+            ) from None
+        return np.ascontiguousarray(full, dtype=np.float64).reshape(-1)
+
+    def shaped(self, array: np.ndarray) -> np.ndarray:
+        """A per-ray result (N, ...) in the batch shape."""
+        return array.reshape(self.shape + array.shape[1:])
+
+    def named(self, error: ValueError) -> ValueError:
+        """A compiled scene's error about flat ray ``i``, naming the ray by its batch index."""
+        text = str(error)
+        head, sep, rest = text.partition(": ")
+        if len(self.shape) > 1 and sep and head.startswith("ray ") and head[4:].isdigit():
+            index = np.unravel_index(int(head[4:]), self.shape)
+            return ValueError(f"ray {tuple(int(i) for i in index)}: {rest}")
+        return error
 
 
 def _names(outputs: Iterable[str] | str) -> list[str]:
@@ -255,7 +286,7 @@ class Scene:
     def cast(
         self,
         origins,
-        directions,
+        directions=None,
         tmin=0.0,
         tmax=np.inf,
         aovs=("t", "distance", "normal", "id", "prim"),
@@ -264,9 +295,12 @@ class Scene:
 
         Parameters
         ----------
-        origins, directions : array_like, shape (N, 3)
-            Ray origins and directions (any non-zero length; not normalised).
-        tmin, tmax : float or array_like, shape (N,)
+        origins, directions : array_like, shape (..., 3)
+            Ray origins and directions (any non-zero length; not normalised), of any batch
+            shape; the two broadcast against each other (one origin for many directions).
+            With ``directions`` left out, ``origins`` holds whole rays as Open3D's
+            ``RaycastingScene`` takes them: shape (..., 6), origin then direction.
+        tmin, tmax : float or array_like, broadcasting to the batch shape
             The parameter range, per ray or for all; ``t`` is in units of ``|direction|``.
             ``tmin >= 0``.
         aovs : sequence of str
@@ -275,7 +309,8 @@ class Scene:
         Returns
         -------
         dict of numpy.ndarray
-            ``t`` (N,) float64, +inf on a miss; ``distance`` (N,) float64,
+            Each of the batch shape (written (N,) below) with the output's own axes after
+            it. ``t`` (N,) float64, +inf on a miss; ``distance`` (N,) float64,
             ``|hit - origin|``, +inf on a miss; ``normal`` (N, 3) float64, the unit geometric
             normal (counter-clockwise winding is the front; not flipped toward the ray), zeros
             on a miss; ``position`` (N, 3) float64, +inf on a miss; ``id`` (N,) uint32, the
@@ -292,14 +327,23 @@ class Scene:
             Arrays that do not hold real numbers.
         """
         names = _names(aovs)
-        return self._scene.cast(_rays(origins, directions, tmin, tmax), names)
+        rays = _Rays(origins, directions, tmin, tmax)
+        try:
+            hits = self._scene.cast(rays.flat, names)
+        except ValueError as e:
+            raise rays.named(e) from None
+        return {k: rays.shaped(v) for k, v in hits.items()}
 
-    def occluded(self, origins, directions, tmin=0.0, tmax=np.inf) -> np.ndarray:
-        """Whether each ray hits anything with ``tmin < t <= tmax``: a (N,) bool array.
-        Arguments and errors as for :meth:`cast`."""
-        return self._scene.occluded(_rays(origins, directions, tmin, tmax))
+    def occluded(self, origins, directions=None, tmin=0.0, tmax=np.inf) -> np.ndarray:
+        """Whether each ray hits anything with ``tmin < t <= tmax``: a bool array of the
+        rays' batch shape. Arguments and errors as for :meth:`cast`."""
+        rays = _Rays(origins, directions, tmin, tmax)
+        try:
+            return rays.shaped(self._scene.occluded(rays.flat))
+        except ValueError as e:
+            raise rays.named(e) from None
 
-    def list_intersections(self, origins, directions, tmin=0.0, tmax=np.inf) -> dict:
+    def list_intersections(self, origins, directions=None, tmin=0.0, tmax=np.inf) -> dict:
         """Every surface crossing of each ray with ``tmin < t <= tmax``, nearest first.
 
         A ray through an edge or a vertex shared by triangles of a consistently wound mesh
@@ -308,30 +352,42 @@ class Scene:
         Returns
         -------
         dict of numpy.ndarray
-            In CSR form: ``ray_splits`` (N + 1,) uint64, the hits of ray ``i`` are
+            In CSR form over the rays flattened in C order (N of them; arguments as for
+            :meth:`cast`): ``ray_splits`` (N + 1,) uint64, the hits of ray ``i`` are
             ``ray_splits[i]:ray_splits[i + 1]``; ``t`` float64; ``id`` uint32; ``prim``
             uint32; ``ray_ids`` uint32 (the ray of each hit).
         """
-        splits, t, ids, prims = self._scene.crossings(_rays(origins, directions, tmin, tmax))
+        rays = _Rays(origins, directions, tmin, tmax)
+        try:
+            splits, t, ids, prims = self._scene.crossings(rays.flat)
+        except ValueError as e:
+            raise rays.named(e) from None
         ray_ids = np.repeat(
             np.arange(len(splits) - 1, dtype=np.uint32), np.diff(splits).astype(np.int64)
         )
         return {"ray_splits": splits, "t": t, "id": ids, "prim": prims, "ray_ids": ray_ids}
 
-    def count_intersections(self, origins, directions, tmin=0.0, tmax=np.inf) -> np.ndarray:
+    def count_intersections(self, origins, directions=None, tmin=0.0, tmax=np.inf) -> np.ndarray:
         """The number of surface crossings of each ray, as :meth:`list_intersections`
-        counts them: a (N,) uint32 array."""
-        splits = self._scene.crossings(_rays(origins, directions, tmin, tmax))[0]
-        return np.diff(splits).astype(np.uint32)
+        counts them: a uint32 array of the rays' batch shape."""
+        rays = _Rays(origins, directions, tmin, tmax)
+        try:
+            splits = self._scene.crossings(rays.flat)[0]
+        except ValueError as e:
+            raise rays.named(e) from None
+        return rays.shaped(np.diff(splits).astype(np.uint32))
 
     def contains(self, points) -> np.ndarray:
-        """Whether each point lies inside the scene's closed surfaces: a (N,) bool array.
+        """Whether each point (an array of shape (..., 3)) lies inside the scene's closed
+        surfaces: a bool array of the points' batch shape.
 
         The parity of the crossings of three rays from the point in fixed directions, by
         majority, so that a ray that grazes an edge cannot decide alone. Meaningful for
         closed, consistently wound surfaces; a point on a surface may count either way.
         """
-        return self._scene.contains(_floats(points, "points", (-1, 3)))
+        p = _batch(points, "points", 3)
+        inside = self._scene.contains(np.ascontiguousarray(p.reshape(-1, 3)))
+        return inside.reshape(p.shape[:-1])
 
     def render(self, camera: camera.Camera, width: int, height: int, aovs=("depth",)) -> dict:
         """An image seen by ``camera``: one ray per pixel through its centre, row 0 at the top.

@@ -94,9 +94,9 @@ def test_inputs_are_read_in_place_or_converted(cube):
             np.zeros((2, 2)),
             np.zeros((2, 2)),
             ValueError,
-            "origins must have shape (N, 3), got (2, 2)",
+            "origins must have shape (..., 3), got (2, 2)",
         ),
-        (np.zeros(3), np.ones(3), ValueError, "origins must have shape (N, 3), got (3,)"),
+        (np.float64(0.0), np.ones(3), ValueError, "origins must have shape (..., 3), got ()"),
         (np.zeros((2, 3)), np.ones((3, 3)), ValueError, "same shape"),
         (np.array([["a", "b", "c"]]), np.ones((1, 3)), TypeError, "origins must hold real numbers"),
         (
@@ -118,6 +118,38 @@ def test_bad_rays_raise_clear_errors(cube, origins, directions, error, text):
     with pytest.raises(error) as raised:
         cube.cast(origins, directions)
     assert text in str(raised.value)
+
+
+def test_rays_of_any_batch_shape(cube):
+    # Analysis as in test_cast_hits_the_faces_it_must: from (x, y, 5) straight down, the +z
+    # face at t = 4 when |x|, |y| < 1, a miss outside.
+    xs = np.array([[-0.5, 0.0, 0.5, 2.0], [0.25, -0.75, 3.0, 0.9]])
+    origins = np.stack([xs, np.full_like(xs, 0.1), np.full_like(xs, 5.0)], axis=-1)  # (2, 4, 3)
+    down = np.array([0.0, 0.0, -1.0])  # one direction for every origin: broadcast
+    hits = cube.cast(origins, down, aovs=["t", "normal", "id"])
+    expected = np.where(np.abs(xs) < 1, 4.0, np.inf)
+    assert hits["t"].shape == (2, 4) and hits["t"].tolist() == expected.tolist()
+    assert hits["normal"].shape == (2, 4, 3)
+    assert hits["normal"][0, 0].tolist() == [0, 0, 1] and hits["id"][1, 2] == 0
+    # Open3D's layout: whole rays (..., 6); a single ray of shape (6,) gives 0-d results.
+    rays = np.concatenate([origins, np.broadcast_to(down, origins.shape)], axis=-1)
+    assert cube.cast(rays, aovs=["t"])["t"].tolist() == expected.tolist()
+    one = cube.cast(np.array([0.2, 0.3, 5.0, 0.0, 0.0, -2.0]), aovs=["t"])["t"]
+    assert one.shape == () and one == 2.0
+    # Per-ray ranges broadcast too; occluded, counts and contains keep the batch shape.
+    ranged = cube.cast(origins, down, tmax=np.array([[3.9], [np.inf]]), aovs=["t"])["t"]
+    assert ranged.tolist() == [[np.inf] * 4, expected[1].tolist()]
+    assert cube.occluded(origins, down).tolist() == (np.abs(xs) < 1).tolist()
+    counts = cube.count_intersections(origins, down)
+    assert counts.shape == (2, 4) and counts.tolist() == np.where(np.abs(xs) < 1, 2, 0).tolist()
+    points = np.zeros((2, 2, 3))
+    points[1, 1] = [0.0, 0.0, 3.0]
+    assert cube.contains(points).tolist() == [[True, True], [True, False]]
+    # A bad ray is named by its place in the batch.
+    bad = origins.copy()
+    bad[1, 2, 0] = np.nan
+    with pytest.raises(ValueError, match=r"ray \(1, 2\): origin \(NaN, 0.1, 5\) is not finite"):
+        cube.cast(bad, down)
 
 
 def test_bad_options_raise_clear_errors(cube):
