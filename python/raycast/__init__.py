@@ -147,9 +147,8 @@ class _Rays:
                 f" got {o.shape} and {d.shape}"
             ) from None
         self.shape = shape
-        flat = (
-            np.ascontiguousarray(np.broadcast_to(x, shape + (3,)).reshape(-1, 3)) for x in (o, d)
-        )
+        # A view where the array is (N, 3) already (read in place, any strides), else a copy.
+        flat = (np.broadcast_to(x, shape + (3,)).reshape(-1, 3) for x in (o, d))
         self.flat = (*flat, self._range(tmin, "tmin"), self._range(tmax, "tmax"))
 
     def _range(self, t, name: str) -> np.ndarray:
