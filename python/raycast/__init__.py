@@ -13,6 +13,7 @@ parameter in units of ``|direction|``. See docs/python.md.
 
 from __future__ import annotations
 
+import errno
 import os
 from typing import Iterable
 
@@ -85,7 +86,12 @@ def load(
     choice = None if scene is None else str(scene)
     which = None if animation is None else str(animation)
     chosen = None if variants is None else [(str(k), str(v)) for k, v in variants.items()]
-    return Scene(_raycast.load_path(os.fspath(path), choice, time, which, chosen))
+    try:
+        return Scene(_raycast.load_path(os.fspath(path), choice, time, which, chosen))
+    except SceneNotFoundError as missing:
+        missing.errno, missing.strerror = errno.ENOENT, os.strerror(errno.ENOENT)
+        missing.filename = os.fspath(path)
+        raise
 
 
 def load_bytes(

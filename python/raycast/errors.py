@@ -14,7 +14,11 @@ class SceneError(RaycastError):
 
 
 class SceneNotFoundError(SceneError, FileNotFoundError):
-    """The scene file does not exist."""
+    """The scene file does not exist. As a ``FileNotFoundError`` it carries ``errno``
+    (``ENOENT``) and ``filename``; its message is raycast's one line naming the file."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else super().__str__()
 
 
 class UsageError(RaycastError, ValueError):

@@ -4,6 +4,7 @@ Expected values come from the fixtures' known geometry (analysis) or from trimes
 from raycast itself. Run: .venv/bin/python -m pytest tests/python/test_py_api.py
 """
 
+import errno
 import pickle
 from pathlib import Path
 
@@ -172,6 +173,7 @@ def test_load_errors_are_typed(tmp_path):
         raycast.load(missing)
     assert isinstance(raised.value, FileNotFoundError)
     assert str(missing) in str(raised.value)
+    assert raised.value.errno == errno.ENOENT and raised.value.filename == str(missing)
     broken = tmp_path / "broken.gltf"
     broken.write_text("{ not json")
     with pytest.raises(raycast.SceneError) as raised:
