@@ -14,18 +14,21 @@ parameter in units of ``|direction|``. See docs/python.md.
 from __future__ import annotations
 
 import errno
+import json
 import os
+import warnings
 from typing import Iterable
 
 import numpy as np
 
 from . import _raycast, camera, errors
-from .errors import RaycastError, SceneError, SceneNotFoundError, UsageError
+from .errors import RaycastError, RaycastWarning, SceneError, SceneNotFoundError, UsageError
 
 __all__ = [
     "CAST_OUTPUTS",
     "RENDER_OUTPUTS",
     "RaycastError",
+    "RaycastWarning",
     "Scene",
     "SceneError",
     "SceneNotFoundError",
@@ -198,6 +201,9 @@ class Scene:
 
     def __init__(self, compiled: _raycast._Scene):
         self._scene = compiled
+        for line in json.loads(compiled.info_json()).get("warnings", []):
+            # stacklevel 3: the caller of load(), load_bytes(), at() or from_arrays().
+            warnings.warn(line, RaycastWarning, stacklevel=3)
 
     @staticmethod
     def from_arrays(vertices, faces) -> Scene:
@@ -284,8 +290,6 @@ class Scene:
 
     def info(self) -> dict:
         """What ``raycast info --json`` prints for this scene, as a dict."""
-        import json
-
         return json.loads(self._scene.info_json())
 
     def cast(

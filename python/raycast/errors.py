@@ -23,3 +23,9 @@ class SceneNotFoundError(SceneError, FileNotFoundError):
 
 class UsageError(RaycastError, ValueError):
     """The request cannot be carried out as asked (an invalid option or combination)."""
+
+
+class RaycastWarning(UserWarning):
+    """A warning about a loaded scene (an empty scene, a pose drawn at its default, something
+    of the file not applied): the same lines the command line prints as ``warning:``, issued
+    once per load with :func:`warnings.warn`. ``Scene.info()["warnings"]`` lists them too."""

@@ -167,6 +167,15 @@ def test_bad_options_raise_clear_errors(cube):
         cube.contains(np.zeros((4, 2)))
 
 
+def test_scene_warnings_are_python_warnings(tmp_path):
+    empty = tmp_path / "empty.obj"
+    empty.write_text("# nothing but a comment\n")
+    with pytest.warns(raycast.RaycastWarning, match="no triangles or quadrics") as caught:
+        scene = raycast.load(empty)
+    assert caught[0].filename == __file__  # pointed at the caller of load()
+    assert scene.info()["warnings"] == [str(w.message) for w in caught]
+
+
 def test_load_errors_are_typed(tmp_path):
     missing = tmp_path / "missing.glb"
     with pytest.raises(raycast.SceneNotFoundError) as raised:
