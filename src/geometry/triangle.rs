@@ -41,6 +41,11 @@ impl WatertightRay {
         }
     }
 
+    /// The axis permutation `[kx, ky, kz]`: `kz` is the direction's dominant axis.
+    pub fn axes(&self) -> [usize; 3] {
+        self.axes
+    }
+
     /// The ray parameter `t` of the hit with triangle `tri`, if `0 < t <= t_max`.
     ///
     /// Watertight: a ray through a shared edge or vertex hits at least one of the triangles

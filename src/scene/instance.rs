@@ -69,6 +69,9 @@ pub struct Instance {
     /// World bounds (the mesh bounds' corners placed, padded for their rounding), for the
     /// pre-test.
     reach: ReachBox,
+    /// A bound on each entry of `to_local.matrix3` minus the exact inverse of
+    /// `to_world.matrix3` ([`crate::bound::inverse_error`]).
+    inverse_error: f64,
 }
 
 impl Instance {
@@ -96,7 +99,14 @@ impl Instance {
             to_local,
             part,
             reach: ReachBox::new(bounds),
+            inverse_error: crate::bound::inverse_error(to_world.matrix3, to_local.matrix3),
         })
+    }
+
+    /// A bound on each entry of the mesh-frame map's linear part minus the exact inverse of
+    /// the placement's.
+    pub fn inverse_error(&self) -> f64 {
+        self.inverse_error
     }
 
     /// World bounds (the mesh bounds' corners placed, padded for their rounding).
