@@ -51,10 +51,10 @@ pub enum Side {
 /// lie in cells the traversal does not visit (cells are grown by 1e-9 of the root).
 pub const CELL_SLACK: f64 = 1e-10;
 
-/// A bound on every entry of `A⁻¹ − inverse` for the computed inverse `inverse` of `a`: with
-/// `E = I − inverse·A` evaluated in bounded arithmetic and `η = ‖E‖∞ < 1`,
-/// `A⁻¹ = (I − E)⁻¹·inverse`, so `‖A⁻¹ − inverse‖∞ ≤ η/(1 − η)·‖inverse‖∞`. `+∞` when `η ≥ 1`.
-pub fn inverse_error(a: DMat3, inverse: DMat3) -> f64 {
+/// A bound on `‖A⁻¹‖∞` from the computed inverse `inverse` of `a`: with `E = I − inverse·A`
+/// evaluated in bounded arithmetic and `η = ‖E‖∞ < 1`, `A⁻¹ = (I − E)⁻¹·inverse`, so
+/// `‖A⁻¹‖∞ ≤ ‖inverse‖∞ / (1 − η)`. `+∞` when `η ≥ 1`.
+pub fn inverse_norm(a: DMat3, inverse: DMat3) -> f64 {
     let l = inverse.transpose().to_cols_array_2d();
     let a_cols = a.to_cols_array_2d();
     let mut eta: f64 = 0.0;
@@ -73,7 +73,25 @@ pub fn inverse_error(a: DMat3, inverse: DMat3) -> f64 {
     if eta >= 1.0 {
         return f64::INFINITY;
     }
-    up(eta / bounded::down(1.0 - eta) * norm)
+    up(norm / bounded::down(1.0 - eta))
+}
+
+/// The computed `x = inverse · y` (the f64 values the tracer uses) as a bounded image of the
+/// exact `A⁻¹y*`, `y*` within `y`'s bounds: with the residual `r = y − A·x` evaluated in
+/// bounded arithmetic, `A⁻¹y* − x = A⁻¹((y* − y) + r)`, so every component is within
+/// `‖A⁻¹‖∞ · (max eᵧ + max |r|)` (`inverse_norm` from [`inverse_norm`]).
+pub fn mapped(a: DMat3, inverse_norm: f64, y: &bounded::BVec3, x: DVec3) -> bounded::BVec3 {
+    let rows = a
+        .transpose()
+        .to_cols_array_2d()
+        .map(|r| r.map(Bounded::exact));
+    let ax = bounded::mat_vec(&rows, &bounded::exact3(x));
+    let residual = (0..3)
+        .map(|i| Bounded::exact(y[i].value).sub(ax[i]).magnitude())
+        .fold(0.0, f64::max);
+    let y_error = y.iter().map(|c| c.error).fold(0.0, f64::max);
+    let error = up(inverse_norm * up(residual + y_error));
+    bounded::within3(x, error)
 }
 
 /// A bound on each coordinate's error when `points` are placed by the f64 affine matrix
@@ -117,18 +135,31 @@ fn depth_bound(t: Bounded, dir: DVec3) -> Bounded {
     t.mul(bounded::dot3(&d, &d).sqrt())
 }
 
-/// The `certain` AOV of `ray` with its nearest hit `hit` (see the module docs).
-pub fn certain(query: &Query, ray: &Ray, hit: Option<&Crossing>) -> bool {
+/// The `certain` AOV of `ray` with its nearest hit `hit` in the range `(t_min, t_max]` (see
+/// the module docs). A hit must lie in the range by more than its bound; crossings before
+/// `t_min` count as competitors too (conservative).
+pub fn certain(
+    query: &Query,
+    ray: &Ray,
+    hit: Option<&Crossing>,
+    (t_min, t_max): (f64, f64),
+) -> bool {
     let scene = query.scene;
+    let hit = hit.map(|h| scene.with_inner(h, ray.origin, ray.dir));
+    let hit = hit.as_ref();
     let t_limit = match hit {
         Some(hit) => {
             let bound = scene.hit_bound(hit, ray.origin, ray.dir);
-            if !bound.certain {
+            let (low, high) = (
+                bound.t.value - bound.t.error,
+                up(bound.t.value + bound.t.error),
+            );
+            if !bound.certain || !(low > t_min && high <= t_max) {
                 return false;
             }
-            up(bound.t.value + bound.t.error)
+            high
         }
-        None => f64::INFINITY,
+        None => t_max,
     };
     let root = query.octree.root().size().max_element();
     let mut certain = true;

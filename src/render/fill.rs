@@ -129,6 +129,8 @@ struct Block<'a, S: ?Sized> {
     /// The camera's eye and view axis (zeros without a camera).
     eye: DVec3,
     forward: DVec3,
+    /// Each ray's `(t_min, t_max]`, for the `certain` AOV.
+    range: &'a (dyn Fn(usize) -> (f64, f64) + Sync),
 }
 
 impl<S: RaySource + ?Sized> Block<'_, S> {
@@ -179,8 +181,9 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
             (Aov::Certain, Slot::Flag(out)) => {
                 let query = self.tracer.query();
                 for (j, (slot, hit)) in out.iter_mut().zip(hits).enumerate() {
+                    let range = (self.range)(self.start + j);
                     let certain = query.as_ref().is_some_and(|query| {
-                        crate::bound::certain(query, &self.ray(j), hit.as_ref())
+                        crate::bound::certain(query, &self.ray(j), hit.as_ref(), range)
                     });
                     *slot = u8::from(certain);
                 }
@@ -266,6 +269,7 @@ where
             start,
             eye,
             forward,
+            range: &rays.range,
         };
         let order = tile_order(len, width);
         let indices: Vec<usize> = match &order {

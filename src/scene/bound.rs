@@ -2,9 +2,9 @@
 //! crossed by the exact ray within a range.
 
 use super::{Crossing, Scene, Top};
-use crate::bound::bounded::{exact3, mat_vec, up, BMat3, BVec3, Bounded};
+use crate::bound::bounded::{exact3, up, BVec3, Bounded};
 use crate::bound::triangle::{self, TriangleBound};
-use crate::bound::{HitBound, Side, CELL_SLACK};
+use crate::bound::{mapped, HitBound, Side, CELL_SLACK};
 use crate::geometry::Aabb;
 use crate::quadric::{Others, QuadricBound, RootBound};
 use glam::DVec3;
@@ -64,14 +64,9 @@ impl Scene {
                 triangle_hit(&b, hit.t)
             }
             Top::Instance(k) => {
-                let instance = &self.instances[k];
-                let stored = &self.meshes[instance.mesh as usize];
-                let inner = match hit.inner {
-                    Some(inner) => inner,
-                    None => match instance.intersect(stored, origin, dir, hit.t) {
-                        Some(found) => found.prim,
-                        None => return unbounded,
-                    },
+                let stored = &self.meshes[self.instances[k].mesh as usize];
+                let Some(inner) = self.with_inner(hit, origin, dir).inner else {
+                    return unbounded;
                 };
                 let (o, d) = self.instance_ray(k, origin, dir);
                 let tri = stored.set.mesh.triangle(inner as usize).map(exact3);
@@ -79,6 +74,23 @@ impl Scene {
             }
             Top::Quadric(q) => quadric_hit(&self.quadrics[q].bound_roots(origin, dir), hit.t),
         }
+    }
+
+    /// `hit` with the triangle of the instance it hits, found again if it does not carry it
+    /// (as [`Scene::locate`] does); unchanged for other primitives.
+    pub fn with_inner(&self, hit: &Crossing, origin: DVec3, dir: DVec3) -> Crossing {
+        let Top::Instance(k) = self.top(hit.top as usize) else {
+            return *hit;
+        };
+        if hit.inner.is_some() {
+            return *hit;
+        }
+        let instance = &self.instances[k];
+        let stored = &self.meshes[instance.mesh as usize];
+        let inner = instance
+            .intersect(stored, origin, dir, hit.t)
+            .map(|h| h.prim);
+        Crossing { inner, ..*hit }
     }
 
     /// Whether top-level primitive `index` may have an exact crossing with the ray `origin +
@@ -176,15 +188,17 @@ impl Scene {
     }
 
     /// The world ray in instance `k`'s mesh frame as the trace maps it, `L(o − T)` and `L d`,
-    /// bounded (`L`'s entries within [`crate::bound::inverse_error`] of the exact inverse).
+    /// bounded ([`crate::bound::mapped`]).
     fn instance_ray(&self, k: usize, origin: DVec3, dir: DVec3) -> (BVec3, BVec3) {
         let instance = &self.instances[k];
-        let error = instance.inverse_error();
-        let rows = instance.to_local.matrix3.transpose().to_cols_array_2d();
-        let l: BMat3 = rows.map(|row| row.map(|x| Bounded::new(x, error)));
+        let (a, norm) = (instance.to_world.matrix3, instance.inverse_norm());
         let t = instance.to_world.translation;
         let offset = [0, 1, 2].map(|i| Bounded::exact(origin[i]).sub(Bounded::exact(t[i])));
-        (mat_vec(&l, &offset), mat_vec(&l, &exact3(dir)))
+        let l = instance.to_local.matrix3;
+        (
+            mapped(a, norm, &offset, l * (origin - t)),
+            mapped(a, norm, &exact3(dir), l * dir),
+        )
     }
 }
 

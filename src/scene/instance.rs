@@ -69,9 +69,8 @@ pub struct Instance {
     /// World bounds (the mesh bounds' corners placed, padded for their rounding), for the
     /// pre-test.
     reach: ReachBox,
-    /// A bound on each entry of `to_local.matrix3` minus the exact inverse of
-    /// `to_world.matrix3` ([`crate::bound::inverse_error`]).
-    inverse_error: f64,
+    /// A bound on `‖A⁻¹‖∞` for `A = to_world.matrix3` ([`crate::bound::inverse_norm`]).
+    inverse_norm: f64,
 }
 
 impl Instance {
@@ -99,14 +98,13 @@ impl Instance {
             to_local,
             part,
             reach: ReachBox::new(bounds),
-            inverse_error: crate::bound::inverse_error(to_world.matrix3, to_local.matrix3),
+            inverse_norm: crate::bound::inverse_norm(to_world.matrix3, to_local.matrix3),
         })
     }
 
-    /// A bound on each entry of the mesh-frame map's linear part minus the exact inverse of
-    /// the placement's.
-    pub fn inverse_error(&self) -> f64 {
-        self.inverse_error
+    /// A bound on `‖A⁻¹‖∞` for the placement's linear part `A`.
+    pub fn inverse_norm(&self) -> f64 {
+        self.inverse_norm
     }
 
     /// World bounds (the mesh bounds' corners placed, padded for their rounding).

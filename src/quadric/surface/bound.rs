@@ -10,10 +10,11 @@
 //! # Derivation
 //! - The computed anchor, `∇f(a)` and `f(a)` carry the [`Bounded`] errors of their f64
 //!   evaluation (kept from [`Quadric::new`]); the power-of-two normalisation is exact.
-//! - `A⁻¹` is the f64 inverse `L`; with the residual `E = I − LA` (evaluated in [`Bounded`]
-//!   arithmetic) and `η = ‖E‖∞ < 1`, `A⁻¹ = (I − E)⁻¹L`, so every entry of `A⁻¹ − L` is at most
-//!   `η/(1 − η)·‖L‖∞` ([`crate::bound::inverse_error`]).
-//! - `x₀`, `v`, `K`, `L`, `M` are recomputed in [`Bounded`] arithmetic in the operations' order.
+//! - `A⁻¹` is applied as the f64 inverse `L`: the computed `x₀ = L(o − c)` is within
+//!   `‖A⁻¹‖∞(‖r‖∞ + e)` of the exact `A⁻¹(o − c*)`, `r = (o − c) − A·x₀` the residual evaluated in
+//!   [`Bounded`] arithmetic and `e` the bound of `o − c` ([`crate::bound::mapped`]; `‖A⁻¹‖∞ ≤
+//!   ‖L‖∞/(1 − ‖I − LA‖∞)`, [`crate::bound::inverse_norm`]); the same for `v = L d`.
+//! - `K`, `L`, `M` are recomputed in [`Bounded`] arithmetic in the operations' order.
 //! - A computed root `t` is checked, not propagated through the root formula (which loses the
 //!   bound near tangents): `G ≥ |g*(t)|` from the bounded coefficients, `m₀ ≤ |g*'(t)|`. On
 //!   `[t − r, t + r]`, `r = 2G/m₀`, `|g*'| ≥ m = m₀ − 2|K*|r`; if `m > 0` and `G/m ≤ r`, `g*` is
@@ -29,14 +30,15 @@
 
 use super::Quadric;
 use crate::bound::bounded::{down, exact3, gamma, mat_vec, up, BMat3, BVec3, Bounded};
-use crate::bound::Side;
+use crate::bound::{mapped, Side};
 use glam::{DMat3, DVec3};
 
 /// Bounds of the numbers a quadric's intersection starts from, kept by [`Quadric::new`].
 #[derive(Debug, Clone, PartialEq)]
 pub(in crate::quadric) struct Errors {
-    /// Bound on each entry of `to_local − A⁻¹`.
-    pub to_local: f64,
+    /// The object→world linear map `A`, and a bound on `‖A⁻¹‖∞`.
+    pub linear: DMat3,
+    pub inverse_norm: f64,
     /// Bound on each component of the computed anchor.
     pub anchor: DVec3,
     /// Bounds on the local polynomial's `P` (normalised) components and `R`.
@@ -107,7 +109,8 @@ impl Errors {
         let translation = world.w_axis.truncate();
         let anchor = [0, 1, 2].map(|i| placed[i].add(Bounded::exact(translation[i])).error);
         Errors {
-            to_local: crate::bound::inverse_error(linear, to_local),
+            linear,
+            inverse_norm: crate::bound::inverse_norm(linear, to_local),
             anchor: DVec3::from_array(anchor),
             gradient: DVec3::from_array(gradient.map(|g| scaled(g.error))),
             constant: scaled(constant.error),
@@ -161,13 +164,18 @@ impl Quadric {
         }
     }
 
-    /// The local ray, bounded: `x₀ = L(o − c)`, `v = L d`.
+    /// The local ray as computed, `x₀ = L(o − c)`, `v = L d`, bounded
+    /// ([`crate::bound::mapped`]).
     fn bounded_ray(&self, origin: DVec3, dir: DVec3) -> (BVec3, BVec3) {
         let e = &self.errors;
         let anchor = [0, 1, 2].map(|i| Bounded::new(self.anchor[i], e.anchor[i]));
         let offset = [0, 1, 2].map(|i| Bounded::exact(origin[i]).sub(anchor[i]));
-        let l = rows(self.to_local, e.to_local);
-        (mat_vec(&l, &offset), mat_vec(&l, &exact3(dir)))
+        let x0 = self.to_local * (origin - self.anchor);
+        let v = self.to_local * dir;
+        (
+            mapped(e.linear, e.inverse_norm, &offset, x0),
+            mapped(e.linear, e.inverse_norm, &exact3(dir), v),
+        )
     }
 
     /// `K`, `L`, `M` of the local polynomial along the bounded ray.
@@ -185,11 +193,26 @@ impl Quadric {
         }
     }
 
+    /// `g*(t) = f(x₀ + t·v)` and `g*'(t) = ∇f(x₀ + t·v)·v`, bounded. Evaluated at the point
+    /// rather than from `K`, `L`, `M`: the errors of the start point then enter weighted by the
+    /// gradient at the crossing, not by the (larger) gradient at the ray's origin.
+    fn value_and_slope(&self, t: f64, x0: &BVec3, v: &BVec3) -> (Bounded, Bounded) {
+        use crate::bound::bounded::dot3;
+        let tb = Bounded::exact(t);
+        let point: BVec3 = [0, 1, 2].map(|i| x0[i].add(tb.mul(v[i])));
+        let q = rows(self.local.q, 0.0);
+        let p = [0, 1, 2].map(|i| Bounded::new(self.local.p[i], self.errors.gradient[i]));
+        let r = Bounded::new(self.local.r, self.errors.constant);
+        let qp = mat_vec(&q, &point);
+        let value = dot3(&point, &qp).add(dot3(&p, &point)).add(r);
+        let gradient: BVec3 = [0, 1, 2].map(|i| Bounded::exact(2.0).mul(qp[i]).add(p[i]));
+        (value, dot3(&gradient, v))
+    }
+
     /// The bound of the computed root `t` (see the module docs) and its clip side.
     fn root_bound(&self, t: f64, c: &Coefficients, x0: &BVec3, v: &BVec3) -> RootBound {
-        let tb = Bounded::exact(t);
-        let g = c.k.mul(tb).add(c.l).mul(tb).add(c.m).magnitude();
-        let slope = Bounded::exact(2.0).mul(c.k).mul(tb).add(c.l);
+        let (value, slope) = self.value_and_slope(t, x0, v);
+        let g = value.magnitude();
         let m0 = down(slope.value.abs() - slope.error);
         let mut bound = f64::INFINITY;
         let mut isolated = false;
