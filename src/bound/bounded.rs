@@ -1,16 +1,23 @@
 //! [`Bounded`]: an f64 value computed in floating point, with a bound on its distance from the
 //! exact real value it stands for (running forward error analysis).
 //!
-//! Every operation follows the standard model `fl(x ∘ y) = (x ∘ y)(1 + θ)`, `|θ| ≤ u = 2⁻⁵³`
-//! (round to nearest, no underflow), so `|fl(z) − z| ≤ u|z| ≤ γ₁|fl(z)|` with Higham's
-//! `γₙ = nu / (1 − nu)`. With `|a − x| ≤ eₐ` and `|b − y| ≤ e_b`:
+//! With `|a − x| ≤ eₐ` and `|b − y| ≤ e_b`:
 //!
-//! - `a ± b`: `|fl(a ± b) − (x ± y)| ≤ eₐ + e_b + γ₁|fl(a ± b)|`;
-//! - `a · b`: `|ab − xy| ≤ |a|e_b + |b|eₐ + eₐe_b`, plus `γ₁|fl(ab)|`;
+//! - `a ± b`: `|fl(a ± b) − (x ± y)| ≤ eₐ + e_b + ρ`;
+//! - `a · b`: `|ab − xy| ≤ |a|e_b + |b|eₐ + eₐe_b`, plus `ρ`;
 //! - `a / b` (`e_b < |b|`): `|a/b − x/y| = |ay − xb| / |by| ≤ (|a|e_b + |b|eₐ) / (|b|(|b| − e_b))`,
-//!   plus `γ₁|fl(a/b)|`;
+//!   plus `ρ`;
 //! - `√a` (`a − eₐ > 0`): `|√a − √x| = |a − x| / (√a + √x) ≤ eₐ / (√a + √(a − eₐ))`, plus
 //!   `γ₁ fl(√a)`.
+//!
+//! `ρ` is the operation's own rounding error, computed exactly rather than bounded by the
+//! standard model's `γ₁|fl(z)|` (Higham's `γₙ = nu / (1 − nu)`, `u = 2⁻⁵³`): Knuth's two-sum for
+//! a sum, Dekker's two-product for a product, and for a quotient `q` the remainder
+//! `a − q·b` (exact to one rounding) over `|b|`. An operation that happens to be exact (adding
+//! zero, a product of short mantissas) then adds nothing, which keeps the bound within a
+//! small factor of the actual error. Products below about 2⁻⁹⁶⁹ may lose the exactness of the
+//! two-product to underflow; each product's bound gets `2⁻¹⁰⁷²` more, and a product too large
+//! to split falls back to `γ₁|fl(ab)|`.
 //!
 //! The bounds themselves are sums and products of non-negative numbers evaluated in f64: a few
 //! roundings, each at most a relative `u`. [`up`] multiplies each by `1 + 2⁻⁵⁰` (more than
@@ -42,6 +49,33 @@ pub fn up(x: f64) -> f64 {
 #[inline]
 pub fn down(x: f64) -> f64 {
     (x * (1.0 - SLACK)).next_down().max(0.0)
+}
+
+/// Extra absolute bound per product, for the underflow of its rounding error.
+const UNDERFLOW: f64 = 4.0 * f64::MIN_POSITIVE * f64::EPSILON;
+
+/// Dekker's splitting constant `2²⁷ + 1`.
+const SPLIT: f64 = 134_217_729.0;
+
+/// `(hi, lo)` with `hi = fl(a)` … the halves of `a` (Dekker).
+fn split(a: f64) -> (f64, f64) {
+    let c = SPLIT * a;
+    let hi = c - (c - a);
+    (hi, a - hi)
+}
+
+/// The exact rounding error `a·b − fl(a·b)` (Dekker's two-product), or `None` when the
+/// splitting overflows.
+fn product_error(a: f64, b: f64, p: f64) -> Option<f64> {
+    let ((ah, al), (bh, bl)) = (split(a), split(b));
+    let error = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
+    error.is_finite().then_some(error)
+}
+
+/// The exact rounding error `a + b − fl(a + b)` (Knuth's two-sum).
+fn sum_error(a: f64, b: f64, s: f64) -> f64 {
+    let bb = s - a;
+    (a - (s - bb)) + (b - bb)
 }
 
 /// A computed value and a bound on its distance from the exact value: `|value − exact| ≤
@@ -83,7 +117,13 @@ impl Bounded {
     #[inline]
     pub fn add(self, other: Bounded) -> Bounded {
         let value = self.value + other.value;
-        Bounded::new(value, up(self.error + other.error + gamma(1) * value.abs()))
+        let rounding = sum_error(self.value, other.value, value).abs();
+        let rounding = if rounding.is_finite() {
+            rounding
+        } else {
+            gamma(1) * value.abs()
+        };
+        Bounded::new(value, up(self.error + other.error + rounding))
     }
 
     /// `self − other`.
@@ -105,7 +145,9 @@ impl Bounded {
         let spread = self.value.abs() * other.error
             + other.value.abs() * self.error
             + self.error * other.error;
-        Bounded::new(value, up(spread + gamma(1) * value.abs()))
+        let rounding = product_error(self.value, other.value, value)
+            .map_or(gamma(1) * value.abs(), |e| e.abs() + UNDERFLOW);
+        Bounded::new(value, up(spread + rounding))
     }
 
     /// `self / other`; an infinite bound when `other` may be zero.
@@ -118,7 +160,11 @@ impl Bounded {
             return Bounded::new(value, f64::INFINITY);
         }
         let spread = up(self.value.abs() * other.error + b * self.error) / down(b * margin);
-        Bounded::new(value, up(spread + gamma(1) * value.abs()))
+        // a − q·b: the high part cancels exactly (Sterbenz), the low part rounds once.
+        let remainder = product_error(value, other.value, value * other.value)
+            .map(|low| up(((self.value - value * other.value) - low).abs()) / down(b));
+        let rounding = remainder.map_or(gamma(1) * value.abs(), |r| r + UNDERFLOW);
+        Bounded::new(value, up(spread + rounding))
     }
 
     /// `√self` for a value that is not negative.
@@ -185,8 +231,9 @@ mod tests {
         // fl(1/3) = 0.333...3148 is within 1.9e-17 of 1/3.
         assert!(third.error >= 1.85e-17 && third.error < 1e-16, "{third:?}");
         let sum = tenth.add(tenth).add(tenth);
-        // 0.30000000000000004 is 4.4e-17 above 3/10.
-        assert!((sum.value - 0.3).abs() <= sum.error, "{sum:?}");
+        // 0.3000000000000000444089209850062616… is 4.44089209850062616e-17 above 3/10.
+        assert_eq!(sum.value, 0.30000000000000004);
+        assert!(4.440892098500627e-17 <= sum.error, "{sum:?}");
         assert!(sum.error < 2e-16);
         let root = Bounded::exact(2.0).sqrt();
         // √2 = 1.41421356237309504880..., fl(√2) = 1.4142135623730951454...

@@ -278,3 +278,60 @@ fn others(roots: &[RootBound], c: &Coefficients) -> Others {
         _ => Others::Unknown,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quadric::QuadricSpec;
+    use glam::DMat4;
+
+    fn sphere_at(centre: DVec3, bounds: Option<[DVec3; 2]>) -> Quadric {
+        let spec = QuadricSpec::from_coefficients(
+            [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
+            bounds,
+        )
+        .unwrap();
+        Quadric::new(&spec, DMat4::from_translation(centre)).unwrap()
+    }
+
+    /// A unit sphere 1e7 from the origin, hit head-on from 10 units above its centre: the
+    /// exact roots are t = 9 and 11 (analysis); both are isolated, each bound covers its root
+    /// and is at most a few hundred ulps of the distance travelled.
+    #[test]
+    fn far_sphere_roots_are_isolated_and_contain_the_exact_ones() {
+        let centre = DVec3::new(1e7, 0.0, 0.0);
+        let q = sphere_at(centre, None);
+        let b = q.bound_roots(centre + DVec3::new(0.0, 0.0, 10.0), DVec3::NEG_Z);
+        assert_eq!(b.others, Others::None);
+        for (root, exact) in b.roots.iter().zip([9.0, 11.0]) {
+            assert!(root.isolated && root.clip == Side::Inside, "{root:?}");
+            assert!((root.t.value - exact).abs() <= root.t.error, "{root:?}");
+            assert!(root.t.error < 1e-12, "{root:?}");
+        }
+    }
+
+    /// A ray tangent to the sphere (the double root t = 5) is not isolated.
+    #[test]
+    fn tangent_rays_are_not_isolated() {
+        let q = sphere_at(DVec3::ZERO, None);
+        let b = q.bound_roots(DVec3::new(1.0, 0.0, 5.0), DVec3::NEG_Z);
+        assert!(b.roots.iter().all(|r| !r.isolated), "{b:?}");
+        assert_eq!(b.others, Others::Unknown);
+    }
+
+    /// A crossing on a face of the clip box is at its edge; one well inside or outside is
+    /// certain.
+    #[test]
+    fn clip_box_faces_are_edges() {
+        let cut = [DVec3::splat(-2.0), DVec3::new(2.0, 2.0, 0.5)];
+        let q = sphere_at(DVec3::ZERO, Some(cut));
+        // Down the z axis: roots at z = 1 (outside the box, z <= 0.5) and z = -1 (inside).
+        let b = q.bound_roots(DVec3::new(0.0, 0.0, 5.0), DVec3::NEG_Z);
+        assert_eq!(b.roots[0].clip, Side::Outside);
+        assert_eq!(b.roots[1].clip, Side::Inside);
+        // Through the circle z = 0.5, x = √0.75 (0.75 and 0.5 exact): on the face.
+        let x = 0.75f64.sqrt();
+        let b = q.bound_roots(DVec3::new(x, -5.0, 0.5), DVec3::Y);
+        assert!(b.roots.iter().all(|r| r.clip == Side::Edge), "{b:?}");
+    }
+}
