@@ -57,7 +57,8 @@ const UNDERFLOW: f64 = 4.0 * f64::MIN_POSITIVE * f64::EPSILON;
 /// Dekker's splitting constant `2²⁷ + 1`.
 const SPLIT: f64 = 134_217_729.0;
 
-/// `(hi, lo)` with `hi = fl(a)` … the halves of `a` (Dekker).
+/// The halves `(hi, lo)` of `a`, `hi + lo = a` exactly, each of at most 26 significant bits
+/// (Dekker's split).
 fn split(a: f64) -> (f64, f64) {
     let c = SPLIT * a;
     let hi = c - (c - a);
@@ -197,11 +198,6 @@ pub fn within3(v: DVec3, error: f64) -> BVec3 {
 /// The values of a bounded vector.
 pub fn values3(v: &BVec3) -> DVec3 {
     DVec3::new(v[0].value, v[1].value, v[2].value)
-}
-
-/// `a − b`, component by component.
-pub fn sub3(a: &BVec3, b: &BVec3) -> BVec3 {
-    [0, 1, 2].map(|i| a[i].sub(b[i]))
 }
 
 /// `a · b` summed left to right, `(a₀b₀ + a₁b₁) + a₂b₂` (glam's order).

@@ -28,7 +28,7 @@
 //! The bound is on `t` as recomputed here; a caller whose `t` came from elsewhere (the packet
 //! test, or the plane fallback for slivers) adds the difference, which is exact to compute.
 
-use super::bounded::{down, gamma, up, BVec3, Bounded};
+use super::bounded::{down, gamma, up, values3, BVec3, Bounded};
 use super::Side;
 use crate::geometry::triangle::WatertightRay;
 
@@ -48,8 +48,7 @@ pub struct TriangleBound {
 /// The bound for the ray `origin + t·dir` and the triangle `tri`, all with per-component
 /// bounds on their distance from the exact values.
 pub fn bound(origin: &BVec3, dir: &BVec3, tri: &[BVec3; 3]) -> TriangleBound {
-    let values = |v: &BVec3| glam::DVec3::new(v[0].value, v[1].value, v[2].value);
-    let [kx, ky, kz] = WatertightRay::new(values(origin), values(dir)).axes();
+    let [kx, ky, kz] = WatertightRay::new(values3(origin), values3(dir)).axes();
     let one = Bounded::exact(1.0);
     let (sx, sy, sz) = (dir[kx].div(dir[kz]), dir[ky].div(dir[kz]), one.div(dir[kz]));
     let sheared = tri.map(|v| {
@@ -64,6 +63,43 @@ pub fn bound(origin: &BVec3, dir: &BVec3, tri: &[BVec3; 3]) -> TriangleBound {
         side: side(&e),
         t: plane_t(&e, &z, sz),
     }
+}
+
+/// Whether the exact ray certainly misses the triangle, for a ray and vertices taken as
+/// exact (no bounds of their own): a cheaper, coarser test than [`bound`], to pass over most
+/// candidates.
+///
+/// With `X = |p_x| + |s_x·p_z|` (`p` a vertex relative to the origin, `s` the shear), a sheared
+/// coordinate is within `γ₇X` of its exact value (the rounding of `p`, of `s`, of the product and
+/// of the difference), and an edge function `x_c y_b − y_c x_b` within
+/// `γ₂(|x_c y_b| + |y_c x_b|) + 2γ₇(1 + γ₇)(X_c Y_b + Y_c X_b)`, less than `γ₁₇(X_c Y_b + Y_c X_b)`;
+/// `32u` is used. Two edge functions beyond it with opposite signs: a certain miss.
+pub fn certainly_missed(ray: &WatertightRay, tri: &[glam::DVec3; 3]) -> bool {
+    let [kx, ky, kz] = ray.axes();
+    let (shear, origin) = ray.shear_and_origin();
+    let sheared = tri.map(|v| {
+        let p = v - origin;
+        let (m, n) = (shear.x * p[kz], shear.y * p[kz]);
+        [
+            p[kx] - m,
+            p[kx].abs() + m.abs(),
+            p[ky] - n,
+            p[ky].abs() + n.abs(),
+        ]
+    });
+    let [a, b, c] = sheared;
+    let edge = |p: &[f64; 4], q: &[f64; 4]| {
+        let value = p[0] * q[2] - p[2] * q[0];
+        let error = 32.0 * super::bounded::UNIT * (p[1] * q[3] + p[3] * q[1]);
+        (value, up(error))
+    };
+    let e = [edge(&c, &b), edge(&a, &c), edge(&b, &a)];
+    if e.iter().any(|(v, err)| !v.is_finite() || !err.is_finite()) {
+        return false;
+    }
+    let positive = e.iter().any(|&(v, err)| v > err);
+    let negative = e.iter().any(|&(v, err)| -v > err);
+    positive && negative
 }
 
 /// The side from the edge functions' signs.

@@ -5,6 +5,7 @@ use super::{Crossing, Scene, Top};
 use crate::bound::bounded::{exact3, up, BVec3, Bounded};
 use crate::bound::triangle::{self, TriangleBound};
 use crate::bound::{mapped, HitBound, Side, CELL_SLACK};
+use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Aabb;
 use crate::quadric::{Others, QuadricBound, RootBound};
 use glam::DVec3;
@@ -111,8 +112,15 @@ impl Scene {
                 if own.is_some() {
                     return false;
                 }
-                if self.placement_of(i) > CELL_SLACK * root {
+                let placement = self.placement_of(i);
+                if placement > CELL_SLACK * root {
                     return true;
+                }
+                let exact = WatertightRay::new(origin, dir);
+                if placement == 0.0
+                    && triangle::certainly_missed(&exact, &self.world.mesh.triangle(i))
+                {
+                    return false;
                 }
                 let b = triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));
                 triangle_competes(&b, limit)

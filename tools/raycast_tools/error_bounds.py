@@ -302,13 +302,55 @@ def run_all(raycast, n: int, seed: int, work: Path) -> list[Tally]:
     return tallies
 
 
+def plot(data: dict, out: Path) -> None:
+    """Two panels: the distribution of error / |depth − exact| per scene group, and error /
+    depth beside |depth − exact| / depth."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    groups = {"meshes (OBJ, far)": [], "glTF placed / instanced": [], "quadrics": []}
+    bounds, actual = [], []
+    for name, d in data["distributions"].items():
+        key = "quadrics" if "quadric" in name else "glTF placed / instanced" if "glTF" in name else "meshes (OBJ, far)"
+        groups[key] += d["ratio"]
+        bounds += d["relative"]
+        actual += [a for a in d["actual"] if a > 0]
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4))
+    bins = np.linspace(0, 6, 61)
+    for key, ratio in groups.items():
+        if ratio:
+            med = np.median(ratio)
+            left.hist(np.log10(ratio), bins=bins, histtype="step", label=f"{key}: median {med:.0f}×")
+    left.axvline(0, color="k", lw=0.8)
+    left.set_xlabel("log10(error / |depth − exact depth|)   (≥ 0: contained)")
+    left.set_ylabel("hits")
+    left.set_title("How far the bound is above the actual error")
+    left.legend(fontsize=8)
+    bins = np.linspace(-18, -8, 81)
+    right.hist(np.log10(actual), bins=bins, histtype="step", label="|depth − exact| / depth")
+    right.hist(np.log10(bounds), bins=bins, histtype="step", label="error / depth")
+    right.set_xlabel("log10(relative)")
+    right.set_title("Bound and actual error, relative to depth")
+    right.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog=prog("error-bounds"), description=__doc__.split("\n\n")[0])
     ap.add_argument("--rays", type=int, default=2000, help="rays per scene (default 2000)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--json", type=Path, help="write the summary and distributions here")
     ap.add_argument("--raycast", help="raycast binary (default: target/release/raycast)")
+    ap.add_argument("--plot", type=Path, help="draw the tightness figure from a --json file here")
     args = ap.parse_args(argv)
+    if args.plot:
+        if not args.json or not args.json.exists():
+            ap.error("--plot needs the --json file of an earlier run")
+        plot(json.loads(args.json.read_text()), args.plot)
+        return 0
     raycast = raycast_or_exit(args.raycast, "error-bounds")
     with tempfile.TemporaryDirectory() as tmp:
         tallies = run_all(raycast, args.rays, args.seed, Path(tmp))
