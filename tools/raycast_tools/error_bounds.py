@@ -175,6 +175,42 @@ def quadric_scene(path: Path, rng):
     return bt.Truth([], prims, boxes), qs
 
 
+def sphere_scene(path: Path, rng, n: int):
+    """Unit spheres placed by scale r and a translation up to 1e4 (RAYCAST_quadric
+    coefficients), and `n` rays at their silhouettes: aimed at a tangent point offset from the
+    sphere by ±10^U(-16, -6)·r, so that the exact answer is a hit or a miss by a hair."""
+    unit = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0]
+    centres = rng.uniform(-1e4, 1e4, size=(4, 3))
+    radii = rng.uniform(0.5, 5.0, size=4)
+    nodes, prims, boxes = [], [], []
+    for k, (c, r) in enumerate(zip(centres, radii)):
+        m = [r, 0, 0, 0, 0, r, 0, 0, 0, 0, r, 0, *c.tolist(), 1]
+        m = [float(x) for x in m]
+        nodes.append({"name": f"s{k}", "matrix": m, "extensions": {"RAYCAST_quadric": {"coefficients": unit}}})
+        prims.append(quadric_prim({"coefficients": unit}, m, f"s{k}"))
+        boxes.append((c - r * (1 + 1e-6), c + r * (1 + 1e-6)))
+    doc = {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["RAYCAST_quadric"],
+        "extensionsRequired": ["RAYCAST_quadric"],
+        "scene": 0,
+        "scenes": [{"nodes": list(range(len(nodes)))}],
+        "nodes": nodes,
+    }
+    path.write_text(json.dumps(doc))
+    which = rng.integers(0, 4, n)
+    w = rng.normal(size=(n, 3))
+    w /= np.linalg.norm(w, axis=1)[:, None]
+    u = np.cross(w, rng.normal(size=(n, 3)))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    r = radii[which][:, None]
+    offset = rng.choice([-1.0, 1.0], n) * 10.0 ** rng.uniform(-16, -6, n)
+    tangent = w / 20.0 + np.sqrt(1.0 - 1.0 / 400.0) * u  # seen from 20 r away along w
+    targets = centres[which] + r * tangent * (1 + offset[:, None])
+    origins = centres[which] + 20.0 * r * w
+    return bt.Truth([], prims, boxes), origins, targets - origins
+
+
 # ------------------------------------------------------------------------ checking
 
 
@@ -295,6 +331,10 @@ def run_all(raycast, n: int, seed: int, work: Path) -> list[Tally]:
         truth, qs = quadric_scene(path, rng)
         o, d = quadric_rays(qs, n // 2, seed=seed + k)
         run_case(raycast, path, truth, o, d, t, work)
+    tallies.append(t)
+    t = Tally("sphere silhouettes")
+    truth, o, d = sphere_scene(work / "spheres.gltf", rng, n)
+    run_case(raycast, work / "spheres.gltf", truth, o, d, t, work)
     tallies.append(t)
     t = Tally("stiff quadric cases")
     stiff_cases(raycast, t, work)
