@@ -49,7 +49,9 @@ def dot(a, b):
 def place(matrix_cols, point):
     """An exact column-major 4×4 affine matrix applied to a point (Fractions)."""
     m = [Fraction(float(x)) for x in matrix_cols]
-    return [m[r] * point[0] + m[4 + r] * point[1] + m[8 + r] * point[2] + m[12 + r] for r in range(3)]
+    return [
+        m[r] * point[0] + m[4 + r] * point[1] + m[8 + r] * point[2] + m[12 + r] for r in range(3)
+    ]
 
 
 def compose(a_cols, b_cols):
@@ -102,7 +104,10 @@ class QuadricPrim:
         self.Q = mp.matrix([[a, d / 2, e / 2], [d / 2, b, f / 2], [e / 2, f / 2, c]])
         self.P = mp.matrix([g, h, i])
         self.R = j
-        m = [mp.mpf(x) if isinstance(x, float) else mp.mpf(x.numerator) / x.denominator for x in self.matrix]
+        m = [
+            mp.mpf(x) if isinstance(x, float) else mp.mpf(x.numerator) / x.denominator
+            for x in self.matrix
+        ]
         self.A = mp.matrix([[m[col * 4 + row] for col in range(3)] for row in range(3)])
         self.T = mp.matrix([m[12 + row] for row in range(3)])
         self.Ai = self.A**-1
@@ -178,7 +183,12 @@ class Truth:
             q = np.cross(s, self.e1)
             v = (q @ d) * inv
             t = np.einsum("ij,ij->i", self.e2, q) * inv
-        keep = (u >= -FILTER) & (v >= -FILTER) & (u + v <= 1 + FILTER) & (t > -FILTER * np.abs(t).max(initial=1.0))
+        keep = (
+            (u >= -FILTER)
+            & (v >= -FILTER)
+            & (u + v <= 1 + FILTER)
+            & (t > -FILTER * np.abs(t).max(initial=1.0))
+        )
         keep |= ~np.isfinite(det) | (np.abs(det) < 1e-300)
         return np.flatnonzero(keep)
 
@@ -218,7 +228,6 @@ class Truth:
         best = min(to_mp(c[0]) for c in valid)
         nearest = {(c[2], c[3]) for c in valid if to_mp(c[0]) == best}
         return crossings, nearest
-
 
     def same_primitive_depth(self, o, d, name, prim, t_reported):
         """The exact depth of the crossing of primitive (name, prim) nearest `t_reported`, or

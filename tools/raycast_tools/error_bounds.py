@@ -168,10 +168,16 @@ def quadric_prim(ext: dict, matrix, name: str) -> bt.QuadricPrim:
 def quadric_scene(path: Path, rng):
     doc = random_quadric_scenes.scene(rng)
     path.write_text(json.dumps(doc))
-    prims = [quadric_prim(n["extensions"]["RAYCAST_quadric"], n["matrix"], n["name"]) for n in doc["nodes"]]
+    prims = [
+        quadric_prim(n["extensions"]["RAYCAST_quadric"], n["matrix"], n["name"])
+        for n in doc["nodes"]
+    ]
     qs = quadric_reference.quadrics_from_gltf(path)
     boxes = [q.world_bounds() for q in qs]
-    boxes = [None if b is None else (b[0] - 1e-6 * (1 + abs(b[0])), b[1] + 1e-6 * (1 + abs(b[1]))) for b in boxes]
+    boxes = [
+        None if b is None else (b[0] - 1e-6 * (1 + abs(b[0])), b[1] + 1e-6 * (1 + abs(b[1])))
+        for b in boxes
+    ]
     return bt.Truth([], prims, boxes), qs
 
 
@@ -186,7 +192,13 @@ def sphere_scene(path: Path, rng, n: int):
     for k, (c, r) in enumerate(zip(centres, radii)):
         m = [r, 0, 0, 0, 0, r, 0, 0, 0, 0, r, 0, *c.tolist(), 1]
         m = [float(x) for x in m]
-        nodes.append({"name": f"s{k}", "matrix": m, "extensions": {"RAYCAST_quadric": {"coefficients": unit}}})
+        nodes.append(
+            {
+                "name": f"s{k}",
+                "matrix": m,
+                "extensions": {"RAYCAST_quadric": {"coefficients": unit}},
+            }
+        )
         prims.append(quadric_prim({"coefficients": unit}, m, f"s{k}"))
         boxes.append((c - r * (1 + 1e-6), c + r * (1 + 1e-6)))
     doc = {
@@ -252,7 +264,11 @@ def check(tally: Tally, truth: bt.Truth, origins, dirs, res: dict):
     for i in range(len(origins)):
         o, d = origins[i].tolist(), dirs[i].tolist()
         oid, prim = int(res["id"][i]), int(res["prim"][i])
-        depth, error, certain = float(res["depth"][i]), float(res["error"][i]), int(res["certain"][i])
+        depth, error, certain = (
+            float(res["depth"][i]),
+            float(res["error"][i]),
+            int(res["certain"][i]),
+        )
         crossings, nearest = truth.answer(o, d)
         decision = (names[oid - 1], prim) if oid else None
         same = decision in nearest if decision else not nearest
@@ -299,7 +315,9 @@ def stiff_cases(raycast, tally: Tally, work: Path):
             "extensionsRequired": ["RAYCAST_quadric"],
             "scene": 0,
             "scenes": [{"nodes": [0]}],
-            "nodes": [{"name": "q", "matrix": case["world"], "extensions": {"RAYCAST_quadric": ext}}],
+            "nodes": [
+                {"name": "q", "matrix": case["world"], "extensions": {"RAYCAST_quadric": ext}}
+            ],
         }
         path = work / f"stiff_{case['name']}.gltf"
         path.write_text(json.dumps(doc))
@@ -353,7 +371,13 @@ def plot(data: dict, out: Path) -> None:
     groups = {"meshes (OBJ, far)": [], "glTF placed / instanced": [], "quadrics": []}
     bounds, actual = [], []
     for name, d in data["distributions"].items():
-        key = "quadrics" if "quadric" in name else "glTF placed / instanced" if "glTF" in name else "meshes (OBJ, far)"
+        key = (
+            "quadrics"
+            if "quadric" in name
+            else "glTF placed / instanced"
+            if "glTF" in name
+            else "meshes (OBJ, far)"
+        )
         groups[key] += d["ratio"]
         bounds += d["relative"]
         actual += [a for a in d["actual"] if a > 0]
@@ -362,7 +386,9 @@ def plot(data: dict, out: Path) -> None:
     for key, ratio in groups.items():
         if ratio:
             med = np.median(ratio)
-            left.hist(np.log10(ratio), bins=bins, histtype="step", label=f"{key}: median {med:.0f}×")
+            left.hist(
+                np.log10(ratio), bins=bins, histtype="step", label=f"{key}: median {med:.0f}×"
+            )
     left.axvline(0, color="k", lw=0.8)
     left.set_xlabel("log10(error / |depth − exact depth|)   (≥ 0: contained)")
     left.set_ylabel("hits")
@@ -398,7 +424,9 @@ def main(argv=None) -> int:
     for row in rows:
         print(json.dumps(row))
     if args.json:
-        dist = {t.name: {"ratio": t.ratio, "relative": t.relative, "actual": t.actual} for t in tallies}
+        dist = {
+            t.name: {"ratio": t.ratio, "relative": t.relative, "actual": t.actual} for t in tallies
+        }
         args.json.write_text(json.dumps({"summary": rows, "distributions": dist}))
     bad = sum(r["depth_exceptions"] + r["decision_exceptions"] for r in rows if r["covered"])
     return 1 if bad else 0
