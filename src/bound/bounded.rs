@@ -114,60 +114,6 @@ impl Bounded {
         self.value.abs() > self.error
     }
 
-    /// `self + other`.
-    #[inline]
-    pub fn add(self, other: Bounded) -> Bounded {
-        let value = self.value + other.value;
-        let rounding = sum_error(self.value, other.value, value).abs();
-        let rounding = if rounding.is_finite() {
-            rounding
-        } else {
-            gamma(1) * value.abs()
-        };
-        Bounded::new(value, up(self.error + other.error + rounding))
-    }
-
-    /// `self − other`.
-    #[inline]
-    pub fn sub(self, other: Bounded) -> Bounded {
-        self.add(other.neg())
-    }
-
-    /// `−self` (exact).
-    #[inline]
-    pub fn neg(self) -> Bounded {
-        Bounded::new(-self.value, self.error)
-    }
-
-    /// `self · other`.
-    #[inline]
-    pub fn mul(self, other: Bounded) -> Bounded {
-        let value = self.value * other.value;
-        let spread = self.value.abs() * other.error
-            + other.value.abs() * self.error
-            + self.error * other.error;
-        let rounding = product_error(self.value, other.value, value)
-            .map_or(gamma(1) * value.abs(), |e| e.abs() + UNDERFLOW);
-        Bounded::new(value, up(spread + rounding))
-    }
-
-    /// `self / other`; an infinite bound when `other` may be zero.
-    #[inline]
-    pub fn div(self, other: Bounded) -> Bounded {
-        let value = self.value / other.value;
-        let b = other.value.abs();
-        let margin = down(down(b) - up(other.error));
-        if !(margin > 0.0) || !value.is_finite() {
-            return Bounded::new(value, f64::INFINITY);
-        }
-        let spread = up(self.value.abs() * other.error + b * self.error) / down(b * margin);
-        // a − q·b: the high part cancels exactly (Sterbenz), the low part rounds once.
-        let remainder = product_error(value, other.value, value * other.value)
-            .map(|low| up(((self.value - value * other.value) - low).abs()) / down(b));
-        let rounding = remainder.map_or(gamma(1) * value.abs(), |r| r + UNDERFLOW);
-        Bounded::new(value, up(spread + rounding))
-    }
-
     /// `√self` for a value that is not negative.
     #[inline]
     pub fn sqrt(self) -> Bounded {
@@ -179,6 +125,80 @@ impl Bounded {
             up((self.value.max(0.0) + self.error).sqrt())
         };
         Bounded::new(value, up(error + gamma(1) * value))
+    }
+}
+
+impl std::ops::Add for Bounded {
+    type Output = Bounded;
+
+    /// `self + other`.
+    #[inline]
+    fn add(self, other: Bounded) -> Bounded {
+        let value = self.value + other.value;
+        let rounding = sum_error(self.value, other.value, value).abs();
+        let rounding = if rounding.is_finite() {
+            rounding
+        } else {
+            gamma(1) * value.abs()
+        };
+        Bounded::new(value, up(self.error + other.error + rounding))
+    }
+}
+
+impl std::ops::Sub for Bounded {
+    type Output = Bounded;
+
+    /// `self − other`.
+    #[inline]
+    fn sub(self, other: Bounded) -> Bounded {
+        self + -other
+    }
+}
+
+impl std::ops::Mul for Bounded {
+    type Output = Bounded;
+
+    /// `self · other`.
+    #[inline]
+    fn mul(self, other: Bounded) -> Bounded {
+        let value = self.value * other.value;
+        let spread = self.value.abs() * other.error
+            + other.value.abs() * self.error
+            + self.error * other.error;
+        let rounding = product_error(self.value, other.value, value)
+            .map_or(gamma(1) * value.abs(), |e| e.abs() + UNDERFLOW);
+        Bounded::new(value, up(spread + rounding))
+    }
+}
+
+impl std::ops::Div for Bounded {
+    type Output = Bounded;
+
+    /// `self / other`; an infinite bound when `other` may be zero.
+    #[inline]
+    fn div(self, other: Bounded) -> Bounded {
+        let value = self.value / other.value;
+        let b = other.value.abs();
+        let margin = down(down(b) - up(other.error));
+        if margin.is_nan() || margin <= 0.0 || !value.is_finite() {
+            return Bounded::new(value, f64::INFINITY);
+        }
+        let spread = up(self.value.abs() * other.error + b * self.error) / down(b * margin);
+        // a − q·b: the high part cancels exactly (Sterbenz), the low part rounds once.
+        let remainder = product_error(value, other.value, value * other.value)
+            .map(|low| up(((self.value - value * other.value) - low).abs()) / down(b));
+        let rounding = remainder.map_or(gamma(1) * value.abs(), |r| r + UNDERFLOW);
+        Bounded::new(value, up(spread + rounding))
+    }
+}
+
+impl std::ops::Neg for Bounded {
+    type Output = Bounded;
+
+    /// `−self` (exact).
+    #[inline]
+    fn neg(self) -> Bounded {
+        Bounded::new(-self.value, self.error)
     }
 }
 
@@ -202,7 +222,7 @@ pub fn values3(v: &BVec3) -> DVec3 {
 
 /// `a · b` summed left to right, `(a₀b₀ + a₁b₁) + a₂b₂` (glam's order).
 pub fn dot3(a: &BVec3, b: &BVec3) -> Bounded {
-    a[0].mul(b[0]).add(a[1].mul(b[1])).add(a[2].mul(b[2]))
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// A 3×3 matrix of bounded entries, `rows[i][j]`.
@@ -216,6 +236,7 @@ pub fn mat_vec(m: &BMat3, v: &BVec3) -> BVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::ops::{Add, Div};
 
     /// Each operation's bound covers its exact result (computed with exact rationals: the
     /// values are small dyadic fractions plus or minus their bounds).

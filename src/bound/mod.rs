@@ -34,6 +34,7 @@ use crate::query::Query;
 use crate::scene::{Crossing, Scene};
 use bounded::{gamma, up, Bounded};
 use glam::{DMat3, DVec3};
+use std::ops::{Add, Mul, Sub};
 
 /// Where an exact crossing lies against a primitive's boundary (a triangle's edges or a
 /// quadric's clip box).
@@ -154,7 +155,7 @@ pub fn certain(
                 bound.t.value - bound.t.error,
                 up(bound.t.value + bound.t.error),
             );
-            if !bound.certain || !(low > t_min && high <= t_max) {
+            if !bound.certain || low.is_nan() || low <= t_min || high > t_max {
                 return false;
             }
             high

@@ -31,6 +31,7 @@
 use super::bounded::{down, gamma, up, values3, BVec3, Bounded};
 use super::Side;
 use crate::geometry::triangle::WatertightRay;
+use std::ops::{Div, Mul, Sub};
 
 /// The bound of one ray/triangle pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -127,7 +128,7 @@ fn plane_t(e: &[Bounded; 3], z: &[Bounded; 3], sz: Bounded) -> Bounded {
     let d_low = down(det.abs() - up(gamma(2) * sum_e));
     let sum_err = up(e.iter().map(|f| f.error).sum());
     let d_star_low = down(d_low - sum_err);
-    if !(d_star_low > 0.0) || !t.is_finite() || !sz.error.is_finite() {
+    if d_star_low.is_nan() || d_star_low <= 0.0 || !t.is_finite() || !sz.error.is_finite() {
         return unbounded;
     }
     // |W̃| ≤ Σ|eᵢzᵢ| / |D|; the computed W and its distance ω from W̃.

@@ -9,6 +9,7 @@ use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Aabb;
 use crate::quadric::{Others, QuadricBound, RootBound};
 use glam::DVec3;
+use std::ops::Sub;
 
 /// Whether a bounded crossing `t` may lie in `(0, limit]`.
 fn may_lie_in(t: Bounded, limit: f64) -> bool {
@@ -30,7 +31,7 @@ fn quadric_competes(b: &QuadricBound, limit: f64, skip: Option<usize>) -> bool {
     root || match b.others {
         Others::None => false,
         Others::Within(t) => may_lie_in(t, limit),
-        Others::Beyond(reach) => !(reach > limit),
+        Others::Beyond(reach) => reach.is_nan() || reach <= limit,
         Others::Unknown => true,
     }
 }
@@ -159,7 +160,7 @@ impl Scene {
         ));
         let worst = |v: &BVec3| v.iter().map(|c| c.error).fold(0.0, f64::max);
         let drift = up(worst(&o) + up(reach.max(0.0) * worst(&d)));
-        if !(drift <= CELL_SLACK * octree.root().size().max_element()) {
+        if drift.is_nan() || drift > CELL_SLACK * octree.root().size().max_element() {
             return true;
         }
         let skip = own.map(|h| h.inner);

@@ -32,6 +32,7 @@ use super::Quadric;
 use crate::bound::bounded::{down, exact3, gamma, mat_vec, up, BMat3, BVec3, Bounded};
 use crate::bound::{mapped, Side};
 use glam::{DMat3, DVec3};
+use std::ops::{Add, Div, Mul, Neg, Sub};
 
 /// Bounds of the numbers a quadric's intersection starts from, kept by [`Quadric::new`].
 #[derive(Debug, Clone, PartialEq)]
