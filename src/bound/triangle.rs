@@ -66,33 +66,63 @@ pub fn bound(origin: &BVec3, dir: &BVec3, tri: &[BVec3; 3]) -> TriangleBound {
     }
 }
 
-/// Whether the exact ray certainly misses the triangle, for a ray and vertices taken as
-/// exact (no bounds of their own): a cheaper, coarser test than [`bound`], to pass over most
-/// candidates.
+/// Whether the exact ray certainly has no crossing with the triangle in `(0, limit]`, for an
+/// exact ray and vertices within `placement` of the stored ones (per coordinate): a cheaper,
+/// coarser test than [`bound`], to pass over most candidates.
 ///
-/// With `X = |p_x| + |s_x·p_z|` (`p` a vertex relative to the origin, `s` the shear), a sheared
-/// coordinate is within `γ₇X` of its exact value (the rounding of `p`, of `s`, of the product and
-/// of the difference), and an edge function `x_c y_b − y_c x_b` within
-/// `γ₂(|x_c y_b| + |y_c x_b|) + 2γ₇(1 + γ₇)(X_c Y_b + Y_c X_b)`, less than `γ₁₇(X_c Y_b + Y_c X_b)`;
-/// `32u` is used. Two edge functions beyond it with opposite signs: a certain miss.
-pub fn certainly_missed(ray: &WatertightRay, tri: &[glam::DVec3; 3]) -> bool {
+/// A crossing's `t` is a convex combination of the vertices' `p_z / d_z` (the barycentric
+/// weights of an interior hit are not negative), so all vertices behind the origin or all
+/// beyond `limit`, each by more than `placement` and the rounding of `p_z`, rule it out.
+///
+/// With `X = |p_x| + |s_x·p_z| + ε_x` (`p` a vertex relative to the origin, `s` the shear,
+/// `ε_x = placement·(1 + |s_x|)` what the vertex's own bound moves a sheared coordinate), a
+/// sheared coordinate is within `γ₇X + ε_x` of its exact value (the rounding of `p`, of `s`, of
+/// the product and of the difference), and an edge function `x_c y_b − y_c x_b` within
+/// `γ₁₇(X_c Y_b + Y_c X_b) + X_c ε_y + Y_b ε_x + Y_c ε_x + X_b ε_y + 2 ε_x ε_y` (expanding the
+/// products of the bounds; `32u` for `γ₁₇`, and `2⁻³⁰` of slack for the second-order terms).
+/// Two edge functions beyond it with opposite signs: a certain miss.
+pub fn certainly_apart(
+    ray: &WatertightRay,
+    tri: &[glam::DVec3; 3],
+    placement: f64,
+    limit: f64,
+) -> bool {
     let [kx, ky, kz] = ray.axes();
     let (shear, origin) = ray.shear_and_origin();
+    let unit = super::bounded::UNIT;
+    let depth = tri.map(|v| v[kz] - origin[kz]);
+    let margin = |p: f64| up(placement + 2.0 * unit * p.abs());
+    let behind = depth
+        .iter()
+        .all(|&p| p * shear.z < 0.0 && p.abs() > margin(p));
+    let far = |p: f64| down(down(p.abs() - margin(p)) * shear.z.abs() * (1.0 - 4.0 * unit));
+    let beyond = depth.iter().all(|&p| p * shear.z > 0.0 && far(p) > limit);
+    if behind || beyond {
+        return true;
+    }
+    let (ex, ey) = (
+        up(placement * (1.0 + shear.x.abs())),
+        up(placement * (1.0 + shear.y.abs())),
+    );
     let sheared = tri.map(|v| {
         let p = v - origin;
         let (m, n) = (shear.x * p[kz], shear.y * p[kz]);
         [
             p[kx] - m,
-            p[kx].abs() + m.abs(),
+            up(p[kx].abs() + m.abs() + ex),
             p[ky] - n,
-            p[ky].abs() + n.abs(),
+            up(p[ky].abs() + n.abs() + ey),
         ]
     });
     let [a, b, c] = sheared;
     let edge = |p: &[f64; 4], q: &[f64; 4]| {
         let value = p[0] * q[2] - p[2] * q[0];
-        let error = 32.0 * super::bounded::UNIT * (p[1] * q[3] + p[3] * q[1]);
-        (value, up(error))
+        let first = 32.0 * unit * (p[1] * q[3] + p[3] * q[1]);
+        let moved = p[1] * ey + q[3] * ex + p[3] * ex + q[1] * ey + 2.0 * ex * ey;
+        (
+            value,
+            up((first + moved) * (1.0 + 1.0 / (1u64 << 30) as f64)),
+        )
     };
     let e = [edge(&c, &b), edge(&a, &c), edge(&b, &a)];
     if e.iter().any(|(v, err)| !v.is_finite() || !err.is_finite()) {

@@ -118,19 +118,20 @@ impl Scene {
                     return true;
                 }
                 let exact = WatertightRay::new(origin, dir);
-                if placement == 0.0
-                    && triangle::certainly_missed(&exact, &self.world.mesh.triangle(i))
-                {
+                let tri = self.world.mesh.triangle(i);
+                if triangle::certainly_apart(&exact, &tri, placement, limit) {
                     return false;
                 }
                 let b = triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));
                 triangle_competes(&b, limit)
             }
             Top::Instance(k) => self.instance_may_cross(k, origin, dir, limit, own),
+            // The hit quadric's other roots are weighed by its hit bound ([`quadric_hit`]).
             Top::Quadric(q) => {
-                let b = self.quadrics[q].bound_roots(origin, dir);
-                let skip = own.and_then(|h| nearest_root(&b, h.t));
-                quadric_competes(&b, limit, skip)
+                if own.is_some() || !self.quadrics[q].may_reach(origin, dir, limit) {
+                    return false;
+                }
+                quadric_competes(&self.quadrics[q].bound_roots(origin, dir), limit, None)
             }
         }
     }

@@ -165,6 +165,14 @@ impl Quadric {
         }
     }
 
+    /// Whether the exact ray `origin + t·dir` may meet the clipped surface with `0 <= t <=
+    /// limit`: the trace's bounds pre-test ([`crate::geometry::ReachBox::may_reach`]), whose
+    /// margin (1e-9 of the box and the origin's distance) is far above the rounding of the
+    /// bounds and of the slab test, so it holds for the exact surface and ray too.
+    pub fn may_reach(&self, origin: DVec3, dir: DVec3, limit: f64) -> bool {
+        self.may_reach_bounds(origin, dir.recip(), limit)
+    }
+
     /// The local ray as computed, `x₀ = L(o − c)`, `v = L d`, bounded
     /// ([`crate::bound::mapped`]).
     fn bounded_ray(&self, origin: DVec3, dir: DVec3) -> (BVec3, BVec3) {
