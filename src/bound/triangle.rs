@@ -211,6 +211,38 @@ mod tests {
         assert_eq!(beside.side, Side::Outside);
     }
 
+    /// The coarse pre-test rules out triangles behind the origin, beyond the limit or well
+    /// beside the ray, and never one the ray crosses or passes within its bounds.
+    #[test]
+    fn the_coarse_test_passes_over_only_what_is_apart() {
+        let at = |z: f64| [[-1.0, -1.0, z], [1.0, -1.0, z], [0.0, 1.0, z]].map(DVec3::from_array);
+        let ray = WatertightRay::new(DVec3::new(0.1, 0.2, 5.0), DVec3::NEG_Z);
+        assert!(
+            certainly_apart(&ray, &at(6.0), 0.0, f64::INFINITY),
+            "behind"
+        );
+        assert!(certainly_apart(&ray, &at(0.0), 0.0, 4.0), "beyond t = 4");
+        assert!(
+            !certainly_apart(&ray, &at(0.0), 0.0, 5.0),
+            "crossed at t = 5"
+        );
+        assert!(
+            !certainly_apart(&ray, &at(0.0), 0.0, f64::INFINITY),
+            "crossed"
+        );
+        let beside = WatertightRay::new(DVec3::new(3.0, 0.0, 5.0), DVec3::NEG_Z);
+        assert!(
+            certainly_apart(&beside, &at(0.0), 0.0, f64::INFINITY),
+            "beside"
+        );
+        // 1e-3 beside the edge x + y = 1 (7e-4 away): apart for exact vertices, not for
+        // vertices that may be off by 1e-2.
+        let near = WatertightRay::new(DVec3::new(0.5 + 1e-3, 0.5, 5.0), DVec3::NEG_Z);
+        let edge = [[-1.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].map(DVec3::from_array);
+        assert!(!certainly_apart(&near, &edge, 1e-2, f64::INFINITY));
+        assert!(certainly_apart(&near, &edge, 0.0, f64::INFINITY));
+    }
+
     /// A ray in the triangle's plane has no bounded t.
     #[test]
     fn parallel_rays_are_unbounded() {
