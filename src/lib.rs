@@ -7,6 +7,7 @@
 //! normal, position and id buffers with [`output`].
 
 pub mod accel;
+pub mod bound;
 pub mod camera;
 pub mod check;
 pub mod error;

@@ -193,7 +193,7 @@ struct RenderArgs {
     /// Scene file (.gltf, .glb, .obj, .ply, .stl, .usda, .usdc, .usd, .usdz).
     #[arg(required = true)]
     scene: Option<PathBuf>,
-    /// Buffers to compute: depth, z, t, normal, position, bary, id, prim.
+    /// Buffers to compute: depth, z, t, normal, position, bary, id, prim, error, certain.
     #[arg(long, value_delimiter = ',', default_value = "depth")]
     aov: Vec<Aov>,
     /// Image width in pixels (default 512, or from the camera's aspect ratio).

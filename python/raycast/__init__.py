@@ -40,9 +40,21 @@ __all__ = [
 ]
 
 #: Outputs :meth:`Scene.cast` can return.
-CAST_OUTPUTS = ("t", "distance", "normal", "position", "id", "prim", "bary")
+CAST_OUTPUTS = ("t", "distance", "normal", "position", "id", "prim", "bary", "error", "certain")
 #: Outputs :meth:`Scene.render` can return (``depth`` is ``distance``, as on the command line).
-RENDER_OUTPUTS = ("t", "distance", "depth", "z", "normal", "position", "id", "prim", "bary")
+RENDER_OUTPUTS = (
+    "t",
+    "distance",
+    "depth",
+    "z",
+    "normal",
+    "position",
+    "id",
+    "prim",
+    "bary",
+    "error",
+    "certain",
+)
 #: The ``prim`` value of a miss.
 INVALID_PRIM = 2**32 - 1
 
@@ -325,7 +337,11 @@ class Scene:
             on a miss; ``position`` (N, 3) float64, +inf on a miss; ``id`` (N,) uint32, the
             1-based object id, 0 on a miss; ``prim`` (N,) uint32, the triangle index in the
             object, ``INVALID_PRIM`` on a miss; ``bary`` (N, 3) float64, the barycentric
-            weights of the triangle's vertices, zeros on a miss or a quadric.
+            weights of the triangle's vertices, zeros on a miss or a quadric; ``error`` (N,)
+            float64, a bound on ``|distance - exact distance|`` of the same primitive's
+            crossing (+inf where none can be made, 0 on a miss); ``certain`` (N,) uint8, 1
+            when no value within the bounds could change the ray's decision (see
+            docs/buffers-and-cli.md, "Error bounds").
 
         Raises
         ------

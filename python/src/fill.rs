@@ -20,10 +20,12 @@ pub fn parse(name: &str, camera: bool) -> Result<Aov, String> {
         "id" => Aov::Id,
         "prim" => Aov::Prim,
         "bary" => Aov::Bary,
+        "error" => Aov::Error,
+        "certain" => Aov::Certain,
         "z" => return Err("the z output needs a camera: use render(), not cast()".into()),
         _ => {
             return Err(format!(
-            "unknown output '{name}' (choose from t, distance, {}normal, position, id, prim, bary)",
+            "unknown output '{name}' (choose from t, distance, {}normal, position, id, prim, bary, error, certain)",
             if camera { "z, " } else { "" }
         ))
         }
@@ -53,6 +55,7 @@ where
         let array = match column {
             Column::Float(v) => array(py, shape, v)?,
             Column::Index(v) => array(py, shape, v)?,
+            Column::Flag(v) => array(py, shape, v)?,
             Column::Vector(v) => array(py, &[shape, &[3]].concat(), v)?,
         };
         dict.set_item(name, array)?;

@@ -41,6 +41,16 @@ impl WatertightRay {
         }
     }
 
+    /// The axis permutation `[kx, ky, kz]`: `kz` is the direction's dominant axis.
+    pub fn axes(&self) -> [usize; 3] {
+        self.axes
+    }
+
+    /// The shear `(d[kx]/d[kz], d[ky]/d[kz], 1/d[kz])` and the origin, as computed.
+    pub fn shear_and_origin(&self) -> (DVec3, DVec3) {
+        (self.shear, self.origin)
+    }
+
     /// The ray parameter `t` of the hit with triangle `tri`, if `0 < t <= t_max`.
     ///
     /// Watertight: a ray through a shared edge or vertex hits at least one of the triangles

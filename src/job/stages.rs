@@ -214,6 +214,7 @@ pub(super) fn trace_and_write(
     };
     let written = Written {
         files,
+        bounds: sidecar::BoundsInfo::of(&buffers),
         hits: hits.as_ref(),
         depth_png_range,
         timings,
@@ -231,6 +232,7 @@ pub(super) fn trace_and_write(
 /// What tracing and writing gave, for the sidecar.
 struct Written<'a> {
     files: Vec<String>,
+    bounds: Option<sidecar::BoundsInfo>,
     hits: Option<&'a HitLists>,
     depth_png_range: Option<[f64; 2]>,
     timings: Timings,
@@ -248,6 +250,7 @@ fn sidecar(
     let total = target.layout.rays();
     let Written {
         files,
+        bounds,
         hits,
         depth_png_range,
         timings,
@@ -279,6 +282,7 @@ fn sidecar(
             DistancePng::Preview => None,
         },
         cryptomatte_spp: job.cryptomatte.filter(|_| view.is_some()),
+        bounds,
         objects: scene.objects.clone(),
         stats: Stats {
             triangles: scene.triangle_count(),

@@ -345,6 +345,9 @@ pub fn write_buffers(
             let Some(values) = values(buffers, aov) else {
                 continue;
             };
+            if !format.holds(aov, matches!(layout, Layout::Rays(_))) {
+                continue;
+            }
             let job = match (format, layout) {
                 (Format::Npy, _) => Some(npy_job(values, aov, layout)),
                 (Format::Exr, Layout::Image { width, height }) => {
@@ -392,6 +395,8 @@ enum Values<'a> {
     Vectors(&'a [[f64; 3]]),
     /// Labels (id, prim).
     Labels(&'a [u32]),
+    /// Flags (certain).
+    Flags(&'a [u8]),
 }
 
 /// The values of `aov`, if it was computed.
@@ -400,9 +405,10 @@ fn values(b: &Buffers, aov: Aov) -> Option<Values<'_>> {
         .map(Values::Distances)
         .or_else(|| b.vectors(aov).map(Values::Vectors))
         .or_else(|| b.labels(aov).map(Values::Labels))
+        .or_else(|| b.flags(aov).map(Values::Flags))
 }
 
-/// The `.npy` file of `aov`: float64 or uint32, one row per pixel or ray.
+/// The `.npy` file of `aov`: float64, uint32 or uint8, one row per pixel or ray.
 fn npy_job(values: Values<'_>, aov: Aov, layout: Layout) -> FileJob<'_> {
     let components = if matches!(values, Values::Vectors(_)) {
         3
@@ -414,6 +420,7 @@ fn npy_job(values: Values<'_>, aov: Aov, layout: Layout) -> FileJob<'_> {
         Values::Distances(v) => npy::write(out, &shape, NpyData::F64(v)),
         Values::Vectors(v) => npy::write(out, &shape, NpyData::F64(v.as_flattened())),
         Values::Labels(v) => npy::write(out, &shape, NpyData::U32(v)),
+        Values::Flags(v) => npy::write(out, &shape, NpyData::U8(v)),
     })
 }
 
@@ -428,6 +435,8 @@ fn exr_note(aov: Aov) -> &'static str {
         Aov::Position => "P = world-space hit point; miss = (+inf,+inf,+inf)",
         Aov::Id => "id = 1-based object id from raycast.json objects; 0 = miss",
         Aov::Prim => "prim = triangle index inside the object (0 for quadrics); 4294967295 = miss",
+        Aov::Error => "Z = bound on |depth - exact depth| of the same primitive's crossing, scene units, rounded up to f32 (depth.exr's own f32 rounding is not included); +inf = no bound; miss = 0",
+        Aov::Certain => "certain = 1 when no value within the bounds could change the decision (nearest primitive, hit or miss), else 0",
     }
 }
 
@@ -437,6 +446,9 @@ fn exr_job(values: Values<'_>, aov: Aov, width: usize, height: usize) -> FileJob
     use exr::ExrChannel::{Float, Uint};
     FileJob::new(format!("{aov}.exr"), move |out| {
         let channels = match values {
+            Values::Distances(v) if aov == Aov::Error => {
+                vec![Float("Z".into(), v.iter().map(|&x| f32_up(x)).collect())]
+            }
             Values::Distances(v) => vec![Float("Z".into(), v.iter().map(|&x| x as f32).collect())],
             Values::Vectors(v) => {
                 let names = match aov {
@@ -452,10 +464,24 @@ fn exr_job(values: Values<'_>, aov: Aov, width: usize, height: usize) -> FileJob
                 let name = if aov == Aov::Id { "id" } else { "prim" };
                 vec![Uint(name.into(), v.to_vec())]
             }
+            Values::Flags(v) => vec![Uint(
+                "certain".into(),
+                v.iter().map(|&x| x.into()).collect(),
+            )],
         };
         let note = [("raycast/convention".to_string(), exr_note(aov).to_string())];
         exr::write(out, width, height, channels, &note)
     })
+}
+
+/// `x` narrowed to the nearest f32 at or above it (a bound stays a bound).
+fn f32_up(x: f64) -> f32 {
+    let narrow = x as f32;
+    if f64::from(narrow) < x {
+        narrow.next_up()
+    } else {
+        narrow
+    }
 }
 
 /// How the PNG files of distances are written.
@@ -523,5 +549,6 @@ fn preview_job(
             });
             (Some(job), None)
         }
+        Values::Flags(_) => (None, None),
     }
 }

@@ -13,6 +13,8 @@ pub enum NpyData<'a> {
     F64(&'a [f64]),
     /// Little-endian uint32 (`<u4`).
     U32(&'a [u32]),
+    /// Bytes (`|u1`).
+    U8(&'a [u8]),
     /// Little-endian uint64 (`<u8`).
     U64(&'a [u64]),
 }
@@ -24,6 +26,7 @@ impl NpyData<'_> {
             NpyData::F64(v) => 8 * v.len(),
             NpyData::U32(v) => 4 * v.len(),
             NpyData::U64(v) => 8 * v.len(),
+            NpyData::U8(v) => v.len(),
         }
     }
 }
@@ -38,6 +41,7 @@ pub fn write(
         NpyData::F64(_) => "<f8",
         NpyData::U32(_) => "<u4",
         NpyData::U64(_) => "<u8",
+        NpyData::U8(_) => "|u1",
     };
     let dims: Vec<String> = shape.iter().map(usize::to_string).collect();
     let shape_text = match dims.len() {
@@ -60,6 +64,7 @@ pub fn write(
         NpyData::F64(v) => v.iter().try_for_each(|x| write_all(&x.to_le_bytes())),
         NpyData::U32(v) => v.iter().try_for_each(|x| write_all(&x.to_le_bytes())),
         NpyData::U64(v) => v.iter().try_for_each(|x| write_all(&x.to_le_bytes())),
+        NpyData::U8(v) => write_all(v),
     }
 }
 

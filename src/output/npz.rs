@@ -36,6 +36,7 @@ fn len(data: &NpyData) -> usize {
         NpyData::F64(v) => v.len(),
         NpyData::U32(v) => v.len(),
         NpyData::U64(v) => v.len(),
+        NpyData::U8(v) => v.len(),
     }
 }
 

@@ -45,7 +45,9 @@ impl Format {
         match self {
             Format::Npy => true,
             Format::Exr => !rays_mode,
-            Format::Png => !rays_mode && !matches!(aov, Aov::Position | Aov::Bary),
+            Format::Png => {
+                !rays_mode && !matches!(aov, Aov::Position | Aov::Bary | Aov::Error | Aov::Certain)
+            }
             Format::Ply => matches!(aov, Aov::Position | Aov::Normal | Aov::Id | Aov::Prim),
         }
     }
@@ -169,9 +171,10 @@ pub fn remove_created_folder(dir: &Path, created: Option<&Path>) {
 /// Bytes per element (pixel or ray) of each AOV's buffer.
 fn aov_bytes(aov: Aov) -> u64 {
     match aov {
-        Aov::Depth | Aov::Z | Aov::T => 8,
+        Aov::Depth | Aov::Z | Aov::T | Aov::Error => 8,
         Aov::Normal | Aov::Position | Aov::Bary => 24,
         Aov::Id | Aov::Prim => 4,
+        Aov::Certain => 1,
     }
 }
 
@@ -180,7 +183,7 @@ fn encoding_bytes(aov: Aov, format: Format) -> u64 {
     match format {
         Format::Npy => aov_bytes(aov),
         Format::Exr => match aov {
-            Aov::Id | Aov::Prim => 4,
+            Aov::Id | Aov::Prim | Aov::Certain => 4,
             _ => aov_bytes(aov) / 2,
         },
         Format::Png => 4,

@@ -46,6 +46,9 @@ pub struct Sidecar {
     /// units (distance / scale, rounded); 0 is no data (a miss, or out of range).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub depth_png_scale: Option<f64>,
+    /// With `--aov error` or `--aov certain`: the largest bound and the uncertain rays.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<BoundsInfo>,
     /// With `--cryptomatte`: the samples per pixel of `cryptomatte.exr`'s object mattes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cryptomatte_spp: Option<usize>,
@@ -67,6 +70,38 @@ pub struct Sidecar {
     pub pose: Option<PoseInfo>,
     /// Importer and render warnings.
     pub warnings: Vec<String>,
+}
+
+/// A summary of the `error` and `certain` buffers.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct BoundsInfo {
+    /// The largest finite `error` (scene units), with `--aov error`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub largest_error: Option<f64>,
+    /// Hits whose `error` is `+∞` (no bound could be made), with `--aov error`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unbounded_hits: Option<usize>,
+    /// Rays whose `certain` is 0, with `--aov certain`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uncertain_rays: Option<usize>,
+}
+
+impl BoundsInfo {
+    /// The summary of `buffers`, or `None` when neither AOV was computed.
+    pub fn of(buffers: &crate::render::Buffers) -> Option<BoundsInfo> {
+        use crate::render::Aov;
+        let errors = buffers.floats(Aov::Error);
+        let flags = buffers.flags(Aov::Certain);
+        if errors.is_none() && flags.is_none() {
+            return None;
+        }
+        let finite = |e: &&f64| e.is_finite();
+        Some(BoundsInfo {
+            largest_error: errors.map(|e| e.iter().filter(finite).fold(0.0, |a, &b| b.max(a))),
+            unbounded_hits: errors.map(|e| e.iter().filter(|e| e.is_infinite()).count()),
+            uncertain_rays: flags.map(|f| f.iter().filter(|&&c| c == 0).count()),
+        })
+    }
 }
 
 /// The crossing lists of `--hits`.
@@ -169,6 +204,8 @@ pub fn conventions() -> BTreeMap<&'static str, &'static str> {
         ("normal", "world-space unit geometric normal; triangles: counter-clockwise winding is the front, not flipped toward the ray; quadrics: gradient direction, toward f > 0; miss = (0, 0, 0)"),
         ("position", "world-space hit point; miss = (+inf, +inf, +inf)"),
         ("id", "1-based object id indexing `objects`; miss = 0"),
+        ("error", "bound on |depth - exact depth| where the exact depth is that of the ray (its f64 numbers) with the same primitive's exact surface (the file's numbers as read, placed by its f64 node matrix); scene units; +inf = no bound; miss = 0"),
+        ("certain", "1 when no value within the bounds could change the decision (which primitive is nearest, hit or miss); 0 otherwise; needs the octree"),
         ("prim", "triangle index inside the object in the object's own order, 0 for quadrics; miss = 4294967295"),
         ("pixels", "one ray per pixel through the pixel centre; row 0 is the top row; the camera looks down its local -Z with +Y up; yfov is vertical"),
     ])

@@ -1,7 +1,8 @@
 //! Analytic quadric surfaces `p·Q·p + P·p + R = 0`: parsing from scene files, placement in
 //! world space about a local anchor, classification, bounds and ray intersection in f64.
 //!
-//! The module is self-contained and depends only on `glam` and `serde_json`.
+//! The module depends only on `glam`, `serde_json`, `twofloat` and, for the error bound of a
+//! crossing ([`Quadric::bound_roots`]), on [`crate::bound`]'s bounded arithmetic.
 
 mod eigen;
 mod interval;
@@ -16,4 +17,4 @@ mod tests;
 
 pub use kind::QuadricKind;
 pub use spec::QuadricSpec;
-pub use surface::Quadric;
+pub use surface::{Others, Quadric, QuadricBound, RootBound};

@@ -86,7 +86,7 @@ impl Polynomial {
     /// along a cylinder's axis that passes outside it never reaches the surface. An accurate discriminant (see
     /// [`Polynomial::discriminant`]); one negative only by its rounding error counts as zero (a
     /// tangent ray, or any ray crossing coincident planes `x² = 0`).
-    pub fn ray_roots(&self, x0: DVec3, v: DVec3) -> Option<[f64; 2]> {
+    pub(super) fn ray_roots(&self, x0: DVec3, v: DVec3) -> Option<[f64; 2]> {
         let poly = self.ray_polynomial(x0, v);
         let disc = (poly.k != 0.0).then(|| self.discriminant(&poly, x0, v));
         if disc.is_some_and(|d| d.is_nan() || d < 0.0) {
@@ -207,7 +207,7 @@ fn dot(a: &[f64; 3], b: &[f64; 3]) -> TwoFloat {
 /// two factors to apply one after the other: for subnormal coefficients (below 2⁻¹⁰²²) the
 /// power itself exceeds the f64 range, its halves do not. Scaling by a power of two is exact
 /// unless a result is subnormal, so it changes no rounding.
-fn power_of_two_normaliser(q: DMat3, p: DVec3) -> [f64; 2] {
+pub(super) fn power_of_two_normaliser(q: DMat3, p: DVec3) -> [f64; 2] {
     let largest = q.abs().to_cols_array().into_iter().fold(0.0, f64::max);
     let largest = if largest > 0.0 {
         largest

@@ -6,8 +6,12 @@ use glam::{DMat3, DMat4, DVec3, DVec4};
 use super::eigen::is_definite;
 use super::interval::value_range_may_contain_zero;
 use super::kind::{classify, QuadricKind};
-use super::polynomial::Polynomial;
+use super::polynomial::{power_of_two_normaliser, Polynomial};
 use super::spec::QuadricSpec;
+
+mod bound;
+
+pub use bound::{Others, QuadricBound, RootBound};
 
 /// World matrices whose determinant is below this fraction of the cube of the longest column
 /// count as singular (a condition number of about 1e14 or worse).
@@ -52,6 +56,8 @@ pub struct Quadric {
     own: [DVec3; 2],
     /// Affine type, from the world-space coefficients.
     kind: QuadricKind,
+    /// Error bounds of the numbers above, for [`Quadric::bound_roots`].
+    errors: bound::Errors,
 }
 
 impl Quadric {
@@ -79,6 +85,8 @@ impl Quadric {
         let p_world = to_local.transpose() * gradient;
         let r_world = local_anchor.dot(spec.q * local_anchor) + spec.p.dot(local_anchor) + spec.r;
         let anchor = world.transform_point3(local_anchor);
+        let scale = power_of_two_normaliser(spec.q, gradient);
+        let errors = bound::Errors::new(spec, local_anchor, world, to_local, scale);
         let mut quadric = Quadric {
             anchor,
             world: Polynomial::new(q_world, p_world, r_world),
@@ -89,6 +97,7 @@ impl Quadric {
             reach: ReachBox::new(Aabb::new(anchor, anchor)),
             own: [anchor, anchor],
             kind: QuadricKind::Empty,
+            errors,
         };
         let definite = is_definite(spec.q).then_some(linear);
         let clip_world = quadric

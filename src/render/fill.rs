@@ -23,14 +23,17 @@ pub enum Column {
     Vector(Vec<f64>),
     /// One label per ray (id, prim).
     Index(Vec<u32>),
+    /// One flag per ray, 0 or 1 (certain).
+    Flag(Vec<u8>),
 }
 
 impl Column {
     fn new(aov: Aov, n: usize) -> Column {
         match aov {
-            Aov::T | Aov::Depth | Aov::Z => Column::Float(vec![0.0; n]),
+            Aov::T | Aov::Depth | Aov::Z | Aov::Error => Column::Float(vec![0.0; n]),
             Aov::Normal | Aov::Position | Aov::Bary => Column::Vector(vec![0.0; 3 * n]),
             Aov::Id | Aov::Prim => Column::Index(vec![0; n]),
+            Aov::Certain => Column::Flag(vec![0; n]),
         }
     }
 
@@ -40,6 +43,7 @@ impl Column {
             Column::Float(v) => Box::new(v.chunks_mut(len).map(Slot::Float)),
             Column::Vector(v) => Box::new(v.as_chunks_mut().0.chunks_mut(len).map(Slot::Vector)),
             Column::Index(v) => Box::new(v.chunks_mut(len).map(Slot::Index)),
+            Column::Flag(v) => Box::new(v.chunks_mut(len).map(Slot::Flag)),
         }
     }
 }
@@ -80,6 +84,14 @@ impl Buffers {
         }
     }
 
+    /// The values of a flag AOV (certain).
+    pub fn flags(&self, aov: Aov) -> Option<&[u8]> {
+        match self.column(aov)? {
+            Column::Flag(v) => Some(v),
+            _ => None,
+        }
+    }
+
     /// The columns, in the order the AOVs were requested.
     pub fn into_columns(self) -> Vec<(Aov, Column)> {
         self.columns
@@ -91,6 +103,7 @@ enum Slot<'a> {
     Float(&'a mut [f64]),
     Vector(&'a mut [[f64; 3]]),
     Index(&'a mut [u32]),
+    Flag(&'a mut [u8]),
 }
 
 /// Sets `out[j]` to `value(j, hit)` for each ray `j` of a block with a hit, `miss` for the
@@ -116,6 +129,8 @@ struct Block<'a, S: ?Sized> {
     /// The camera's eye and view axis (zeros without a camera).
     eye: DVec3,
     forward: DVec3,
+    /// Each ray's `(t_min, t_max]`, for the `certain` AOV.
+    range: &'a (dyn Fn(usize) -> (f64, f64) + Sync),
 }
 
 impl<S: RaySource + ?Sized> Block<'_, S> {
@@ -159,6 +174,19 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
             }
             (Aov::Prim, Slot::Index(out)) => {
                 fill(out, hits, u32::MAX, |j, h| self.locate(j, h).prim)
+            }
+            (Aov::Error, Slot::Float(out)) => fill(out, hits, 0.0, |j, h| {
+                crate::bound::depth_error(self.tracer.scene, &self.ray(j), h)
+            }),
+            (Aov::Certain, Slot::Flag(out)) => {
+                let query = self.tracer.query();
+                for (j, (slot, hit)) in out.iter_mut().zip(hits).enumerate() {
+                    let range = (self.range)(self.start + j);
+                    let certain = query.as_ref().is_some_and(|query| {
+                        crate::bound::certain(query, &self.ray(j), hit.as_ref(), range)
+                    });
+                    *slot = u8::from(certain);
+                }
             }
             _ => unreachable!("a column is made for its AOV's type"),
         }
@@ -241,6 +269,7 @@ where
             start,
             eye,
             forward,
+            range: &rays.range,
         };
         let order = tile_order(len, width);
         let indices: Vec<usize> = match &order {

@@ -38,11 +38,17 @@ pub enum Aov {
     Id,
     /// Primitive index inside the object; `u32::MAX` on a miss.
     Prim,
+    /// A bound on the depth's distance from the exact depth of the same primitive's crossing
+    /// (scene units; see [`crate::bound`]); `+∞` where none can be made, 0 on a miss.
+    Error,
+    /// 1 when no value within the bounds could change the ray's decision (nearest primitive,
+    /// hit or miss), else 0 (see [`crate::bound`]); needs the octree (0 with a BVH).
+    Certain,
 }
 
 impl Aov {
     /// All AOVs, in output order.
-    pub const ALL: [Aov; 8] = [
+    pub const ALL: [Aov; 10] = [
         Aov::Depth,
         Aov::Z,
         Aov::T,
@@ -51,6 +57,8 @@ impl Aov {
         Aov::Bary,
         Aov::Id,
         Aov::Prim,
+        Aov::Error,
+        Aov::Certain,
     ];
 
     /// The name used on the command line and in file names.
@@ -64,6 +72,8 @@ impl Aov {
             Aov::Bary => "bary",
             Aov::Id => "id",
             Aov::Prim => "prim",
+            Aov::Error => "error",
+            Aov::Certain => "certain",
         }
     }
 }

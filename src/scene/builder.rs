@@ -186,6 +186,7 @@ impl SceneBuilder {
             quadrics,
             quadric_parts,
             parts,
+            placement,
         } = layout;
         let bounds = points.iter().copied().fold(Aabb::EMPTY, Aabb::grow);
         let bounds = instances.iter().fold(bounds, |b, i| b.union(i.bounds()));
@@ -209,6 +210,7 @@ impl SceneBuilder {
             quadrics,
             quadric_parts,
             parts,
+            placement,
             objects,
             cameras,
             warnings,
@@ -278,6 +280,7 @@ struct Layout {
     quadrics: Vec<Quadric>,
     quadric_parts: Vec<u32>,
     parts: Vec<Part>,
+    placement: Vec<f64>,
 }
 
 impl Layout {
@@ -290,6 +293,7 @@ impl Layout {
         meshes: &[StoredMesh],
         mesh_of: &HashMap<usize, u32>,
     ) {
+        let mut placement = 0.0;
         let kind = match item {
             Item::Quadric(quadric) => {
                 self.quadrics.push(*quadric);
@@ -306,6 +310,11 @@ impl Layout {
                         PartKind::Instance(self.instances.len() as u32 - 1)
                     }
                     None => {
+                        let positions = mesh.positions();
+                        placement = crate::bound::placement_error(
+                            &world,
+                            (0..positions.len() as u32).map(|v| positions.get(v)),
+                        );
                         let first = self.triangles.len() as u32;
                         mesh.place_into(&world, &mut self.points, &mut self.triangles);
                         let count = self.triangles.len() as u32 - first;
@@ -316,6 +325,7 @@ impl Layout {
                 }
             }
         };
+        self.placement.push(placement);
         self.parts.push(Part {
             object,
             first_prim,

@@ -69,6 +69,8 @@ pub struct Instance {
     /// World bounds (the mesh bounds' corners placed, padded for their rounding), for the
     /// pre-test.
     reach: ReachBox,
+    /// A bound on `‖A⁻¹‖∞` for `A = to_world.matrix3` ([`crate::bound::inverse_norm`]).
+    inverse_norm: f64,
 }
 
 impl Instance {
@@ -96,7 +98,13 @@ impl Instance {
             to_local,
             part,
             reach: ReachBox::new(bounds),
+            inverse_norm: crate::bound::inverse_norm(to_world.matrix3, to_local.matrix3),
         })
+    }
+
+    /// A bound on `‖A⁻¹‖∞` for the placement's linear part `A`.
+    pub fn inverse_norm(&self) -> f64 {
+        self.inverse_norm
     }
 
     /// World bounds (the mesh bounds' corners placed, padded for their rounding).

@@ -20,6 +20,7 @@
 //! order its parts were added, a mesh counting one per triangle and a quadric one, which is what
 //! the `prim` buffer reports.
 
+mod bound;
 mod builder;
 mod hits;
 pub mod instance;
@@ -211,6 +212,10 @@ pub struct Scene {
     quadrics: Vec<Quadric>,
     quadric_parts: Vec<u32>,
     parts: Vec<Part>,
+    /// Per part, a bound on each stored coordinate's distance from the exact placement of the
+    /// file's vertex (0 but for world meshes placed by a transform; see
+    /// [`crate::bound::placement_error`]).
+    placement: Vec<f64>,
     /// The object table, in id order.
     pub objects: Vec<Object>,
     /// Cameras defined by the file.

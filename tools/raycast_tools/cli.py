@@ -60,6 +60,10 @@ COMMANDS = {
         "check_scale",
         "raycast check shards, merge, throughput and the Khronos validator (check_scale.md)",
     ),
+    "error-bounds": (
+        "error_bounds",
+        "raycast's error and certain AOVs against exact answers (reports/error_bounds.md)",
+    ),
     "exact-depth": (
         "exact_depth",
         "USD/glTF/OBJ depth against an outside float64 reading + ray/triangle test (1e-12)",

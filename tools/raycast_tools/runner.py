@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-AOVS = ("depth", "normal", "id", "prim")
+AOVS = ("depth", "t", "normal", "id", "prim", "error", "certain")
 
 
 def run_raycast(raycast, scene, args, out) -> dict:

@@ -1,0 +1,253 @@
+//! The error bound of the watertight triangle test ([`crate::geometry::triangle`]).
+//!
+//! # What is bounded
+//! The exact ray `o + t·d` (its f64 numbers, or in an instance frame the exact image of the
+//! world ray) against the exact triangle (its vertices, each within a per-component bound of the
+//! stored ones). Translating by `o`, permuting so that `z` is the dominant direction axis and
+//! shearing (`S = (d_x/d_z, d_y/d_z)`) are exact changes of coordinates in real arithmetic, so
+//! the exact hit has barycentric weights `λᵢ = eᵢ*/D*` from the exact edge functions and
+//! `t* = sz*·W*` with `W* = Σ eᵢ* zᵢ* / D*`, `D* = Σ eᵢ*`, `sz* = 1/d_z` and `zᵢ` the vertices'
+//! unscaled `z` relative to `o`.
+//!
+//! # Derivation
+//! The sheared coordinates and edge functions are recomputed here in [`Bounded`] arithmetic,
+//! with the same operations in the same order as the test, so each comes with `|eᵢ − eᵢ*| ≤ Eᵢ`
+//! and `|zᵢ − zᵢ*| ≤ Zᵢ`. Let `W̃ = Σ eᵢzᵢ / D` with `D = Σ eᵢ` in real arithmetic on the computed
+//! values. Because `Σ eᵢ(zᵢ − W̃) = 0` exactly,
+//!
+//! `Σ eᵢ*(zᵢ* − W̃) = Σ (eᵢ* − eᵢ)(zᵢ* − W̃) + Σ eᵢ(zᵢ* − zᵢ)`, so
+//! `|W* − W̃| ≤ [Σ Eᵢ(|zᵢ − W̃| + Zᵢ) + Σ |eᵢ| Zᵢ] / (|D| − Σ Eᵢ)`.
+//!
+//! This is first-order tight: an error in an edge function moves `t` only by its weight times the
+//! vertex's offset `zᵢ − W̃` from the hit, not by `zᵢ` itself (a plain interval quotient of
+//! `Σ eᵢzᵢ` by `Σ eᵢ` would lose the ratio of the distance to the triangle's size). `|zᵢ − W̃|` is
+//! taken from the computed `W` plus its rounding `ω`; `|D| ≥ |det| − γ₂Σ|eᵢ|`. The last step,
+//! from `W̃·sz` to the f64 `t = (Σ (eᵢ·sz)·zᵢ) / det`, is the rounding of two products and two sums
+//! in the numerator (`γ₄ |sz| Σ|eᵢzᵢ|`), two sums in `det` (`γ₂ Σ|eᵢ|`) and the quotient (`γ₁|t|`).
+//!
+//! The bound is on `t` as recomputed here; a caller whose `t` came from elsewhere (the packet
+//! test, or the plane fallback for slivers) adds the difference, which is exact to compute.
+
+use super::bounded::{down, gamma, up, values3, BVec3, Bounded};
+use super::Side;
+use crate::geometry::triangle::WatertightRay;
+use std::ops::{Div, Mul, Sub};
+
+/// The bound of one ray/triangle pair.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TriangleBound {
+    /// Where the exact ray passes the triangle: [`Side::Inside`] when every edge function has
+    /// a certain sign, the same for all; [`Side::Outside`] when two have certain, opposite
+    /// signs; [`Side::Edge`] when one may be zero.
+    pub side: Side,
+    /// `t` where the ray meets the triangle's plane, as the watertight test computes it, with a
+    /// bound on its distance from the exact plane's `t` (`+∞` for a ray that may be parallel to
+    /// the plane, or whose direction's dominant component may be zero).
+    pub t: Bounded,
+}
+
+/// The bound for the ray `origin + t·dir` and the triangle `tri`, all with per-component
+/// bounds on their distance from the exact values.
+pub fn bound(origin: &BVec3, dir: &BVec3, tri: &[BVec3; 3]) -> TriangleBound {
+    let [kx, ky, kz] = WatertightRay::new(values3(origin), values3(dir)).axes();
+    let one = Bounded::exact(1.0);
+    let (sx, sy, sz) = (dir[kx].div(dir[kz]), dir[ky].div(dir[kz]), one.div(dir[kz]));
+    let sheared = tri.map(|v| {
+        let p = [0, 1, 2].map(|i| v[i].sub(origin[i]));
+        [p[kx].sub(sx.mul(p[kz])), p[ky].sub(sy.mul(p[kz])), p[kz]]
+    });
+    let [a, b, c] = sheared;
+    let edge = |p: &BVec3, q: &BVec3| p[0].mul(q[1]).sub(p[1].mul(q[0]));
+    let e = [edge(&c, &b), edge(&a, &c), edge(&b, &a)];
+    let z = [a[2], b[2], c[2]];
+    TriangleBound {
+        side: side(&e),
+        t: plane_t(&e, &z, sz),
+    }
+}
+
+/// Whether the exact ray certainly has no crossing with the triangle in `(0, limit]`, for an
+/// exact ray and vertices within `placement` of the stored ones (per coordinate): a cheaper,
+/// coarser test than [`bound`], to pass over most candidates.
+///
+/// A crossing's `t` is a convex combination of the vertices' `p_z / d_z` (the barycentric
+/// weights of an interior hit are not negative), so all vertices behind the origin or all
+/// beyond `limit`, each by more than `placement` and the rounding of `p_z`, rule it out.
+///
+/// With `X = |p_x| + |s_x·p_z| + ε_x` (`p` a vertex relative to the origin, `s` the shear,
+/// `ε_x = placement·(1 + |s_x|)` what the vertex's own bound moves a sheared coordinate), a
+/// sheared coordinate is within `γ₇X + ε_x` of its exact value (the rounding of `p`, of `s`, of
+/// the product and of the difference), and an edge function `x_c y_b − y_c x_b` within
+/// `γ₁₇(X_c Y_b + Y_c X_b) + X_c ε_y + Y_b ε_x + Y_c ε_x + X_b ε_y + 2 ε_x ε_y` (expanding the
+/// products of the bounds; `32u` for `γ₁₇`, and `2⁻³⁰` of slack for the second-order terms).
+/// Two edge functions beyond it with opposite signs: a certain miss.
+pub fn certainly_apart(
+    ray: &WatertightRay,
+    tri: &[glam::DVec3; 3],
+    placement: f64,
+    limit: f64,
+) -> bool {
+    let [kx, ky, kz] = ray.axes();
+    let (shear, origin) = ray.shear_and_origin();
+    let unit = super::bounded::UNIT;
+    let depth = tri.map(|v| v[kz] - origin[kz]);
+    let margin = |p: f64| up(placement + 2.0 * unit * p.abs());
+    let behind = depth
+        .iter()
+        .all(|&p| p * shear.z < 0.0 && p.abs() > margin(p));
+    let far = |p: f64| down(down(p.abs() - margin(p)) * shear.z.abs() * (1.0 - 4.0 * unit));
+    let beyond = depth.iter().all(|&p| p * shear.z > 0.0 && far(p) > limit);
+    if behind || beyond {
+        return true;
+    }
+    let (ex, ey) = (
+        up(placement * (1.0 + shear.x.abs())),
+        up(placement * (1.0 + shear.y.abs())),
+    );
+    let sheared = tri.map(|v| {
+        let p = v - origin;
+        let (m, n) = (shear.x * p[kz], shear.y * p[kz]);
+        [
+            p[kx] - m,
+            up(p[kx].abs() + m.abs() + ex),
+            p[ky] - n,
+            up(p[ky].abs() + n.abs() + ey),
+        ]
+    });
+    let [a, b, c] = sheared;
+    let edge = |p: &[f64; 4], q: &[f64; 4]| {
+        let value = p[0] * q[2] - p[2] * q[0];
+        let first = 32.0 * unit * (p[1] * q[3] + p[3] * q[1]);
+        let moved = p[1] * ey + q[3] * ex + p[3] * ex + q[1] * ey + 2.0 * ex * ey;
+        (
+            value,
+            up((first + moved) * (1.0 + 1.0 / (1u64 << 30) as f64)),
+        )
+    };
+    let e = [edge(&c, &b), edge(&a, &c), edge(&b, &a)];
+    if e.iter().any(|(v, err)| !v.is_finite() || !err.is_finite()) {
+        return false;
+    }
+    let positive = e.iter().any(|&(v, err)| v > err);
+    let negative = e.iter().any(|&(v, err)| -v > err);
+    positive && negative
+}
+
+/// The side from the edge functions' signs.
+fn side(e: &[Bounded; 3]) -> Side {
+    let positive = e.iter().any(|f| f.sign_certain() && f.value > 0.0);
+    let negative = e.iter().any(|f| f.sign_certain() && f.value < 0.0);
+    if positive && negative {
+        Side::Outside
+    } else if e.iter().all(|f| f.sign_certain()) {
+        Side::Inside
+    } else {
+        Side::Edge
+    }
+}
+
+/// `t` from the edge functions `e`, the vertices' unscaled `z` and the scale `sz = 1/d_z`, as
+/// the test computes it, with the bound of the module docs.
+fn plane_t(e: &[Bounded; 3], z: &[Bounded; 3], sz: Bounded) -> Bounded {
+    let det = e[0].value + e[1].value + e[2].value;
+    let scaled = |i: usize| e[i].value * sz.value * z[i].value;
+    let t = (scaled(0) + scaled(1) + scaled(2)) / det;
+    let unbounded = Bounded::new(t, f64::INFINITY);
+    let sum_e = up(e.iter().map(|f| f.value.abs()).sum());
+    let sum_ez = up((0..3).map(|i| (e[i].value * z[i].value).abs()).sum());
+    let d_low = down(det.abs() - up(gamma(2) * sum_e));
+    let sum_err = up(e.iter().map(|f| f.error).sum());
+    let d_star_low = down(d_low - sum_err);
+    if d_star_low.is_nan() || d_star_low <= 0.0 || !t.is_finite() || !sz.error.is_finite() {
+        return unbounded;
+    }
+    // |W̃| ≤ Σ|eᵢzᵢ| / |D|; the computed W and its distance ω from W̃.
+    let w_abs = up(sum_ez / d_low);
+    let w = (e[0].value * z[0].value + e[1].value * z[1].value + e[2].value * z[2].value) / det;
+    let omega = up((gamma(3) * sum_ez + gamma(2) * sum_e * w_abs) / d_low + gamma(1) * w.abs());
+    let spread: f64 = (0..3)
+        .map(|i| {
+            let offset = up((z[i].value - w).abs() + omega + z[i].error);
+            up(e[i].error * offset + e[i].value.abs() * z[i].error)
+        })
+        .sum();
+    let dw = up(up(spread) / d_star_low);
+    let s_abs = sz.value.abs();
+    let exact_part = up(dw * up(s_abs + sz.error) + up(w_abs + dw) * sz.error);
+    let rounding = up(up(gamma(4) * s_abs * sum_ez + s_abs * w_abs * gamma(2) * sum_e) / d_low);
+    Bounded::new(t, up(exact_part + rounding + gamma(1) * t.abs()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bound::bounded::exact3;
+    use glam::DVec3;
+
+    fn tri(points: [[f64; 3]; 3]) -> [BVec3; 3] {
+        points.map(|p| exact3(DVec3::from_array(p)))
+    }
+
+    /// A head-on hit at an exactly representable t: zero error there, and a tiny bound.
+    #[test]
+    fn head_on_hits_are_tight_and_inside() {
+        let t = tri([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]]);
+        let o = exact3(DVec3::new(0.1, 0.2, 5.0));
+        let d = exact3(DVec3::new(0.0, 0.0, -2.0));
+        let b = bound(&o, &d, &t);
+        assert_eq!(b.side, Side::Inside);
+        assert_eq!(b.t.value, 2.5);
+        assert!(b.t.error > 0.0 && b.t.error < 1e-14, "{b:?}");
+    }
+
+    /// A ray through a vertex is an edge case; one beside the triangle is certainly outside.
+    #[test]
+    fn vertices_are_edges_and_misses_are_outside() {
+        let t = tri([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]]);
+        let d = exact3(DVec3::NEG_Z);
+        let through = bound(&exact3(DVec3::new(0.0, 1.0, 5.0)), &d, &t);
+        assert_eq!(through.side, Side::Edge);
+        let beside = bound(&exact3(DVec3::new(3.0, 0.0, 5.0)), &d, &t);
+        assert_eq!(beside.side, Side::Outside);
+    }
+
+    /// The coarse pre-test rules out triangles behind the origin, beyond the limit or well
+    /// beside the ray, and never one the ray crosses or passes within its bounds.
+    #[test]
+    fn the_coarse_test_passes_over_only_what_is_apart() {
+        let at = |z: f64| [[-1.0, -1.0, z], [1.0, -1.0, z], [0.0, 1.0, z]].map(DVec3::from_array);
+        let ray = WatertightRay::new(DVec3::new(0.1, 0.2, 5.0), DVec3::NEG_Z);
+        assert!(
+            certainly_apart(&ray, &at(6.0), 0.0, f64::INFINITY),
+            "behind"
+        );
+        assert!(certainly_apart(&ray, &at(0.0), 0.0, 4.0), "beyond t = 4");
+        assert!(
+            !certainly_apart(&ray, &at(0.0), 0.0, 5.0),
+            "crossed at t = 5"
+        );
+        assert!(
+            !certainly_apart(&ray, &at(0.0), 0.0, f64::INFINITY),
+            "crossed"
+        );
+        let beside = WatertightRay::new(DVec3::new(3.0, 0.0, 5.0), DVec3::NEG_Z);
+        assert!(
+            certainly_apart(&beside, &at(0.0), 0.0, f64::INFINITY),
+            "beside"
+        );
+        // 1e-3 beside the edge x + y = 1 (7e-4 away): apart for exact vertices, not for
+        // vertices that may be off by 1e-2.
+        let near = WatertightRay::new(DVec3::new(0.5 + 1e-3, 0.5, 5.0), DVec3::NEG_Z);
+        let edge = [[-1.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].map(DVec3::from_array);
+        assert!(!certainly_apart(&near, &edge, 1e-2, f64::INFINITY));
+        assert!(certainly_apart(&near, &edge, 0.0, f64::INFINITY));
+    }
+
+    /// A ray in the triangle's plane has no bounded t.
+    #[test]
+    fn parallel_rays_are_unbounded() {
+        let t = tri([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [0.0, 1.0, 0.0]]);
+        let b = bound(&exact3(DVec3::new(-5.0, 0.0, 0.0)), &exact3(DVec3::X), &t);
+        assert_eq!(b.t.error, f64::INFINITY);
+    }
+}

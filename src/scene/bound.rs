@@ -1,0 +1,250 @@
+//! The per-primitive side of [`crate::bound`]: a hit's bound, and whether a primitive may be
+//! crossed by the exact ray within a range.
+
+use super::{Crossing, Scene, Top};
+use crate::bound::bounded::{exact3, up, BVec3, Bounded};
+use crate::bound::triangle::{self, TriangleBound};
+use crate::bound::{mapped, HitBound, Side, CELL_SLACK};
+use crate::geometry::triangle::WatertightRay;
+use crate::geometry::Aabb;
+use crate::quadric::{Others, QuadricBound, RootBound};
+use glam::DVec3;
+use std::ops::Sub;
+
+/// Whether a bounded crossing `t` may lie in `(0, limit]`.
+fn may_lie_in(t: Bounded, limit: f64) -> bool {
+    t.value + t.error > 0.0 && t.value - t.error <= limit
+}
+
+/// Whether a bounded triangle crossing may lie in `(0, limit]`.
+fn triangle_competes(b: &TriangleBound, limit: f64) -> bool {
+    b.side != Side::Outside && may_lie_in(b.t, limit)
+}
+
+/// Whether one of a quadric's exact crossings, other than `skip`, may lie in `(0, limit]`
+/// inside its clip box.
+fn quadric_competes(b: &QuadricBound, limit: f64, skip: Option<usize>) -> bool {
+    let roots = b.roots.iter().enumerate().filter(|&(i, _)| Some(i) != skip);
+    let root = roots
+        .map(|(_, r)| r)
+        .any(|r: &RootBound| !r.isolated || (r.clip != Side::Outside && may_lie_in(r.t, limit)));
+    root || match b.others {
+        Others::None => false,
+        Others::Within(t) => may_lie_in(t, limit),
+        Others::Beyond(reach) => reach.is_nan() || reach <= limit,
+        Others::Unknown => true,
+    }
+}
+
+/// The ray parameter where `origin + t·dir` leaves `aabb` (at most; `+∞` if it never does).
+fn exit_t(aabb: &Aabb, origin: DVec3, dir: DVec3) -> f64 {
+    (0..3)
+        .map(|i| {
+            let (a, b) = (
+                (aabb.min[i] - origin[i]) / dir[i],
+                (aabb.max[i] - origin[i]) / dir[i],
+            );
+            if a.is_nan() || b.is_nan() {
+                f64::INFINITY
+            } else {
+                a.max(b)
+            }
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+impl Scene {
+    /// The bound of `hit`, a crossing of the ray `origin + t·dir` (see [`crate::bound`]).
+    pub fn hit_bound(&self, hit: &Crossing, origin: DVec3, dir: DVec3) -> HitBound {
+        let unbounded = HitBound {
+            t: Bounded::new(hit.t, f64::INFINITY),
+            certain: false,
+        };
+        match self.top(hit.top as usize) {
+            Top::Triangle(i) => {
+                let b = triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));
+                triangle_hit(&b, hit.t)
+            }
+            Top::Instance(k) => {
+                let stored = &self.meshes[self.instances[k].mesh as usize];
+                let Some(inner) = self.with_inner(hit, origin, dir).inner else {
+                    return unbounded;
+                };
+                let (o, d) = self.instance_ray(k, origin, dir);
+                let tri = stored.set.mesh.triangle(inner as usize).map(exact3);
+                triangle_hit(&triangle::bound(&o, &d, &tri), hit.t)
+            }
+            Top::Quadric(q) => quadric_hit(&self.quadrics[q].bound_roots(origin, dir), hit.t),
+        }
+    }
+
+    /// `hit` with the triangle of the instance it hits, found again if it does not carry it
+    /// (as [`Scene::locate`] does); unchanged for other primitives.
+    pub fn with_inner(&self, hit: &Crossing, origin: DVec3, dir: DVec3) -> Crossing {
+        let Top::Instance(k) = self.top(hit.top as usize) else {
+            return *hit;
+        };
+        if hit.inner.is_some() {
+            return *hit;
+        }
+        let instance = &self.instances[k];
+        let stored = &self.meshes[instance.mesh as usize];
+        let inner = instance
+            .intersect(stored, origin, dir, hit.t)
+            .map(|h| h.prim);
+        Crossing { inner, ..*hit }
+    }
+
+    /// Whether top-level primitive `index` may have an exact crossing with the ray `origin +
+    /// t·dir` in `(0, limit]`, other than the crossing `hit` itself. `root` is the size of the
+    /// scene octree's root (see [`CELL_SLACK`]).
+    pub fn may_cross(
+        &self,
+        index: usize,
+        origin: DVec3,
+        dir: DVec3,
+        limit: f64,
+        hit: Option<&Crossing>,
+        root: f64,
+    ) -> bool {
+        let own = hit.filter(|h| h.top as usize == index);
+        match self.top(index) {
+            Top::Triangle(i) => {
+                if own.is_some() {
+                    return false;
+                }
+                let placement = self.placement_of(i);
+                if placement > CELL_SLACK * root {
+                    return true;
+                }
+                let exact = WatertightRay::new(origin, dir);
+                let tri = self.world.mesh.triangle(i);
+                if triangle::certainly_apart(&exact, &tri, placement, limit) {
+                    return false;
+                }
+                let b = triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));
+                triangle_competes(&b, limit)
+            }
+            Top::Instance(k) => self.instance_may_cross(k, origin, dir, limit, own),
+            // The hit quadric's other roots are weighed by its hit bound ([`quadric_hit`]).
+            Top::Quadric(q) => {
+                if own.is_some() || !self.quadrics[q].may_reach(origin, dir, limit) {
+                    return false;
+                }
+                quadric_competes(&self.quadrics[q].bound_roots(origin, dir), limit, None)
+            }
+        }
+    }
+
+    /// [`Scene::may_cross`] for instance `k`: its own octree along the mapped ray, every
+    /// triangle but the hit's.
+    fn instance_may_cross(
+        &self,
+        k: usize,
+        origin: DVec3,
+        dir: DVec3,
+        limit: f64,
+        own: Option<&Crossing>,
+    ) -> bool {
+        let instance = &self.instances[k];
+        let stored = &self.meshes[instance.mesh as usize];
+        let (o, d) = self.instance_ray(k, origin, dir);
+        let (ov, dv) = (
+            crate::bound::bounded::values3(&o),
+            crate::bound::bounded::values3(&d),
+        );
+        let octree = stored.octree();
+        let reach = limit.min(exit_t(
+            &octree.root().translated(-stored.set.anchor),
+            ov - stored.set.anchor,
+            dv,
+        ));
+        let worst = |v: &BVec3| v.iter().map(|c| c.error).fold(0.0, f64::max);
+        let drift = up(worst(&o) + up(reach.max(0.0) * worst(&d)));
+        if drift.is_nan() || drift > CELL_SLACK * octree.root().size().max_element() {
+            return true;
+        }
+        let skip = own.map(|h| h.inner);
+        let mut crossing = false;
+        octree.traverse(ov - stored.set.anchor, dv, limit, |refs, _, _| {
+            crossing = refs.iter().any(|&prim| {
+                if skip == Some(Some(prim)) {
+                    return false;
+                }
+                let tri = stored.set.mesh.triangle(prim as usize).map(exact3);
+                triangle_competes(&triangle::bound(&o, &d, &tri), limit)
+            });
+            if crossing {
+                f64::NEG_INFINITY
+            } else {
+                limit
+            }
+        });
+        crossing
+    }
+
+    /// World triangle `i` with its placement bound.
+    fn world_triangle(&self, i: usize) -> [BVec3; 3] {
+        let error = self.placement_of(i);
+        self.world
+            .mesh
+            .triangle(i)
+            .map(|v| v.to_array().map(|x| Bounded::new(x, error)))
+    }
+
+    /// The placement bound of world triangle `i`'s vertices.
+    fn placement_of(&self, i: usize) -> f64 {
+        self.placement[self.world_parts[i] as usize]
+    }
+
+    /// The world ray in instance `k`'s mesh frame as the trace maps it, `L(o − T)` and `L d`,
+    /// bounded ([`crate::bound::mapped`]).
+    fn instance_ray(&self, k: usize, origin: DVec3, dir: DVec3) -> (BVec3, BVec3) {
+        let instance = &self.instances[k];
+        let (a, norm) = (instance.to_world.matrix3, instance.inverse_norm());
+        let t = instance.to_world.translation;
+        let offset = [0, 1, 2].map(|i| Bounded::exact(origin[i]).sub(Bounded::exact(t[i])));
+        let l = instance.to_local.matrix3;
+        (
+            mapped(a, norm, &offset, l * (origin - t)),
+            mapped(a, norm, &exact3(dir), l * dir),
+        )
+    }
+}
+
+/// A triangle hit's bound: the reported `t` within the distance to the recomputed one plus its
+/// bound; certain when the exact ray crosses the interior in front of the origin.
+fn triangle_hit(b: &TriangleBound, t: f64) -> HitBound {
+    let error = up((t - b.t.value).abs() + b.t.error);
+    HitBound {
+        t: Bounded::new(t, error),
+        certain: b.side == Side::Inside && t - error > 0.0,
+    }
+}
+
+/// The index of the root nearest `t`.
+fn nearest_root(b: &QuadricBound, t: f64) -> Option<usize> {
+    (0..b.roots.len()).min_by(|&i, &j| {
+        let d = |k: usize| (b.roots[k].t.value - t).abs();
+        d(i).total_cmp(&d(j))
+    })
+}
+
+/// A quadric hit's bound: the reported `t` within the distance to the nearest computed root
+/// plus its bound; certain when that root is isolated, inside the clip box, in front of the
+/// origin, and no other exact root may be a nearer valid crossing.
+fn quadric_hit(b: &QuadricBound, t: f64) -> HitBound {
+    let Some(i) = nearest_root(b, t) else {
+        return HitBound {
+            t: Bounded::new(t, f64::INFINITY),
+            certain: false,
+        };
+    };
+    let root = b.roots[i];
+    let error = up((t - root.t.value).abs() + root.t.error);
+    let own = root.isolated && root.clip == Side::Inside && t - error > 0.0;
+    HitBound {
+        t: Bounded::new(t, error),
+        certain: own && !quadric_competes(b, up(t + error), Some(i)),
+    }
+}

@@ -1,0 +1,104 @@
+//! The `error` and `certain` AOVs on scenes whose exact answers are known by analysis.
+
+use glam::DVec3;
+use raycast::accel::{Octree, OctreeParams};
+use raycast::geometry::Ray;
+use raycast::render::{render, Aov, Tracer};
+use raycast::scene::SceneBuilder;
+
+/// The exact `a − b` as an unevaluated sum `hi + lo` (Knuth's two-sum).
+fn two_diff(a: f64, b: f64) -> (f64, f64) {
+    let hi = a - b;
+    let bb = a - hi;
+    (hi, (a - (hi + bb)) + (bb - b))
+}
+
+/// Traces `rays` at a unit square of two triangles (sharing the diagonal) in the plane
+/// z = `height`, and returns the depth, error and certain buffers.
+fn square_at(height: f64, rays: Vec<Ray>) -> (Vec<f64>, Vec<f64>, Vec<u8>) {
+    let [a, b, c, d] =
+        [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| DVec3::new(x, y, height));
+    let mut builder = SceneBuilder::new();
+    builder.add_mesh("square".into(), "test".into(), vec![[a, b, c], [a, c, d]]);
+    let scene = builder.finish("square".into());
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let tracer = Tracer::new(&scene, &octree);
+    let buffers = render(
+        &tracer,
+        &rays,
+        &[Aov::Depth, Aov::Error, Aov::Certain],
+        |_| {},
+    );
+    (
+        buffers.floats(Aov::Depth).unwrap().to_vec(),
+        buffers.floats(Aov::Error).unwrap().to_vec(),
+        buffers.flags(Aov::Certain).unwrap().to_vec(),
+    )
+}
+
+/// Straight down from z = 1 at the plane z = 0.1 (the f64 nearest 1/10): the exact depth is
+/// `1 − 0.1` as reals, which two-sum gives exactly; the bound covers it and is a few ulps.
+/// An interior ray is certain; one through the shared diagonal, or a corner, is not.
+#[test]
+fn depth_bound_covers_the_exact_depth_and_edges_are_uncertain() {
+    let down = |x: f64, y: f64| Ray::new(DVec3::new(x, y, 1.0), DVec3::NEG_Z);
+    let rays = vec![
+        down(0.7, 0.2),
+        down(0.5, 0.5),
+        down(0.0, 0.0),
+        down(0.3, 0.9),
+    ];
+    let (depth, error, certain) = square_at(0.1, rays);
+    let (hi, lo) = two_diff(1.0, 0.1);
+    for i in [0, 3] {
+        let off = (depth[i] - hi) - lo;
+        assert!(off.abs() <= error[i], "ray {i}: {off:e} > {:e}", error[i]);
+        assert!(error[i] < 1e-14, "ray {i}: {:e}", error[i]);
+        assert_eq!(certain[i], 1, "ray {i}");
+    }
+    assert_eq!(certain[1], 0, "through the shared edge");
+    assert_eq!(certain[2], 0, "through a corner");
+}
+
+/// A miss far from the square is certain, and so is one 1e-15 beside its edge from 1 unit
+/// away (the coordinates are small there, their rounding far below 1e-15). From 1000 units
+/// away, aimed 1e-14 beside the edge, the sheared coordinates carry rounding of about
+/// 1e-13 (an ulp of 1000): the miss is within the edge's bound, not certain. A miss's error
+/// is 0.
+#[test]
+fn misses_beside_an_edge_are_uncertain_only_within_the_bound() {
+    let far = DVec3::new(1000.0, 0.5, 1000.0);
+    let rays = vec![
+        Ray::new(DVec3::new(5.0, 5.0, 1.0), DVec3::NEG_Z),
+        Ray::new(DVec3::new(1.0 + 1e-15, 0.5, 1.0), DVec3::NEG_Z),
+        Ray::new(far, DVec3::new(1.0 + 1e-14, 0.5, 0.1) - far),
+    ];
+    let (depth, error, certain) = square_at(0.1, rays);
+    assert_eq!(depth[..2], [f64::INFINITY; 2]);
+    assert_eq!(error[..2], [0.0; 2]);
+    assert_eq!(certain, [1, 1, 0]);
+}
+
+/// Two parallel squares 1e-16 apart (closer than any bound of their crossings): the nearest
+/// is not certain. 1 apart: it is.
+#[test]
+fn surfaces_within_each_others_bounds_are_uncertain() {
+    for (gap, expected) in [(1e-16, 0), (1.0, 1)] {
+        let mut builder = SceneBuilder::new();
+        for (name, z) in [("near", 0.5 + gap), ("far", 0.5)] {
+            let [a, b, c] =
+                [[-1.0, -1.0], [2.0, -1.0], [0.0, 2.0]].map(|[x, y]| DVec3::new(x, y, z));
+            builder.add_mesh(name.into(), "test".into(), vec![[a, b, c]]);
+        }
+        let scene = builder.finish("pair".into());
+        let octree = Octree::build(&scene, OctreeParams::default());
+        let tracer = Tracer::new(&scene, &octree);
+        let rays = vec![Ray::new(DVec3::new(0.2, 0.3, 3.0), DVec3::NEG_Z)];
+        let buffers = render(&tracer, &rays, &[Aov::Certain], |_| {});
+        assert_eq!(
+            buffers.flags(Aov::Certain).unwrap(),
+            [expected],
+            "gap {gap}"
+        );
+    }
+}
