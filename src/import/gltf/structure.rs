@@ -48,45 +48,44 @@ const COLLECTIONS: &[&str] = &[
     "textures",
 ];
 
-/// Properties inside the collections' objects, by their path below the collection (`*` for
-/// every element of an array), and the type each must have.
-const PROPERTIES: &[(&[&str], Kind)] = &[
-    (&["*", "nodes"], Kind::Array),
-    (&["*", "children"], Kind::Array),
-    (&["*", "matrix"], Kind::Array),
-    (&["*", "translation"], Kind::Array),
-    (&["*", "rotation"], Kind::Array),
-    (&["*", "weights"], Kind::Array),
-    (&["*", "primitives"], Kind::Array),
-    (&["*", "primitives", "*"], Kind::Object),
-    (&["*", "primitives", "*", "attributes"], Kind::Object),
-    (&["*", "primitives", "*", "targets"], Kind::Array),
-    (&["*", "primitives", "*", "targets", "*"], Kind::Object),
-    (&["*", "joints"], Kind::Array),
-    (&["*", "channels"], Kind::Array),
-    (&["*", "channels", "*"], Kind::Object),
-    (&["*", "channels", "*", "target"], Kind::Object),
-    (&["*", "samplers"], Kind::Array),
-    (&["*", "samplers", "*"], Kind::Object),
-    (&["*", "sparse"], Kind::Object),
-    (&["*", "min"], Kind::Array),
-    (&["*", "max"], Kind::Array),
+/// Properties inside the collections' objects: the collection, the path below it (`*` for
+/// every element of an array) and the type each must have. Per collection, because a name can
+/// mean two things (`scale` is an array on a node but a number on a normal texture).
+const PROPERTIES: &[(&str, &[&str], Kind)] = &[
+    ("scenes", &["*", "nodes"], Kind::Array),
+    ("nodes", &["*", "children"], Kind::Array),
+    ("nodes", &["*", "matrix"], Kind::Array),
+    ("nodes", &["*", "translation"], Kind::Array),
+    ("nodes", &["*", "rotation"], Kind::Array),
+    ("nodes", &["*", "weights"], Kind::Array),
+    ("meshes", &["*", "weights"], Kind::Array),
+    ("meshes", &["*", "primitives"], Kind::Array),
+    ("meshes", &["*", "primitives", "*"], Kind::Object),
+    (
+        "meshes",
+        &["*", "primitives", "*", "attributes"],
+        Kind::Object,
+    ),
+    ("meshes", &["*", "primitives", "*", "targets"], Kind::Array),
+    (
+        "meshes",
+        &["*", "primitives", "*", "targets", "*"],
+        Kind::Object,
+    ),
+    ("skins", &["*", "joints"], Kind::Array),
+    ("animations", &["*", "channels"], Kind::Array),
+    ("animations", &["*", "channels", "*"], Kind::Object),
+    (
+        "animations",
+        &["*", "channels", "*", "target"],
+        Kind::Object,
+    ),
+    ("animations", &["*", "samplers"], Kind::Array),
+    ("animations", &["*", "samplers", "*"], Kind::Object),
+    ("accessors", &["*", "sparse"], Kind::Object),
+    ("accessors", &["*", "min"], Kind::Array),
+    ("accessors", &["*", "max"], Kind::Array),
 ];
-
-/// Which collections each property pattern applies in (a `scale` is an array on a node but a
-/// number on a normal texture, so patterns are per collection).
-fn applies(collection: &str, pattern: &[&str]) -> bool {
-    match pattern.get(1).copied() {
-        Some("nodes") => collection == "scenes",
-        Some("children" | "matrix" | "translation" | "rotation") => collection == "nodes",
-        Some("weights") => matches!(collection, "nodes" | "meshes"),
-        Some("primitives") => collection == "meshes",
-        Some("joints") => collection == "skins",
-        Some("channels" | "samplers") => collection == "animations",
-        Some("sparse" | "min" | "max") => collection == "accessors",
-        _ => false,
-    }
-}
 
 /// Reports every property of the table above that has another JSON type.
 pub fn check(doc: &Document, sink: &mut dyn Sink) {
@@ -100,10 +99,8 @@ pub fn check(doc: &Document, sink: &mut dyn Sink) {
             continue;
         }
         walk(value, &["*"], &at, Kind::Object, sink);
-        for &(pattern, kind) in PROPERTIES {
-            if applies(collection, pattern) {
-                walk(value, pattern, &at, kind, sink);
-            }
+        for &(_, pattern, kind) in PROPERTIES.iter().filter(|p| p.0 == collection) {
+            walk(value, pattern, &at, kind, sink);
         }
     }
 }
