@@ -1,7 +1,7 @@
 # Type stubs of the compiled module raycast._raycast (python/src/*.rs). The public API is
 # raycast/__init__.py, which checks shapes and dtypes and hands over float64 arrays.
 import os
-from typing import final
+from typing import Any, final
 
 import numpy as np
 import numpy.typing as npt
@@ -74,3 +74,5 @@ def pinhole(k: F64, cam_to_world: F64, width: int, height: int) -> Camera: ...
 def read_views(
     path: str | os.PathLike, width: int | None = None, height: int | None = None
 ) -> list[tuple[str | None, Camera]]: ...
+def closest_points(scene: _Scene, points: F64) -> dict[str, npt.NDArray[Any]]: ...
+def signed_distance(scene: _Scene, points: F64, sign: str) -> F64: ...

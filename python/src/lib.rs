@@ -9,6 +9,7 @@
 
 mod arrays;
 mod camera;
+mod distance;
 mod fill;
 mod scene;
 
@@ -42,6 +43,8 @@ fn _raycast(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scene::load_path, m)?)?;
     m.add_function(wrap_pyfunction!(scene::load_bytes, m)?)?;
     m.add_function(wrap_pyfunction!(scene::load_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(distance::closest_points, m)?)?;
+    m.add_function(wrap_pyfunction!(distance::signed_distance, m)?)?;
     m.add_function(wrap_pyfunction!(camera::look_at, m)?)?;
     m.add_function(wrap_pyfunction!(camera::pinhole, m)?)?;
     m.add_function(wrap_pyfunction!(camera::read_views, m)?)?;

@@ -122,11 +122,17 @@ impl PyScene {
         })
     }
 
-    fn query(&self) -> Query<'_> {
+    /// The scene and its octree, for queries.
+    pub(crate) fn query(&self) -> Query<'_> {
         Query {
             scene: &self.scene,
             octree: &self.octree,
         }
+    }
+
+    /// The scene.
+    pub(crate) fn scene(&self) -> &Scene {
+        &self.scene
     }
 
     /// The scene and its octree as the tracer of the command line's buffers.

@@ -25,11 +25,13 @@ mod builder;
 mod hits;
 pub mod instance;
 pub mod mesh;
+mod proximity;
 
 pub use builder::SceneBuilder;
 pub use hits::{Crossing, EdgeRule};
 pub use instance::{Instance, StoredMesh};
 pub use mesh::{Mesh, MeshSet, Positions};
+pub use proximity::Nearest;
 
 use crate::accel::{
     intersect_each, intersect_one_by_one, octants_by_overlap, Hit, PreparedRay, PrimitiveSet,
