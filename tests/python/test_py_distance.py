@@ -235,3 +235,37 @@ def test_signed_distance_signs_are_never_wrong_on_closed_meshes():
     assert not ((sign != 0) & (sign != expected)).any()
     certain = sign != 0
     assert np.array_equal((scene.occupancy(points) == 1)[certain], (sign < 0)[certain])
+
+
+def test_instances_are_measured_as_placed():
+    # One cube mesh drawn by five nodes (translated, rotated, scaled unevenly by a parent,
+    # mirrored): raycast stores it once and places each instance; trimesh places the
+    # triangles itself.
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "fixtures" / "gltf" / "instances.gltf"
+    bodies = trimesh.load(path, force="scene").dump()
+    placed = trimesh.util.concatenate(bodies)
+    triangles = placed.vertices[placed.faces]
+    scene = raycast.load(path)
+    rng = np.random.default_rng(3)
+    points = np.concatenate(
+        [rng.uniform(-5, 5, (150, 3)), near_features(rng, placed.vertices, placed.faces, 50, 1e-9)]
+    )
+    found = scene.closest_points(points)
+    for i, p in enumerate(points):
+        truth, _ = exact_distance(p, triangles)
+        # A few ulps of the cubes' size, plus the two placements' rounding.
+        assert abs(mpmath.mpf(found["distance"][i]) - truth) <= 1e-14, (
+            p,
+            found["distance"][i],
+            truth,
+        )
+    # The cubes are convex and apart: inside one of them, exactly, is inside the scene.
+    for body in bodies:
+        if body.volume < 0:
+            body.invert()  # the mirrored one, if trimesh kept its winding
+    truth = np.min([convex_truth(body, points) for body in bodies], axis=0)
+    sign = np.sign(scene.signed_distance(points))
+    assert not ((sign != 0) & (sign != truth)).any()
+    assert (sign != 0).mean() > 0.95
