@@ -269,3 +269,17 @@ def test_instances_are_measured_as_placed():
     sign = np.sign(scene.signed_distance(points))
     assert not ((sign != 0) & (sign != truth)).any()
     assert (sign != 0).mean() > 0.95
+
+
+def test_info_says_which_meshes_are_closed_as_trimesh_does():
+    mesh, _ = l_prism()
+    sphere = trimesh.creation.icosphere(subdivisions=1)
+    holed = trimesh.Trimesh(sphere.vertices, sphere.faces[1:], process=False)
+    flipped = trimesh.Trimesh(
+        sphere.vertices, np.concatenate([sphere.faces[:1, ::-1], sphere.faces[1:]])
+    )
+    for m in (mesh, sphere, holed, flipped):
+        closed = m.is_watertight and m.is_winding_consistent
+        info = raycast.Scene.from_arrays(m.vertices, m.faces).info()
+        assert info["objects"][0]["closed"] is closed
+    assert [m.is_watertight and m.is_winding_consistent for m in (holed, flipped)] == [False, False]
