@@ -3,6 +3,7 @@
 
 use crate::fill::array;
 use crate::scene::PyScene;
+use crate::threads;
 use glam::DVec3;
 use numpy::ndarray::ArrayView2;
 use numpy::PyReadonlyArray2;
@@ -43,22 +44,26 @@ fn point(points: &ArrayView2<'_, f64>, i: usize) -> DVec3 {
 }
 
 /// The nearest surface point of each (N, 3) point: a dict of `point` (N, 3), `distance` (N,),
-/// `id` (N,), `prim` (N,), `bary` (N, 3) and `normal` (N, 3). A scene without triangles gives
-/// infinite points and distances, id 0 and prim `u32::MAX`.
+/// `id` (N,), `prim` (N,), `bary` (N, 3) and `normal` (N, 3), on `nthreads` threads (0: all
+/// cores). A scene without triangles gives infinite points and distances, id 0 and prim
+/// `u32::MAX`.
 #[pyfunction]
 pub fn closest_points<'py>(
     py: Python<'py>,
     scene: &PyScene,
     points: PyReadonlyArray2<'py, f64>,
+    nthreads: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
     let points = rows(scene, &points)?;
     let query = scene.query();
     let found: Vec<Option<NearestPoint>> = py.detach(|| {
-        (0..points.nrows())
-            .into_par_iter()
-            .map(|i| query.closest(point(&points, i)))
-            .collect()
-    });
+        threads::run(nthreads, || {
+            (0..points.nrows())
+                .into_par_iter()
+                .map(|i| query.closest(point(&points, i)))
+                .collect()
+        })
+    })?;
     let n = found.len();
     let column = |f: &dyn Fn(&NearestPoint) -> [f64; 3], miss: f64| {
         found
@@ -96,12 +101,13 @@ pub fn signed_distance<'py>(
     scene: &PyScene,
     points: PyReadonlyArray2<'py, f64>,
     sign: &str,
+    nthreads: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
     let points = rows(scene, &points)?;
     let query = scene.query();
     let signed: Vec<f64> = match sign {
-        "crossings" => py.detach(|| by_crossings(&query, &points)),
-        "winding" => py.detach(|| by_winding(&query, &points)),
+        "crossings" => py.detach(|| threads::run(nthreads, || by_crossings(&query, &points)))?,
+        "winding" => py.detach(|| threads::run(nthreads, || by_winding(&query, &points)))?,
         _ => {
             return Err(PyValueError::new_err(format!(
                 "unknown sign rule '{sign}' (choose crossings or winding)"

@@ -12,6 +12,7 @@ mod camera;
 mod distance;
 mod fill;
 mod scene;
+mod threads;
 
 use pyo3::prelude::*;
 use pyo3::types::PyType;
