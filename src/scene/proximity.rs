@@ -1,6 +1,6 @@
 //! The nearest surface point of the scene to a query point, found through the octree.
 //!
-//! The octree's boxes are searched best first ([`Octree::nearest_leaves`]) with a lower bound
+//! The octree's boxes are searched best first ([`Octree::nearest`]) with a lower bound
 //! on the distance to each box; a leaf's world triangles are measured exactly
 //! ([`closest_on_triangle`]) and an instance's mesh is searched through its own octree, its
 //! boxes and triangles placed in the world by the instance's transform. Distances are world
@@ -53,14 +53,12 @@ impl Scene {
         // `local` is rounded by at most EPS · |local| per component.
         let slack = 2.0 * EPS * local.abs().max_element();
         let mut best: Option<Nearest> = None;
-        octree.nearest_leaves(
+        octree.nearest(
             |b| lower_bound(box_distance(local, b), slack),
-            |refs| {
-                for &top in refs {
-                    let limit = best.map_or(f64::INFINITY, |b| b.closest.distance);
-                    if let Some(found) = self.nearest_in(top, point, limit) {
-                        best = Some(best.map_or(found, |b| b.nearer(found)));
-                    }
+            |top| {
+                let limit = best.map_or(f64::INFINITY, |b| b.closest.distance);
+                if let Some(found) = self.nearest_in(top, point, limit) {
+                    best = Some(best.map_or(found, |b| b.nearer(found)));
                 }
                 best.map_or(f64::INFINITY, |b| b.closest.distance)
             },
@@ -112,7 +110,7 @@ fn nearest_in_instance(
     let abs = glam::DMat3::from_cols(a.x_axis.abs(), a.y_axis.abs(), a.z_axis.abs());
     let mut best: Option<(Closest, u32)> = None;
     let mut limit = limit;
-    stored.octree().nearest_leaves(
+    stored.octree().nearest(
         |b| {
             // The box placed: centre A·c + t, half extents |A|·h, each rounded by less than
             // a few EPS of |A|·|c| + |t| + |A|·h (bounded generously by `slack`).
@@ -128,22 +126,20 @@ fn nearest_in_instance(
             let gap = (point - placed).abs() - reach;
             lower_bound(gap.max(DVec3::ZERO).length(), slack)
         },
-        |refs| {
-            for &prim in refs {
-                let tri = stored
-                    .set
-                    .mesh
-                    .triangle(prim as usize)
-                    .map(|v| to_world.transform_point3(v));
-                let found = closest_on_triangle(point, &tri);
-                let better = match best {
-                    None => found.distance <= limit,
-                    Some((b, i)) => (found.distance, prim) < (b.distance, i),
-                };
-                if better {
-                    best = Some((found, prim));
-                    limit = found.distance;
-                }
+        |prim| {
+            let tri = stored
+                .set
+                .mesh
+                .triangle(prim as usize)
+                .map(|v| to_world.transform_point3(v));
+            let found = closest_on_triangle(point, &tri);
+            let better = match best {
+                None => found.distance <= limit,
+                Some((b, i)) => (found.distance, prim) < (b.distance, i),
+            };
+            if better {
+                best = Some((found, prim));
+                limit = found.distance;
             }
             limit
         },
