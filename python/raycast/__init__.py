@@ -17,11 +17,12 @@ import errno
 import json
 import os
 import warnings
+from pathlib import Path
 from typing import Iterable
 
 import numpy as np
 
-from . import _chunks, _raycast, camera, errors
+from . import _chunks, _content, _raycast, camera, errors
 from .errors import RaycastError, RaycastWarning, SceneError, SceneNotFoundError, UsageError
 
 __all__ = [
@@ -57,6 +58,9 @@ RENDER_OUTPUTS = (
 )
 #: The ``prim`` value of a miss.
 INVALID_PRIM = 2**32 - 1
+#: Whether a pickled scene refuses to load a file that changed since it was pickled (its
+#: content digest differs). Set it to False to load the files as they are now.
+CHECK_PICKLED_FILES = True
 
 
 def load(
@@ -102,11 +106,20 @@ def load(
     which = None if animation is None else str(animation)
     chosen = None if variants is None else [(str(k), str(v)) for k, v in variants.items()]
     try:
-        return Scene(_raycast.load_path(os.fspath(path), choice, time, which, chosen))
+        scene = Scene(_raycast.load_path(os.fspath(path), choice, time, which, chosen))
     except SceneNotFoundError as missing:
         missing.errno, missing.strerror = errno.ENOENT, os.strerror(errno.ENOENT)
         missing.filename = os.fspath(path)
         raise
+    scene._files = _content.stamp(Path(path))
+    return scene
+
+
+def _load_pickled(path, digest, scene, time, animation, variants) -> Scene:
+    """Unpickles a scene loaded from a file: the file must hold what it held when the scene
+    was pickled (unless :data:`CHECK_PICKLED_FILES` is False)."""
+    _content.check(Path(path), digest, CHECK_PICKLED_FILES)
+    return load(path, scene, time, animation, variants)
 
 
 def load_bytes(
@@ -265,6 +278,8 @@ class Scene:
 
     def __init__(self, compiled: _raycast._Scene):
         self._scene = compiled
+        # For a scene loaded from a file: its files' sizes and times when it was loaded.
+        self._files = None
         for line in json.loads(compiled.info_json()).get("warnings", []):
             # stacklevel 3: the caller of load(), load_bytes(), at() or from_arrays().
             warnings.warn(line, RaycastWarning, stacklevel=3)
@@ -305,7 +320,8 @@ class Scene:
             return (Scene.from_arrays, arrays)
         data, name, choice, time, animation, variants = self._scene.source()
         if name is None:
-            return (load, (data, choice, time, animation, dict(variants) or None))
+            digest = _content.digest_unchanged_since(Path(data), self._files)
+            return (_load_pickled, (data, digest, choice, time, animation, dict(variants) or None))
         return (load_bytes, (data, name, choice, time, animation))
 
     def at(self, time: float) -> Scene:
@@ -327,7 +343,9 @@ class Scene:
         Scene
             A new scene; this one is unchanged.
         """
-        return Scene(self._scene.at(float(time)))
+        posed = Scene(self._scene.at(float(time)))
+        posed._files = self._files
+        return posed
 
     @property
     def objects(self) -> list[dict]:
