@@ -8,6 +8,7 @@ Run: .venv/bin/python -m pytest tests/python/test_py_distance.py
 """
 
 from fractions import Fraction
+from pathlib import Path
 
 import mpmath
 import numpy as np
@@ -139,8 +140,6 @@ def test_shapes_misses_and_refusals():
 
 
 def test_quadric_scenes_are_refused_not_answered_wrong():
-    from pathlib import Path
-
     root = Path(__file__).resolve().parents[2]
     scene = raycast.load(root / "fixtures" / "quadrics" / "ellipsoid.gltf")
     with pytest.raises(NotImplementedError, match="quadrics"):
@@ -241,8 +240,6 @@ def test_instances_are_measured_as_placed():
     # One cube mesh drawn by five nodes (translated, rotated, scaled unevenly by a parent,
     # mirrored): raycast stores it once and places each instance; trimesh places the
     # triangles itself.
-    from pathlib import Path
-
     path = Path(__file__).resolve().parents[2] / "fixtures" / "gltf" / "instances.gltf"
     bodies = trimesh.load(path, force="scene").dump()
     placed = trimesh.util.concatenate(bodies)
@@ -283,3 +280,54 @@ def test_info_says_which_meshes_are_closed_as_trimesh_does():
         info = raycast.Scene.from_arrays(m.vertices, m.faces).info()
         assert info["objects"][0]["closed"] is closed
     assert [m.is_watertight and m.is_winding_consistent for m in (holed, flipped)] == [False, False]
+
+
+def test_the_command_line_gives_the_exact_distances_and_signs(tmp_path):
+    import json
+    import subprocess
+
+    from raycast_tools.paths import find_raycast
+
+    mesh, inside = l_prism()
+    obj = tmp_path / "prism.obj"
+    mesh.export(obj)
+    rng = np.random.default_rng(8)
+    points = np.concatenate(
+        [
+            rng.uniform(-0.5, 2.5, (200, 3)),
+            near_features(rng, mesh.vertices, mesh.faces, 100, 1e-12),
+        ]
+    )
+    np.save(tmp_path / "points.npy", points)
+    binary = find_raycast()
+    for _ in range(2):  # a second run replaces the first's files
+        run = subprocess.run(
+            [binary, "distance", obj, tmp_path / "points.npy", "--out", tmp_path / "d", "-q"],
+            capture_output=True,
+            text=True,
+        )
+        assert run.returncode == 0, run.stderr
+    d = {
+        n: np.load(tmp_path / "d" / f"{n}.npy")
+        for n in ("distance", "signed_distance", "point", "id", "prim")
+    }
+    triangles = trimesh.load(obj, process=False).triangles
+    for i, p in enumerate(points):
+        truth, _ = exact_distance(p, triangles)
+        assert abs(mpmath.mpf(d["distance"][i]) - truth) <= 16 * EPS * 2
+    sign = np.sign(d["signed_distance"])
+    assert not ((sign != 0) & (sign != np.where(inside(points), -1, 1))).any()
+    scene = raycast.load(obj)
+    assert np.array_equal(d["signed_distance"], scene.signed_distance(points))
+    assert np.array_equal(d["point"], scene.closest_points(points)["point"])
+    sidecar = json.loads((tmp_path / "d" / "raycast.json").read_text())
+    assert sidecar["points"] == len(points) and sidecar["sign"] == "crossings"
+    assert sidecar["meshes"][0]["closed"] is True
+    quadrics = Path(__file__).resolve().parents[2] / "fixtures" / "quadrics" / "ellipsoid.gltf"
+    refused = subprocess.run(
+        [binary, "distance", quadrics, tmp_path / "points.npy", "--out", tmp_path / "q"],
+        capture_output=True,
+        text=True,
+    )
+    assert refused.returncode == 2 and "do not handle quadrics" in refused.stderr
+    assert not (tmp_path / "q").exists()
