@@ -64,6 +64,7 @@ pub(super) fn load(job: &RenderJob, source: Option<&import::Source>) -> Result<L
     let seconds = started.elapsed().as_secs_f64();
     let mut warnings = scene.warnings.clone();
     warnings.append(&mut ray_warnings);
+    warnings.extend(render::attribute_warnings(&scene, &job.aovs));
     Ok(Loaded {
         scene,
         rays,
@@ -284,6 +285,8 @@ fn sidecar(
         cryptomatte_spp: job.cryptomatte.filter(|_| view.is_some()),
         bounds,
         objects: scene.objects.clone(),
+        materials: (job.aovs.contains(&render::Aov::Material) || job.cryptomatte.is_some())
+            .then(|| scene.materials().to_vec()),
         stats: Stats {
             triangles: scene.triangle_count(),
             quadrics: scene.quadrics().len(),

@@ -10,10 +10,11 @@ use super::document::{array, as_index, extension, index_of, Document};
 use super::mesh::DRACO;
 use super::node::{animated_transform, Node};
 use super::pose::Pose;
+use super::shading::MeshShading;
 use super::QUADRIC_EXTENSION;
 use crate::camera::Camera;
 use crate::quadric::{Quadric, QuadricSpec};
-use crate::scene::{Mesh, Scene, SceneBuilder};
+use crate::scene::{Attributes, Mesh, Scene, SceneBuilder};
 use glam::{DMat4, DVec3};
 use serde_json::Value;
 use std::collections::{HashMap, HashSet};
@@ -70,6 +71,9 @@ pub fn build_at(
             ));
         }
         walk.builder.set_pose(pose);
+    }
+    for index in 0..doc.list("materials").len() {
+        walk.builder.add_material(super::shading::material_name(doc, index));
     }
     walk.builder.set_extensions_used(
         doc.extension_names("extensionsUsed")
@@ -136,7 +140,7 @@ fn add_mesh_object(
 }
 
 /// Which buffers the geometry reads: those behind the accessors of mesh primitives (POSITION,
-/// indices, sparse parts), Draco data and GPU instancing attributes, and the sources of
+/// NORMAL, TEXCOORD_0, indices, sparse parts), Draco data and GPU instancing attributes, and the sources of
 /// meshopt-compressed views; what posing reads (morph targets drawn with weights, skin joints,
 /// weights and inverse bind matrices); with `animating`, every morph target and animation
 /// sampler. Others (textures, animations without `--time`) are never read for a render.
@@ -178,12 +182,16 @@ pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<bool> {
     for (m, mesh) in doc.list("meshes").iter().enumerate() {
         for prim in array(mesh, "primitives") {
             let attributes = prim.get("attributes");
-            accessors.extend(attributes.and_then(|a| index_of(a, "POSITION")));
+            for name in ["POSITION", "NORMAL", "TEXCOORD_0"] {
+                accessors.extend(attributes.and_then(|a| index_of(a, name)));
+            }
             accessors.extend(index_of(prim, "indices"));
             mark_view(extension(prim, DRACO).and_then(|d| index_of(d, "bufferView")));
             if morphed.contains(&m) {
-                let targets = array(prim, "targets").iter();
-                accessors.extend(targets.filter_map(|t| index_of(t, "POSITION")));
+                for target in array(prim, "targets") {
+                    accessors.extend(index_of(target, "POSITION"));
+                    accessors.extend(index_of(target, "NORMAL"));
+                }
             }
             if let Some(attributes) = attributes
                 .and_then(Value::as_object)
@@ -311,10 +319,10 @@ impl Walk<'_> {
                 self.read_mesh(mesh).map_err(|e| e.within(&at))?;
                 &self.meshes[&mesh]
             } else {
-                let triangles = self
+                let (triangles, attributes) = self
                     .mesh_triangles(mesh, Some(&pose))
                     .map_err(|e| e.within(&at))?;
-                posed = Arc::new(Mesh::from_soup(&triangles));
+                posed = Arc::new(Mesh::from_soup(&triangles).with_attributes(attributes));
                 &posed
             };
             let instances = match extension(node.json, GPU_INSTANCING) {
@@ -382,9 +390,9 @@ impl Walk<'_> {
                 "mesh does not exist",
             ));
         }
-        let triangles = self.mesh_triangles(mesh, None)?;
-        self.meshes
-            .insert(mesh, Arc::new(Mesh::from_soup(&triangles)));
+        let (triangles, attributes) = self.mesh_triangles(mesh, None)?;
+        let read = Mesh::from_soup(&triangles).with_attributes(attributes);
+        self.meshes.insert(mesh, Arc::new(read));
         Ok(())
     }
 
@@ -408,20 +416,31 @@ impl Walk<'_> {
     }
 
     /// The triangles of mesh `mesh` (all its triangle primitives, in order), posed by `pose`
-    /// when given, in the mesh's frame (the world's for a skin).
+    /// when given, in the mesh's frame (the world's for a skin), with their shading
+    /// attributes (normals posed too).
     fn mesh_triangles(
         &mut self,
         mesh: usize,
         pose: Option<&Pose>,
-    ) -> Result<Vec<[DVec3; 3]>, Diagnostic> {
+    ) -> Result<(Vec<[DVec3; 3]>, Attributes), Diagnostic> {
         let mut triangles = Vec::new();
+        let mut shading = MeshShading::default();
         for prim in 0..self.doc.primitive_count(mesh) {
             match self.doc.primitive_geometry(mesh, prim) {
                 Ok(Some(mut geometry)) => {
+                    for warning in self.doc.read_shading(mesh, prim, &mut geometry) {
+                        self.builder.warn(warning);
+                    }
                     if let Some(pose) = pose {
                         self.doc.pose_primitive(mesh, prim, &mut geometry, pose)?;
                     }
-                    triangles.extend(geometry.triangles())
+                    let corners = geometry.corners();
+                    shading.add(&geometry, &corners);
+                    triangles.extend(
+                        corners
+                            .iter()
+                            .map(|c| c.map(|v| geometry.positions[v as usize])),
+                    );
                 }
                 Ok(None) => {
                     let why = self.doc.primitive_skip_reason(mesh, prim);
@@ -436,7 +455,7 @@ impl Walk<'_> {
                 Err(e) => return Err(e),
             }
         }
-        Ok(triangles)
+        Ok((triangles, shading.finish()))
     }
 
     fn add_camera(&mut self, camera: usize, node_name: &str, world: &DMat4) {
