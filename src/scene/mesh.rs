@@ -15,7 +15,7 @@ use crate::geometry::triangle_box;
 use crate::geometry::triangle_packet::WatertightPacket;
 use crate::geometry::Aabb;
 use glam::{DAffine3, DVec3, Vec3};
-use super::attributes::Attributes;
+use super::attributes::{Attributes, MaterialRun};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -120,6 +120,20 @@ impl Mesh {
             attributes: (!attributes.is_empty()).then(|| Arc::new(attributes)),
             ..self
         }
+    }
+
+    /// The mesh with its triangles bound to materials by `runs` (its other attributes kept).
+    pub fn with_materials(self, runs: Vec<MaterialRun>) -> Mesh {
+        let mut attributes = self.attributes.as_deref().cloned().unwrap_or_default();
+        attributes.materials = runs;
+        self.with_attributes(attributes)
+    }
+
+    /// The mesh without shading normals (its other attributes kept).
+    pub fn without_normals(self) -> Mesh {
+        let mut attributes = self.attributes.as_deref().cloned().unwrap_or_default();
+        attributes.normals = Vec::new();
+        self.with_attributes(attributes)
     }
 
     /// The shading attributes, if the file gave any.
