@@ -40,7 +40,20 @@ __all__ = [
 ]
 
 #: Outputs :meth:`Scene.cast` can return.
-CAST_OUTPUTS = ("t", "distance", "normal", "position", "id", "prim", "bary", "error", "certain")
+CAST_OUTPUTS = (
+    "t",
+    "distance",
+    "normal",
+    "position",
+    "id",
+    "prim",
+    "bary",
+    "error",
+    "certain",
+    "uv",
+    "shading_normal",
+    "material",
+)
 #: Outputs :meth:`Scene.render` can return (``depth`` is ``distance``, as on the command line).
 RENDER_OUTPUTS = (
     "t",
@@ -54,6 +67,9 @@ RENDER_OUTPUTS = (
     "bary",
     "error",
     "certain",
+    "uv",
+    "shading_normal",
+    "material",
 )
 #: The ``prim`` value of a miss.
 INVALID_PRIM = 2**32 - 1
@@ -213,6 +229,7 @@ class Scene:
 
     def __init__(self, compiled: _raycast._Scene):
         self._scene = compiled
+        self._warned: set[str] = set()
         for line in json.loads(compiled.info_json()).get("warnings", []):
             # stacklevel 3: the caller of load(), load_bytes(), at() or from_arrays().
             warnings.warn(line, RaycastWarning, stacklevel=3)
@@ -284,6 +301,22 @@ class Scene:
         ``bounds`` ([min, max])."""
         return self._scene.objects()
 
+    @property
+    def materials(self) -> list[str]:
+        """The materials, named as the file names them (glTF material names, ``material<i>``
+        when unnamed; OBJ ``usemtl`` names; USD material prim paths): the ``material``
+        output's value ``m`` is ``materials[m - 1]``, 0 meaning a miss or no material."""
+        return self._scene.materials()
+
+    def _warn_missing(self, names: list[str]) -> None:
+        """Warns once per scene and output when some objects lack what ``uv``,
+        ``shading_normal`` or ``material`` read (their hits hold the miss value)."""
+        for line in self._scene.attribute_warnings(names):
+            if line not in self._warned:
+                self._warned.add(line)
+                # stacklevel 3: the caller of cast(), render() or render_views().
+                warnings.warn(line, RaycastWarning, stacklevel=3)
+
     def triangles(self, id: int) -> np.ndarray:
         """Object ``id``'s triangles in world coordinates: a (T, 3, 3) float64 array, row ``i``
         the triangle whose ``prim`` is ``i`` (empty for a quadric). Raises ValueError for an
@@ -341,7 +374,13 @@ class Scene:
             float64, a bound on ``|distance - exact distance|`` of the same primitive's
             crossing (+inf where none can be made, 0 on a miss); ``certain`` (N,) uint8, 1
             when no value within the bounds could change the ray's decision (see
-            docs/buffers-and-cli.md, "Error bounds").
+            docs/buffers-and-cli.md, "Error bounds"); ``uv`` (N, 2) float64, the file's
+            texture coordinates interpolated at the hit, as stored, +inf on a miss, a quadric
+            or a mesh without them; ``shading_normal`` (N, 3) float64, the file's normals
+            interpolated, in the world, unit length (quadrics: the analytic normal), zeros on
+            a miss or a mesh without them; ``material`` (N,) uint32, 1-based index into
+            :attr:`materials`, 0 on a miss or without material. An output that some objects
+            have no data for warns once (:class:`RaycastWarning`).
 
         Raises
         ------
@@ -353,6 +392,7 @@ class Scene:
         """
         names = _names(aovs)
         rays = _Rays(origins, directions, tmin, tmax)
+        self._warn_missing([n for n in names if n != "z"])
         try:
             hits = self._scene.cast(rays.flat, names)
         except ValueError as e:
@@ -434,7 +474,9 @@ class Scene:
             Arrays of shape (height, width) or (height, width, 3), with the values and misses
             of :meth:`cast`; bit-identical to the command line's buffers for the same camera.
         """
-        return self._scene.render(camera, int(width), int(height), _names(aovs))
+        names = _names(aovs)
+        self._warn_missing(names)
+        return self._scene.render(camera, int(width), int(height), names)
 
     def render_views(self, views, aovs=("depth",)):
         """Renders each of ``views`` (from :func:`raycast.camera.read_views`) at its own size,
@@ -447,6 +489,7 @@ class Scene:
             so that a long list does not hold every image in memory.
         """
         names = _names(aovs)
+        self._warn_missing(names)
         for name, view in views:
             width, height = view.size
             yield name, self._scene.render(view, width, height, names)

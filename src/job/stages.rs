@@ -199,10 +199,9 @@ pub(super) fn trace_and_write(
         staging.write(npz::HITS_FILE, |out| npz::write_hits(out, hits))?;
     }
     if let (Some(spp), Some(view)) = (job.cryptomatte, view) {
-        let ranked = super::cryptomatte::mattes(&tracer, view, spp)?;
-        let names = cryptomatte::object_names(scene.objects.iter().map(|o| o.name.clone()));
+        let layers = super::cryptomatte::mattes(&tracer, view, spp)?;
         staging.write(cryptomatte::FILE, |out| {
-            cryptomatte::write(out, view.width, view.height, &ranked, &names)
+            cryptomatte::write(out, view.width, view.height, &layers)
         })?;
     }
     let mut files = staging.names();
