@@ -20,7 +20,9 @@ from binary import RAYCAST, ROOT, needs_binary
 import raycast
 
 FIXTURES = ROOT / "fixtures" / "attributes"
-GLTF, OBJ, SEAMS, USD = (FIXTURES / n for n in ("textured.gltf", "textured.obj", "seams.obj", "bound.usda"))
+GLTF, OBJ, SEAMS, PLY, USD = (
+    FIXTURES / n for n in ("textured.gltf", "textured.obj", "seams.obj", "dome.ply", "bound.usda")
+)
 
 
 def rays_down(lo, hi, n, seed=3):
@@ -71,8 +73,8 @@ def trimesh_reference(scene, origins, directions, flip_v):
 
 @pytest.mark.parametrize(
     ("path", "box", "flip_v"),
-    [(GLTF, (-1.2, 4.2), True), (SEAMS, (-1.1, 1.1), False)],
-    ids=["gltf", "obj"],
+    [(GLTF, (-1.2, 4.2), True), (SEAMS, (-1.1, 1.1), False), (PLY, (-1.1, 1.1), False)],
+    ids=["gltf", "obj", "ply"],
 )
 def test_uv_and_shading_normals_match_trimesh(path, box, flip_v):
     with warnings.catch_warnings():
