@@ -213,7 +213,10 @@ fn model_materials(
 fn model_attributes(mesh: &tobj::Mesh, materials: Vec<u32>) -> Attributes {
     let triangles = |indices: &[u32]| -> Vec<[u32; 3]> {
         match indices.len() == mesh.indices.len() {
-            true => indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+            true => indices
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect(),
             false => Vec::new(),
         }
     };

@@ -182,7 +182,8 @@ mod tests {
 
     #[test]
     fn face_materials_follow_usemtl_over_fanned_faces() {
-        let text = "f 1 2 3\nusemtl red\nf 1 2 3 4\nusemtl blue\nf 1 2\nf 1 2 3\nusemtl red\nf 1 2 3\n";
+        let text =
+            "f 1 2 3\nusemtl red\nf 1 2 3 4\nusemtl blue\nf 1 2\nf 1 2 3\nusemtl red\nf 1 2 3\n";
         let (names, per_triangle) = face_materials(text);
         assert_eq!(names, ["red", "blue"]);
         assert_eq!(per_triangle, [0, 1, 1, 2, 1]);

@@ -7,6 +7,7 @@ use super::view::camera_view;
 use super::{HitLimit, Progress, RenderJob};
 use crate::error::{Error, Result};
 use crate::import;
+use crate::output::colormap::Colormap;
 use crate::output::cryptomatte;
 use crate::output::npy::RayFile;
 use crate::output::png::DistancePng;
@@ -277,6 +278,8 @@ fn sidecar(
             crossings: lists.t.len(),
         }),
         depth_png_range,
+        depth_png_colormap: Some(job.pngs.colormap.name())
+            .filter(|_| job.pngs.colormap != Colormap::Grey),
         depth_png_scale: match job.pngs.distances {
             DistancePng::U16 { scale } => Some(scale),
             DistancePng::Preview => None,

@@ -124,7 +124,11 @@ pub fn write(
     let mut channels = Vec::with_capacity(4 * LEVELS * layers.len());
     let mut notes = Vec::new();
     for layer in layers {
-        let hashes: Vec<u32> = layer.names.iter().map(|n| murmur3_32(n.as_bytes())).collect();
+        let hashes: Vec<u32> = layer
+            .names
+            .iter()
+            .map(|n| murmur3_32(n.as_bytes()))
+            .collect();
         channels.extend(layer_channels(layer, &hashes));
         let key = layer_key(layer.name);
         notes.extend([

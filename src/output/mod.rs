@@ -4,6 +4,7 @@
 //! the same scene file listed in the folder's `raycast.json` ([`ownership`]): those it does not
 //! write again are removed; other files in the folder are never touched.
 
+pub mod colormap;
 pub mod cryptomatte;
 pub mod exr;
 pub mod npy;
@@ -503,6 +504,8 @@ pub struct PngOptions {
     pub depth_range: Option<[f64; 2]>,
     /// Previews, or 16-bit integers, for depth and z.
     pub distances: png::DistancePng,
+    /// The colour map of the distance previews (depth, z, t).
+    pub colormap: colormap::Colormap,
 }
 
 /// The `.png` preview of `aov` (position and bary have none), and for depth the range it maps.
@@ -523,7 +526,7 @@ fn png_job(
             });
             (Some(job), None)
         }
-        (values, _) => preview_job(values, aov, width, pngs.depth_range),
+        (values, _) => preview_job(values, aov, width, pngs),
     }
 }
 
@@ -532,17 +535,18 @@ fn preview_job(
     values: Values<'_>,
     aov: Aov,
     width: usize,
-    depth_range: Option<[f64; 2]>,
+    pngs: PngOptions,
 ) -> (Option<FileJob<'_>>, Option<[f64; 2]>) {
     let name = format!("{aov}.png");
     match values {
         Values::Distances(v) => {
-            let range = depth_range
+            let range = (pngs.depth_range)
                 .filter(|_| aov != Aov::T)
                 .or_else(|| png::percentile_range(v))
                 .unwrap_or([0.0, 1.0]);
-            let job = FileJob::new(name, move |out| {
-                png::write(out, png::distance_image(v, width, range))
+            let job = FileJob::new(name, move |out| match pngs.colormap {
+                colormap::Colormap::Grey => png::write(out, png::distance_image(v, width, range)),
+                map => png::write(out, colormap::distance_image(v, width, range, map)),
             });
             (Some(job), (aov == Aov::Depth).then_some(range))
         }

@@ -42,6 +42,9 @@ pub struct Sidecar {
     /// Depth range mapped into `depth.png` (near = light, far = dark).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub depth_png_range: Option<[f64; 2]>,
+    /// With `--colormap viridis|turbo`: the colour map of the distance previews.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth_png_colormap: Option<&'static str>,
     /// With `--depth-png u16`: depth.png and z.png hold 16-bit integers, each this many scene
     /// units (distance / scale, rounded); 0 is no data (a miss, or out of range).
     #[serde(skip_serializing_if = "Option::is_none")]

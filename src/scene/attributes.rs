@@ -47,7 +47,9 @@ impl Attributes {
 
     /// Triangle `i`'s material (1-based; 0: none).
     pub fn material(&self, i: usize) -> u32 {
-        let after = self.materials.partition_point(|run| run.first as usize <= i);
+        let after = self
+            .materials
+            .partition_point(|run| run.first as usize <= i);
         after
             .checked_sub(1)
             .map_or(0, |run| self.materials[run].material)
@@ -99,7 +101,11 @@ pub fn runs(per_triangle: &[u32]) -> Vec<MaterialRun> {
 /// Per-corner values of `triangles` (index triples into `values`); empty when `values` does
 /// not cover every index (an attribute that does not fit its mesh is left out).
 pub fn corners<T: Copy>(values: &[T], triangles: &[[u32; 3]]) -> Vec<[T; 3]> {
-    if triangles.iter().flatten().any(|&i| i as usize >= values.len()) {
+    if triangles
+        .iter()
+        .flatten()
+        .any(|&i| i as usize >= values.len())
+    {
         return Vec::new();
     }
     triangles

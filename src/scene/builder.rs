@@ -122,7 +122,9 @@ impl SceneBuilder {
     /// Adds a material named `name` to the scene's list, even when another has that name
     /// (glTF materials, which are told apart by index); returns its id (1-based).
     pub fn add_material(&mut self, name: String) -> u32 {
-        self.material_ids.entry(name.clone()).or_insert(self.materials.len() as u32 + 1);
+        self.material_ids
+            .entry(name.clone())
+            .or_insert(self.materials.len() as u32 + 1);
         self.materials.push(name);
         self.materials.len() as u32
     }

@@ -9,13 +9,13 @@
 //! triangle test fetches three indices and three vertices instead of one 36-byte record; the
 //! branch on the storage kind is the same for every triangle of a mesh, so it predicts well.
 
+use super::attributes::{Attributes, MaterialRun};
 use crate::accel::{intersect_each, set_bits, PreparedRay, PrimitiveSet, GROUP, PACKET};
 use crate::geometry::triangle::{self, WatertightRay};
 use crate::geometry::triangle_box;
 use crate::geometry::triangle_packet::WatertightPacket;
 use crate::geometry::Aabb;
 use glam::{DAffine3, DVec3, Vec3};
-use super::attributes::{Attributes, MaterialRun};
 use std::collections::HashMap;
 use std::sync::Arc;
 

@@ -28,10 +28,10 @@ pub mod instance;
 pub mod mesh;
 mod shading;
 
+pub use attributes::Attributes;
 pub use builder::SceneBuilder;
 pub use hits::{Crossing, EdgeRule};
 pub use instance::{Instance, StoredMesh};
-pub use attributes::Attributes;
 pub use mesh::{Mesh, MeshSet, Positions};
 pub use shading::Attribute;
 

@@ -115,7 +115,11 @@ impl Scene {
     pub fn uv(&self, crossing: &Crossing, origin: DVec3, dir: DVec3) -> Option<[f64; 2]> {
         let surface = self.surface(crossing, origin, dir)?;
         let (triangle, weights) = surface.triangle?;
-        surface.shading.attributes.as_ref()?.uv_at(triangle, weights)
+        surface
+            .shading
+            .attributes
+            .as_ref()?
+            .uv_at(triangle, weights)
     }
 
     /// The unit world shading normal at a crossing: the file's normals interpolated and
@@ -126,7 +130,11 @@ impl Scene {
         let Some((triangle, weights)) = surface.triangle else {
             return Some(self.locate_crossing(crossing, origin, dir).normal);
         };
-        let local = surface.shading.attributes.as_ref()?.normal_at(triangle, weights)?;
+        let local = surface
+            .shading
+            .attributes
+            .as_ref()?
+            .normal_at(triangle, weights)?;
         (surface.shading.normal_matrix * local).try_normalize()
     }
 

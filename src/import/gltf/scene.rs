@@ -73,7 +73,8 @@ pub fn build_at(
         walk.builder.set_pose(pose);
     }
     for index in 0..doc.list("materials").len() {
-        walk.builder.add_material(super::shading::material_name(doc, index));
+        walk.builder
+            .add_material(super::shading::material_name(doc, index));
     }
     walk.builder.set_extensions_used(
         doc.extension_names("extensionsUsed")

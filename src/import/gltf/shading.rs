@@ -26,7 +26,8 @@ impl Document {
             return warnings;
         };
         let n = geometry.positions.len();
-        geometry.material = index_of(json, "material").filter(|&m| m < self.list("materials").len());
+        geometry.material =
+            index_of(json, "material").filter(|&m| m < self.list("materials").len());
         let attributes = json.get("attributes");
         let mut read = |name: &str, comps: usize| -> Option<Vec<f64>> {
             let accessor = attributes.and_then(|a| index_of(a, name))?;
@@ -38,9 +39,13 @@ impl Document {
                 }
             }
         };
-        geometry.uv = read("TEXCOORD_0", 2).map(|v| v.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
-        geometry.normals =
-            read("NORMAL", 3).map(|v| v.chunks_exact(3).map(|c| DVec3::new(c[0], c[1], c[2])).collect());
+        geometry.uv =
+            read("TEXCOORD_0", 2).map(|v| v.chunks_exact(2).map(|c| [c[0], c[1]]).collect());
+        geometry.normals = read("NORMAL", 3).map(|v| {
+            v.chunks_exact(3)
+                .map(|c| DVec3::new(c[0], c[1], c[2]))
+                .collect()
+        });
         warnings
     }
 

@@ -419,7 +419,14 @@ impl Roles {
                     .find_map(|[u, v]| Some([scalar(u)?, scalar(v)?]));
                 let normal = (|| Some([scalar("nx")?, scalar("ny")?, scalar("nz")?]))();
                 let position = [axis("x")?, axis("y")?, axis("z")?];
-                Some((k, VertexProperties { position, uv, normal }))
+                Some((
+                    k,
+                    VertexProperties {
+                        position,
+                        uv,
+                        normal,
+                    },
+                ))
             }
             _ => None,
         };

@@ -29,8 +29,8 @@ pub struct Topology<'a> {
 /// primvars left out.
 pub fn read(prim: &Prim, at: At, topology: &Topology) -> (Attributes, Vec<String>) {
     let mut warnings = Vec::new();
-    let uv = vec2s(prim, "primvars:st", at)
-        .and_then(|v| expand(prim, "primvars:st", at, topology, v));
+    let uv =
+        vec2s(prim, "primvars:st", at).and_then(|v| expand(prim, "primvars:st", at, topology, v));
     let normals_name = match value::raw(prim, "primvars:normals", at) {
         Ok(Some(_)) => "primvars:normals",
         _ => "normals",
@@ -146,11 +146,20 @@ pub fn bound_material(prim: &Prim) -> Option<String> {
 /// The material runs of a mesh prim's triangles (`faces`: each triangle's face): each face's
 /// `materialBind` GeomSubset's binding, else the prim's own ([`bound_material`]); empty when
 /// nothing is bound.
-pub fn material_runs(prim: &Prim, at: At, faces: &[u32], builder: &mut SceneBuilder) -> Vec<MaterialRun> {
+pub fn material_runs(
+    prim: &Prim,
+    at: At,
+    faces: &[u32],
+    builder: &mut SceneBuilder,
+) -> Vec<MaterialRun> {
     let own = bound_material(prim).map_or(0, |m| builder.material(&m));
     let mut per_face: std::collections::HashMap<u32, u32> = std::collections::HashMap::new();
     for child in prim.children().unwrap_or_default() {
-        let subset = child.type_name().ok().flatten().is_some_and(|t| t.as_str() == "GeomSubset");
+        let subset = child
+            .type_name()
+            .ok()
+            .flatten()
+            .is_some_and(|t| t.as_str() == "GeomSubset");
         let family = value::token(&child, "familyName", at).ok().flatten();
         if !subset || family.as_deref() != Some("materialBind") {
             continue;
@@ -159,7 +168,11 @@ pub fn material_runs(prim: &Prim, at: At, faces: &[u32], builder: &mut SceneBuil
             continue;
         };
         let id = builder.material(&material);
-        for face in value::ints(&child, "indices", at).ok().flatten().unwrap_or_default() {
+        for face in value::ints(&child, "indices", at)
+            .ok()
+            .flatten()
+            .unwrap_or_default()
+        {
             per_face.entry(face as u32).or_insert(id);
         }
     }
