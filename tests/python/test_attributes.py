@@ -46,9 +46,13 @@ def trimesh_reference(scene, origins, directions, flip_v):
     for node in scene.graph.nodes_geometry:
         transform, name = scene.graph[node]
         mesh = scene.geometry[name]
-        world = trimesh.Trimesh(trimesh.transform_points(mesh.vertices, transform), mesh.faces, process=False)
+        world = trimesh.Trimesh(
+            trimesh.transform_points(mesh.vertices, transform), mesh.faces, process=False
+        )
         intersector = trimesh.ray.ray_triangle.RayMeshIntersector(world)
-        locations, ray, tri = intersector.intersects_location(origins, directions, multiple_hits=True)
+        locations, ray, tri = intersector.intersects_location(
+            origins, directions, multiple_hits=True
+        )
         t = np.einsum("ij,ij->i", locations - origins[ray], directions[ray]) / np.einsum(
             "ij,ij->i", directions[ray], directions[ray]
         )
@@ -86,7 +90,9 @@ def test_uv_and_shading_normals_match_trimesh(path, box, flip_v):
     point, uv, normal = trimesh_reference(reference, origins, directions, flip_v)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", raycast.RaycastWarning)  # a primitive without uv
-        hits = raycast.load(path).cast(origins, directions, aovs=("position", "uv", "shading_normal"))
+        hits = raycast.load(path).cast(
+            origins, directions, aovs=("position", "uv", "shading_normal")
+        )
     # Rays that trimesh's tolerant test and the exact one see hitting the same point.
     same = np.isfinite(point[:, 0]) & (np.abs(hits["position"] - point).max(axis=1) < 1e-9)
     assert same.sum() > 0.9 * np.isfinite(point[:, 0]).sum() > 1000
@@ -102,7 +108,7 @@ def test_uv_and_shading_normals_match_trimesh(path, box, flip_v):
     untextured = same & np.isnan(uv[:, 0])
     assert (hits["uv"][untextured] == np.inf).all()
     assert (hits["shading_normal"][untextured] == 0).all()
-    print(f"{path.name}: {textured.sum()} rays, uv error {uv_error:.2e}, normal error {normal_error:.2e}")
+    print(f"{path.name}: {textured.sum()} rays, uv {uv_error:.2e}, normals {normal_error:.2e}")
     norms = np.linalg.norm(hits["shading_normal"][textured], axis=1)
     assert np.abs(norms - 1).max() < 1e-12
 
@@ -168,7 +174,9 @@ def test_usd_material_ids_match_usd_core():
         if prim.IsA(UsdGeom.Mesh):
             # The face of the triangle (faces fanned, in order), and its subset's binding.
             counts = UsdGeom.Mesh(prim).GetFaceVertexCountsAttr().Get()
-            face = np.repeat(np.arange(len(counts)), np.maximum(np.array(counts) - 2, 0))[hits["prim"][i]]
+            face = np.repeat(np.arange(len(counts)), np.maximum(np.array(counts) - 2, 0))[
+                hits["prim"][i]
+            ]
             for subset in UsdShade.MaterialBindingAPI(prim).GetMaterialBindSubsets():
                 if face in subset.GetIndicesAttr().Get():
                     bound = UsdShade.MaterialBindingAPI(subset.GetPrim()).ComputeBoundMaterial()[0]
@@ -183,7 +191,9 @@ def test_usd_primvars_by_interpolation():
     """faceVarying and indexed vertex `st`, vertex and uniform normals, read back at the
     corners (rays straight down onto a corner's neighbourhood)."""
     scene = raycast.load(USD)
-    origins = np.array([[-0.999, -0.999, 5], [0.999, -0.999, 5], [-0.999, -0.999, -1], [-0.5, 0.9, -1]])
+    origins = np.array(
+        [[-0.999, -0.999, 5], [0.999, -0.999, 5], [-0.999, -0.999, -1], [-0.5, 0.9, -1]]
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", raycast.RaycastWarning)
         hits = scene.cast(origins, [0, 0, -1], aovs=("id", "uv", "shading_normal"))
@@ -218,7 +228,10 @@ def test_the_command_line_writes_the_same_values(tmp_path):
     rays = tmp_path / "rays.npy"
     np.save(rays, np.column_stack([origins, directions]))
     aovs = ("uv", "shading_normal", "material")
-    subprocess.run([RAYCAST, GLTF, "--rays", rays, "--aov", ",".join(aovs), "--out", tmp_path / "r", "-q"], check=True)
+    subprocess.run(
+        [RAYCAST, GLTF, "--rays", rays, "--aov", ",".join(aovs), "--out", tmp_path / "r", "-q"],
+        check=True,
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", raycast.RaycastWarning)
         hits = raycast.load(GLTF).cast(origins, directions, aovs=aovs)
@@ -228,7 +241,19 @@ def test_the_command_line_writes_the_same_values(tmp_path):
     assert sidecar["materials"] == ["Red", "material1"]
     out = tmp_path / "c"
     subprocess.run(
-        [RAYCAST, GLTF, "--aov", "uv,shading_normal,material", "--width", "16", "--height", "12", "--out", out, "-q"],
+        [
+            RAYCAST,
+            GLTF,
+            "--aov",
+            "uv,shading_normal,material",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--out",
+            out,
+            "-q",
+        ],
         check=True,
     )
     channels = {name for path in out.glob("*.exr") for name in OpenEXR.File(str(path)).channels()}

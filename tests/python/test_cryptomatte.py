@@ -114,7 +114,19 @@ def test_material_layer_decodes_to_the_materials_and_their_coverage(tmp_path):
     size = ["--width", str(W), "--height", str(H), "--eye", "1.5,1.5,8", "--target", "1.5,1.5,0"]
     spp = str(SIDE * SIDE)
     subprocess.run(
-        [RAYCAST, scene_path, *size, "--aov", "id", "--cryptomatte", "--spp", spp, "--out", out, "-q"],
+        [
+            RAYCAST,
+            scene_path,
+            *size,
+            "--aov",
+            "id",
+            "--cryptomatte",
+            "--spp",
+            spp,
+            "--out",
+            out,
+            "-q",
+        ],
         check=True,
     )
     sidecar = json.loads((out / "raycast.json").read_text())
