@@ -55,22 +55,7 @@ CAST_OUTPUTS = (
     "material",
 )
 #: Outputs :meth:`Scene.render` can return (``depth`` is ``distance``, as on the command line).
-RENDER_OUTPUTS = (
-    "t",
-    "distance",
-    "depth",
-    "z",
-    "normal",
-    "position",
-    "id",
-    "prim",
-    "bary",
-    "error",
-    "certain",
-    "uv",
-    "shading_normal",
-    "material",
-)
+RENDER_OUTPUTS = (*CAST_OUTPUTS[:2], "depth", "z", *CAST_OUTPUTS[2:])
 #: The ``prim`` value of a miss.
 INVALID_PRIM = 2**32 - 1
 

@@ -88,18 +88,13 @@ impl Scene {
                 (part, Some((i - first as usize, weights)))
             }
             Top::Instance(k) => {
-                let instance = &self.instances[k];
-                let stored = &self.meshes[instance.mesh as usize];
-                let inner = match crossing.inner {
-                    Some(inner) => inner,
-                    None => instance.intersect(stored, origin, dir, crossing.t)?.prim,
-                };
+                let inner = self.instance_triangle(k, crossing, origin, dir)?;
                 let found = Crossing {
                     inner: Some(inner),
                     ..*crossing
                 };
                 let weights = self.barycentric(&found, origin, dir)?;
-                (instance.part, Some((inner as usize, weights)))
+                (self.instances[k].part, Some((inner as usize, weights)))
             }
             Top::Quadric(q) => (self.quadric_parts[q], None),
         };

@@ -13,6 +13,7 @@ import mmh3
 import numpy as np
 import OpenEXR
 from binary import RAYCAST, ROOT, needs_binary
+from test_attributes import expected_gltf_materials
 
 import raycast
 
@@ -136,14 +137,7 @@ def test_material_layer_decodes_to_the_materials_and_their_coverage(tmp_path):
     manifest, ranks = decode(out / "cryptomatte.exr", "CryptoMaterial")
     assert sorted(manifest) == sorted(names)
     by_id = {float(v): name for name, v in manifest.items()}
-    # Each triangle's material name, by object id and prim, from the JSON.
-    per_object = {}
-    for node in doc["nodes"]:
-        triangles = []
-        for primitive in doc["meshes"][node["mesh"]]["primitives"]:
-            count = doc["accessors"][primitive["indices"]]["count"] // 3
-            triangles += [names[primitive["material"]]] * count
-        per_object[node["name"]] = triangles
+    per_object = expected_gltf_materials()  # each node's triangles' materials, from the JSON
     objects = [o["name"] for o in sidecar["objects"]]
     origins, directions = sample_rays(sidecar["camera"])
     hits = raycast.load(scene_path).cast(origins, directions, aovs=("id", "prim"))
