@@ -259,3 +259,26 @@ def test_the_command_line_writes_the_same_values(tmp_path):
     channels = {name for path in out.glob("*.exr") for name in OpenEXR.File(str(path)).channels()}
     assert {"UV", "Ns", "material"} <= {c.split(".")[0] for c in channels}, channels
     assert {p.name for p in out.glob("*.png")} == {"shading_normal.png", "material.png"}
+
+
+def test_an_unreadable_attribute_buffer_leaves_the_attribute_out(tmp_path):
+    """NORMAL in a buffer whose file is missing: the render goes on, the normals are left out
+    with a warning naming the buffer, the texture coordinates stay."""
+    doc = json.loads(GLTF.read_text())
+    normal = doc["meshes"][0]["primitives"][0]["attributes"]["NORMAL"]
+    doc["buffers"].append({"byteLength": 1024, "uri": "missing.bin"})
+    doc["bufferViews"].append({"buffer": 1, "byteOffset": 0, "byteLength": 300})
+    doc["accessors"][normal]["bufferView"] = len(doc["bufferViews"]) - 1
+    for primitive in doc["meshes"][1]["primitives"]:
+        primitive["attributes"].pop("NORMAL", None)
+    path = tmp_path / "missing_normals.gltf"
+    path.write_text(json.dumps(doc))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        scene = raycast.load(path)
+        hits = scene.cast([[0.1, 0.2, 5]], [0, 0, -1], aovs=("uv", "shading_normal"))
+    lines = [str(w.message) for w in caught]
+    assert any("/buffers/1" in line and "left out" in line for line in lines), lines
+    assert any(line.startswith("shading_normal: 4 of 4 objects") for line in lines), lines
+    assert (hits["shading_normal"] == 0).all()
+    assert np.isfinite(hits["uv"]).all()

@@ -4,6 +4,7 @@
 
 use super::accessor::NO_DATA;
 use super::animation::NodeValues;
+use super::buffers::Need;
 use super::decode::{self, GPU_INSTANCING, MESHOPT};
 use super::diagnostics::{Diagnostic, FailFast};
 use super::document::{array, as_index, extension, index_of, Document};
@@ -141,13 +142,15 @@ fn add_mesh_object(
 }
 
 /// Which buffers the geometry reads: those behind the accessors of mesh primitives (POSITION,
-/// NORMAL, TEXCOORD_0, indices, sparse parts), Draco data and GPU instancing attributes, and the sources of
+/// indices, sparse parts), Draco data and GPU instancing attributes, and the sources of
 /// meshopt-compressed views; what posing reads (morph targets drawn with weights, skin joints,
 /// weights and inverse bind matrices); with `animating`, every morph target and animation
-/// sampler. Others (textures, animations without `--time`) are never read for a render.
-pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<bool> {
-    let mut needed = vec![false; doc.list("buffers").len()];
-    let mut mark_view = |view: Option<usize>| {
+/// sampler. Buffers that only shading attributes read (NORMAL, TEXCOORD_0, morph NORMAL
+/// deltas) are [`Need::Shading`]. Others (textures, animations without `--time`) are never
+/// read for a render.
+pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<Need> {
+    let mut needed = vec![Need::No; doc.list("buffers").len()];
+    let mut mark_view = |view: Option<usize>, need: Need| {
         let Some(v) = view.and_then(|v| doc.item("bufferViews", v)) else {
             return;
         };
@@ -158,11 +161,12 @@ pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<bool> {
             .find_map(|name| extension(v, name).map(|e| index_of(e, "buffer")));
         if let Some(b) = compressed.unwrap_or_else(|| index_of(v, "buffer")) {
             if let Some(flag) = needed.get_mut(b) {
-                *flag = true;
+                *flag = (*flag).max(need);
             }
         }
     };
     let mut accessors = Vec::new();
+    let mut shading = Vec::new();
     // What posing reads: morph targets of meshes some node draws with weights that are not
     // all zero, the joints and weights of skinned meshes, inverse bind matrices.
     let (mut morphed, mut skinned) = (HashSet::new(), HashSet::new());
@@ -183,15 +187,17 @@ pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<bool> {
     for (m, mesh) in doc.list("meshes").iter().enumerate() {
         for prim in array(mesh, "primitives") {
             let attributes = prim.get("attributes");
-            for name in ["POSITION", "NORMAL", "TEXCOORD_0"] {
-                accessors.extend(attributes.and_then(|a| index_of(a, name)));
+            accessors.extend(attributes.and_then(|a| index_of(a, "POSITION")));
+            for name in ["NORMAL", "TEXCOORD_0"] {
+                shading.extend(attributes.and_then(|a| index_of(a, name)));
             }
             accessors.extend(index_of(prim, "indices"));
-            mark_view(extension(prim, DRACO).and_then(|d| index_of(d, "bufferView")));
+            let draco = extension(prim, DRACO).and_then(|d| index_of(d, "bufferView"));
+            mark_view(draco, Need::Geometry);
             if morphed.contains(&m) {
                 for target in array(prim, "targets") {
                     accessors.extend(index_of(target, "POSITION"));
-                    accessors.extend(index_of(target, "NORMAL"));
+                    shading.extend(index_of(target, "NORMAL"));
                 }
             }
             if let Some(attributes) = attributes
@@ -225,18 +231,18 @@ pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<bool> {
             );
         }
     }
-    for acc in accessors
+    let shading = shading.into_iter().map(|a| (a, Need::Shading));
+    let all = accessors
         .into_iter()
-        .filter_map(|a| doc.item("accessors", a))
-    {
-        mark_view(index_of(acc, "bufferView"));
+        .map(|a| (a, Need::Geometry))
+        .chain(shading);
+    for (acc, need) in all.filter_map(|(a, need)| Some((doc.item("accessors", a)?, need))) {
+        mark_view(index_of(acc, "bufferView"), need);
         if let Some(sparse) = acc.get("sparse") {
-            mark_view(
-                sparse
-                    .get("indices")
-                    .and_then(|i| index_of(i, "bufferView")),
-            );
-            mark_view(sparse.get("values").and_then(|v| index_of(v, "bufferView")));
+            let indices = sparse.get("indices");
+            mark_view(indices.and_then(|i| index_of(i, "bufferView")), need);
+            let values = sparse.get("values");
+            mark_view(values.and_then(|v| index_of(v, "bufferView")), need);
         }
     }
     needed
