@@ -264,6 +264,15 @@ struct RenderArgs {
     /// instead of 8-bit previews.
     #[arg(long, value_name = "UNITS", value_parser = parse_positive)]
     depth_scale: Option<f64>,
+    /// Colour map of the depth, z and t previews: grey (near white, far dark; one channel),
+    /// viridis or turbo (near the map's top end: yellow, dark red).
+    #[arg(
+        long,
+        value_name = "NAME",
+        default_value = "grey",
+        conflicts_with = "depth_scale"
+    )]
+    colormap: raycast::output::colormap::Colormap,
     /// Seconds the USD reader may take on the scene (it reads it in a child process first,
     /// so that a reader crash or hang ends with a one-line error).
     #[arg(long, value_name = "SECS", default_value_t = 120.0, value_parser = parse_positive)]
@@ -536,6 +545,7 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
                 Some(scale) => DistancePng::U16 { scale },
                 None => DistancePng::Preview,
             },
+            colormap: args.colormap,
         },
         hits: args.hits,
         cryptomatte: args.cryptomatte.then_some(args.spp),

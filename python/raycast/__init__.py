@@ -41,13 +41,9 @@ __all__ = [
 ]
 
 #: Outputs :meth:`Scene.cast` can return.
-CAST_OUTPUTS = ("t", "distance", "normal", "position", "id", "prim", "bary", "error", "certain")
-#: Outputs :meth:`Scene.render` can return (``depth`` is ``distance``, as on the command line).
-RENDER_OUTPUTS = (
+CAST_OUTPUTS = (
     "t",
     "distance",
-    "depth",
-    "z",
     "normal",
     "position",
     "id",
@@ -55,7 +51,12 @@ RENDER_OUTPUTS = (
     "bary",
     "error",
     "certain",
+    "uv",
+    "shading_normal",
+    "material",
 )
+#: Outputs :meth:`Scene.render` can return (``depth`` is ``distance``, as on the command line).
+RENDER_OUTPUTS = (*CAST_OUTPUTS[:2], "depth", "z", *CAST_OUTPUTS[2:])
 #: The ``prim`` value of a miss.
 INVALID_PRIM = 2**32 - 1
 #: Whether a pickled scene refuses to load a file that changed since it was pickled (its
@@ -280,6 +281,7 @@ class Scene:
         self._scene = compiled
         # For a scene loaded from a file: its files' sizes and times when it was loaded.
         self._files = None
+        self._warned: set[str] = set()
         for line in json.loads(compiled.info_json()).get("warnings", []):
             # stacklevel 3: the caller of load(), load_bytes(), at() or from_arrays().
             warnings.warn(line, RaycastWarning, stacklevel=3)
@@ -354,6 +356,22 @@ class Scene:
         ``bounds`` ([min, max])."""
         return self._scene.objects()
 
+    @property
+    def materials(self) -> list[str]:
+        """The materials, named as the file names them (glTF material names, ``material<i>``
+        when unnamed; OBJ ``usemtl`` names; USD material prim paths): the ``material``
+        output's value ``m`` is ``materials[m - 1]``, 0 meaning a miss or no material."""
+        return self._scene.materials()
+
+    def _warn_missing(self, names: list[str]) -> None:
+        """Warns once per scene and output when some objects lack what ``uv``,
+        ``shading_normal`` or ``material`` read (their hits hold the miss value)."""
+        for line in self._scene.attribute_warnings(names):
+            if line not in self._warned:
+                self._warned.add(line)
+                # stacklevel 3: the caller of cast(), render() or render_views().
+                warnings.warn(line, RaycastWarning, stacklevel=3)
+
     def triangles(self, id: int) -> np.ndarray:
         """Object ``id``'s triangles in world coordinates: a (T, 3, 3) float64 array, row ``i``
         the triangle whose ``prim`` is ``i`` (empty for a quadric). Raises ValueError for an
@@ -423,7 +441,13 @@ class Scene:
             float64, a bound on ``|distance - exact distance|`` of the same primitive's
             crossing (+inf where none can be made, 0 on a miss); ``certain`` (N,) uint8, 1
             when no value within the bounds could change the ray's decision (see
-            docs/buffers-and-cli.md, "Error bounds").
+            docs/buffers-and-cli.md, "Error bounds"); ``uv`` (N, 2) float64, the file's
+            texture coordinates interpolated at the hit, as stored, +inf on a miss, a quadric
+            or a mesh without them; ``shading_normal`` (N, 3) float64, the file's normals
+            interpolated, in the world, unit length (quadrics: the analytic normal), zeros on
+            a miss or a mesh without them; ``material`` (N,) uint32, 1-based index into
+            :attr:`materials`, 0 on a miss or without material. An output that some objects
+            have no data for warns once (:class:`RaycastWarning`).
 
         Raises
         ------
@@ -435,6 +459,7 @@ class Scene:
         """
         names = _names(aovs)
         rays = _Rays(origins, directions, tmin, tmax)
+        self._warn_missing([n for n in names if n != "z"])
         threads = _threads(nthreads)
         return rays.run(lambda flat: self._scene.cast(flat, names, threads), progress)
 
@@ -591,6 +616,7 @@ class Scene:
             ``nthreads`` and ``progress`` (told image rows) as for :meth:`cast`.
         """
         width, height, names = int(width), int(height), _names(aovs)
+        self._warn_missing(names)
         threads = _threads(nthreads)
 
         def rows(first, last):

@@ -23,10 +23,13 @@ pub fn parse(name: &str, camera: bool) -> Result<Aov, String> {
         "bary" => Aov::Bary,
         "error" => Aov::Error,
         "certain" => Aov::Certain,
+        "uv" => Aov::Uv,
+        "shading_normal" => Aov::ShadingNormal,
+        "material" => Aov::Material,
         "z" => return Err("the z output needs a camera: use render(), not cast()".into()),
         _ => {
             return Err(format!(
-            "unknown output '{name}' (choose from t, distance, {}normal, position, id, prim, bary, error, certain)",
+            "unknown output '{name}' (choose from t, distance, {}normal, position, id, prim, bary, error, certain, uv, shading_normal, material)",
             if camera { "z, " } else { "" }
         ))
         }
@@ -34,8 +37,8 @@ pub fn parse(name: &str, camera: bool) -> Result<Aov, String> {
 }
 
 /// Traces `rays` and returns a dict of `outputs` (with their names), arrays of shape `shape`
-/// (+ `(3,)` for vectors), or the first refused ray. The tracing runs with the GIL released, on
-/// `nthreads` threads (0: all cores).
+/// (+ `(2,)` for uv, `(3,)` for vectors), or the first refused ray. The tracing runs with the GIL
+/// released, on `nthreads` threads (0: all cores).
 pub fn trace_dict<'py, S, R>(
     py: Python<'py>,
     tracer: &Tracer,
@@ -61,6 +64,7 @@ where
             Column::Float(v) => array(py, shape, v)?,
             Column::Index(v) => array(py, shape, v)?,
             Column::Flag(v) => array(py, shape, v)?,
+            Column::Pair(v) => array(py, &[shape, &[2]].concat(), v)?,
             Column::Vector(v) => array(py, &[shape, &[3]].concat(), v)?,
         };
         dict.set_item(name, array)?;

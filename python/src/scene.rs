@@ -424,6 +424,20 @@ impl PyScene {
             .map_err(|i| PyValueError::new_err(format!("camera ray {i} cannot be traced")))
     }
 
+    /// The materials, named as the file names them (`material` m is `materials[m - 1]`).
+    fn materials(&self) -> Vec<String> {
+        self.scene.materials().to_vec()
+    }
+
+    /// The warnings for `outputs` that read attributes some objects lack (one line each).
+    fn attribute_warnings(&self, outputs: Vec<String>) -> PyResult<Vec<String>> {
+        let aovs: Vec<Aov> = parse_outputs(&outputs, true)?
+            .into_iter()
+            .map(|(_, a)| a)
+            .collect();
+        Ok(raycast::render::attribute_warnings(&self.scene, &aovs))
+    }
+
     /// The object table: a list of dicts (id, name, kind, source, triangles, bounds).
     fn objects<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.scene

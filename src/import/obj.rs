@@ -9,7 +9,8 @@
 //! (see [`super::obj_text`]).
 
 use crate::error::{Error, Result};
-use crate::scene::{Mesh, Scene, SceneBuilder};
+use crate::scene::attributes::{corners, runs};
+use crate::scene::{Attributes, Mesh, Scene, SceneBuilder};
 use glam::{DMat4, DVec3};
 use std::path::Path;
 use std::sync::Arc;
@@ -67,7 +68,7 @@ pub(crate) const STATEMENTS: &[&str] = &[
 /// Characters of a foreign line quoted in a message.
 const QUOTED_CHARS: usize = 24;
 
-/// Loads an OBJ file. Materials are not read.
+/// Loads an OBJ file. Materials are named by `usemtl`; MTL files are not read.
 pub fn load(path: &Path) -> Result<Scene> {
     let bytes = std::fs::read(path).map_err(|e| super::read_error(path, e))?;
     load_bytes(&bytes, path)
@@ -104,11 +105,13 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
     for warning in normal.warnings {
         builder.warn(warning);
     }
+    let materials = model_materials(&normal.text, &models, &mut builder);
     let mut triangles = 0;
-    for (index, model) in models.iter().enumerate() {
+    for (index, (model, materials)) in models.iter().zip(materials).enumerate() {
         triangles += model.mesh.indices.len() / 3;
         let mesh = model_mesh(&model.mesh)
             .map_err(|e| Error::in_file(path, format!("object '{}': {e}", model.name)))?;
+        let mesh = mesh.with_attributes(model_attributes(&model.mesh, materials));
         let name = if model.name.is_empty() {
             format!("object{index}")
         } else {
@@ -173,6 +176,61 @@ pub(crate) fn quoted(line: &str) -> String {
         out.push('…');
     }
     out
+}
+
+/// Each model's triangles' materials (scene material ids, 0: none), from the `usemtl`
+/// statements of `text` (tobj's models hold the faces in file order). Where the faces counted
+/// in the text do not match tobj's triangles, materials are left out with a warning.
+fn model_materials(
+    text: &str,
+    models: &[tobj::Model],
+    builder: &mut SceneBuilder,
+) -> Vec<Vec<u32>> {
+    let (names, per_triangle) = super::obj_text::face_materials(text);
+    let counts: Vec<usize> = models.iter().map(|m| m.mesh.indices.len() / 3).collect();
+    if per_triangle.len() != counts.iter().sum::<usize>() {
+        if !names.is_empty() {
+            builder.warn("usemtl: the faces could not be matched to their materials: left out");
+        }
+        return counts.iter().map(|&n| vec![0; n]).collect();
+    }
+    let ids: Vec<u32> = names.iter().map(|n| builder.material(n)).collect();
+    let mut rest = per_triangle.as_slice();
+    counts
+        .iter()
+        .map(|&n| {
+            let (mine, after) = rest.split_at(n);
+            rest = after;
+            mine.iter()
+                .map(|&m| m.checked_sub(1).map_or(0, |m| ids[m as usize]))
+                .collect()
+        })
+        .collect()
+}
+
+/// The texture coordinates (`vt`) and normals (`vn`) of a model's triangle corners, each
+/// only where every corner has one, and the triangles' `materials`.
+fn model_attributes(mesh: &tobj::Mesh, materials: Vec<u32>) -> Attributes {
+    let triangles = |indices: &[u32]| -> Vec<[u32; 3]> {
+        match indices.len() == mesh.indices.len() {
+            true => indices
+                .chunks_exact(3)
+                .map(|c| [c[0], c[1], c[2]])
+                .collect(),
+            false => Vec::new(),
+        }
+    };
+    let uv: Vec<[f32; 2]> = (mesh.texcoords.chunks_exact(2))
+        .map(|c| [c[0] as f32, c[1] as f32])
+        .collect();
+    let normals: Vec<[f32; 3]> = (mesh.normals.chunks_exact(3))
+        .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32])
+        .collect();
+    Attributes {
+        uv: corners(&uv, &triangles(&mesh.texcoord_indices)),
+        normals: corners(&normals, &triangles(&mesh.normal_indices)),
+        materials: runs(&materials),
+    }
 }
 
 /// The indexed mesh of one OBJ model, with every index and coordinate checked.

@@ -176,9 +176,48 @@ fn more(count: usize) -> String {
     }
 }
 
+/// The material of each triangle tobj makes of normalised `text` (faces fanned from their
+/// first corner, in file order): the name of the `usemtl` in force at the face, as an index
+/// into the names returned (in the order first used), from 1; 0 before any `usemtl`.
+pub fn face_materials(text: &str) -> (Vec<String>, Vec<u32>) {
+    let mut names: Vec<String> = Vec::new();
+    let mut current = 0;
+    let mut per_triangle = Vec::new();
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("usemtl") => {
+                let name = line.trim().split_once(' ').unwrap_or_default().1.trim();
+                current = match names.iter().position(|n| n == name) {
+                    Some(i) => i as u32 + 1,
+                    None => {
+                        names.push(name.to_string());
+                        names.len() as u32
+                    }
+                };
+            }
+            Some("f") => {
+                let corners = words.count();
+                per_triangle.extend(std::iter::repeat_n(current, corners.saturating_sub(2)));
+            }
+            _ => {}
+        }
+    }
+    (names, per_triangle)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn face_materials_follow_usemtl_over_fanned_faces() {
+        let text =
+            "f 1 2 3\nusemtl red\nf 1 2 3 4\nusemtl blue\nf 1 2\nf 1 2 3\nusemtl red\nf 1 2 3\n";
+        let (names, per_triangle) = face_materials(text);
+        assert_eq!(names, ["red", "blue"]);
+        assert_eq!(per_triangle, [0, 1, 1, 2, 1]);
+    }
 
     #[test]
     fn continuations_join_on_the_first_line_and_keep_the_count() {

@@ -1,10 +1,10 @@
 //! The Cryptomatte pass of a camera run (`--cryptomatte --spp N`): N stratified samples per
-//! pixel, traced for the object id only, band of rows by band of rows (so that no more than
-//! about a million samples are held at a time), ranked per pixel by coverage
-//! ([`crate::output::cryptomatte`]).
+//! pixel, traced for the object id and the material only, band of rows by band of rows (so
+//! that no more than about a million samples are held at a time), ranked per pixel by
+//! coverage ([`crate::output::cryptomatte`]).
 
 use crate::error::{Error, Result};
-use crate::output::cryptomatte;
+use crate::output::cryptomatte::{self, Layer};
 use crate::render::samples::PixelSamples;
 use crate::render::{self, Aov, CameraView, Rays, Tracer};
 
@@ -28,15 +28,12 @@ pub(super) fn side(spp: usize) -> Result<usize> {
     }
 }
 
-/// Each pixel's objects of `view` by coverage, from `spp` samples per pixel.
-pub(super) fn mattes(
-    tracer: &Tracer,
-    view: &CameraView,
-    spp: usize,
-) -> Result<Vec<Vec<(u32, f32)>>> {
+/// The object and material layers of `view`, from `spp` samples per pixel.
+pub(super) fn mattes(tracer: &Tracer, view: &CameraView, spp: usize) -> Result<[Layer; 2]> {
     let side = side(spp)?;
     let band = (BAND_SAMPLES / (view.width * spp)).max(1);
-    let mut ranked = Vec::with_capacity(view.width * view.height);
+    let pixels = view.width * view.height;
+    let (mut objects, mut materials) = (Vec::with_capacity(pixels), Vec::with_capacity(pixels));
     for start in (0..view.height).step_by(band) {
         let samples = PixelSamples {
             view,
@@ -48,10 +45,24 @@ pub(super) fn mattes(
             range: |_| (0.0, f64::INFINITY),
             refuse_untraceable: false,
         };
-        let buffers = render::trace(tracer, &rays, &[Aov::Id], |_| {})
+        let buffers = render::trace(tracer, &rays, &[Aov::Id, Aov::Material], |_| {})
             .map_err(|i| Error::msg(format!("cryptomatte sample {i} cannot be traced")))?;
-        let ids = buffers.labels(Aov::Id).unwrap_or_default();
-        ranked.extend(cryptomatte::rank(ids, spp));
+        let labels = |aov| buffers.labels(aov).unwrap_or_default();
+        objects.extend(cryptomatte::rank(labels(Aov::Id), spp));
+        materials.extend(cryptomatte::rank(labels(Aov::Material), spp));
     }
-    Ok(ranked)
+    let scene = tracer.scene;
+    let names = |names: Vec<String>| cryptomatte::unique_names(names.into_iter());
+    Ok([
+        Layer {
+            name: cryptomatte::OBJECT_LAYER,
+            ranked: objects,
+            names: names(scene.objects.iter().map(|o| o.name.clone()).collect()),
+        },
+        Layer {
+            name: cryptomatte::MATERIAL_LAYER,
+            ranked: materials,
+            names: names(scene.materials().to_vec()),
+        },
+    ])
 }

@@ -7,6 +7,7 @@ use super::view::camera_view;
 use super::{HitLimit, Progress, RenderJob};
 use crate::error::{Error, Result};
 use crate::import;
+use crate::output::colormap::Colormap;
 use crate::output::cryptomatte;
 use crate::output::npy::RayFile;
 use crate::output::png::DistancePng;
@@ -64,6 +65,7 @@ pub(super) fn load(job: &RenderJob, source: Option<&import::Source>) -> Result<L
     let seconds = started.elapsed().as_secs_f64();
     let mut warnings = scene.warnings.clone();
     warnings.append(&mut ray_warnings);
+    warnings.extend(render::attribute_warnings(&scene, &job.aovs));
     Ok(Loaded {
         scene,
         rays,
@@ -198,10 +200,9 @@ pub(super) fn trace_and_write(
         staging.write(npz::HITS_FILE, |out| npz::write_hits(out, hits))?;
     }
     if let (Some(spp), Some(view)) = (job.cryptomatte, view) {
-        let ranked = super::cryptomatte::mattes(&tracer, view, spp)?;
-        let names = cryptomatte::object_names(scene.objects.iter().map(|o| o.name.clone()));
+        let layers = super::cryptomatte::mattes(&tracer, view, spp)?;
         staging.write(cryptomatte::FILE, |out| {
-            cryptomatte::write(out, view.width, view.height, &ranked, &names)
+            cryptomatte::write(out, view.width, view.height, &layers)
         })?;
     }
     let mut files = staging.names();
@@ -277,6 +278,8 @@ fn sidecar(
             crossings: lists.t.len(),
         }),
         depth_png_range,
+        depth_png_colormap: Some(job.pngs.colormap.name())
+            .filter(|_| job.pngs.colormap != Colormap::Grey),
         depth_png_scale: match job.pngs.distances {
             DistancePng::U16 { scale } => Some(scale),
             DistancePng::Preview => None,
@@ -284,6 +287,8 @@ fn sidecar(
         cryptomatte_spp: job.cryptomatte.filter(|_| view.is_some()),
         bounds,
         objects: scene.objects.clone(),
+        materials: (job.aovs.contains(&render::Aov::Material) || job.cryptomatte.is_some())
+            .then(|| scene.materials().to_vec()),
         stats: Stats {
             triangles: scene.triangle_count(),
             quadrics: scene.quadrics().len(),

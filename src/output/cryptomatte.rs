@@ -1,27 +1,45 @@
-//! Cryptomatte object mattes (`--cryptomatte`), as the Cryptomatte specification (v1.2.0,
-//! Psyop) defines them, in `cryptomatte.exr`:
+//! Cryptomatte mattes (`--cryptomatte`), as the Cryptomatte specification (v1.2.0, Psyop)
+//! defines them, in `cryptomatte.exr`: two layers, objects (`CryptoObject`, by the `id`
+//! AOV) and materials (`CryptoMaterial`, by the `material` AOV), each written by the same
+//! rules:
 //!
-//! - each object's name is hashed with MurmurHash3_32 (seed 0) and the hash stored as the
+//! - each object's (material's) name is hashed with MurmurHash3_32 (seed 0) and the hash stored as the
 //!   float32 of the same bits, its exponent clamped to 1..=254 so that no id is a NaN, an
 //!   infinity, zero or a denormal;
 //! - each pixel's objects are ranked by coverage (the share of its `spp` stratified samples
 //!   that hit them; misses are background and not ranked), and rank pairs are written as the
 //!   channels `CryptoObject00.R` (rank 0 id), `.G` (its coverage), `.B`, `.A` (rank 1), then
-//!   `CryptoObject01` for ranks 2 and 3, and so on, empty ranks 0;
-//! - the header says `cryptomatte/KEY/name` (`CryptoObject`), `/hash` (`MurmurHash3_32`),
+//!   `CryptoObject01` for ranks 2 and 3, and so on, empty ranks 0 (a hit without material
+//!   is not ranked in the material layer, as a miss);
+//! - the header says `cryptomatte/KEY/name` (the layer's name), `/hash` (`MurmurHash3_32`),
 //!   `/conversion` (`uint32_to_float32`) and `/manifest` (JSON: each name and its hash in
 //!   eight hex digits), KEY being the first seven hex digits of the layer name's hash.
 
 use super::exr::{self, ExrChannel};
 use std::io::{Seek, Write};
 
-/// The layer name: object mattes.
-pub const LAYER: &str = "CryptoObject";
+/// The layer of object mattes.
+pub const OBJECT_LAYER: &str = "CryptoObject";
+
+/// The layer of material mattes.
+pub const MATERIAL_LAYER: &str = "CryptoMaterial";
+
+/// One layer of mattes: its name, each pixel's ranked labels (from [`rank`]) and the names
+/// the labels stand for (`names[label - 1]`, made unique by [`unique_names`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layer {
+    /// `CryptoObject` or `CryptoMaterial`.
+    pub name: &'static str,
+    /// Per pixel, the labels by coverage.
+    pub ranked: Vec<Vec<(u32, f32)>>,
+    /// The names of the labels.
+    pub names: Vec<String>,
+}
 
 /// The file written.
 pub const FILE: &str = "cryptomatte.exr";
 
-/// Rank pairs written: `CryptoObject00` … `CryptoObject02`, six objects per pixel.
+/// Rank pairs written per layer: `CryptoObject00` … `CryptoObject02`, six per pixel.
 pub const LEVELS: usize = 3;
 
 /// MurmurHash3's 32-bit hash of `bytes` with seed 0 (Austin Appleby's x86_32 variant).
@@ -72,8 +90,9 @@ fn manifest(names: &[String], hashes: &[u32]) -> String {
     serde_json::Value::Object(entries).to_string()
 }
 
-/// Each pixel's objects (1-based ids, as the `id` AOV) by coverage, most first (ties: the
-/// lower id first), at most `2 · LEVELS`: `samples` holds `spp` ids per pixel, 0 for a miss.
+/// Each pixel's labels (1-based, as the `id` and `material` AOVs) by coverage, most first
+/// (ties: the lower label first), at most `2 · LEVELS`: `samples` holds `spp` labels per
+/// pixel, 0 for a miss (or no material).
 pub fn rank(samples: &[u32], spp: usize) -> Vec<Vec<(u32, f32)>> {
     samples
         .chunks_exact(spp)
@@ -95,57 +114,66 @@ pub fn rank(samples: &[u32], spp: usize) -> Vec<Vec<(u32, f32)>> {
         .collect()
 }
 
-/// Writes the object mattes of `ranked` (per pixel, from [`rank`]) for objects named `names`
-/// (`names[id - 1]`) as a `width`×`height` EXR to `out`.
+/// Writes the mattes of `layers` as a `width`×`height` EXR to `out`.
 pub fn write(
     out: &mut (impl Write + Seek),
     width: usize,
     height: usize,
-    ranked: &[Vec<(u32, f32)>],
-    names: &[String],
+    layers: &[Layer],
 ) -> Result<(), String> {
-    let hashes: Vec<u32> = names.iter().map(|n| murmur3_32(n.as_bytes())).collect();
+    let mut channels = Vec::with_capacity(4 * LEVELS * layers.len());
+    let mut notes = Vec::new();
+    for layer in layers {
+        let hashes: Vec<u32> = layer
+            .names
+            .iter()
+            .map(|n| murmur3_32(n.as_bytes()))
+            .collect();
+        channels.extend(layer_channels(layer, &hashes));
+        let key = layer_key(layer.name);
+        notes.extend([
+            (format!("cryptomatte/{key}/name"), layer.name.to_string()),
+            (
+                format!("cryptomatte/{key}/hash"),
+                "MurmurHash3_32".to_string(),
+            ),
+            (
+                format!("cryptomatte/{key}/conversion"),
+                "uint32_to_float32".to_string(),
+            ),
+            (
+                format!("cryptomatte/{key}/manifest"),
+                manifest(&layer.names, &hashes),
+            ),
+        ]);
+    }
+    exr::write(out, width, height, channels, &notes)
+}
+
+/// The rank-pair channels of one layer whose names hash to `hashes`.
+fn layer_channels(layer: &Layer, hashes: &[u32]) -> Vec<ExrChannel> {
     let ids: Vec<f32> = hashes.iter().map(|&h| hash_to_float(h)).collect();
     let mut channels = Vec::with_capacity(4 * LEVELS);
     for level in 0..LEVELS {
         for (c, channel) in ["R", "G", "B", "A"].iter().enumerate() {
             let rank = 2 * level + c / 2;
-            let values = ranked
-                .iter()
+            let values = (layer.ranked.iter())
                 .map(|pixel| match pixel.get(rank) {
                     Some(&(id, _)) if c % 2 == 0 => ids[id as usize - 1],
                     Some(&(_, coverage)) => coverage,
                     None => 0.0,
                 })
                 .collect();
-            channels.push(ExrChannel::Float(
-                format!("{LAYER}{level:02}.{channel}"),
-                values,
-            ));
+            let name = format!("{}{level:02}.{channel}", layer.name);
+            channels.push(ExrChannel::Float(name, values));
         }
     }
-    let key = layer_key(LAYER);
-    let notes = [
-        (format!("cryptomatte/{key}/name"), LAYER.to_string()),
-        (
-            format!("cryptomatte/{key}/hash"),
-            "MurmurHash3_32".to_string(),
-        ),
-        (
-            format!("cryptomatte/{key}/conversion"),
-            "uint32_to_float32".to_string(),
-        ),
-        (
-            format!("cryptomatte/{key}/manifest"),
-            manifest(names, &hashes),
-        ),
-    ];
-    exr::write(out, width, height, channels, &notes)
+    channels
 }
 
-/// The names objects are matted by: each object's name, made unique by ` #ID` where two
-/// objects share one (or it is empty), so that every object has a matte of its own.
-pub fn object_names(names: impl Iterator<Item = String>) -> Vec<String> {
+/// The names objects (or materials) are matted by: each name, made unique by ` #ID` (its
+/// 1-based label) where two share one (or it is empty), so that each has a matte of its own.
+pub fn unique_names(names: impl Iterator<Item = String>) -> Vec<String> {
     let names: Vec<String> = names.collect();
     let mut uses: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
     for n in &names {
@@ -199,7 +227,7 @@ mod tests {
 
     #[test]
     fn shared_names_get_their_id() {
-        let names = object_names(["a", "b", "a", ""].map(String::from).into_iter());
+        let names = unique_names(["a", "b", "a", ""].map(String::from).into_iter());
         assert_eq!(names, ["a #1", "b", "a #3", " #4"]);
     }
 }

@@ -4,6 +4,7 @@
 //! the same scene file listed in the folder's `raycast.json` ([`ownership`]): those it does not
 //! write again are removed; other files in the folder are never touched.
 
+pub mod colormap;
 pub mod cryptomatte;
 pub mod exr;
 pub mod npy;
@@ -403,9 +404,11 @@ fn shape(layout: Layout, components: usize) -> Vec<usize> {
 enum Values<'a> {
     /// Distances (depth, z, t).
     Distances(&'a [f64]),
-    /// Vectors (normal, position, bary).
+    /// Pairs (uv).
+    Pairs(&'a [[f64; 2]]),
+    /// Vectors (normal, position, bary, shading normal).
     Vectors(&'a [[f64; 3]]),
-    /// Labels (id, prim).
+    /// Labels (id, prim, material).
     Labels(&'a [u32]),
     /// Flags (certain).
     Flags(&'a [u8]),
@@ -415,6 +418,7 @@ enum Values<'a> {
 fn values(b: &Buffers, aov: Aov) -> Option<Values<'_>> {
     b.floats(aov)
         .map(Values::Distances)
+        .or_else(|| b.pairs(aov).map(Values::Pairs))
         .or_else(|| b.vectors(aov).map(Values::Vectors))
         .or_else(|| b.labels(aov).map(Values::Labels))
         .or_else(|| b.flags(aov).map(Values::Flags))
@@ -422,14 +426,15 @@ fn values(b: &Buffers, aov: Aov) -> Option<Values<'_>> {
 
 /// The `.npy` file of `aov`: float64, uint32 or uint8, one row per pixel or ray.
 fn npy_job(values: Values<'_>, aov: Aov, layout: Layout) -> FileJob<'_> {
-    let components = if matches!(values, Values::Vectors(_)) {
-        3
-    } else {
-        1
+    let components = match values {
+        Values::Pairs(_) => 2,
+        Values::Vectors(_) => 3,
+        _ => 1,
     };
     let shape = shape(layout, components);
     FileJob::new(format!("{aov}.npy"), move |out| match values {
         Values::Distances(v) => npy::write(out, &shape, NpyData::F64(v)),
+        Values::Pairs(v) => npy::write(out, &shape, NpyData::F64(v.as_flattened())),
         Values::Vectors(v) => npy::write(out, &shape, NpyData::F64(v.as_flattened())),
         Values::Labels(v) => npy::write(out, &shape, NpyData::U32(v)),
         Values::Flags(v) => npy::write(out, &shape, NpyData::U8(v)),
@@ -449,6 +454,9 @@ fn exr_note(aov: Aov) -> &'static str {
         Aov::Prim => "prim = triangle index inside the object (0 for quadrics); 4294967295 = miss",
         Aov::Error => "Z = bound on |depth - exact depth| of the same primitive's crossing, scene units, rounded up to f32 (depth.exr's own f32 rounding is not included); +inf = no bound; miss = 0",
         Aov::Certain => "certain = 1 when no value within the bounds could change the decision (nearest primitive, hit or miss), else 0",
+        Aov::Uv => "UV = the file's texture coordinates (TEXCOORD_0, vt, primvars:st) interpolated at the hit, as stored (glTF: origin top left; no flip); miss, quadric or none in the file = (+inf,+inf)",
+        Aov::ShadingNormal => "Ns = world-space unit shading normal: the file's normals interpolated, by the inverse transpose of the placement; quadrics: analytic normal; miss or none in the file = (0,0,0)",
+        Aov::Material => "material = 1-based index into raycast.json materials; 0 = miss or no material",
     }
 }
 
@@ -462,9 +470,16 @@ fn exr_job(values: Values<'_>, aov: Aov, width: usize, height: usize) -> FileJob
                 vec![Float("Z".into(), v.iter().map(|&x| f32_up(x)).collect())]
             }
             Values::Distances(v) => vec![Float("Z".into(), v.iter().map(|&x| x as f32).collect())],
+            Values::Pairs(v) => (0..2)
+                .map(|c| {
+                    let name = ["UV.U", "UV.V"][c];
+                    Float(name.into(), v.iter().map(|p| p[c] as f32).collect())
+                })
+                .collect(),
             Values::Vectors(v) => {
                 let names = match aov {
                     Aov::Normal => ["N.X", "N.Y", "N.Z"],
+                    Aov::ShadingNormal => ["Ns.X", "Ns.Y", "Ns.Z"],
                     Aov::Bary => ["B.X", "B.Y", "B.Z"],
                     _ => ["P.X", "P.Y", "P.Z"],
                 };
@@ -472,10 +487,7 @@ fn exr_job(values: Values<'_>, aov: Aov, width: usize, height: usize) -> FileJob
                     .map(|c| Float(names[c].into(), v.iter().map(|p| p[c] as f32).collect()))
                     .collect()
             }
-            Values::Labels(v) => {
-                let name = if aov == Aov::Id { "id" } else { "prim" };
-                vec![Uint(name.into(), v.to_vec())]
-            }
+            Values::Labels(v) => vec![Uint(aov.name().into(), v.to_vec())],
             Values::Flags(v) => vec![Uint(
                 "certain".into(),
                 v.iter().map(|&x| x.into()).collect(),
@@ -504,6 +516,8 @@ pub struct PngOptions {
     pub depth_range: Option<[f64; 2]>,
     /// Previews, or 16-bit integers, for depth and z.
     pub distances: png::DistancePng,
+    /// The colour map of the distance previews (depth, z, t).
+    pub colormap: colormap::Colormap,
 }
 
 /// The `.png` preview of `aov` (position and bary have none), and for depth the range it maps.
@@ -524,7 +538,7 @@ fn png_job(
             });
             (Some(job), None)
         }
-        (values, _) => preview_job(values, aov, width, pngs.depth_range),
+        (values, _) => preview_job(values, aov, width, pngs),
     }
 }
 
@@ -533,21 +547,23 @@ fn preview_job(
     values: Values<'_>,
     aov: Aov,
     width: usize,
-    depth_range: Option<[f64; 2]>,
+    pngs: PngOptions,
 ) -> (Option<FileJob<'_>>, Option<[f64; 2]>) {
     let name = format!("{aov}.png");
     match values {
         Values::Distances(v) => {
-            let range = depth_range
+            let range = (pngs.depth_range)
                 .filter(|_| aov != Aov::T)
                 .or_else(|| png::percentile_range(v))
                 .unwrap_or([0.0, 1.0]);
-            let job = FileJob::new(name, move |out| {
-                png::write(out, png::distance_image(v, width, range))
+            let job = FileJob::new(name, move |out| match pngs.colormap {
+                colormap::Colormap::Grey => png::write(out, png::distance_image(v, width, range)),
+                map => png::write(out, colormap::distance_image(v, width, range, map)),
             });
             (Some(job), (aov == Aov::Depth).then_some(range))
         }
-        Values::Vectors(_) if aov != Aov::Normal => (None, None),
+        Values::Pairs(_) => (None, None),
+        Values::Vectors(_) if !matches!(aov, Aov::Normal | Aov::ShadingNormal) => (None, None),
         Values::Vectors(v) => {
             let job = FileJob::new(name, move |out| {
                 png::write(out, png::normal_image(v, width))
@@ -555,7 +571,7 @@ fn preview_job(
             (Some(job), None)
         }
         Values::Labels(v) => {
-            let miss = if aov == Aov::Id { 0 } else { u32::MAX };
+            let miss = if aov == Aov::Prim { u32::MAX } else { 0 };
             let job = FileJob::new(name, move |out| {
                 png::write(out, png::label_image(v, width, miss))
             });

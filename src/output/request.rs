@@ -39,14 +39,18 @@ impl Format {
     }
 
     /// Whether this format writes `aov` into a file: NPY always; EXR for images; PNG previews
-    /// for images, except positions and barycentric weights (which have no meaningful
-    /// preview); the PLY point cloud holds positions and, beside them, normals, ids and prims.
+    /// for images, except positions, barycentric weights and texture coordinates (which have
+    /// no meaningful preview); the PLY point cloud holds positions and, beside them, normals, ids and prims.
     pub fn holds(self, aov: Aov, rays_mode: bool) -> bool {
         match self {
             Format::Npy => true,
             Format::Exr => !rays_mode,
             Format::Png => {
-                !rays_mode && !matches!(aov, Aov::Position | Aov::Bary | Aov::Error | Aov::Certain)
+                !rays_mode
+                    && !matches!(
+                        aov,
+                        Aov::Position | Aov::Bary | Aov::Error | Aov::Certain | Aov::Uv
+                    )
             }
             Format::Ply => matches!(aov, Aov::Position | Aov::Normal | Aov::Id | Aov::Prim),
         }
@@ -172,8 +176,9 @@ pub fn remove_created_folder(dir: &Path, created: Option<&Path>) {
 fn aov_bytes(aov: Aov) -> u64 {
     match aov {
         Aov::Depth | Aov::Z | Aov::T | Aov::Error => 8,
-        Aov::Normal | Aov::Position | Aov::Bary => 24,
-        Aov::Id | Aov::Prim => 4,
+        Aov::Normal | Aov::Position | Aov::Bary | Aov::ShadingNormal => 24,
+        Aov::Uv => 16,
+        Aov::Id | Aov::Prim | Aov::Material => 4,
         Aov::Certain => 1,
     }
 }
@@ -183,7 +188,7 @@ fn encoding_bytes(aov: Aov, format: Format) -> u64 {
     match format {
         Format::Npy => aov_bytes(aov),
         Format::Exr => match aov {
-            Aov::Id | Aov::Prim | Aov::Certain => 4,
+            Aov::Id | Aov::Prim | Aov::Material | Aov::Certain => 4,
             _ => aov_bytes(aov) / 2,
         },
         Format::Png => 4,

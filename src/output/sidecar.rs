@@ -42,6 +42,9 @@ pub struct Sidecar {
     /// Depth range mapped into `depth.png` (near = light, far = dark).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub depth_png_range: Option<[f64; 2]>,
+    /// With `--colormap viridis|turbo`: the colour map of the distance previews.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth_png_colormap: Option<&'static str>,
     /// With `--depth-png u16`: depth.png and z.png hold 16-bit integers, each this many scene
     /// units (distance / scale, rounded); 0 is no data (a miss, or out of range).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -54,6 +57,10 @@ pub struct Sidecar {
     pub cryptomatte_spp: Option<usize>,
     /// The object table; `id` indexes it from 1.
     pub objects: Vec<Object>,
+    /// With `--aov material` or `--cryptomatte`: the materials, named as the file names
+    /// them; `material` indexes it from 1.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub materials: Option<Vec<String>>,
     /// Totals.
     pub stats: Stats,
     /// Seconds per stage.
@@ -204,6 +211,9 @@ pub fn conventions() -> BTreeMap<&'static str, &'static str> {
         ("normal", "world-space unit geometric normal; triangles: counter-clockwise winding is the front, not flipped toward the ray; quadrics: gradient direction, toward f > 0; miss = (0, 0, 0)"),
         ("position", "world-space hit point; miss = (+inf, +inf, +inf)"),
         ("id", "1-based object id indexing `objects`; miss = 0"),
+        ("uv", "the file's texture coordinates (glTF TEXCOORD_0, OBJ vt, USD primvars:st, PLY u v / s t) interpolated with the hit's barycentric weights, as stored (glTF's origin is the top left; nothing is flipped); miss, quadric or none in the file = (+inf, +inf)"),
+        ("shading_normal", "world-space unit shading normal: the file's normals interpolated, mapped by the inverse transpose of the placement; quadrics: the analytic normal (as normal); miss or none in the file = (0, 0, 0)"),
+        ("material", "1-based material id indexing `materials`; miss or no material = 0"),
         ("error", "bound on |depth - exact depth| where the exact depth is that of the ray (its f64 numbers) with the same primitive's exact surface (the file's numbers as read, placed by its f64 node matrix); scene units; +inf = no bound; miss = 0"),
         ("certain", "1 when no value within the bounds could change the decision (which primitive is nearest, hit or miss); 0 otherwise; needs the octree"),
         ("prim", "triangle index inside the object in the object's own order, 0 for quadrics; miss = 4294967295"),

@@ -19,7 +19,9 @@ use std::sync::Mutex;
 pub enum Column {
     /// One number per ray (depth, z, t).
     Float(Vec<f64>),
-    /// Three numbers per ray, flattened (normal, position, bary).
+    /// Two numbers per ray, flattened (uv).
+    Pair(Vec<f64>),
+    /// Three numbers per ray, flattened (normal, position, bary, shading normal).
     Vector(Vec<f64>),
     /// One label per ray (id, prim).
     Index(Vec<u32>),
@@ -31,8 +33,11 @@ impl Column {
     fn new(aov: Aov, n: usize) -> Column {
         match aov {
             Aov::T | Aov::Depth | Aov::Z | Aov::Error => Column::Float(vec![0.0; n]),
-            Aov::Normal | Aov::Position | Aov::Bary => Column::Vector(vec![0.0; 3 * n]),
-            Aov::Id | Aov::Prim => Column::Index(vec![0; n]),
+            Aov::Uv => Column::Pair(vec![0.0; 2 * n]),
+            Aov::Normal | Aov::Position | Aov::Bary | Aov::ShadingNormal => {
+                Column::Vector(vec![0.0; 3 * n])
+            }
+            Aov::Id | Aov::Prim | Aov::Material => Column::Index(vec![0; n]),
             Aov::Certain => Column::Flag(vec![0; n]),
         }
     }
@@ -41,6 +46,7 @@ impl Column {
     fn blocks(&mut self, len: usize) -> Box<dyn Iterator<Item = Slot<'_>> + '_> {
         match self {
             Column::Float(v) => Box::new(v.chunks_mut(len).map(Slot::Float)),
+            Column::Pair(v) => Box::new(v.as_chunks_mut().0.chunks_mut(len).map(Slot::Pair)),
             Column::Vector(v) => Box::new(v.as_chunks_mut().0.chunks_mut(len).map(Slot::Vector)),
             Column::Index(v) => Box::new(v.chunks_mut(len).map(Slot::Index)),
             Column::Flag(v) => Box::new(v.chunks_mut(len).map(Slot::Flag)),
@@ -68,7 +74,15 @@ impl Buffers {
         }
     }
 
-    /// The values of a vector AOV (normal, position, bary).
+    /// The values of a two-number AOV (uv).
+    pub fn pairs(&self, aov: Aov) -> Option<&[[f64; 2]]> {
+        match self.column(aov)? {
+            Column::Pair(v) => Some(v.as_chunks().0),
+            _ => None,
+        }
+    }
+
+    /// The values of a vector AOV (normal, position, bary, shading normal).
     pub fn vectors(&self, aov: Aov) -> Option<&[[f64; 3]]> {
         match self.column(aov)? {
             Column::Vector(v) => Some(v.as_chunks().0),
@@ -76,7 +90,7 @@ impl Buffers {
         }
     }
 
-    /// The values of a label AOV (id, prim).
+    /// The values of a label AOV (id, prim, material).
     pub fn labels(&self, aov: Aov) -> Option<&[u32]> {
         match self.column(aov)? {
             Column::Index(v) => Some(v),
@@ -101,6 +115,7 @@ impl Buffers {
 /// One block of a column.
 enum Slot<'a> {
     Float(&'a mut [f64]),
+    Pair(&'a mut [[f64; 2]]),
     Vector(&'a mut [[f64; 3]]),
     Index(&'a mut [u32]),
     Flag(&'a mut [u8]),
@@ -168,6 +183,20 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
                 let ray = self.ray(j);
                 let weights = self.tracer.scene.barycentric(h, ray.origin, ray.dir);
                 weights.unwrap_or([0.0; 3])
+            }),
+            (Aov::Uv, Slot::Pair(out)) => fill(out, hits, [inf; 2], |j, h| {
+                let ray = self.ray(j);
+                let uv = self.tracer.scene.uv(h, ray.origin, ray.dir);
+                uv.unwrap_or([inf; 2])
+            }),
+            (Aov::ShadingNormal, Slot::Vector(out)) => fill(out, hits, [0.0; 3], |j, h| {
+                let ray = self.ray(j);
+                let normal = self.tracer.scene.shading_normal(h, ray.origin, ray.dir);
+                normal.map_or([0.0; 3], |n| n.to_array())
+            }),
+            (Aov::Material, Slot::Index(out)) => fill(out, hits, 0, |j, h| {
+                let ray = self.ray(j);
+                self.tracer.scene.material(h, ray.origin, ray.dir)
             }),
             (Aov::Id, Slot::Index(out)) => {
                 fill(out, hits, 0, |_, h| self.tracer.scene.object(h.top).id)

@@ -44,11 +44,21 @@ pub enum Aov {
     /// 1 when no value within the bounds could change the ray's decision (nearest primitive,
     /// hit or miss), else 0 (see [`crate::bound`]); needs the octree (0 with a BVH).
     Certain,
+    /// The file's texture coordinates (glTF `TEXCOORD_0`, OBJ `vt`, USD `primvars:st`, PLY
+    /// `u v`/`s t`) interpolated at the hit, as stored; (+inf, +inf) on a miss, a quadric or
+    /// a mesh without them.
+    Uv,
+    /// Unit world shading normal: the file's normals interpolated and mapped by the inverse
+    /// transpose of the placement; quadrics: the analytic normal; (0, 0, 0) on a miss or a
+    /// mesh without normals.
+    ShadingNormal,
+    /// 1-based material id, indexing the scene's materials; 0 on a miss or without material.
+    Material,
 }
 
 impl Aov {
     /// All AOVs, in output order.
-    pub const ALL: [Aov; 10] = [
+    pub const ALL: [Aov; 13] = [
         Aov::Depth,
         Aov::Z,
         Aov::T,
@@ -59,6 +69,9 @@ impl Aov {
         Aov::Prim,
         Aov::Error,
         Aov::Certain,
+        Aov::Uv,
+        Aov::ShadingNormal,
+        Aov::Material,
     ];
 
     /// The name used on the command line and in file names.
@@ -74,8 +87,30 @@ impl Aov {
             Aov::Prim => "prim",
             Aov::Error => "error",
             Aov::Certain => "certain",
+            Aov::Uv => "uv",
+            Aov::ShadingNormal => "shading_normal",
+            Aov::Material => "material",
         }
     }
+}
+
+/// One warning for each of `aovs` that reads a shading attribute some of the scene's objects
+/// lack (`uv`, `shading_normal`, `material`): their hits hold the AOV's miss value.
+pub fn attribute_warnings(scene: &Scene, aovs: &[Aov]) -> Vec<String> {
+    use crate::scene::Attribute;
+    let mut warnings = Vec::new();
+    for &aov in aovs {
+        let attribute = match aov {
+            Aov::Uv => Attribute::Uv,
+            Aov::ShadingNormal => Attribute::Normal,
+            Aov::Material => Attribute::Material,
+            _ => continue,
+        };
+        if let Some(line) = scene.missing_attribute(attribute) {
+            warnings.push(format!("{aov}: {line}"));
+        }
+    }
+    warnings
 }
 
 impl fmt::Display for Aov {

@@ -2,12 +2,13 @@
 
 use super::instance::{Instance, StoredMesh};
 use super::mesh::{Mesh, MeshSet, Positions};
+use super::shading::PartShading;
 use super::{near_origin, Object, ObjectKind, Part, PartKind, PoseInfo, Scene, StageInfo};
 use crate::accel::OctreeParams;
 use crate::camera::Camera;
 use crate::geometry::Aabb;
 use crate::quadric::Quadric;
-use glam::{DMat4, DVec3};
+use glam::{DMat3, DMat4, DVec3};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -28,7 +29,8 @@ struct Draft {
 #[derive(Debug)]
 enum Item {
     Mesh(Arc<Mesh>, DMat4),
-    Quadric(Box<Quadric>),
+    /// A quadric and its material (1-based; 0: none).
+    Quadric(Box<Quadric>, u32),
 }
 
 /// Collects objects (meshes in their own frames with f64 transforms, quadrics) and turns
@@ -44,6 +46,9 @@ pub struct SceneBuilder {
     decoded: Vec<String>,
     stage: Option<StageInfo>,
     pose: Option<PoseInfo>,
+    /// Material names, in the order first met (a material's id is its index + 1).
+    materials: Vec<String>,
+    material_ids: HashMap<String, u32>,
     /// Meshes seen so far by content hash, so that equal meshes read from different places
     /// (USD prims referencing one asset, say) are stored once.
     by_content: HashMap<u64, Vec<Arc<Mesh>>>,
@@ -105,7 +110,35 @@ impl SceneBuilder {
 
     /// Adds a quadric to object `id`.
     pub fn place_quadric(&mut self, id: u32, quadric: Quadric) {
-        self.push(id, 1, Item::Quadric(Box::new(quadric)));
+        self.place_bound_quadric(id, quadric, 0);
+    }
+
+    /// Adds a quadric bound to `material` (from [`SceneBuilder::material`]; 0: none) to
+    /// object `id`.
+    pub fn place_bound_quadric(&mut self, id: u32, quadric: Quadric, material: u32) {
+        self.push(id, 1, Item::Quadric(Box::new(quadric), material));
+    }
+
+    /// Adds a material named `name` to the scene's list, even when another has that name
+    /// (glTF materials, which are told apart by index); returns its id (1-based).
+    pub fn add_material(&mut self, name: String) -> u32 {
+        self.material_ids
+            .entry(name.clone())
+            .or_insert(self.materials.len() as u32 + 1);
+        self.materials.push(name);
+        self.materials.len() as u32
+    }
+
+    /// The id of the material named `name` (1-based, in the order materials are first
+    /// named), for [`crate::scene::attributes::MaterialRun`]s and bound quadrics.
+    pub fn material(&mut self, name: &str) -> u32 {
+        if let Some(&id) = self.material_ids.get(name) {
+            return id;
+        }
+        self.materials.push(name.to_string());
+        let id = self.materials.len() as u32;
+        self.material_ids.insert(name.to_string(), id);
+        id
     }
 
     /// Adds a mesh object made of world-space triangles; returns its id.
@@ -170,6 +203,7 @@ impl SceneBuilder {
             decoded,
             stage,
             pose,
+            materials,
             ..
         } = self;
         items.sort_by_key(|&(object, first, _)| (object, first));
@@ -187,6 +221,7 @@ impl SceneBuilder {
             quadric_parts,
             parts,
             placement,
+            shading,
         } = layout;
         let bounds = points.iter().copied().fold(Aabb::EMPTY, Aabb::grow);
         let bounds = instances.iter().fold(bounds, |b, i| b.union(i.bounds()));
@@ -211,6 +246,8 @@ impl SceneBuilder {
             quadric_parts,
             parts,
             placement,
+            shading,
+            materials,
             objects,
             cameras,
             warnings,
@@ -281,6 +318,7 @@ struct Layout {
     quadric_parts: Vec<u32>,
     parts: Vec<Part>,
     placement: Vec<f64>,
+    shading: Vec<PartShading>,
 }
 
 impl Layout {
@@ -294,8 +332,10 @@ impl Layout {
         mesh_of: &HashMap<usize, u32>,
     ) {
         let mut placement = 0.0;
+        let shading;
         let kind = match item {
-            Item::Quadric(quadric) => {
+            Item::Quadric(quadric, material) => {
+                shading = PartShading::quadric(material);
                 self.quadrics.push(*quadric);
                 self.quadric_parts.push(part);
                 PartKind::Quadric(self.quadrics.len() as u32 - 1)
@@ -304,12 +344,16 @@ impl Layout {
                 let stored = mesh_of.get(&(Arc::as_ptr(&mesh) as usize));
                 let instance =
                     stored.and_then(|&m| Instance::new(m, &meshes[m as usize], &world, part));
+                let attributes = mesh.attributes().cloned();
                 match instance {
                     Some(instance) => {
+                        shading = PartShading::mesh(attributes, instance.to_world.matrix3, false);
                         self.instances.push(instance);
                         PartKind::Instance(self.instances.len() as u32 - 1)
                     }
                     None => {
+                        let swapped = world.determinant() < 0.0;
+                        shading = PartShading::mesh(attributes, DMat3::from_mat4(world), swapped);
                         let positions = mesh.positions();
                         placement = crate::bound::placement_error(
                             &world,
@@ -326,6 +370,7 @@ impl Layout {
             }
         };
         self.placement.push(placement);
+        self.shading.push(shading);
         self.parts.push(Part {
             object,
             first_prim,

@@ -119,15 +119,29 @@ impl Scene {
             Top::Instance(k) => {
                 let instance = &self.instances[k];
                 let stored = &self.meshes[instance.mesh as usize];
-                let inner = match crossing.inner {
-                    Some(inner) => inner,
-                    None => instance.intersect(stored, origin, dir, crossing.t)?.prim,
-                };
+                let inner = self.instance_triangle(k, crossing, origin, dir)?;
                 let o = instance.to_local.transform_point3(origin);
                 let d = instance.to_local.transform_vector3(dir) + DVec3::ZERO;
                 WatertightRay::new(o, d).barycentric(&stored.set.mesh.triangle(inner as usize))
             }
             Top::Quadric(_) => None,
+        }
+    }
+
+    /// The triangle of instance `k`'s mesh that a crossing of the ray `origin + t · dir` is
+    /// on: the one it carries, else found by tracing the instance up to the crossing's `t`.
+    pub(super) fn instance_triangle(
+        &self,
+        k: usize,
+        crossing: &Crossing,
+        origin: DVec3,
+        dir: DVec3,
+    ) -> Option<u32> {
+        let instance = &self.instances[k];
+        let stored = &self.meshes[instance.mesh as usize];
+        match crossing.inner {
+            Some(inner) => Some(inner),
+            None => Some(instance.intersect(stored, origin, dir, crossing.t)?.prim),
         }
     }
 

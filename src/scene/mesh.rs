@@ -9,6 +9,7 @@
 //! triangle test fetches three indices and three vertices instead of one 36-byte record; the
 //! branch on the storage kind is the same for every triangle of a mesh, so it predicts well.
 
+use super::attributes::{Attributes, MaterialRun};
 use crate::accel::{intersect_each, set_bits, PreparedRay, PrimitiveSet, GROUP, PACKET};
 use crate::geometry::triangle::{self, WatertightRay};
 use crate::geometry::triangle_box;
@@ -16,6 +17,7 @@ use crate::geometry::triangle_packet::WatertightPacket;
 use crate::geometry::Aabb;
 use glam::{DAffine3, DVec3, Vec3};
 use std::collections::HashMap;
+use std::sync::Arc;
 
 /// Vertex positions in the precision the file stores them.
 #[derive(Debug, Clone, PartialEq)]
@@ -73,6 +75,9 @@ impl Positions {
 pub struct Mesh {
     positions: Positions,
     triangles: Vec<[u32; 3]>,
+    /// Shading attributes (texture coordinates, normals, materials); `None` when the file
+    /// gives none. Read only after a trace ([`super::attributes`]).
+    attributes: Option<Arc<Attributes>>,
 }
 
 impl Mesh {
@@ -86,14 +91,54 @@ impl Mesh {
         (in_range && positions.iter().all(|p| p.is_finite())).then(|| Mesh {
             positions: Positions::exact(positions),
             triangles,
+            attributes: None,
         })
     }
 
-    /// The same triangles over new vertices (a posed mesh): `None` when the vertex count
-    /// differs or a vertex is not finite.
+    /// The same triangles over new vertices (a posed mesh), with the same attributes: `None`
+    /// when the vertex count differs or a vertex is not finite.
     pub fn with_positions(&self, positions: Vec<DVec3>) -> Option<Mesh> {
         (positions.len() == self.positions.len()).then_some(())?;
-        Mesh::new(positions, self.triangles.clone())
+        let mesh = Mesh::new(positions, self.triangles.clone())?;
+        Some(Mesh {
+            attributes: self.attributes.clone(),
+            ..mesh
+        })
+    }
+
+    /// The mesh with `attributes` (kept only where they fit: a corner list that does not hold
+    /// one entry per triangle is dropped, so a lookup never reads past it).
+    pub fn with_attributes(self, mut attributes: Attributes) -> Mesh {
+        let n = self.triangles.len();
+        if attributes.uv.len() != n {
+            attributes.uv = Vec::new();
+        }
+        if attributes.normals.len() != n {
+            attributes.normals = Vec::new();
+        }
+        Mesh {
+            attributes: (!attributes.is_empty()).then(|| Arc::new(attributes)),
+            ..self
+        }
+    }
+
+    /// The mesh with its triangles bound to materials by `runs` (its other attributes kept).
+    pub fn with_materials(self, runs: Vec<MaterialRun>) -> Mesh {
+        let mut attributes = self.attributes.as_deref().cloned().unwrap_or_default();
+        attributes.materials = runs;
+        self.with_attributes(attributes)
+    }
+
+    /// The mesh without shading normals (its other attributes kept).
+    pub fn without_normals(self) -> Mesh {
+        let mut attributes = self.attributes.as_deref().cloned().unwrap_or_default();
+        attributes.normals = Vec::new();
+        self.with_attributes(attributes)
+    }
+
+    /// The shading attributes, if the file gave any.
+    pub fn attributes(&self) -> Option<&Arc<Attributes>> {
+        self.attributes.as_ref()
     }
 
     /// A mesh from stored vertices and index triples that are known to be in range.
@@ -105,6 +150,7 @@ impl Mesh {
         Mesh {
             positions,
             triangles,
+            attributes: None,
         }
     }
 
@@ -128,6 +174,7 @@ impl Mesh {
         Mesh {
             positions: Positions::exact(positions),
             triangles,
+            attributes: None,
         }
     }
 
@@ -180,9 +227,10 @@ impl Mesh {
         }
     }
 
-    /// Bytes of vertex and index data.
+    /// Bytes of vertex, index and attribute data.
     pub fn bytes(&self) -> usize {
-        self.positions.bytes() + self.triangles.len() * 12
+        let attributes = self.attributes.as_ref().map_or(0, |a| a.bytes());
+        self.positions.bytes() + self.triangles.len() * 12 + attributes
     }
 
     /// Bounds of all vertices used by a triangle, in the mesh frame.
@@ -235,7 +283,7 @@ impl Mesh {
 #[derive(Debug, Clone)]
 pub struct MeshSet {
     /// The mesh (shared with the importer's cache while the scene is built).
-    pub mesh: std::sync::Arc<Mesh>,
+    pub mesh: Arc<Mesh>,
     /// Frame position that the acceleration structure's coordinates are relative to.
     pub anchor: DVec3,
 }

@@ -20,18 +20,22 @@
 //! order its parts were added, a mesh counting one per triangle and a quadric one, which is what
 //! the `prim` buffer reports.
 
+pub mod attributes;
 mod bound;
 mod builder;
 mod hits;
 pub mod instance;
 pub mod mesh;
 mod proximity;
+mod shading;
 
+pub use attributes::Attributes;
 pub use builder::SceneBuilder;
 pub use hits::{Crossing, EdgeRule};
 pub use instance::{Instance, StoredMesh};
 pub use mesh::{Mesh, MeshSet, Positions};
 pub use proximity::Nearest;
+pub use shading::Attribute;
 
 use crate::accel::{
     intersect_each, intersect_one_by_one, octants_by_overlap, Hit, PreparedRay, PrimitiveSet,
@@ -218,6 +222,10 @@ pub struct Scene {
     /// file's vertex (0 but for world meshes placed by a transform; see
     /// [`crate::bound::placement_error`]).
     placement: Vec<f64>,
+    /// Per part, what the shading lookups need ([`shading`]).
+    shading: Vec<shading::PartShading>,
+    /// The materials parts are bound to, named as the file names them.
+    materials: Vec<String>,
     /// The object table, in id order.
     pub objects: Vec<Object>,
     /// Cameras defined by the file.
@@ -315,9 +323,16 @@ impl Scene {
     }
 
     /// Bytes of stored geometry: vertices, indices, per-triangle part indices, instanced
-    /// meshes with their octrees, instance records and quadrics.
+    /// meshes with their octrees, instance records and quadrics, and the shading attributes
+    /// of the meshes placed in the world.
     pub fn geometry_bytes(&self) -> usize {
-        self.world.mesh.bytes()
+        let world_attributes: usize = (self.parts.iter().zip(&self.shading))
+            .filter(|(part, _)| matches!(part.kind, PartKind::World { .. }))
+            .filter_map(|(_, s)| s.attributes.as_ref())
+            .map(|a| a.bytes())
+            .sum();
+        world_attributes
+            + self.world.mesh.bytes()
             + self.world_parts.len() * 4
             + self.meshes.iter().map(StoredMesh::bytes).sum::<usize>()
             + self.instances.len() * std::mem::size_of::<Instance>()

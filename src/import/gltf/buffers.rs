@@ -2,7 +2,7 @@
 //! size checked against the limit before decoding), and external files under the path rule
 //! ([`crate::import::paths`]). Network URIs are never fetched.
 
-use super::diagnostics::Sink;
+use super::diagnostics::{Diagnostic, Severity, Sink};
 use super::document::{index_of, BufferData, Document};
 use crate::import::paths::resolve_inside;
 use serde_json::Value;
@@ -170,21 +170,28 @@ pub fn base64_decode(text: &str) -> Option<Vec<u8>> {
 impl Document {
     /// Reads the buffers: all of them, or only those `needed` marks (the importer reads the
     /// buffers its geometry uses, so a missing texture file cannot stop a render). A buffer
-    /// that cannot be read is left empty and reported; reading its bytes later fails.
+    /// that cannot be read is left empty and reported (as a warning for one that only shading
+    /// attributes need, which are then left out); reading its bytes later fails.
     pub fn load_buffers(
         &mut self,
         resources: &Resources,
-        needed: Option<&[bool]>,
+        needed: Option<&[Need]>,
         sink: &mut dyn Sink,
     ) {
         let count = self.list("buffers").len();
         let mut loaded = Vec::with_capacity(count);
         let mut total = 0u64;
         for i in 0..count {
-            if sink.stopped() || needed.is_some_and(|n| !n.get(i).copied().unwrap_or(false)) {
+            let need = needed.map_or(Need::Geometry, |n| n.get(i).copied().unwrap_or_default());
+            if sink.stopped() || need == Need::No {
                 loaded.push(None);
                 continue;
             }
+            let mut lenient = AsWarnings(&mut *sink);
+            let sink: &mut dyn Sink = match need {
+                Need::Shading => &mut lenient,
+                _ => &mut *sink,
+            };
             let buffer = &self.list("buffers")[i];
             let at = format!("/buffers/{i}");
             let declared = index_of(buffer, "byteLength").unwrap_or(0) as u64;
@@ -355,5 +362,33 @@ mod tests {
         assert_eq!(base64_decode("aGVsbG8"), Some(b"hello".to_vec()));
         assert_eq!(base64_decode("a"), None);
         assert_eq!(base64_decode("a*bc"), None);
+    }
+}
+
+/// Why the importer reads a buffer ([`super::scene::needed_buffers`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Default)]
+pub enum Need {
+    /// Not at all.
+    #[default]
+    No,
+    /// Only for shading attributes: a buffer that cannot be read leaves them out, with a
+    /// warning, and never stops a render.
+    Shading,
+    /// For the geometry drawn.
+    Geometry,
+}
+
+/// A sink that records errors as warnings (for buffers only shading attributes need).
+struct AsWarnings<'a>(&'a mut dyn Sink);
+
+impl Sink for AsWarnings<'_> {
+    fn push(&mut self, mut diagnostic: Diagnostic) {
+        if diagnostic.severity == Severity::Error {
+            diagnostic.severity = Severity::Warning;
+            diagnostic
+                .message
+                .push_str(": the shading attributes it holds are left out");
+        }
+        self.0.push(diagnostic);
     }
 }

@@ -42,6 +42,12 @@ pub struct Geometry {
     pub indices: Vec<u32>,
     /// How the indices make triangles.
     pub mode: TriangleMode,
+    /// `TEXCOORD_0` per vertex, when read ([`Document::read_shading`]).
+    pub uv: Option<Vec<[f64; 2]>>,
+    /// `NORMAL` per vertex, when read (posed with the positions).
+    pub normals: Option<Vec<DVec3>>,
+    /// The primitive's material index, when it has one.
+    pub material: Option<usize>,
 }
 
 impl Geometry {
@@ -72,13 +78,24 @@ impl Geometry {
             positions,
             indices,
             mode,
+            uv: None,
+            normals: None,
+            material: None,
         })
     }
 
     /// The triangles, as corner positions.
     pub fn triangles(&self) -> Vec<[DVec3; 3]> {
+        self.corners()
+            .into_iter()
+            .map(|c| c.map(|v| self.positions[v as usize]))
+            .collect()
+    }
+
+    /// The triangles, as the vertex indices of their corners.
+    pub fn corners(&self) -> Vec<[u32; 3]> {
         let i = &self.indices;
-        let corners: Vec<[u32; 3]> = match self.mode {
+        match self.mode {
             TriangleMode::Strip => (0..i.len().saturating_sub(2))
                 .map(|k| {
                     if k % 2 == 0 {
@@ -92,11 +109,7 @@ impl Geometry {
                 .map(|k| [i[k], i[k + 1], i[0]])
                 .collect(),
             TriangleMode::List => i.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
-        };
-        corners
-            .into_iter()
-            .map(|c| c.map(|v| self.positions[v as usize]))
-            .collect()
+        }
     }
 }
 

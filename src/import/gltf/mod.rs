@@ -33,6 +33,7 @@ pub mod meshopt;
 pub mod node;
 pub mod pose;
 pub mod scene;
+pub mod shading;
 pub mod structure;
 
 pub use diagnostics::{Diagnostic, ErrorsOnly, FailFast, Severity, Sink};

@@ -21,7 +21,7 @@ use super::document::{array, as_index, index_of, numbers, Document};
 use super::mesh::Geometry;
 use super::node::animated_transform;
 use crate::scene::{AnimationInfo, PoseInfo};
-use glam::DMat4;
+use glam::{DMat4, DVec3};
 use serde_json::Value;
 
 /// How one node's mesh is posed; `None` fields leave that step out.
@@ -201,6 +201,7 @@ impl Document {
         if let Some(weights) = &pose.weights {
             for (t, target) in array(json, "targets").iter().enumerate() {
                 let w = weights.get(t).copied().unwrap_or(0.0);
+                self.morph_normals(target, w, geometry);
                 let Some(accessor) = index_of(target, "POSITION").filter(|_| w != 0.0) else {
                     continue;
                 };
@@ -246,6 +247,15 @@ impl Document {
             for (p, m) in geometry.positions.iter_mut().zip(&skinned) {
                 *p = m.transform_point3(*p);
             }
+            // Normals follow the blended matrix by its inverse transpose (a skin that
+            // collapses a vertex leaves a zero normal there: a miss).
+            for (normal, m) in geometry.normals.iter_mut().flatten().zip(&skinned) {
+                let linear = glam::DMat3::from_mat4(*m);
+                *normal = match linear.determinant() {
+                    0.0 => DVec3::ZERO,
+                    _ => linear.inverse().transpose() * *normal,
+                };
+            }
         }
         if let Some(i) = geometry.positions.iter().position(|p| !p.is_finite()) {
             return Err(Diagnostic::error(
@@ -255,6 +265,26 @@ impl Document {
             ));
         }
         Ok(())
+    }
+
+    /// Adds `w` times morph target `target`'s NORMAL deltas to the geometry's normals; a
+    /// target whose deltas cannot be read leaves the normals out (their hits are misses),
+    /// as an unreadable NORMAL does, rather than stopping the render.
+    fn morph_normals(&self, target: &Value, w: f64, geometry: &mut Geometry) {
+        let Some(accessor) = index_of(target, "NORMAL").filter(|_| w != 0.0) else {
+            return;
+        };
+        let Some(normals) = geometry.normals.as_mut() else {
+            return;
+        };
+        match self.positions(accessor) {
+            Ok(deltas) if deltas.len() == normals.len() => {
+                for (n, d) in normals.iter_mut().zip(&deltas) {
+                    *n += w * *d;
+                }
+            }
+            _ => geometry.normals = None,
+        }
     }
 
     /// The joint indices and weights (as values: normalized integers decoded) of influence

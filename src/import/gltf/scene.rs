@@ -4,16 +4,18 @@
 
 use super::accessor::NO_DATA;
 use super::animation::NodeValues;
+use super::buffers::Need;
 use super::decode::{self, GPU_INSTANCING, MESHOPT};
 use super::diagnostics::{Diagnostic, FailFast};
 use super::document::{array, as_index, extension, index_of, Document};
 use super::mesh::DRACO;
 use super::node::{animated_transform, Node};
 use super::pose::Pose;
+use super::shading::MeshShading;
 use super::QUADRIC_EXTENSION;
 use crate::camera::Camera;
 use crate::quadric::{Quadric, QuadricSpec};
-use crate::scene::{Mesh, Scene, SceneBuilder};
+use crate::scene::{Attributes, Mesh, Scene, SceneBuilder};
 use glam::{DMat4, DVec3};
 use serde_json::Value;
 use std::collections::{HashMap, HashSet};
@@ -70,6 +72,10 @@ pub fn build_at(
             ));
         }
         walk.builder.set_pose(pose);
+    }
+    for index in 0..doc.list("materials").len() {
+        walk.builder
+            .add_material(super::shading::material_name(doc, index));
     }
     walk.builder.set_extensions_used(
         doc.extension_names("extensionsUsed")
@@ -139,10 +145,12 @@ fn add_mesh_object(
 /// indices, sparse parts), Draco data and GPU instancing attributes, and the sources of
 /// meshopt-compressed views; what posing reads (morph targets drawn with weights, skin joints,
 /// weights and inverse bind matrices); with `animating`, every morph target and animation
-/// sampler. Others (textures, animations without `--time`) are never read for a render.
-pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<bool> {
-    let mut needed = vec![false; doc.list("buffers").len()];
-    let mut mark_view = |view: Option<usize>| {
+/// sampler. Buffers that only shading attributes read (NORMAL, TEXCOORD_0, morph NORMAL
+/// deltas) are [`Need::Shading`]. Others (textures, animations without `--time`) are never
+/// read for a render.
+pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<Need> {
+    let mut needed = vec![Need::No; doc.list("buffers").len()];
+    let mut mark_view = |view: Option<usize>, need: Need| {
         let Some(v) = view.and_then(|v| doc.item("bufferViews", v)) else {
             return;
         };
@@ -153,11 +161,12 @@ pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<bool> {
             .find_map(|name| extension(v, name).map(|e| index_of(e, "buffer")));
         if let Some(b) = compressed.unwrap_or_else(|| index_of(v, "buffer")) {
             if let Some(flag) = needed.get_mut(b) {
-                *flag = true;
+                *flag = (*flag).max(need);
             }
         }
     };
     let mut accessors = Vec::new();
+    let mut shading = Vec::new();
     // What posing reads: morph targets of meshes some node draws with weights that are not
     // all zero, the joints and weights of skinned meshes, inverse bind matrices.
     let (mut morphed, mut skinned) = (HashSet::new(), HashSet::new());
@@ -179,11 +188,17 @@ pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<bool> {
         for prim in array(mesh, "primitives") {
             let attributes = prim.get("attributes");
             accessors.extend(attributes.and_then(|a| index_of(a, "POSITION")));
+            for name in ["NORMAL", "TEXCOORD_0"] {
+                shading.extend(attributes.and_then(|a| index_of(a, name)));
+            }
             accessors.extend(index_of(prim, "indices"));
-            mark_view(extension(prim, DRACO).and_then(|d| index_of(d, "bufferView")));
+            let draco = extension(prim, DRACO).and_then(|d| index_of(d, "bufferView"));
+            mark_view(draco, Need::Geometry);
             if morphed.contains(&m) {
-                let targets = array(prim, "targets").iter();
-                accessors.extend(targets.filter_map(|t| index_of(t, "POSITION")));
+                for target in array(prim, "targets") {
+                    accessors.extend(index_of(target, "POSITION"));
+                    shading.extend(index_of(target, "NORMAL"));
+                }
             }
             if let Some(attributes) = attributes
                 .and_then(Value::as_object)
@@ -216,18 +231,18 @@ pub fn needed_buffers(doc: &Document, animating: bool) -> Vec<bool> {
             );
         }
     }
-    for acc in accessors
+    let shading = shading.into_iter().map(|a| (a, Need::Shading));
+    let all = accessors
         .into_iter()
-        .filter_map(|a| doc.item("accessors", a))
-    {
-        mark_view(index_of(acc, "bufferView"));
+        .map(|a| (a, Need::Geometry))
+        .chain(shading);
+    for (acc, need) in all.filter_map(|(a, need)| Some((doc.item("accessors", a)?, need))) {
+        mark_view(index_of(acc, "bufferView"), need);
         if let Some(sparse) = acc.get("sparse") {
-            mark_view(
-                sparse
-                    .get("indices")
-                    .and_then(|i| index_of(i, "bufferView")),
-            );
-            mark_view(sparse.get("values").and_then(|v| index_of(v, "bufferView")));
+            let indices = sparse.get("indices");
+            mark_view(indices.and_then(|i| index_of(i, "bufferView")), need);
+            let values = sparse.get("values");
+            mark_view(values.and_then(|v| index_of(v, "bufferView")), need);
         }
     }
     needed
@@ -311,10 +326,10 @@ impl Walk<'_> {
                 self.read_mesh(mesh).map_err(|e| e.within(&at))?;
                 &self.meshes[&mesh]
             } else {
-                let triangles = self
+                let (triangles, attributes) = self
                     .mesh_triangles(mesh, Some(&pose))
                     .map_err(|e| e.within(&at))?;
-                posed = Arc::new(Mesh::from_soup(&triangles));
+                posed = Arc::new(Mesh::from_soup(&triangles).with_attributes(attributes));
                 &posed
             };
             let instances = match extension(node.json, GPU_INSTANCING) {
@@ -382,9 +397,9 @@ impl Walk<'_> {
                 "mesh does not exist",
             ));
         }
-        let triangles = self.mesh_triangles(mesh, None)?;
-        self.meshes
-            .insert(mesh, Arc::new(Mesh::from_soup(&triangles)));
+        let (triangles, attributes) = self.mesh_triangles(mesh, None)?;
+        let read = Mesh::from_soup(&triangles).with_attributes(attributes);
+        self.meshes.insert(mesh, Arc::new(read));
         Ok(())
     }
 
@@ -408,20 +423,31 @@ impl Walk<'_> {
     }
 
     /// The triangles of mesh `mesh` (all its triangle primitives, in order), posed by `pose`
-    /// when given, in the mesh's frame (the world's for a skin).
+    /// when given, in the mesh's frame (the world's for a skin), with their shading
+    /// attributes (normals posed too).
     fn mesh_triangles(
         &mut self,
         mesh: usize,
         pose: Option<&Pose>,
-    ) -> Result<Vec<[DVec3; 3]>, Diagnostic> {
+    ) -> Result<(Vec<[DVec3; 3]>, Attributes), Diagnostic> {
         let mut triangles = Vec::new();
+        let mut shading = MeshShading::default();
         for prim in 0..self.doc.primitive_count(mesh) {
             match self.doc.primitive_geometry(mesh, prim) {
                 Ok(Some(mut geometry)) => {
+                    for warning in self.doc.read_shading(mesh, prim, &mut geometry) {
+                        self.builder.warn(warning);
+                    }
                     if let Some(pose) = pose {
                         self.doc.pose_primitive(mesh, prim, &mut geometry, pose)?;
                     }
-                    triangles.extend(geometry.triangles())
+                    let corners = geometry.corners();
+                    shading.add(&geometry, &corners);
+                    triangles.extend(
+                        corners
+                            .iter()
+                            .map(|c| c.map(|v| geometry.positions[v as usize])),
+                    );
                 }
                 Ok(None) => {
                     let why = self.doc.primitive_skip_reason(mesh, prim);
@@ -436,7 +462,7 @@ impl Walk<'_> {
                 Err(e) => return Err(e),
             }
         }
-        Ok(triangles)
+        Ok((triangles, shading.finish()))
     }
 
     fn add_camera(&mut self, camera: usize, node_name: &str, world: &DMat4) {

@@ -20,7 +20,8 @@ mod body;
 pub mod header;
 
 use crate::error::{Error, Result};
-use crate::scene::{Mesh, Positions, Scene};
+use crate::scene::attributes::corners;
+use crate::scene::{Attributes, Mesh, Positions, Scene};
 use body::{Body, Fault, Layout, RecordEnd};
 use glam::DVec3;
 use header::{Element, Format, Header, Kind, Scalar};
@@ -166,6 +167,10 @@ pub struct PlyMesh {
     pub positions: Vec<DVec3>,
     /// The faces fanned into triangles, in file order.
     pub triangles: Vec<[u32; 3]>,
+    /// The vertices' texture coordinates (`u v`, `s t` or `texture_u texture_v`), if any.
+    pub uv: Vec<[f32; 2]>,
+    /// The vertices' normals (`nx ny nz`), if any.
+    pub normals: Vec<[f32; 3]>,
     /// What was read past (faces of fewer than three corners, data after the last element).
     pub warnings: Vec<String>,
 }
@@ -188,8 +193,13 @@ pub fn scene(mesh: PlyMesh, path: &Path) -> Scene {
         Vec::new()
     } else {
         // `read` checked every index and every vertex a face uses.
+        let attributes = Attributes {
+            uv: corners(&mesh.uv, &mesh.triangles),
+            normals: corners(&mesh.normals, &mesh.triangles),
+            materials: Vec::new(),
+        };
         let drawn = Mesh::from_parts(Positions::exact(mesh.positions), mesh.triangles);
-        vec![(super::file_stem(path), drawn)]
+        vec![(super::file_stem(path), drawn.with_attributes(attributes))]
     };
     super::mesh_file_scene(path, "ply", mesh.warnings, objects)
 }
@@ -314,6 +324,8 @@ fn finish(read: Read, header: &Header) -> std::result::Result<PlyMesh, PlyError>
     Ok(PlyMesh {
         positions: out.positions,
         triangles: out.triangles,
+        uv: out.uv,
+        normals: out.normals,
         warnings,
     })
 }
@@ -334,17 +346,29 @@ fn unread_strips(header: &Header) -> Option<String> {
 /// What an element is read for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Role {
-    /// Positions from the properties at these indices.
-    Vertex([usize; 3]),
+    /// Positions (and texture coordinates, normals) from the properties at these indices.
+    Vertex(VertexProperties),
     /// Faces from the list property at this index, into `vertices` vertices.
     Face { list: usize, vertices: u64 },
     /// Read past.
     Skip,
 }
 
+/// The properties of the `vertex` element read: its position's, and its texture
+/// coordinates' and normal's where it has all of their scalars.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct VertexProperties {
+    position: [usize; 3],
+    uv: Option<[usize; 2]>,
+    normal: Option<[usize; 3]>,
+}
+
+/// The names texture coordinates go by in PLY files (trimesh's, Blender's, MeshLab's).
+const UV_NAMES: [[&str; 2]; 3] = [["u", "v"], ["s", "t"], ["texture_u", "texture_v"]];
+
 /// Which elements are the vertices and the faces.
 struct Roles {
-    vertex: Option<(usize, [usize; 3])>,
+    vertex: Option<(usize, VertexProperties)>,
     face: Option<(usize, usize, u64)>,
 }
 
@@ -389,7 +413,20 @@ impl Roles {
                     Some(i) if matches!(e.properties[i].kind, Kind::Scalar(_)) => Ok(i),
                     _ => Err(error(e, format!("element 'vertex' has no scalar '{name}'"))),
                 };
-                Some((k, [axis("x")?, axis("y")?, axis("z")?]))
+                let scalar = |name: &str| axis(name).ok();
+                let uv = UV_NAMES
+                    .iter()
+                    .find_map(|[u, v]| Some([scalar(u)?, scalar(v)?]));
+                let normal = (|| Some([scalar("nx")?, scalar("ny")?, scalar("nz")?]))();
+                let position = [axis("x")?, axis("y")?, axis("z")?];
+                Some((
+                    k,
+                    VertexProperties {
+                        position,
+                        uv,
+                        normal,
+                    },
+                ))
             }
             _ => None,
         };
@@ -398,7 +435,7 @@ impl Roles {
 
     fn of_element(&self, k: usize) -> Role {
         match (self.vertex, self.face) {
-            (Some((v, axes)), _) if v == k => Role::Vertex(axes),
+            (Some((v, properties)), _) if v == k => Role::Vertex(properties),
             (_, Some((f, list, vertices))) if f == k => Role::Face { list, vertices },
             _ => Role::Skip,
         }
@@ -409,6 +446,8 @@ impl Roles {
 #[derive(Default)]
 struct Collected {
     positions: Vec<DVec3>,
+    uv: Vec<[f32; 2]>,
+    normals: Vec<[f32; 3]>,
     triangles: Vec<[u32; 3]>,
     short_faces: u64,
 }
@@ -484,9 +523,17 @@ fn read_element(
             off_line.note(&element.name, record);
         }
         match role {
-            Role::Vertex([x, y, z]) => out
-                .positions
-                .push(DVec3::new(values[x], values[y], values[z])),
+            Role::Vertex(properties) => {
+                let [x, y, z] = properties.position;
+                out.positions
+                    .push(DVec3::new(values[x], values[y], values[z]));
+                if let Some(uv) = properties.uv {
+                    out.uv.push(uv.map(|k| values[k] as f32));
+                }
+                if let Some(normal) = properties.normal {
+                    out.normals.push(normal.map(|k| values[k] as f32));
+                }
+            }
             Role::Face { vertices, .. } => fan(&corners, record, vertices, out)?,
             Role::Skip => {}
         }

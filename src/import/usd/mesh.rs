@@ -9,11 +9,16 @@ pub enum MeshRead {
     /// The mesh in its own frame: the points as stored, triangles in face order (fans),
     /// winding made counter-clockwise-is-front.
     Triangles {
+        /// The mesh, with its texture coordinates and normals ([`super::primvars`]).
         mesh: Mesh,
+        /// Each triangle's face (its index in `faceVertexCounts`), for per-face materials.
+        faces: Vec<u32>,
         /// The mesh is a subdivision surface (drawn as its control cage).
         subdivided: bool,
         /// Faces with fewer than three vertices that were dropped.
         degenerate_faces: usize,
+        /// Primvars that could not be read (left out).
+        warnings: Vec<String>,
     },
     /// Nothing to draw, with the reason (a warning).
     Skip(String),
@@ -93,22 +98,28 @@ fn read_checked(prim: &Prim, at: At) -> Result<MeshRead, String> {
     // unless it says `none`.
     let subdivided = value::token(prim, "subdivisionScheme", at)?.as_deref() != Some("none");
     let mut triangles: Vec<[u32; 3]> = Vec::with_capacity(indices.len());
+    // Each corner's place in faceVertexIndices, and each triangle's face.
+    let mut corners: Vec<[u32; 3]> = Vec::with_capacity(indices.len());
+    let mut faces: Vec<u32> = Vec::with_capacity(indices.len());
     let mut degenerate_faces = 0;
     let mut start = 0usize;
-    for &count in &counts {
+    for (f, &count) in counts.iter().enumerate() {
         let face = &indices[start..start + count as usize];
+        let first = start as u32;
         start += count as usize;
         if face.len() < 3 {
             degenerate_faces += 1;
             continue;
         }
-        let p = |k: usize| face[k] as u32;
         for k in 1..face.len() - 1 {
-            triangles.push(if left_handed {
-                [p(0), p(k + 1), p(k)]
+            let fan = if left_handed {
+                [0, k + 1, k]
             } else {
-                [p(0), p(k), p(k + 1)]
-            });
+                [0, k, k + 1]
+            };
+            triangles.push(fan.map(|c| face[c] as u32));
+            corners.push(fan.map(|c| first + c as u32));
+            faces.push(f as u32);
         }
     }
     if triangles.is_empty() {
@@ -117,11 +128,22 @@ fn read_checked(prim: &Prim, at: At) -> Result<MeshRead, String> {
         )));
     }
     // Indices and points were checked above, so this always succeeds.
+    let topology = super::primvars::Topology {
+        triangles: &triangles,
+        corners: &corners,
+        faces: &faces,
+        points: points.len(),
+        face_vertices: indices.len(),
+        face_count: counts.len(),
+    };
+    let (attributes, warnings) = super::primvars::read(prim, at, &topology);
     let Some(mesh) = Mesh::new(points, triangles) else {
         return Ok(MeshRead::Skip(format!("{path}: invalid mesh: skipped")));
     };
     Ok(MeshRead::Triangles {
-        mesh,
+        mesh: mesh.with_attributes(attributes),
+        faces,
+        warnings,
         subdivided,
         degenerate_faces,
     })

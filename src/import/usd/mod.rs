@@ -26,6 +26,7 @@ mod confine;
 mod instancer;
 mod mesh;
 mod motion;
+mod primvars;
 mod quadric;
 mod read_warnings;
 pub use read_warnings::UNKNOWN_VALUE_TYPE;
@@ -41,6 +42,7 @@ use super::LoadOptions;
 use crate::camera::{Camera, Projection};
 use crate::error::{Error, Result};
 use crate::quadric::Quadric;
+use crate::scene::attributes::runs;
 use crate::scene::{Mesh, Scene, SceneBuilder, StageInfo};
 use glam::{DMat4, DVec3};
 use openusd::sdf;
@@ -341,6 +343,8 @@ pub(super) struct Instance {
 #[derive(Clone)]
 struct CachedMesh {
     mesh: Arc<Mesh>,
+    /// Each triangle's face, for per-face material bindings.
+    faces: Arc<Vec<u32>>,
     subdivided: bool,
 }
 
@@ -641,7 +645,16 @@ impl Loader {
                             .push(format!("{source}: a skinned point is not finite: skipped"));
                         return Ok(());
                     };
-                    mesh.mesh = Arc::new(posed);
+                    if posed.attributes().is_some_and(|a| !a.normals.is_empty()) {
+                        self.warnings.push(format!(
+                            "{source}: normals of a UsdSkel-skinned mesh are not posed: left out"
+                        ));
+                    }
+                    mesh.mesh = Arc::new(posed.without_normals());
+                }
+                let runs = primvars::material_runs(prim, self.at, &mesh.faces, &mut self.builder);
+                if !runs.is_empty() {
+                    mesh.mesh = Arc::new(Mesh::clone(&mesh.mesh).with_materials(runs));
                 }
                 if mesh.mesh.places_finitely(&world) {
                     let id = target.id(&mut self.builder);
@@ -662,12 +675,15 @@ impl Loader {
                                 let quadric = Quadric::new(&spec, world * frame)
                                     .map_err(|e| format!("{source} ({type_name}): {e}"))?;
                                 let id = target.id(&mut self.builder);
-                                self.builder.place_quadric(id, quadric);
+                                let material = self.bound_material(prim);
+                                self.builder.place_bound_quadric(id, quadric, material);
                             }
                             Part::Mesh { triangles, .. } => {
                                 let id = target.id(&mut self.builder);
-                                let mesh = Arc::new(Mesh::from_soup(&triangles));
-                                self.builder.place_mesh(id, mesh, world);
+                                let material = self.bound_material(prim);
+                                let runs = runs(&vec![material; triangles.len()]);
+                                let mesh = Mesh::from_soup(&triangles).with_materials(runs);
+                                self.builder.place_mesh(id, Arc::new(mesh), world);
                             }
                         }
                     }
@@ -686,6 +702,11 @@ impl Loader {
         Ok(())
     }
 
+    /// The id of the material bound to `prim` (0: none).
+    fn bound_material(&mut self, prim: &Prim) -> u32 {
+        primvars::bound_material(prim).map_or(0, |m| self.builder.material(&m))
+    }
+
     /// A mesh's local triangles, read once per prototype.
     fn mesh(&mut self, prim: &Prim) -> std::result::Result<Option<CachedMesh>, String> {
         let key = match prim.prim_in_prototype() {
@@ -702,9 +723,12 @@ impl Loader {
             }
             mesh::MeshRead::Triangles {
                 mesh,
+                faces,
                 subdivided,
                 degenerate_faces,
+                warnings,
             } => {
+                self.warnings.extend(warnings);
                 if degenerate_faces > 0 {
                     self.warnings.push(format!(
                         "{}: {degenerate_faces} faces with fewer than 3 vertices skipped",
@@ -713,6 +737,7 @@ impl Loader {
                 }
                 Some(CachedMesh {
                     mesh: Arc::new(mesh),
+                    faces: Arc::new(faces),
                     subdivided,
                 })
             }
