@@ -4,8 +4,7 @@
 use super::{Crossing, Scene, Top};
 use crate::bound::bounded::{exact3, up, BVec3, Bounded};
 use crate::bound::triangle::{self, TriangleBound};
-use crate::bound::{mapped, HitBound, Side, CELL_SLACK};
-use crate::geometry::triangle::WatertightRay;
+use crate::bound::{mapped, HitBound, Probe, Side, CELL_SLACK};
 use crate::geometry::Aabb;
 use crate::quadric::{Others, QuadricBound, RootBound};
 use glam::DVec3;
@@ -95,31 +94,22 @@ impl Scene {
         Crossing { inner, ..*hit }
     }
 
-    /// Whether top-level primitive `index` may have an exact crossing with the ray `origin +
-    /// t·dir` in `(0, limit]`, other than the crossing `hit` itself. `root` is the size of the
-    /// scene octree's root (see [`CELL_SLACK`]).
-    pub fn may_cross(
-        &self,
-        index: usize,
-        origin: DVec3,
-        dir: DVec3,
-        limit: f64,
-        hit: Option<&Crossing>,
-        root: f64,
-    ) -> bool {
-        let own = hit.filter(|h| h.top as usize == index);
+    /// Whether top-level primitive `index` may have an exact crossing with the probe's ray in
+    /// `(0, limit]`, other than the probe's hit itself (see [`CELL_SLACK`] for the root).
+    pub fn may_cross(&self, index: usize, probe: &Probe) -> bool {
+        let own = probe.hit.filter(|h| h.top as usize == index);
+        let (origin, dir, limit) = (probe.origin, probe.dir, probe.limit);
         match self.top(index) {
             Top::Triangle(i) => {
                 if own.is_some() {
                     return false;
                 }
                 let placement = self.placement_of(i);
-                if placement > CELL_SLACK * root {
+                if placement > CELL_SLACK * probe.root {
                     return true;
                 }
-                let exact = WatertightRay::new(origin, dir);
                 let tri = self.world.mesh.triangle(i);
-                if triangle::certainly_apart(&exact, &tri, placement, limit) {
+                if triangle::certainly_apart(&probe.watertight, &tri, placement, limit) {
                     return false;
                 }
                 let b = triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));

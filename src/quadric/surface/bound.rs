@@ -33,6 +33,7 @@ use crate::bound::bounded::{down, exact3, gamma, mat_vec, up, BMat3, BVec3, Boun
 use crate::bound::{mapped, Side};
 use glam::{DMat3, DVec3};
 use std::ops::{Add, Div, Mul, Neg, Sub};
+use std::sync::OnceLock;
 
 /// Bounds of the numbers a quadric's intersection starts from, kept by [`Quadric::new`].
 #[derive(Debug, Clone, PartialEq)]
@@ -82,11 +83,45 @@ pub struct QuadricBound {
     pub others: Others,
 }
 
+/// What [`Errors`] are made from, kept by [`Quadric::new`] and turned into them the first time
+/// a bound is asked for: a run without the `error` and `certain` AOVs never pays for them (a
+/// pointer per quadric, and a copy of its spec and matrix).
+#[derive(Debug, Clone)]
+pub(in crate::quadric) struct LazyErrors(Box<(ErrorInputs, OnceLock<Errors>)>);
+
+/// The quadric's spec as read, its object→world matrix and the power-of-two normalisation of
+/// its local polynomial.
+#[derive(Debug, Clone, PartialEq)]
+struct ErrorInputs {
+    spec: crate::quadric::QuadricSpec,
+    world: glam::DMat4,
+    scale: [f64; 2],
+}
+
+impl PartialEq for LazyErrors {
+    /// Equal inputs make equal bounds.
+    fn eq(&self, other: &LazyErrors) -> bool {
+        self.0 .0 == other.0 .0
+    }
+}
+
+impl LazyErrors {
+    /// Keeps the inputs; nothing is computed yet.
+    pub fn new(spec: &crate::quadric::QuadricSpec, world: glam::DMat4, scale: [f64; 2]) -> Self {
+        let inputs = ErrorInputs {
+            spec: spec.clone(),
+            world,
+            scale,
+        };
+        LazyErrors(Box::new((inputs, OnceLock::new())))
+    }
+}
+
 impl Errors {
     /// The bounds for a quadric with local polynomial coefficients `gradient` and `constant`
     /// (as computed, before normalisation by `scale`), `spec_q`, the local anchor, the
     /// object→world matrix's linear part and translation and its f64 inverse.
-    pub fn new(
+    fn new(
         spec: &crate::quadric::QuadricSpec,
         local_anchor: DVec3,
         world: glam::DMat4,
@@ -134,6 +169,15 @@ struct Coefficients {
 }
 
 impl Quadric {
+    /// The bounds of the quadric's numbers ([`Errors`]), made on the first call.
+    fn errors(&self) -> &Errors {
+        let (inputs, errors) = &*self.errors.0;
+        errors.get_or_init(|| {
+            let (spec, world) = (&inputs.spec, inputs.world);
+            Errors::new(spec, self.local_anchor, world, self.to_local, inputs.scale)
+        })
+    }
+
     /// The crossings of the world ray `origin + t·dir` (exact numbers) with the quadric's
     /// whole surface, the roots as [`Quadric::intersect`] computes them, each with its bound
     /// and its place against the clip box (see the module docs).
@@ -176,7 +220,7 @@ impl Quadric {
     /// The local ray as computed, `x₀ = L(o − c)`, `v = L d`, bounded
     /// ([`crate::bound::mapped`]).
     fn bounded_ray(&self, origin: DVec3, dir: DVec3) -> (BVec3, BVec3) {
-        let e = &self.errors;
+        let e = self.errors();
         let anchor = [0, 1, 2].map(|i| Bounded::new(self.anchor[i], e.anchor[i]));
         let offset = [0, 1, 2].map(|i| Bounded::exact(origin[i]).sub(anchor[i]));
         let x0 = self.to_local * (origin - self.anchor);
@@ -191,8 +235,8 @@ impl Quadric {
     fn coefficients(&self, x0: &BVec3, v: &BVec3) -> Coefficients {
         use crate::bound::bounded::dot3;
         let q = rows(self.local.q, 0.0);
-        let p = [0, 1, 2].map(|i| Bounded::new(self.local.p[i], self.errors.gradient[i]));
-        let r = Bounded::new(self.local.r, self.errors.constant);
+        let p = [0, 1, 2].map(|i| Bounded::new(self.local.p[i], self.errors().gradient[i]));
+        let r = Bounded::new(self.local.r, self.errors().constant);
         let qv = mat_vec(&q, v);
         let two = Bounded::exact(2.0);
         Coefficients {
@@ -210,8 +254,8 @@ impl Quadric {
         let tb = Bounded::exact(t);
         let point: BVec3 = [0, 1, 2].map(|i| x0[i].add(tb.mul(v[i])));
         let q = rows(self.local.q, 0.0);
-        let p = [0, 1, 2].map(|i| Bounded::new(self.local.p[i], self.errors.gradient[i]));
-        let r = Bounded::new(self.local.r, self.errors.constant);
+        let p = [0, 1, 2].map(|i| Bounded::new(self.local.p[i], self.errors().gradient[i]));
+        let r = Bounded::new(self.local.r, self.errors().constant);
         let qp = mat_vec(&q, &point);
         let value = dot3(&point, &qp).add(dot3(&p, &point)).add(r);
         let gradient: BVec3 = [0, 1, 2].map(|i| Bounded::exact(2.0).mul(qp[i]).add(p[i]));
@@ -247,7 +291,7 @@ impl Quadric {
 
     /// Where the exact point `x₀ + t·v + a` lies against the file's clip box.
     fn clip_side(&self, t: Bounded, x0: &BVec3, v: &BVec3) -> Side {
-        let Some([min, max]) = self.errors.clip else {
+        let Some([min, max]) = self.errors().clip else {
             return Side::Inside;
         };
         if !t.error.is_finite() {
