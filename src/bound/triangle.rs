@@ -272,9 +272,9 @@ mod tests {
         let edge = [[-1.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].map(DVec3::from_array);
         assert!(!certainly_apart(&near, &edge, 1e-2, f64::INFINITY));
         assert!(certainly_apart(&near, &edge, 0.0, f64::INFINITY));
-        // 1e-3 past the largest x of the triangle (x = 1): the sheared box is beside the ray
+        // 1e-3 past the vertex (1, 0), the largest x: the sheared box is beside the ray
         // for exact vertices; vertices that may be 1e-2 off may reach it.
-        let past = WatertightRay::new(DVec3::new(1.0 + 1e-3, -0.5, 5.0), DVec3::NEG_Z);
+        let past = WatertightRay::new(DVec3::new(1.0 + 1e-3, 0.0, 5.0), DVec3::NEG_Z);
         assert!(certainly_apart(&past, &edge, 0.0, f64::INFINITY));
         assert!(!certainly_apart(&past, &edge, 1e-2, f64::INFINITY));
     }
