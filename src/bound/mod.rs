@@ -27,6 +27,7 @@
 //! vertices, and of the camera's ray generation (the ray traced is the one bounded).
 
 pub mod bounded;
+pub mod transform;
 pub mod triangle;
 
 use crate::geometry::triangle::WatertightRay;
@@ -79,10 +80,18 @@ pub fn inverse_norm(a: DMat3, inverse: DMat3) -> f64 {
 }
 
 /// The computed `x = inverse · y` (the f64 values the tracer uses) as a bounded image of the
-/// exact `A⁻¹y*`, `y*` within `y`'s bounds: with the residual `r = y − A·x` evaluated in
-/// bounded arithmetic, `A⁻¹y* − x = A⁻¹((y* − y) + r)`, so every component is within
-/// `‖A⁻¹‖∞ · (max eᵧ + max |r|)` (`inverse_norm` from [`inverse_norm`]).
-pub fn mapped(a: DMat3, inverse_norm: f64, y: &bounded::BVec3, x: DVec3) -> bounded::BVec3 {
+/// exact `A*⁻¹y*`, `y*` within `y`'s bounds and `A*` within `a_error` (entrywise) of `a`: with
+/// the residual `r = y − A·x` evaluated in bounded arithmetic, `A*(A*⁻¹y* − x) = (y* − y) + r
+/// − (A* − A)x`, so every component is within `‖A*⁻¹‖∞ · (max eᵧ + max |r| + max (a_error·|x|))`
+/// (`inverse_norm` bounds `‖A*⁻¹‖∞`: [`inverse_norm`], widened by
+/// [`transform::perturbed_inverse_norm`] when `a_error` is not zero).
+pub fn mapped(
+    a: DMat3,
+    a_error: &DMat3,
+    inverse_norm: f64,
+    y: &bounded::BVec3,
+    x: DVec3,
+) -> bounded::BVec3 {
     let rows = a
         .transpose()
         .to_cols_array_2d()
@@ -92,26 +101,37 @@ pub fn mapped(a: DMat3, inverse_norm: f64, y: &bounded::BVec3, x: DVec3) -> boun
         .map(|i| Bounded::exact(y[i].value).sub(ax[i]).magnitude())
         .fold(0.0, f64::max);
     let y_error = y.iter().map(|c| c.error).fold(0.0, f64::max);
-    let error = up(inverse_norm * up(residual + y_error));
+    let mut spread = up(residual + y_error);
+    if *a_error != DMat3::ZERO {
+        spread = up(spread + up((*a_error * x.abs()).max_element()));
+    }
+    let error = up(inverse_norm * spread);
     bounded::within3(x, error)
 }
 
 /// A bound on each coordinate's error when `points` are placed by the f64 affine matrix
-/// `world` (`transform_point3`: three products and three sums per coordinate, `γ₄` of the sum
-/// of magnitudes); zero for the identity, `+∞` for a projective matrix.
-pub fn placement_error(world: &glam::DMat4, points: impl Iterator<Item = DVec3>) -> f64 {
-    if *world == glam::DMat4::IDENTITY {
+/// `world.value` (`transform_point3`: three products and three sums per coordinate, `γ₄` of
+/// the sum of magnitudes), plus what the exactly composed matrix may place them elsewhere
+/// ([`transform::moved`]); zero for an exact identity, `+∞` for a projective matrix.
+pub fn placement_error(
+    world: &transform::BoundedMat4,
+    points: impl Iterator<Item = DVec3>,
+) -> f64 {
+    let exact = world.is_exact();
+    if world.value == glam::DMat4::IDENTITY && exact {
         return 0.0;
     }
-    if world.row(3) != glam::DVec4::W {
+    if world.value.row(3) != glam::DVec4::W || world.error.row(3) != glam::DVec4::ZERO {
         return f64::INFINITY;
     }
-    let linear = DMat3::from_mat4(*world).abs();
-    let translation = world.w_axis.truncate().abs();
-    let largest = points
-        .map(|p| (linear * p.abs() + translation).max_element())
-        .fold(0.0, f64::max);
-    up(gamma(4) * up(largest))
+    let linear = DMat3::from_mat4(world.value).abs();
+    let translation = world.value.w_axis.truncate().abs();
+    let (rounding, composed) = points.fold((0.0, 0.0), |(r, c): (f64, f64), p| {
+        let rounding = (linear * p.abs() + translation).max_element();
+        let composed = if exact { 0.0 } else { transform::moved(&world.error, p) };
+        (r.max(rounding), c.max(composed))
+    });
+    up(up(gamma(4) * up(rounding)) + composed)
 }
 
 /// The bound of a hit: its `t` with a bound on the distance to the same primitive's exact

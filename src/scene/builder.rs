@@ -6,6 +6,7 @@ use super::{near_origin, Object, ObjectKind, Part, PartKind, PoseInfo, Scene, St
 use crate::accel::OctreeParams;
 use crate::camera::Camera;
 use crate::geometry::Aabb;
+use crate::bound::transform::BoundedMat4;
 use crate::quadric::Quadric;
 use glam::{DMat4, DVec3};
 use std::collections::HashMap;
@@ -27,7 +28,7 @@ struct Draft {
 /// One part as collected.
 #[derive(Debug)]
 enum Item {
-    Mesh(Arc<Mesh>, DMat4),
+    Mesh(Arc<Mesh>, BoundedMat4),
     Quadric(Box<Quadric>),
 }
 
@@ -78,6 +79,13 @@ impl SceneBuilder {
     /// Adds `mesh`, placed in the world by `world`, to object `id`. Pass the same `Arc` for
     /// every use of one mesh: a mesh used several times is stored once.
     pub fn place_mesh(&mut self, id: u32, mesh: Arc<Mesh>, world: DMat4) {
+        self.place_composed_mesh(id, mesh, BoundedMat4::exact(world));
+    }
+
+    /// [`SceneBuilder::place_mesh`] with a matrix composed from nested nodes, and the bound of
+    /// that composition (for the `error` and `certain` AOVs; the mesh is placed by
+    /// `world.value`).
+    pub fn place_composed_mesh(&mut self, id: u32, mesh: Arc<Mesh>, world: BoundedMat4) {
         if !mesh.is_empty() {
             let mesh = self.canonical(mesh);
             self.push(id, mesh.len() as u32, Item::Mesh(mesh, world));
@@ -187,6 +195,7 @@ impl SceneBuilder {
             quadric_parts,
             parts,
             placement,
+            instance_errors,
         } = layout;
         let bounds = points.iter().copied().fold(Aabb::EMPTY, Aabb::grow);
         let bounds = instances.iter().fold(bounds, |b, i| b.union(i.bounds()));
@@ -211,6 +220,7 @@ impl SceneBuilder {
             quadric_parts,
             parts,
             placement,
+            instance_errors,
             objects,
             cameras,
             warnings,
@@ -251,7 +261,7 @@ fn store_instanced(items: &[(u32, u32, Item)]) -> (Vec<StoredMesh>, HashMap<usiz
     for (_, _, item) in items {
         if let Item::Mesh(mesh, world) = item {
             let key = Arc::as_ptr(mesh) as usize;
-            if instanced(mesh, world, uses[&key]) && !mesh_of.contains_key(&key) {
+            if instanced(mesh, &world.value, uses[&key]) && !mesh_of.contains_key(&key) {
                 mesh_of.insert(key, unique.len() as u32);
                 unique.push(Arc::clone(mesh));
             }
@@ -281,6 +291,7 @@ struct Layout {
     quadric_parts: Vec<u32>,
     parts: Vec<Part>,
     placement: Vec<f64>,
+    instance_errors: Vec<DMat4>,
 }
 
 impl Layout {
@@ -302,11 +313,12 @@ impl Layout {
             }
             Item::Mesh(mesh, world) => {
                 let stored = mesh_of.get(&(Arc::as_ptr(&mesh) as usize));
-                let instance =
-                    stored.and_then(|&m| Instance::new(m, &meshes[m as usize], &world, part));
+                let instance = stored
+                    .and_then(|&m| Instance::new(m, &meshes[m as usize], &world.value, part));
                 match instance {
                     Some(instance) => {
                         self.instances.push(instance);
+                        self.instance_errors.push(world.error);
                         PartKind::Instance(self.instances.len() as u32 - 1)
                     }
                     None => {
@@ -316,7 +328,7 @@ impl Layout {
                             (0..positions.len() as u32).map(|v| positions.get(v)),
                         );
                         let first = self.triangles.len() as u32;
-                        mesh.place_into(&world, &mut self.points, &mut self.triangles);
+                        mesh.place_into(&world.value, &mut self.points, &mut self.triangles);
                         let count = self.triangles.len() as u32 - first;
                         self.world_parts
                             .extend(std::iter::repeat_n(part, count as usize));

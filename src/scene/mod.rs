@@ -216,6 +216,9 @@ pub struct Scene {
     /// file's vertex (0 but for world meshes placed by a transform; see
     /// [`crate::bound::placement_error`]).
     placement: Vec<f64>,
+    /// Per instance, the entrywise bound of its placement matrix's composition from nested
+    /// nodes ([`crate::bound::transform`]; zero for a matrix as read).
+    instance_errors: Vec<glam::DMat4>,
     /// The object table, in id order.
     pub objects: Vec<Object>,
     /// Cameras defined by the file.

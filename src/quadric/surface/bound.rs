@@ -30,6 +30,7 @@
 
 use super::Quadric;
 use crate::bound::bounded::{down, exact3, gamma, mat_vec, up, BMat3, BVec3, Bounded};
+use crate::bound::transform::BoundedMat4;
 use crate::bound::{mapped, Side};
 use glam::{DMat3, DVec3};
 use std::ops::{Add, Div, Mul, Neg, Sub};
@@ -38,8 +39,11 @@ use std::sync::OnceLock;
 /// Bounds of the numbers a quadric's intersection starts from, kept by [`Quadric::new`].
 #[derive(Debug, Clone, PartialEq)]
 pub(in crate::quadric) struct Errors {
-    /// The object→world linear map `A`, and a bound on `‖A⁻¹‖∞`.
+    /// The object→world linear map `A`, a bound on its entries' distance from the exactly
+    /// composed one ([`crate::bound::transform`]), and a bound on `‖A*⁻¹‖∞` for every `A*`
+    /// within it.
     pub linear: DMat3,
+    pub linear_error: DMat3,
     pub inverse_norm: f64,
     /// Bound on each component of the computed anchor.
     pub anchor: DVec3,
@@ -94,7 +98,7 @@ pub(in crate::quadric) struct LazyErrors(Box<(ErrorInputs, OnceLock<Errors>)>);
 #[derive(Debug, Clone, PartialEq)]
 struct ErrorInputs {
     spec: crate::quadric::QuadricSpec,
-    world: glam::DMat4,
+    world: BoundedMat4,
     scale: [f64; 2],
 }
 
@@ -107,13 +111,20 @@ impl PartialEq for LazyErrors {
 
 impl LazyErrors {
     /// Keeps the inputs; nothing is computed yet.
-    pub fn new(spec: &crate::quadric::QuadricSpec, world: glam::DMat4, scale: [f64; 2]) -> Self {
+    pub fn new(spec: &crate::quadric::QuadricSpec, world: BoundedMat4, scale: [f64; 2]) -> Self {
         let inputs = ErrorInputs {
             spec: spec.clone(),
             world,
             scale,
         };
         LazyErrors(Box::new((inputs, OnceLock::new())))
+    }
+
+    /// The same inputs with the node matrix's bound from its composition.
+    pub fn composed(mut self, world: BoundedMat4) -> Self {
+        self.0 .0.world = world;
+        self.0 .1 = OnceLock::new();
+        self
     }
 }
 
@@ -124,11 +135,13 @@ impl Errors {
     fn new(
         spec: &crate::quadric::QuadricSpec,
         local_anchor: DVec3,
-        world: glam::DMat4,
+        placement: &BoundedMat4,
         to_local: DMat3,
         scale: [f64; 2],
     ) -> Errors {
+        let world = placement.value;
         let linear = DMat3::from_mat4(world);
+        let linear_error = DMat3::from_mat4(placement.error);
         let a = exact3(local_anchor);
         let q = rows(spec.q, 0.0);
         let qa = mat_vec(&q, &a);
@@ -143,10 +156,20 @@ impl Errors {
         let scaled = |e: f64| up(up(e * scale[0]) * scale[1]);
         let placed = mat_vec(&rows(linear, 0.0), &a);
         let translation = world.w_axis.truncate();
-        let anchor = [0, 1, 2].map(|i| placed[i].add(Bounded::exact(translation[i])).error);
+        let composed = crate::bound::transform::moved(&placement.error, local_anchor);
+        let anchor = [0, 1, 2].map(|i| {
+            let rounded = placed[i].add(Bounded::exact(translation[i])).error;
+            if composed == 0.0 {
+                rounded
+            } else {
+                up(rounded + composed)
+            }
+        });
+        let norm = crate::bound::inverse_norm(linear, to_local);
         Errors {
             linear,
-            inverse_norm: crate::bound::inverse_norm(linear, to_local),
+            linear_error,
+            inverse_norm: crate::bound::transform::perturbed_inverse_norm(norm, &linear_error),
             anchor: DVec3::from_array(anchor),
             gradient: DVec3::from_array(gradient.map(|g| scaled(g.error))),
             constant: scaled(constant.error),
@@ -174,8 +197,15 @@ impl Quadric {
         let (inputs, errors) = &*self.errors.0;
         errors.get_or_init(|| {
             let (spec, world) = (&inputs.spec, inputs.world);
-            Errors::new(spec, self.local_anchor, world, self.to_local, inputs.scale)
+            Errors::new(spec, self.local_anchor, &world, self.to_local, inputs.scale)
         })
+    }
+
+    /// The quadric with the bound of its node matrix's composition from nested nodes
+    /// ([`crate::bound::transform`]); `world.value` must be the matrix it was placed by.
+    pub fn with_composition(mut self, world: &BoundedMat4) -> Quadric {
+        self.errors = self.errors.composed(*world);
+        self
     }
 
     /// The crossings of the world ray `origin + t·dir` (exact numbers) with the quadric's
@@ -226,8 +256,8 @@ impl Quadric {
         let x0 = self.to_local * (origin - self.anchor);
         let v = self.to_local * dir;
         (
-            mapped(e.linear, e.inverse_norm, &offset, x0),
-            mapped(e.linear, e.inverse_norm, &exact3(dir), v),
+            mapped(e.linear, &e.linear_error, e.inverse_norm, &offset, x0),
+            mapped(e.linear, &e.linear_error, e.inverse_norm, &exact3(dir), v),
         )
     }
 
