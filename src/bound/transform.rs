@@ -24,7 +24,7 @@
 
 use super::bounded::{down, up, Bounded};
 use std::ops::{Add, Mul};
-use glam::{DMat3, DMat4, DVec3};
+use glam::{DMat3, DMat4, DVec3, DVec4};
 
 /// An f64 affine matrix and a bound on each entry's distance from the exact one.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -70,6 +70,14 @@ impl BoundedMat4 {
                 error[j][i] = entry.error;
             }
         }
+        // Two affine matrices: the last row (0, 0, 0, 1) is computed exactly (the products'
+        // underflow allowance is not needed there).
+        if self.value.row(3) == DVec4::W && local.row(3) == DVec4::W && self.error.row(3) == DVec4::ZERO
+        {
+            for column in &mut error {
+                column[3] = 0.0;
+            }
+        }
         BoundedMat4 {
             value,
             error: DMat4::from_cols_array_2d(&error),
@@ -85,10 +93,10 @@ impl BoundedMat4 {
 /// A bound on `‖A*⁻¹‖∞` for every `A*` within `error` (entrywise) of a matrix whose inverse
 /// norm is at most `norm`: `norm / (1 − norm·‖error‖∞)`, `+∞` when that is not positive.
 pub fn perturbed_inverse_norm(norm: f64, error: &DMat3) -> f64 {
-    let size = row_norm(error);
-    if size == 0.0 {
+    if *error == DMat3::ZERO {
         return norm;
     }
+    let size = row_norm(error);
     let margin = down(1.0 - up(norm * size));
     if margin.is_nan() || margin <= 0.0 {
         return f64::INFINITY;

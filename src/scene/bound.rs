@@ -3,7 +3,7 @@
 
 use super::instance::StoredMesh;
 use super::{Crossing, Scene, Top};
-use crate::bound::bounded::{exact3, up, BVec3, Bounded};
+use crate::bound::bounded::{exact3, gamma, up, BVec3, Bounded};
 use crate::bound::triangle::{self, TriangleBound};
 use crate::bound::{mapped, HitBound, Probe, Side, CELL_SLACK};
 use crate::geometry::Aabb;
@@ -175,6 +175,27 @@ impl Scene {
             }
         });
         crossing
+    }
+
+    /// A bound on how far the diagonal of `bounds` ([`Scene::world_bounds`], the box `raycast
+    /// info` prints) may be from the diagonal of the same box made from exactly placed
+    /// coordinates: each face moves by at most the largest placement bound of a world mesh
+    /// (nested instances: what their composed matrix may move the farthest corner by), so each
+    /// side by twice that and the diagonal by `2√3` times it, plus the rounding of the box's
+    /// move from the anchor (`u` of the largest coordinate per face) and of the diagonal itself
+    /// (`γ₆` of it). The box's own padding only makes it larger. Projective placements, whose
+    /// rounding is not bounded, are left out.
+    pub fn size_bound(&self, bounds: &Aabb) -> f64 {
+        let world = self.placement.iter().copied().filter(|p| p.is_finite());
+        let instances = self.instances.iter().zip(&self.instance_errors).map(|(i, e)| {
+            let local = self.meshes[i.mesh as usize].set.mesh.bounds();
+            moved(e, local.min.abs().max(local.max.abs()))
+        });
+        let moved = world.chain(instances).fold(0.0, f64::max);
+        let far = bounds.min.abs().max(bounds.max.abs()).max_element();
+        let faces = up(moved + gamma(1) * far);
+        let size = bounds.size().length();
+        up(2.0 * 3f64.sqrt() * up(faces * (1.0 + gamma(1))) + gamma(6) * size)
     }
 
     /// World triangle `i` with its placement bound.

@@ -120,7 +120,8 @@ def random_matrix(rng, reach: float, scale: float):
 def gltf_scene(path: Path, rng, layout: str):
     """A glTF of one f32 mesh drawn by node matrices: `placed` (one node, the mesh placed in
     the world), `instanced` (three nodes: instances), `nested` (a parent matrix over three
-    children: instances under composed matrices)."""
+    children: instances under composed matrices), `nested once` (a parent matrix over one
+    child: the mesh placed in the world by the composed matrix)."""
     pts, faces = terrain(rng, 4, 2.0)
     pts32 = pts.astype(np.float32)
     g = Gltf("raycast_tools error-bounds")
@@ -129,10 +130,10 @@ def gltf_scene(path: Path, rng, layout: str):
     mesh = g.mesh("m", [{"attributes": {"POSITION": acc}, "indices": idx}])
     local = [bt.frac3(p) for p in pts32.astype(np.float64)]
     draws = []  # (node name, exact column-major world matrix)
-    if layout == "nested":
+    if layout.startswith("nested"):
         parent = random_matrix(rng, 1e4, 50.0)
         kids = []
-        for k in range(3):
+        for k in range(3 if layout == "nested" else 1):
             m = random_matrix(rng, 3.0, 0.5)
             kids.append(g.node(f"leaf{k}", mesh=mesh, matrix=m))
             draws.append((f"leaf{k}", bt.compose(parent, m)))
@@ -336,9 +337,9 @@ def run_all(raycast, n: int, seed: int, work: Path) -> list[Tally]:
         o, d = mesh_rays(world_triangles(truth), n, rng)
         run_case(raycast, path, truth, o, d, t, work)
         tallies.append(t)
-    for layout in ("placed", "instanced", "nested"):
+    for layout in ("placed", "instanced", "nested", "nested once"):
         t = Tally(f"glTF {layout}")
-        path = work / f"{layout}.gltf"
+        path = work / f"{layout.replace(' ', '_')}.gltf"
         truth = gltf_scene(path, rng, layout)
         o, d = mesh_rays(world_triangles(truth), n, rng)
         run_case(raycast, path, truth, o, d, t, work)
