@@ -813,7 +813,10 @@ fn golden_comparison() {
     let out = run(&[]);
     assert_eq!(out.status.code(), Some(1), "moved beyond the bounds");
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("GOLDEN_MISMATCH") && text.contains("both bounds"), "{text}");
+    assert!(
+        text.contains("GOLDEN_MISMATCH") && text.contains("both bounds"),
+        "{text}"
+    );
     assert_eq!(run(&["--update-golden"]).status.code(), Some(0));
     // Another scene under the same name: the comparison fails and says where the image is.
     std::fs::copy(fixture("gltf/instances.gltf"), assets.join("cube.gltf")).unwrap();

@@ -6,7 +6,9 @@
 //! as exact numbers) with the same primitive's exact surface: the triangle's plane (vertices as
 //! stored, instance meshes placed by their f64 matrix, world meshes with the rounding of their
 //! f64 placement bounded, see [`placement_error`]), or the quadric's nearest root (its file
-//! coefficients and clip box placed by its f64 node matrix). When `certain` is 1, that crossing
+//! coefficients and clip box placed by its node matrix); a glTF node matrix is the exact
+//! product of the matrices above it, the f64 composition's rounding carried in
+//! [`transform::BoundedMat4`]. When `certain` is 1, that crossing
 //! is the exact nearest hit. It is a forward error analysis of the operations the tracer
 //! performs, carried in [`bounded::Bounded`] (value plus bound, Higham's `γₙ`); the derivations
 //! are in [`triangle`] and [`crate::quadric::Quadric::bound_roots`]. `+∞` where no bound can be
@@ -22,9 +24,10 @@
 //! the root, so a primitive whose stored geometry or mapped ray may be off by more than 1e-10
 //! of its octree's root counts as a possible crossing.
 //!
-//! Not covered (the bound takes them as exact): the rounding of node transforms composed in
-//! f64 by the importers, of decimal numbers read into f64, of posed (skinned, morphed)
-//! vertices, and of the camera's ray generation (the ray traced is the one bounded).
+//! Not covered (the bound takes them as exact): the rounding of a glTF node's own TRS
+//! multiplied out into a matrix and of USD transform ops composed in f64, of decimal numbers
+//! read into f64, of posed (skinned, morphed) vertices, and of the camera's ray generation
+//! (the ray traced is the one bounded).
 
 pub mod bounded;
 pub mod transform;
@@ -113,10 +116,7 @@ pub fn mapped(
 /// `world.value` (`transform_point3`: three products and three sums per coordinate, `γ₄` of
 /// the sum of magnitudes), plus what the exactly composed matrix may place them elsewhere
 /// ([`transform::moved`]); zero for an exact identity, `+∞` for a projective matrix.
-pub fn placement_error(
-    world: &transform::BoundedMat4,
-    points: impl Iterator<Item = DVec3>,
-) -> f64 {
+pub fn placement_error(world: &transform::BoundedMat4, points: impl Iterator<Item = DVec3>) -> f64 {
     let exact = world.is_exact();
     if world.value == glam::DMat4::IDENTITY && exact {
         return 0.0;
@@ -128,7 +128,11 @@ pub fn placement_error(
     let translation = world.value.w_axis.truncate().abs();
     let (rounding, composed) = points.fold((0.0, 0.0), |(r, c): (f64, f64), p| {
         let rounding = (linear * p.abs() + translation).max_element();
-        let composed = if exact { 0.0 } else { transform::moved(&world.error, p) };
+        let composed = if exact {
+            0.0
+        } else {
+            transform::moved(&world.error, p)
+        };
         (r.max(rounding), c.max(composed))
     });
     up(up(gamma(4) * up(rounding)) + composed)
@@ -192,13 +196,21 @@ pub fn certain(
         None => t_max,
     };
     let hit = hit.map(|(h, _)| scene.with_inner(h, ray.origin, ray.dir));
-    let probe = Probe::new(ray, t_limit, hit.as_ref(), query.octree.root().size().max_element());
+    let probe = Probe::new(
+        ray,
+        t_limit,
+        hit.as_ref(),
+        query.octree.root().size().max_element(),
+    );
     let mut certain = true;
     let local = ray.origin - scene.anchor;
     query
         .octree
         .traverse(local, ray.dir, t_limit, |refs, _, _| {
-            if refs.iter().any(|&prim| scene.may_cross(prim as usize, &probe)) {
+            if refs
+                .iter()
+                .any(|&prim| scene.may_cross(prim as usize, &probe))
+            {
                 certain = false;
                 f64::NEG_INFINITY
             } else {

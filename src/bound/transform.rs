@@ -23,8 +23,8 @@
 //!   translation moves by `E_A|a| + E_T`.
 
 use super::bounded::{down, up, Bounded};
-use std::ops::{Add, Mul};
 use glam::{DMat3, DMat4, DVec3, DVec4};
+use std::ops::{Add, Mul};
 
 /// An f64 affine matrix and a bound on each entry's distance from the exact one.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -72,7 +72,9 @@ impl BoundedMat4 {
         }
         // Two affine matrices: the last row (0, 0, 0, 1) is computed exactly (the products'
         // underflow allowance is not needed there).
-        if self.value.row(3) == DVec4::W && local.row(3) == DVec4::W && self.error.row(3) == DVec4::ZERO
+        if self.value.row(3) == DVec4::W
+            && local.row(3) == DVec4::W
+            && self.error.row(3) == DVec4::ZERO
         {
             for column in &mut error {
                 column[3] = 0.0;
@@ -135,7 +137,11 @@ mod tests {
         let child = parent.then(&local);
         assert_eq!(child.value.w_axis.x, third * 0.1);
         // |fl(third · 0.1) − third · 0.1| = 300239975158033 / 2^109 (Fraction).
-        assert!(child.error.w_axis.x >= 4.6259292692714e-19, "{:?}", child.error);
+        assert!(
+            child.error.w_axis.x >= 4.6259292692714e-19,
+            "{:?}",
+            child.error
+        );
         assert!(child.error.w_axis.x < 4.7e-19, "{:?}", child.error);
         // The last row (0, 0, 0, 1) of two affine matrices is exact.
         assert_eq!(child.error.row(3), glam::DVec4::ZERO);

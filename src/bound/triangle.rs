@@ -53,7 +53,11 @@ pub fn bound(origin: &BVec3, dir: &BVec3, tri: &[BVec3; 3]) -> TriangleBound {
     let one = Bounded::exact(1.0);
     let (sx, sy, sz) = (dir[kx].div(dir[kz]), dir[ky].div(dir[kz]), one.div(dir[kz]));
     let shear_one = |v: &BVec3| {
-        let (x, y, z) = (v[kx].sub(origin[kx]), v[ky].sub(origin[ky]), v[kz].sub(origin[kz]));
+        let (x, y, z) = (
+            v[kx].sub(origin[kx]),
+            v[ky].sub(origin[ky]),
+            v[kz].sub(origin[kz]),
+        );
         [x.sub(sx.mul(z)), y.sub(sy.mul(z)), z]
     };
     // Written out: array `map`s are left as calls here.
@@ -95,7 +99,11 @@ pub fn certainly_apart(
     let [kx, ky, kz] = ray.axes();
     let (shear, origin) = ray.shear_and_origin();
     let unit = super::bounded::UNIT;
-    let depth = [tri[0][kz] - origin[kz], tri[1][kz] - origin[kz], tri[2][kz] - origin[kz]];
+    let depth = [
+        tri[0][kz] - origin[kz],
+        tri[1][kz] - origin[kz],
+        tri[2][kz] - origin[kz],
+    ];
     let margin = |p: f64| pad(placement + 2.0 * unit * p.abs());
     let behind = depth
         .iter()

@@ -134,26 +134,18 @@ fn store(dir: &Path, index: usize, buffers: &Buffers) -> Result<(), Failure> {
     let fail = |e: crate::Error| ("IO_ERROR", format!("cannot write golden buffers: {e}"));
     let mut staging = Staging::new(dir).map_err(fail)?;
     let shape = [SIZE, SIZE];
-    staging
-        .write(&format!("view{index}.depth.npy"), |out| {
-            npy::write(out, &shape, NpyData::F64(depth(buffers)))
-        })
-        .map_err(fail)?;
-    staging
-        .write(&format!("view{index}.id.npy"), |out| {
-            npy::write(out, &shape, NpyData::U32(ids(buffers)))
-        })
-        .map_err(fail)?;
-    staging
-        .write(&format!("view{index}.error.npy"), |out| {
-            npy::write(out, &shape, NpyData::F64(errors(buffers)))
-        })
-        .map_err(fail)?;
-    staging
-        .write(&format!("view{index}.certain.npy"), |out| {
-            npy::write(out, &shape, NpyData::U8(certain(buffers)))
-        })
-        .map_err(fail)?;
+    let files = [
+        ("depth", NpyData::F64(depth(buffers))),
+        ("id", NpyData::U32(ids(buffers))),
+        ("error", NpyData::F64(errors(buffers))),
+        ("certain", NpyData::U8(certain(buffers))),
+    ];
+    for (aov, data) in files {
+        let name = format!("view{index}.{aov}.npy");
+        staging
+            .write(&name, |out| npy::write(out, &shape, data))
+            .map_err(fail)?;
+    }
     staging.commit().map_err(fail)
 }
 

@@ -6,12 +6,12 @@
 //! [`trace`], so they share this loop.
 
 use super::{Aov, RaySource, Tracer};
+use crate::bound::HitBound;
 use crate::geometry::Ray;
 use crate::query::traceable;
 use crate::scene::{Crossing, Located};
 use glam::DVec3;
 use rayon::prelude::*;
-use crate::bound::HitBound;
 use std::cell::OnceCell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -158,7 +158,11 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
             let each = hits.iter().enumerate();
             each.map(|(j, hit)| {
                 let hit = hit.as_ref()?;
-                Some(crate::bound::hit_bound(self.tracer.scene, &self.ray(j), hit))
+                Some(crate::bound::hit_bound(
+                    self.tracer.scene,
+                    &self.ray(j),
+                    hit,
+                ))
             })
             .collect()
         })

@@ -3,13 +3,13 @@
 
 use super::instance::StoredMesh;
 use super::{Crossing, Scene, Top};
+use crate::bound::bounded;
 use crate::bound::bounded::{exact3, gamma, up, BVec3, Bounded};
+use crate::bound::transform::moved;
 use crate::bound::triangle::{self, TriangleBound};
 use crate::bound::{mapped, HitBound, Probe, Side, CELL_SLACK};
 use crate::geometry::Aabb;
 use crate::quadric::{Others, QuadricBound, RootBound};
-use crate::bound::bounded;
-use crate::bound::transform::moved;
 use glam::{DMat3, DVec3};
 use std::ops::Sub;
 
@@ -187,10 +187,14 @@ impl Scene {
     /// rounding is not bounded, are left out.
     pub fn size_bound(&self, bounds: &Aabb) -> f64 {
         let world = self.placement.iter().copied().filter(|p| p.is_finite());
-        let instances = self.instances.iter().zip(&self.instance_errors).map(|(i, e)| {
-            let local = self.meshes[i.mesh as usize].set.mesh.bounds();
-            moved(e, local.min.abs().max(local.max.abs()))
-        });
+        let instances = self
+            .instances
+            .iter()
+            .zip(&self.instance_errors)
+            .map(|(i, e)| {
+                let local = self.meshes[i.mesh as usize].set.mesh.bounds();
+                moved(e, local.min.abs().max(local.max.abs()))
+            });
         let moved = world.chain(instances).fold(0.0, f64::max);
         let far = bounds.min.abs().max(bounds.max.abs()).max_element();
         let faces = up(moved + gamma(1) * far);

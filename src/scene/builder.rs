@@ -4,9 +4,9 @@ use super::instance::{Instance, StoredMesh};
 use super::mesh::{Mesh, MeshSet, Positions};
 use super::{near_origin, Object, ObjectKind, Part, PartKind, PoseInfo, Scene, StageInfo};
 use crate::accel::OctreeParams;
+use crate::bound::transform::BoundedMat4;
 use crate::camera::Camera;
 use crate::geometry::Aabb;
-use crate::bound::transform::BoundedMat4;
 use crate::quadric::Quadric;
 use glam::{DMat4, DVec3};
 use std::collections::HashMap;
@@ -28,7 +28,7 @@ struct Draft {
 /// One part as collected.
 #[derive(Debug)]
 enum Item {
-    Mesh(Arc<Mesh>, BoundedMat4),
+    Mesh(Arc<Mesh>, Box<BoundedMat4>),
     Quadric(Box<Quadric>),
 }
 
@@ -88,7 +88,7 @@ impl SceneBuilder {
     pub fn place_composed_mesh(&mut self, id: u32, mesh: Arc<Mesh>, world: BoundedMat4) {
         if !mesh.is_empty() {
             let mesh = self.canonical(mesh);
-            self.push(id, mesh.len() as u32, Item::Mesh(mesh, world));
+            self.push(id, mesh.len() as u32, Item::Mesh(mesh, Box::new(world)));
         }
     }
 
@@ -313,8 +313,8 @@ impl Layout {
             }
             Item::Mesh(mesh, world) => {
                 let stored = mesh_of.get(&(Arc::as_ptr(&mesh) as usize));
-                let instance = stored
-                    .and_then(|&m| Instance::new(m, &meshes[m as usize], &world.value, part));
+                let instance =
+                    stored.and_then(|&m| Instance::new(m, &meshes[m as usize], &world.value, part));
                 match instance {
                     Some(instance) => {
                         self.instances.push(instance);
