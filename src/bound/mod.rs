@@ -135,7 +135,12 @@ pub fn placement_error(world: &transform::BoundedMat4, points: impl Iterator<Ite
         };
         (r.max(rounding), c.max(composed))
     });
-    up(up(gamma(4) * up(rounding)) + composed)
+    let rounded = up(gamma(4) * up(rounding));
+    if exact {
+        rounded
+    } else {
+        up(rounded + composed)
+    }
 }
 
 /// The bound of a hit: its `t` with a bound on the distance to the same primitive's exact

@@ -166,15 +166,24 @@ fn compare(dir: &Path, index: usize, buffers: &Buffers, size: f64) -> Result<(),
             "golden buffers have the wrong size; run with --update-golden".into(),
         ));
     }
-    // Bounds stored beside them (goldens written before they were have none).
-    let bounds = ["error", "certain"].map(|aov| {
-        npy::read(&dir.join(format!("view{index}.{aov}.npy")))
-            .ok()
-            .map(|(_, v)| v)
-            .filter(|v| v.len() == SIZE * SIZE)
-    });
-    let golden_bounds = match &bounds {
-        [Some(error), Some(certain)] => Some((error, certain)),
+    // Bounds stored beside them (goldens written before they were have none; a bound buffer
+    // that is there but unusable is an error, not a silent fall-back to the tolerance).
+    let mut bounds = Vec::new();
+    for aov in ["error", "certain"] {
+        let path = dir.join(format!("view{index}.{aov}.npy"));
+        if path.exists() {
+            let (_, values) = read(format!("view{index}.{aov}.npy"))?;
+            if values.len() != SIZE * SIZE {
+                return Err((
+                    "GOLDEN_MISSING",
+                    format!("golden {aov} buffer has the wrong size; run with --update-golden"),
+                ));
+            }
+            bounds.push(values);
+        }
+    }
+    let golden_bounds = match &bounds[..] {
+        [error, certain] => Some((error, certain)),
         _ => None,
     };
     let tolerance = DEPTH_TOLERANCE * size;

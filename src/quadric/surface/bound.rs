@@ -2,8 +2,13 @@
 //!
 //! # What is bounded
 //! The exact surface is the file's `Q`, `P`, `R` and clip box (as read into f64) placed by the
-//! f64 node matrix `[A | T]`, both taken as exact. With the anchor `c = A·a + T` (`a` the local
-//! anchor, any fixed point) the exact local ray is `x₀* = A⁻¹(o − c)`, `v* = A⁻¹d`, and the exact
+//! node matrix `[A* | T*]`, both taken as exact: the f64 matrix `[A | T]` as read, or for a
+//! nested glTF node the exact product of its ancestors' matrices, within the entrywise bound
+//! `[E_A | E_T]` of the f64 composition ([`crate::bound::transform`]). With the anchor
+//! `c* = A*·a + T*` (`a` the local anchor, any fixed point; within `E_A|a| + E_T` of the f64
+//! `A·a + T` beyond that product's own rounding) the exact local ray is `x₀* = A*⁻¹(o − c*)`,
+//! `v* = A*⁻¹d` (the residual of [`crate::bound::mapped`] gains `E_A|x|`, and `‖A*⁻¹‖∞` is
+//! bounded from `‖A⁻¹‖∞` by [`crate::bound::transform::perturbed_inverse_norm`]), and the exact
 //! crossings are the roots of `g*(t) = K*t² + L*t + M*` for the polynomial about `a`: `Q`,
 //! `∇f(a) = 2Qa + P`, `f(a)`. The same `t` in every frame.
 //!
