@@ -473,10 +473,19 @@ fn geometric_checks() {
         )
     };
     assert_eq!(with(1.0, 10.0).errors, 0);
-    assert!(with(100.0, 1000.0)
-        .findings
-        .iter()
-        .any(|f| f.code == "SCENE_SIZE_OUT_OF_RANGE"));
+    let out_of_range = |report: AssetReport| {
+        report
+            .findings
+            .iter()
+            .any(|f| f.code == "SCENE_SIZE_OUT_OF_RANGE")
+    };
+    assert!(out_of_range(with(100.0, 1000.0)));
+    // The unit cube's diagonal is √3 (its f64: 1.7320508075688772). A range ending one ulp
+    // below is within the diagonal's rounding bound: no finding; one ending 1e-9 below is.
+    let root3 = 3f64.sqrt();
+    assert!(!out_of_range(with(1.0, root3.next_down())));
+    assert!(!out_of_range(with(root3.next_up(), 10.0)));
+    assert!(out_of_range(with(1.0, root3 - 1e-9)));
     // OBJ lines are located.
     let bad = run("bad.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 9\n".into());
     let at: Vec<_> = bad
@@ -785,6 +794,30 @@ fn golden_comparison() {
         Some(0),
         "the same asset matches its golden buffers"
     );
+    // The golden depths moved within the bounds of both renders (half the stored bound):
+    // rounding could explain that, so it is no finding; moved by four times the bound (twice
+    // the sum of both, still far below 1e-6 of the scene's size), it is.
+    let view = golden.join("cube.gltf");
+    let (_, depth) = raycast::output::npy::read(&view.join("view0.depth.npy")).unwrap();
+    let (_, error) = raycast::output::npy::read(&view.join("view0.error.npy")).unwrap();
+    assert!(error.iter().any(|&e| e > 0.0) && error.iter().all(|&e| e < 1e-12));
+    let moved = |by: f64| {
+        let shifted: Vec<f64> = depth.iter().zip(&error).map(|(d, e)| d + by * e).collect();
+        let mut out = std::fs::File::create(view.join("view0.depth.npy")).unwrap();
+        let data = raycast::output::npy::NpyData::F64(&shifted);
+        raycast::output::npy::write(&mut out, &[64, 64], data).unwrap();
+    };
+    moved(0.5);
+    assert_eq!(run(&[]).status.code(), Some(0), "moved within the bounds");
+    moved(4.0);
+    let out = run(&[]);
+    assert_eq!(out.status.code(), Some(1), "moved beyond the bounds");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("GOLDEN_MISMATCH") && text.contains("both bounds"),
+        "{text}"
+    );
+    assert_eq!(run(&["--update-golden"]).status.code(), Some(0));
     // Another scene under the same name: the comparison fails and says where the image is.
     std::fs::copy(fixture("gltf/instances.gltf"), assets.join("cube.gltf")).unwrap();
     let out = run(&[]);

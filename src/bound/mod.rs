@@ -6,7 +6,9 @@
 //! as exact numbers) with the same primitive's exact surface: the triangle's plane (vertices as
 //! stored, instance meshes placed by their f64 matrix, world meshes with the rounding of their
 //! f64 placement bounded, see [`placement_error`]), or the quadric's nearest root (its file
-//! coefficients and clip box placed by its f64 node matrix). When `certain` is 1, that crossing
+//! coefficients and clip box placed by its node matrix); a glTF node matrix is the exact
+//! product of the matrices above it, the f64 composition's rounding carried in
+//! [`transform::BoundedMat4`]. When `certain` is 1, that crossing
 //! is the exact nearest hit. It is a forward error analysis of the operations the tracer
 //! performs, carried in [`bounded::Bounded`] (value plus bound, Higham's `γₙ`); the derivations
 //! are in [`triangle`] and [`crate::quadric::Quadric::bound_roots`]. `+∞` where no bound can be
@@ -22,13 +24,16 @@
 //! the root, so a primitive whose stored geometry or mapped ray may be off by more than 1e-10
 //! of its octree's root counts as a possible crossing.
 //!
-//! Not covered (the bound takes them as exact): the rounding of node transforms composed in
-//! f64 by the importers, of decimal numbers read into f64, of posed (skinned, morphed)
-//! vertices, and of the camera's ray generation (the ray traced is the one bounded).
+//! Not covered (the bound takes them as exact): the rounding of a glTF node's own TRS
+//! multiplied out into a matrix and of USD transform ops composed in f64, of decimal numbers
+//! read into f64, of posed (skinned, morphed) vertices, and of the camera's ray generation
+//! (the ray traced is the one bounded).
 
 pub mod bounded;
+pub mod transform;
 pub mod triangle;
 
+use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
 use crate::query::Query;
 use crate::scene::{Crossing, Scene};
@@ -78,10 +83,18 @@ pub fn inverse_norm(a: DMat3, inverse: DMat3) -> f64 {
 }
 
 /// The computed `x = inverse · y` (the f64 values the tracer uses) as a bounded image of the
-/// exact `A⁻¹y*`, `y*` within `y`'s bounds: with the residual `r = y − A·x` evaluated in
-/// bounded arithmetic, `A⁻¹y* − x = A⁻¹((y* − y) + r)`, so every component is within
-/// `‖A⁻¹‖∞ · (max eᵧ + max |r|)` (`inverse_norm` from [`inverse_norm`]).
-pub fn mapped(a: DMat3, inverse_norm: f64, y: &bounded::BVec3, x: DVec3) -> bounded::BVec3 {
+/// exact `A*⁻¹y*`, `y*` within `y`'s bounds and `A*` within `a_error` (entrywise) of `a`: with
+/// the residual `r = y − A·x` evaluated in bounded arithmetic, `A*(A*⁻¹y* − x) = (y* − y) + r
+/// − (A* − A)x`, so every component is within `‖A*⁻¹‖∞ · (max eᵧ + max |r| + max (a_error·|x|))`
+/// (`inverse_norm` bounds `‖A*⁻¹‖∞`: [`inverse_norm`], widened by
+/// [`transform::perturbed_inverse_norm`] when `a_error` is not zero).
+pub fn mapped(
+    a: DMat3,
+    a_error: &DMat3,
+    inverse_norm: f64,
+    y: &bounded::BVec3,
+    x: DVec3,
+) -> bounded::BVec3 {
     let rows = a
         .transpose()
         .to_cols_array_2d()
@@ -91,26 +104,43 @@ pub fn mapped(a: DMat3, inverse_norm: f64, y: &bounded::BVec3, x: DVec3) -> boun
         .map(|i| Bounded::exact(y[i].value).sub(ax[i]).magnitude())
         .fold(0.0, f64::max);
     let y_error = y.iter().map(|c| c.error).fold(0.0, f64::max);
-    let error = up(inverse_norm * up(residual + y_error));
+    let mut spread = up(residual + y_error);
+    if *a_error != DMat3::ZERO {
+        spread = up(spread + up((*a_error * x.abs()).max_element()));
+    }
+    let error = up(inverse_norm * spread);
     bounded::within3(x, error)
 }
 
 /// A bound on each coordinate's error when `points` are placed by the f64 affine matrix
-/// `world` (`transform_point3`: three products and three sums per coordinate, `γ₄` of the sum
-/// of magnitudes); zero for the identity, `+∞` for a projective matrix.
-pub fn placement_error(world: &glam::DMat4, points: impl Iterator<Item = DVec3>) -> f64 {
-    if *world == glam::DMat4::IDENTITY {
+/// `world.value` (`transform_point3`: three products and three sums per coordinate, `γ₄` of
+/// the sum of magnitudes), plus what the exactly composed matrix may place them elsewhere
+/// ([`transform::moved`]); zero for an exact identity, `+∞` for a projective matrix.
+pub fn placement_error(world: &transform::BoundedMat4, points: impl Iterator<Item = DVec3>) -> f64 {
+    let exact = world.is_exact();
+    if world.value == glam::DMat4::IDENTITY && exact {
         return 0.0;
     }
-    if world.row(3) != glam::DVec4::W {
+    if world.value.row(3) != glam::DVec4::W || world.error.row(3) != glam::DVec4::ZERO {
         return f64::INFINITY;
     }
-    let linear = DMat3::from_mat4(*world).abs();
-    let translation = world.w_axis.truncate().abs();
-    let largest = points
-        .map(|p| (linear * p.abs() + translation).max_element())
-        .fold(0.0, f64::max);
-    up(gamma(4) * up(largest))
+    let linear = DMat3::from_mat4(world.value).abs();
+    let translation = world.value.w_axis.truncate().abs();
+    let (rounding, composed) = points.fold((0.0, 0.0), |(r, c): (f64, f64), p| {
+        let rounding = (linear * p.abs() + translation).max_element();
+        let composed = if exact {
+            0.0
+        } else {
+            transform::moved(&world.error, p)
+        };
+        (r.max(rounding), c.max(composed))
+    });
+    let rounded = up(gamma(4) * up(rounding));
+    if exact {
+        rounded
+    } else {
+        up(rounded + composed)
+    }
 }
 
 /// The bound of a hit: its `t` with a bound on the distance to the same primitive's exact
@@ -124,9 +154,15 @@ pub struct HitBound {
     pub certain: bool,
 }
 
-/// The `error` AOV of a hit of `ray`: a bound on `|t·|d| − t*·|d||` (see the module docs).
-pub fn depth_error(scene: &Scene, ray: &Ray, hit: &Crossing) -> f64 {
-    let bound = scene.hit_bound(hit, ray.origin, ray.dir);
+/// The bound of `hit`, the nearest hit of `ray`: computed once per hit and shared by the
+/// `error` and `certain` AOVs.
+pub fn hit_bound(scene: &Scene, ray: &Ray, hit: &Crossing) -> HitBound {
+    scene.hit_bound(hit, ray.origin, ray.dir)
+}
+
+/// The `error` AOV of a hit of `ray` from its bound: a bound on `|t·|d| − t*·|d||` (see the
+/// module docs).
+pub fn depth_error(bound: &HitBound, ray: &Ray) -> f64 {
     depth_bound(bound.t, ray.dir).error
 }
 
@@ -136,21 +172,23 @@ fn depth_bound(t: Bounded, dir: DVec3) -> Bounded {
     t.mul(bounded::dot3(&d, &d).sqrt())
 }
 
-/// The `certain` AOV of `ray` with its nearest hit `hit` in the range `(t_min, t_max]` (see
-/// the module docs). A hit must lie in the range by more than its bound; crossings before
-/// `t_min` count as competitors too (conservative).
+/// The `certain` AOV of `ray` with its nearest hit `hit` (and the hit's [`hit_bound`]) in the
+/// range `(t_min, t_max]` (see the module docs). A hit must lie in the range by more than its
+/// bound; crossings before `t_min` count as competitors too (conservative).
+///
+/// Cost: the hit's own test comes first (most uncertain hits are decided there, at no extra
+/// cost); then one scalar traversal of the octree up to `t + δ` (or `t_max` for a miss),
+/// each candidate passed over by [`triangle::certainly_apart`]'s f64 filters (a depth range,
+/// the sheared triangle's box, the edge functions' signs) before any bounded recomputation.
 pub fn certain(
     query: &Query,
     ray: &Ray,
-    hit: Option<&Crossing>,
+    hit: Option<(&Crossing, &HitBound)>,
     (t_min, t_max): (f64, f64),
 ) -> bool {
     let scene = query.scene;
-    let hit = hit.map(|h| scene.with_inner(h, ray.origin, ray.dir));
-    let hit = hit.as_ref();
     let t_limit = match hit {
-        Some(hit) => {
-            let bound = scene.hit_bound(hit, ray.origin, ray.dir);
+        Some((_, bound)) => {
             let (low, high) = (
                 bound.t.value - bound.t.error,
                 up(bound.t.value + bound.t.error),
@@ -162,16 +200,22 @@ pub fn certain(
         }
         None => t_max,
     };
-    let root = query.octree.root().size().max_element();
+    let hit = hit.map(|(h, _)| scene.with_inner(h, ray.origin, ray.dir));
+    let probe = Probe::new(
+        ray,
+        t_limit,
+        hit.as_ref(),
+        query.octree.root().size().max_element(),
+    );
     let mut certain = true;
     let local = ray.origin - scene.anchor;
     query
         .octree
         .traverse(local, ray.dir, t_limit, |refs, _, _| {
-            let crossing = refs.iter().any(|&prim| {
-                scene.may_cross(prim as usize, ray.origin, ray.dir, t_limit, hit, root)
-            });
-            if crossing {
+            if refs
+                .iter()
+                .any(|&prim| scene.may_cross(prim as usize, &probe))
+            {
                 certain = false;
                 f64::NEG_INFINITY
             } else {
@@ -179,4 +223,36 @@ pub fn certain(
             }
         });
     certain
+}
+
+/// One `certain` query: the exact ray, the range `(0, limit]` searched for competitors, the
+/// hit they compete with, and the size of the scene octree's root (see [`CELL_SLACK`]); the
+/// ray's watertight set-up made once for all candidates.
+#[derive(Debug, Clone, Copy)]
+pub struct Probe<'a> {
+    /// The ray's f64 origin and direction, taken as exact.
+    pub origin: DVec3,
+    pub dir: DVec3,
+    /// The same ray prepared for the watertight test's frame.
+    pub watertight: WatertightRay,
+    /// Competitors are crossings in `(0, limit]`.
+    pub limit: f64,
+    /// The reported hit (its instance triangle found), or `None` for a miss.
+    pub hit: Option<&'a Crossing>,
+    /// The largest side of the scene octree's root.
+    pub root: f64,
+}
+
+impl<'a> Probe<'a> {
+    /// The probe of `ray` up to `limit` against `hit`.
+    pub fn new(ray: &Ray, limit: f64, hit: Option<&'a Crossing>, root: f64) -> Probe<'a> {
+        Probe {
+            origin: ray.origin,
+            dir: ray.dir,
+            watertight: WatertightRay::new(ray.origin, ray.dir),
+            limit,
+            hit,
+            root,
+        }
+    }
 }

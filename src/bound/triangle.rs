@@ -52,11 +52,16 @@ pub fn bound(origin: &BVec3, dir: &BVec3, tri: &[BVec3; 3]) -> TriangleBound {
     let [kx, ky, kz] = WatertightRay::new(values3(origin), values3(dir)).axes();
     let one = Bounded::exact(1.0);
     let (sx, sy, sz) = (dir[kx].div(dir[kz]), dir[ky].div(dir[kz]), one.div(dir[kz]));
-    let sheared = tri.map(|v| {
-        let p = [0, 1, 2].map(|i| v[i].sub(origin[i]));
-        [p[kx].sub(sx.mul(p[kz])), p[ky].sub(sy.mul(p[kz])), p[kz]]
-    });
-    let [a, b, c] = sheared;
+    let shear_one = |v: &BVec3| {
+        let (x, y, z) = (
+            v[kx].sub(origin[kx]),
+            v[ky].sub(origin[ky]),
+            v[kz].sub(origin[kz]),
+        );
+        [x.sub(sx.mul(z)), y.sub(sy.mul(z)), z]
+    };
+    // Written out: array `map`s are left as calls here.
+    let [a, b, c] = [shear_one(&tri[0]), shear_one(&tri[1]), shear_one(&tri[2])];
     let edge = |p: &BVec3, q: &BVec3| p[0].mul(q[1]).sub(p[1].mul(q[0]));
     let e = [edge(&c, &b), edge(&a, &c), edge(&b, &a)];
     let z = [a[2], b[2], c[2]];
@@ -68,19 +73,23 @@ pub fn bound(origin: &BVec3, dir: &BVec3, tri: &[BVec3; 3]) -> TriangleBound {
 
 /// Whether the exact ray certainly has no crossing with the triangle in `(0, limit]`, for an
 /// exact ray and vertices within `placement` of the stored ones (per coordinate): a cheaper,
-/// coarser test than [`bound`], to pass over most candidates.
+/// coarser test than [`bound`], to pass over most candidates. Three filters, cheapest first:
 ///
-/// A crossing's `t` is a convex combination of the vertices' `p_z / d_z` (the barycentric
-/// weights of an interior hit are not negative), so all vertices behind the origin or all
-/// beyond `limit`, each by more than `placement` and the rounding of `p_z`, rule it out.
-///
-/// With `X = |p_x| + |s_x·p_z| + ε_x` (`p` a vertex relative to the origin, `s` the shear,
-/// `ε_x = placement·(1 + |s_x|)` what the vertex's own bound moves a sheared coordinate), a
-/// sheared coordinate is within `γ₇X + ε_x` of its exact value (the rounding of `p`, of `s`, of
-/// the product and of the difference), and an edge function `x_c y_b − y_c x_b` within
-/// `γ₁₇(X_c Y_b + Y_c X_b) + X_c ε_y + Y_b ε_x + Y_c ε_x + X_b ε_y + 2 ε_x ε_y` (expanding the
-/// products of the bounds; `32u` for `γ₁₇`, and `2⁻³⁰` of slack for the second-order terms).
-/// Two edge functions beyond it with opposite signs: a certain miss.
+/// 1. **Depth.** A crossing's `t` is a convex combination of the vertices' `p_z / d_z` (the
+///    barycentric weights of an interior hit are not negative), so all vertices behind the
+///    origin or all beyond `limit`, each by more than `placement` and the rounding of `p_z`,
+///    rule it out.
+/// 2. **Sheared box.** With `X = |p_x| + |s_x·p_z| + ε_x` (`p` a vertex relative to the origin,
+///    `s` the shear, `ε_x = placement·(1 + |s_x|)` what the vertex's own bound moves a sheared
+///    coordinate), a sheared coordinate is within `γ₇X + ε_x` of its exact value (the rounding
+///    of `p`, of `s`, of the product and of the difference; `8u` for `γ₇`). The exact ray is
+///    the point `(0, 0)` of the sheared plane and a crossing a convex combination of the
+///    vertices' sheared points, so all three certainly on one side of `x = 0` (or `y = 0`)
+///    rule it out.
+/// 3. **Edge functions.** An edge function `x_c y_b − y_c x_b` is within
+///    `γ₁₇(X_c Y_b + Y_c X_b) + X_c ε_y + Y_b ε_x + Y_c ε_x + X_b ε_y + 2 ε_x ε_y` (expanding
+///    the products of the bounds; `32u` for `γ₁₇`, and `2⁻³⁰` of slack for the second-order
+///    terms). Two edge functions beyond it with opposite signs: a certain miss.
 pub fn certainly_apart(
     ray: &WatertightRay,
     tri: &[glam::DVec3; 3],
@@ -90,39 +99,49 @@ pub fn certainly_apart(
     let [kx, ky, kz] = ray.axes();
     let (shear, origin) = ray.shear_and_origin();
     let unit = super::bounded::UNIT;
-    let depth = tri.map(|v| v[kz] - origin[kz]);
-    let margin = |p: f64| up(placement + 2.0 * unit * p.abs());
+    let depth = [
+        tri[0][kz] - origin[kz],
+        tri[1][kz] - origin[kz],
+        tri[2][kz] - origin[kz],
+    ];
+    let margin = |p: f64| pad(placement + 2.0 * unit * p.abs());
     let behind = depth
         .iter()
         .all(|&p| p * shear.z < 0.0 && p.abs() > margin(p));
-    let far = |p: f64| down(down(p.abs() - margin(p)) * shear.z.abs() * (1.0 - 4.0 * unit));
-    let beyond = depth.iter().all(|&p| p * shear.z > 0.0 && far(p) > limit);
+    let far = |p: f64| (p.abs() - margin(p)) * shear.z.abs() * (1.0 - 8.0 * unit);
+    // Above the smallest normal number, each rounding of `far` is within a relative `u`.
+    let floor = limit.max(f64::MIN_POSITIVE);
+    let beyond = depth.iter().all(|&p| p * shear.z > 0.0 && far(p) > floor);
     if behind || beyond {
         return true;
     }
     let (ex, ey) = (
-        up(placement * (1.0 + shear.x.abs())),
-        up(placement * (1.0 + shear.y.abs())),
+        pad(placement * (1.0 + shear.x.abs())),
+        pad(placement * (1.0 + shear.y.abs())),
     );
-    let sheared = tri.map(|v| {
-        let p = v - origin;
+    // Per vertex: sheared x, its magnitude bound X, sheared y, Y (written out: no array
+    // `map`, which the compiler leaves as calls here).
+    let shear_one = |v: glam::DVec3| {
+        let p = (v - origin).to_array();
         let (m, n) = (shear.x * p[kz], shear.y * p[kz]);
         [
             p[kx] - m,
-            up(p[kx].abs() + m.abs() + ex),
+            p[kx].abs() + m.abs() + ex,
             p[ky] - n,
-            up(p[ky].abs() + n.abs() + ey),
+            p[ky].abs() + n.abs() + ey,
         ]
-    });
+    };
+    let sheared = [shear_one(tri[0]), shear_one(tri[1]), shear_one(tri[2])];
+    if one_side(&sheared, 0, ex, unit) || one_side(&sheared, 2, ey, unit) {
+        return true;
+    }
     let [a, b, c] = sheared;
     let edge = |p: &[f64; 4], q: &[f64; 4]| {
         let value = p[0] * q[2] - p[2] * q[0];
         let first = 32.0 * unit * (p[1] * q[3] + p[3] * q[1]);
         let moved = p[1] * ey + q[3] * ex + p[3] * ex + q[1] * ey + 2.0 * ex * ey;
-        (
-            value,
-            up((first + moved) * (1.0 + 1.0 / (1u64 << 30) as f64)),
-        )
+        // Twice: the slack for the second-order terms, then the evaluation's roundings.
+        (value, pad(pad(first + moved)))
     };
     let e = [edge(&c, &b), edge(&a, &c), edge(&b, &a)];
     if e.iter().any(|(v, err)| !v.is_finite() || !err.is_finite()) {
@@ -131,6 +150,26 @@ pub fn certainly_apart(
     let positive = e.iter().any(|&(v, err)| v > err);
     let negative = e.iter().any(|&(v, err)| -v > err);
     positive && negative
+}
+
+/// `x ≥ 0`, a bound of [`certainly_apart`] evaluated in a few f64 operations, raised past
+/// their roundings: each is at most a relative `u` (with an absolute `2⁻¹⁰⁷⁴` when the result
+/// is subnormal), far less than the factor `1 + 2⁻³⁰` and the smallest normal number added.
+/// One multiply and one add where [`up`] would take a step per operation.
+#[inline]
+fn pad(x: f64) -> f64 {
+    x * (1.0 + 1.0 / (1u64 << 30) as f64) + f64::MIN_POSITIVE
+}
+
+/// Whether the sheared coordinate `at` (`0` for `x`, `2` for `y`; its magnitude bound next to
+/// it) of all three vertices is certainly positive, or certainly negative (filter 2 of
+/// [`certainly_apart`]; `moved` is the vertices' own bound in that coordinate).
+fn one_side(sheared: &[[f64; 4]; 3], at: usize, moved: f64, unit: f64) -> bool {
+    let error = |s: &[f64; 4]| pad(8.0 * unit * s[at + 1] + moved);
+    let positive = sheared.iter().all(|s| s[at] > error(s));
+    let negative = sheared.iter().all(|s| -s[at] > error(s));
+    // NaN coordinates fail both comparisons: no conclusion.
+    positive || negative
 }
 
 /// The side from the edge functions' signs.
@@ -241,6 +280,11 @@ mod tests {
         let edge = [[-1.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].map(DVec3::from_array);
         assert!(!certainly_apart(&near, &edge, 1e-2, f64::INFINITY));
         assert!(certainly_apart(&near, &edge, 0.0, f64::INFINITY));
+        // 1e-3 past the vertex (1, 0), the largest x: the sheared box is beside the ray
+        // for exact vertices; vertices that may be 1e-2 off may reach it.
+        let past = WatertightRay::new(DVec3::new(1.0 + 1e-3, 0.0, 5.0), DVec3::NEG_Z);
+        assert!(certainly_apart(&past, &edge, 0.0, f64::INFINITY));
+        assert!(!certainly_apart(&past, &edge, 1e-2, f64::INFINITY));
     }
 
     /// A ray in the triangle's plane has no bounded t.

@@ -282,7 +282,9 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
         );
     }
     if let Some((min, max)) = options.expect_size {
-        if !(min..=max).contains(&size) {
+        // Out of range only beyond the rounding of the placed coordinates and the diagonal.
+        let slack = scene.size_bound(&bounds);
+        if !(size + slack >= min && size - slack <= max) {
             let hint = if size > max && size / 100.0 <= max && size / 100.0 >= min {
                 " (centimetres instead of metres?)"
             } else if size < min && size * 100.0 >= min && size * 100.0 <= max {

@@ -1,9 +1,16 @@
-//! Golden comparison: an asset is rendered from three fixed views (depth and id, 64×64) and the
-//! buffers are compared with the ones stored under the golden folder; `--update-golden` stores
-//! them instead. A failed comparison writes a difference image beside the golden buffers.
+//! Golden comparison: an asset is rendered from three fixed views (depth and id with their
+//! certified bounds, `error` and `certain`; 64×64) and the buffers are compared with the ones
+//! stored under the golden folder; `--update-golden` stores them instead. A failed comparison
+//! writes a difference image beside the golden buffers.
+//!
+//! With stored bounds a pixel differs only when rounding cannot explain it ([`differs`]):
+//! both renders are `certain` (the exact nearest primitive, or the exact miss) and the hit,
+//! the id, or the depth beyond the sum of both depths' bounds differ. Golden buffers stored
+//! without bounds (before they were written) are compared with [`DEPTH_TOLERANCE`].
 
 use super::Findings;
 use crate::accel::{Octree, OctreeParams};
+use crate::bound::bounded::up;
 use crate::camera::Camera;
 use crate::output::npy::{self, NpyData};
 use crate::output::{png, Staging};
@@ -34,9 +41,13 @@ const VIEWS: [DVec3; 3] = [
     DVec3::new(-0.6, 0.8, -0.7),
 ];
 
-/// Depths may differ by this fraction of the scene's size (float rounding across builds and
-/// platforms stays far below it; a moved or rescaled object does not).
+/// For golden buffers without bounds: depths may differ by this fraction of the scene's size
+/// (float rounding across builds and platforms stays far below it; a moved or rescaled object
+/// does not).
 const DEPTH_TOLERANCE: f64 = 1e-6;
+
+/// What each view renders.
+const AOVS: [Aov; 4] = [Aov::Depth, Aov::Id, Aov::Error, Aov::Certain];
 
 /// Renders the views of `scene` and compares them with (or stores them under) the golden folder
 /// for the asset `key` (its path relative to the checked folder).
@@ -55,7 +66,7 @@ pub fn check(scene: &Scene, key: &Path, options: &GoldenOptions, findings: &mut 
     };
     for (index, direction) in VIEWS.into_iter().enumerate() {
         let view = CameraView::new(Camera::framing_from(&bounds, direction), SIZE, SIZE);
-        let buffers = render::render(&tracer, &view, &[Aov::Depth, Aov::Id], |_| {});
+        let buffers = render::render(&tracer, &view, &AOVS, |_| {});
         let outcome = if options.update {
             store(&dir, index, &buffers)
         } else {
@@ -82,22 +93,59 @@ fn ids(b: &Buffers) -> &[u32] {
     b.labels(Aov::Id).unwrap_or_default()
 }
 
+fn errors(b: &Buffers) -> &[f64] {
+    b.floats(Aov::Error).unwrap_or_default()
+}
+
+fn certain(b: &Buffers) -> &[u8] {
+    b.flags(Aov::Certain).unwrap_or_default()
+}
+
+/// One pixel of a view: its depth (`+∞` for a miss), its object id, and, when known, its
+/// depth's bound and whether its decision is certain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pixel {
+    pub depth: f64,
+    pub id: f64,
+    pub bound: Option<(f64, bool)>,
+}
+
+/// Whether the pixel `current` differs from `golden` for real. With both bounds known: only
+/// when both decisions are certain and the hit, the id or the depth beyond `δ + δ_golden`
+/// differ (the exact depths of one scene are within those of both). Otherwise: a different
+/// hit or id, or depths apart by more than `tolerance`.
+pub fn differs(current: Pixel, golden: Pixel, tolerance: f64) -> bool {
+    let hits = (current.depth.is_finite(), golden.depth.is_finite());
+    let depth_apart = |allowed: f64| (current.depth - golden.depth).abs() > allowed;
+    match (current.bound, golden.bound) {
+        (Some((error, sure)), Some((golden_error, golden_sure))) => {
+            sure && golden_sure
+                && (hits.0 != hits.1
+                    || current.id != golden.id
+                    || (hits.0 && hits.1 && depth_apart(up(error + golden_error))))
+        }
+        _ => hits.0 != hits.1 || current.id != golden.id || (hits.0 && depth_apart(tolerance)),
+    }
+}
+
 type Failure = (&'static str, String);
 
 fn store(dir: &Path, index: usize, buffers: &Buffers) -> Result<(), Failure> {
     let fail = |e: crate::Error| ("IO_ERROR", format!("cannot write golden buffers: {e}"));
     let mut staging = Staging::new(dir).map_err(fail)?;
     let shape = [SIZE, SIZE];
-    staging
-        .write(&format!("view{index}.depth.npy"), |out| {
-            npy::write(out, &shape, NpyData::F64(depth(buffers)))
-        })
-        .map_err(fail)?;
-    staging
-        .write(&format!("view{index}.id.npy"), |out| {
-            npy::write(out, &shape, NpyData::U32(ids(buffers)))
-        })
-        .map_err(fail)?;
+    let files = [
+        ("depth", NpyData::F64(depth(buffers))),
+        ("id", NpyData::U32(ids(buffers))),
+        ("error", NpyData::F64(errors(buffers))),
+        ("certain", NpyData::U8(certain(buffers))),
+    ];
+    for (aov, data) in files {
+        let name = format!("view{index}.{aov}.npy");
+        staging
+            .write(&name, |out| npy::write(out, &shape, data))
+            .map_err(fail)?;
+    }
     staging.commit().map_err(fail)
 }
 
@@ -118,14 +166,40 @@ fn compare(dir: &Path, index: usize, buffers: &Buffers, size: f64) -> Result<(),
             "golden buffers have the wrong size; run with --update-golden".into(),
         ));
     }
+    // Bounds stored beside them (goldens written before they were have none; a bound buffer
+    // that is there but unusable is an error, not a silent fall-back to the tolerance).
+    let mut bounds = Vec::new();
+    for aov in ["error", "certain"] {
+        let path = dir.join(format!("view{index}.{aov}.npy"));
+        if path.exists() {
+            let (_, values) = read(format!("view{index}.{aov}.npy"))?;
+            if values.len() != SIZE * SIZE {
+                return Err((
+                    "GOLDEN_MISSING",
+                    format!("golden {aov} buffer has the wrong size; run with --update-golden"),
+                ));
+            }
+            bounds.push(values);
+        }
+    }
+    let golden_bounds = match &bounds[..] {
+        [error, certain] => Some((error, certain)),
+        _ => None,
+    };
+    let tolerance = DEPTH_TOLERANCE * size;
     let differs: Vec<bool> = (0..SIZE * SIZE)
         .map(|i| {
-            let (a, b) = (depth(buffers)[i], golden_depth[i]);
-            let depth_differs = match (a.is_finite(), b.is_finite()) {
-                (true, true) => (a - b).abs() > DEPTH_TOLERANCE * size,
-                (hit_a, hit_b) => hit_a != hit_b,
+            let now = Pixel {
+                depth: depth(buffers)[i],
+                id: f64::from(ids(buffers)[i]),
+                bound: Some((errors(buffers)[i], certain(buffers)[i] == 1)),
             };
-            depth_differs || f64::from(ids(buffers)[i]) != golden_id[i]
+            let then = Pixel {
+                depth: golden_depth[i],
+                id: golden_id[i],
+                bound: golden_bounds.map(|(e, c)| (e[i], c[i] == 1.0)),
+            };
+            differs(now, then, tolerance)
         })
         .collect();
     let count = differs.iter().filter(|&&d| d).count();
@@ -137,9 +211,12 @@ fn compare(dir: &Path, index: usize, buffers: &Buffers, size: f64) -> Result<(),
     Err((
         "GOLDEN_MISMATCH",
         format!(
-            "{count} of {} pixels differ from the golden depth/id buffers (depth tolerance {:.0e} of the scene size){}",
+            "{count} of {} pixels differ from the golden depth/id buffers ({}){}",
             SIZE * SIZE,
-            DEPTH_TOLERANCE,
+            match golden_bounds {
+                Some(_) => "certain pixels, depths apart by more than both bounds".to_string(),
+                None => format!("depth tolerance {DEPTH_TOLERANCE:.0e} of the scene size"),
+            },
             match written {
                 Ok(()) => format!("; difference image {}", diff_path.display()),
                 Err(e) => format!("; the difference image could not be written: {e}"),
@@ -166,4 +243,51 @@ fn write_difference(path: &Path, depth: &[f64], differs: &[bool]) -> crate::Resu
         .unwrap_or_default();
     staging.write(&name, |out| png::write(out, image))?;
     staging.commit()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{differs, Pixel};
+
+    fn hit(depth: f64, error: f64, certain: bool) -> Pixel {
+        Pixel {
+            depth,
+            id: 1.0,
+            bound: Some((error, certain)),
+        }
+    }
+
+    /// With bounds, depths within the sum of both bounds are the same exact depth; beyond it
+    /// they differ, even far below the tolerance of goldens without bounds.
+    #[test]
+    fn depths_differ_only_beyond_both_bounds() {
+        let golden = hit(10.0, 1e-14, true);
+        assert!(!differs(hit(10.0 + 1.5e-14, 1e-14, true), golden, 1e-5));
+        assert!(differs(hit(10.0 + 3e-14, 1e-14, true), golden, 1e-5));
+        // Without stored bounds: the tolerance.
+        let old = Pixel {
+            bound: None,
+            ..golden
+        };
+        assert!(!differs(hit(10.0 + 3e-14, 1e-14, true), old, 1e-5));
+        assert!(differs(hit(10.0 + 2e-5, 1e-14, true), old, 1e-5));
+    }
+
+    /// A hit against a miss, or another id, is real only where both decisions are certain.
+    #[test]
+    fn changed_decisions_count_only_where_both_are_certain() {
+        let miss = |certain| Pixel {
+            depth: f64::INFINITY,
+            id: 0.0,
+            bound: Some((0.0, certain)),
+        };
+        assert!(differs(hit(10.0, 1e-14, true), miss(true), 1e-5));
+        assert!(!differs(hit(10.0, 1e-14, false), miss(true), 1e-5));
+        assert!(!differs(hit(10.0, 1e-14, true), miss(false), 1e-5));
+        let other = Pixel {
+            id: 2.0,
+            ..hit(10.0, 1e-14, true)
+        };
+        assert!(differs(hit(10.0, 1e-14, true), other, 1e-5));
+    }
 }

@@ -125,8 +125,8 @@ fn untraceable(index: usize, ray: &Ray) -> Option<Untraceable> {
     })
 }
 
-/// Reads a float64 (`<f8`) or uint32 (`<u4`) array as written by [`write`]: its shape and its
-/// values as f64.
+/// Reads a float64 (`<f8`), uint32 (`<u4`) or byte (`|u1`) array as written by [`write`]: its
+/// shape and its values as f64.
 pub fn read(path: &Path) -> Result<(Vec<usize>, Vec<f64>)> {
     let bytes =
         std::fs::read(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
@@ -149,7 +149,12 @@ fn parse_array(bytes: &[u8]) -> std::result::Result<(Vec<usize>, Vec<f64>), Stri
             .chunks_exact(4)
             .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64)
             .collect(),
-        other => return Err(format!("expected float64 or uint32 data, found '{other}'")),
+        "|u1" => data.iter().map(|&b| f64::from(b)).collect(),
+        other => {
+            return Err(format!(
+                "expected float64, uint32 or uint8 data, found '{other}'"
+            ))
+        }
     };
     if values.len() != count {
         return Err(format!(
@@ -381,6 +386,13 @@ mod tests {
             let rays = parse_rays(&bytes).unwrap().rays;
             assert_eq!(rays, vec![Ray::new(DVec3::new(0.0, 0.0, 5.0), -DVec3::Z)]);
         }
+    }
+
+    /// A `certain` buffer (uint8) reads back as its 0s and 1s.
+    #[test]
+    fn reads_bytes() {
+        let (shape, values) = parse_array(&npy("|u1", "(3,)", &[1, 0, 1])).unwrap();
+        assert_eq!((shape, values), (vec![3], vec![1.0, 0.0, 1.0]));
     }
 
     #[test]

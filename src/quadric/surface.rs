@@ -56,8 +56,8 @@ pub struct Quadric {
     own: [DVec3; 2],
     /// Affine type, from the world-space coefficients.
     kind: QuadricKind,
-    /// Error bounds of the numbers above, for [`Quadric::bound_roots`].
-    errors: bound::Errors,
+    /// Error bounds of the numbers above, for [`Quadric::bound_roots`], made on first use.
+    errors: bound::LazyErrors,
 }
 
 impl Quadric {
@@ -86,7 +86,8 @@ impl Quadric {
         let r_world = local_anchor.dot(spec.q * local_anchor) + spec.p.dot(local_anchor) + spec.r;
         let anchor = world.transform_point3(local_anchor);
         let scale = power_of_two_normaliser(spec.q, gradient);
-        let errors = bound::Errors::new(spec, local_anchor, world, to_local, scale);
+        let exact = crate::bound::transform::BoundedMat4::exact(world);
+        let errors = bound::LazyErrors::new(spec, exact, scale);
         let mut quadric = Quadric {
             anchor,
             world: Polynomial::new(q_world, p_world, r_world),

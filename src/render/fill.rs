@@ -6,11 +6,13 @@
 //! [`trace`], so they share this loop.
 
 use super::{Aov, RaySource, Tracer};
+use crate::bound::HitBound;
 use crate::geometry::Ray;
 use crate::query::traceable;
 use crate::scene::{Crossing, Located};
 use glam::DVec3;
 use rayon::prelude::*;
+use std::cell::OnceCell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
@@ -146,6 +148,8 @@ struct Block<'a, S: ?Sized> {
     forward: DVec3,
     /// Each ray's `(t_min, t_max]`, for the `certain` AOV.
     range: &'a (dyn Fn(usize) -> (f64, f64) + Sync),
+    /// The hits' bounds, once `error` or `certain` asks for them.
+    bounds: OnceCell<Vec<Option<HitBound>>>,
 }
 
 impl<S: RaySource + ?Sized> Block<'_, S> {
@@ -160,6 +164,23 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
     fn locate(&self, j: usize, hit: &Crossing) -> Located<'_> {
         let ray = self.ray(j);
         self.tracer.scene.locate_crossing(hit, ray.origin, ray.dir)
+    }
+
+    /// The bound of each hit of the block ([`crate::bound::hit_bound`]), made on first use
+    /// and shared by the `error` and `certain` columns.
+    fn hit_bounds(&self, hits: &[Option<Crossing>]) -> &[Option<HitBound>] {
+        self.bounds.get_or_init(|| {
+            let each = hits.iter().enumerate();
+            each.map(|(j, hit)| {
+                let hit = hit.as_ref()?;
+                Some(crate::bound::hit_bound(
+                    self.tracer.scene,
+                    &self.ray(j),
+                    hit,
+                ))
+            })
+            .collect()
+        })
     }
 
     /// Fills `slot`, the block's part of the column of `aov`, from the block's `hits`.
@@ -204,15 +225,22 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
             (Aov::Prim, Slot::Index(out)) => {
                 fill(out, hits, u32::MAX, |j, h| self.locate(j, h).prim)
             }
-            (Aov::Error, Slot::Float(out)) => fill(out, hits, 0.0, |j, h| {
-                crate::bound::depth_error(self.tracer.scene, &self.ray(j), h)
-            }),
+            (Aov::Error, Slot::Float(out)) => {
+                let bounds = self.hit_bounds(hits);
+                fill(out, hits, 0.0, |j, _| {
+                    bounds[j].map_or(f64::INFINITY, |b| {
+                        crate::bound::depth_error(&b, &self.ray(j))
+                    })
+                })
+            }
             (Aov::Certain, Slot::Flag(out)) => {
+                let bounds = self.hit_bounds(hits);
                 let query = self.tracer.query();
                 for (j, (slot, hit)) in out.iter_mut().zip(hits).enumerate() {
                     let range = (self.range)(self.start + j);
+                    let hit = hit.as_ref().zip(bounds[j].as_ref());
                     let certain = query.as_ref().is_some_and(|query| {
-                        crate::bound::certain(query, &self.ray(j), hit.as_ref(), range)
+                        crate::bound::certain(query, &self.ray(j), hit, range)
                     });
                     *slot = u8::from(certain);
                 }
@@ -299,6 +327,7 @@ where
             eye,
             forward,
             range: &rays.range,
+            bounds: OnceCell::new(),
         };
         let order = tile_order(len, width);
         let indices: Vec<usize> = match &order {

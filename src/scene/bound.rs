@@ -1,14 +1,16 @@
 //! The per-primitive side of [`crate::bound`]: a hit's bound, and whether a primitive may be
 //! crossed by the exact ray within a range.
 
+use super::instance::StoredMesh;
 use super::{Crossing, Scene, Top};
-use crate::bound::bounded::{exact3, up, BVec3, Bounded};
+use crate::bound::bounded;
+use crate::bound::bounded::{exact3, gamma, up, BVec3, Bounded};
+use crate::bound::transform::moved;
 use crate::bound::triangle::{self, TriangleBound};
-use crate::bound::{mapped, HitBound, Side, CELL_SLACK};
-use crate::geometry::triangle::WatertightRay;
+use crate::bound::{mapped, HitBound, Probe, Side, CELL_SLACK};
 use crate::geometry::Aabb;
 use crate::quadric::{Others, QuadricBound, RootBound};
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use std::ops::Sub;
 
 /// Whether a bounded crossing `t` may lie in `(0, limit]`.
@@ -71,7 +73,7 @@ impl Scene {
                     return unbounded;
                 };
                 let (o, d) = self.instance_ray(k, origin, dir);
-                let tri = stored.set.mesh.triangle(inner as usize).map(exact3);
+                let tri = self.bounded_instance_triangle(k, stored, inner as usize);
                 triangle_hit(&triangle::bound(&o, &d, &tri), hit.t)
             }
             Top::Quadric(q) => quadric_hit(&self.quadrics[q].bound_roots(origin, dir), hit.t),
@@ -95,31 +97,22 @@ impl Scene {
         Crossing { inner, ..*hit }
     }
 
-    /// Whether top-level primitive `index` may have an exact crossing with the ray `origin +
-    /// t·dir` in `(0, limit]`, other than the crossing `hit` itself. `root` is the size of the
-    /// scene octree's root (see [`CELL_SLACK`]).
-    pub fn may_cross(
-        &self,
-        index: usize,
-        origin: DVec3,
-        dir: DVec3,
-        limit: f64,
-        hit: Option<&Crossing>,
-        root: f64,
-    ) -> bool {
-        let own = hit.filter(|h| h.top as usize == index);
+    /// Whether top-level primitive `index` may have an exact crossing with the probe's ray in
+    /// `(0, limit]`, other than the probe's hit itself (see [`CELL_SLACK`] for the root).
+    pub fn may_cross(&self, index: usize, probe: &Probe) -> bool {
+        let own = probe.hit.filter(|h| h.top as usize == index);
+        let (origin, dir, limit) = (probe.origin, probe.dir, probe.limit);
         match self.top(index) {
             Top::Triangle(i) => {
                 if own.is_some() {
                     return false;
                 }
                 let placement = self.placement_of(i);
-                if placement > CELL_SLACK * root {
+                if placement > CELL_SLACK * probe.root {
                     return true;
                 }
-                let exact = WatertightRay::new(origin, dir);
                 let tri = self.world.mesh.triangle(i);
-                if triangle::certainly_apart(&exact, &tri, placement, limit) {
+                if triangle::certainly_apart(&probe.watertight, &tri, placement, limit) {
                     return false;
                 }
                 let b = triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));
@@ -160,7 +153,8 @@ impl Scene {
             dv,
         ));
         let worst = |v: &BVec3| v.iter().map(|c| c.error).fold(0.0, f64::max);
-        let drift = up(worst(&o) + up(reach.max(0.0) * worst(&d)));
+        let vertices = self.instance_vertex_error(k);
+        let drift = up(up(worst(&o) + up(reach.max(0.0) * worst(&d))) + vertices);
         if drift.is_nan() || drift > CELL_SLACK * octree.root().size().max_element() {
             return true;
         }
@@ -171,7 +165,7 @@ impl Scene {
                 if skip == Some(Some(prim)) {
                     return false;
                 }
-                let tri = stored.set.mesh.triangle(prim as usize).map(exact3);
+                let tri = self.bounded_instance_triangle(k, stored, prim as usize);
                 triangle_competes(&triangle::bound(&o, &d, &tri), limit)
             });
             if crossing {
@@ -181,6 +175,31 @@ impl Scene {
             }
         });
         crossing
+    }
+
+    /// A bound on how far the diagonal of `bounds` ([`Scene::world_bounds`], the box `raycast
+    /// info` prints) may be from the diagonal of the same box made from exactly placed
+    /// coordinates: each face moves by at most the largest placement bound of a world mesh
+    /// (nested instances: what their composed matrix may move the farthest corner by), so each
+    /// side by twice that and the diagonal by `2√3` times it, plus the rounding of the box's
+    /// move from the anchor (`u` of the largest coordinate per face) and of the diagonal itself
+    /// (`γ₆` of it). The box's own padding only makes it larger. Projective placements, whose
+    /// rounding is not bounded, are left out.
+    pub fn size_bound(&self, bounds: &Aabb) -> f64 {
+        let world = self.placement.iter().copied().filter(|p| p.is_finite());
+        let instances = self
+            .instances
+            .iter()
+            .zip(&self.instance_errors)
+            .map(|(i, e)| {
+                let local = self.meshes[i.mesh as usize].set.mesh.bounds();
+                moved(e, local.min.abs().max(local.max.abs()))
+            });
+        let moved = world.chain(instances).fold(0.0, f64::max);
+        let far = bounds.min.abs().max(bounds.max.abs()).max_element();
+        let faces = up(moved + gamma(1) * far);
+        let size = bounds.size().length();
+        up(2.0 * 3f64.sqrt() * up(faces * (1.0 + gamma(1))) + gamma(6) * size)
     }
 
     /// World triangle `i` with its placement bound.
@@ -198,7 +217,8 @@ impl Scene {
     }
 
     /// The world ray in instance `k`'s mesh frame as the trace maps it, `L(o − T)` and `L d`,
-    /// bounded ([`crate::bound::mapped`]).
+    /// bounded against the exact image `M̂⁻¹o`, `M̂⁻¹d` through the f64 placement `M̂`
+    /// ([`crate::bound::mapped`]).
     fn instance_ray(&self, k: usize, origin: DVec3, dir: DVec3) -> (BVec3, BVec3) {
         let instance = &self.instances[k];
         let (a, norm) = (instance.to_world.matrix3, instance.inverse_norm());
@@ -206,9 +226,54 @@ impl Scene {
         let offset = [0, 1, 2].map(|i| Bounded::exact(origin[i]).sub(Bounded::exact(t[i])));
         let l = instance.to_local.matrix3;
         (
-            mapped(a, norm, &offset, l * (origin - t)),
-            mapped(a, norm, &exact3(dir), l * dir),
+            mapped(a, &DMat3::ZERO, norm, &offset, l * (origin - t)),
+            mapped(a, &DMat3::ZERO, norm, &exact3(dir), l * dir),
         )
+    }
+
+    /// Triangle `i` of instance `k`'s stored mesh, each vertex `v` within `|Â⁻¹|(E_A|v| + E_T)`
+    /// of the exact triangle in the `M̂` frame, componentwise (see
+    /// [`Scene::instance_vertex_error`]; `|Â⁻¹| ≤ |L| + (‖Â⁻¹‖∞ − ‖L‖∞)` entrywise, `L` the f64
+    /// inverse, from `Â⁻¹ = (I − E)⁻¹L` as in [`crate::bound::inverse_norm`]).
+    fn bounded_instance_triangle(&self, k: usize, stored: &StoredMesh, i: usize) -> [BVec3; 3] {
+        let tri = stored.set.mesh.triangle(i);
+        let composed = &self.instance_errors[k];
+        if *composed == glam::DMat4::ZERO {
+            return tri.map(exact3);
+        }
+        let instance = &self.instances[k];
+        let l = instance.to_local.matrix3.abs();
+        let rows = l.transpose();
+        let l_norm = [rows.x_axis, rows.y_axis, rows.z_axis]
+            .map(|r| bounded::down(r.element_sum()))
+            .into_iter()
+            .fold(0.0, f64::max);
+        let slack = up(instance.inverse_norm() - l_norm).max(0.0);
+        let (a_error, t_error) = (DMat3::from_mat4(*composed), composed.w_axis.truncate());
+        tri.map(|v| {
+            let w = (a_error * v.abs() + t_error).to_array().map(up);
+            let w = DVec3::from_array(w);
+            let spread = (l * w + DVec3::splat(slack * w.max_element())).to_array();
+            [0, 1, 2].map(|c| Bounded::new(v[c], up(spread[c])))
+        })
+    }
+
+    /// How far, per coordinate, instance `k`'s exact vertices may lie from its stored ones in
+    /// the frame of its f64 placement `M̂`: the exact placement `M*` of a nested node
+    /// ([`crate::bound::transform`]) draws vertex `v` at `M*v`, which `M̂` maps from
+    /// `M̂⁻¹M*v = v + Â⁻¹((A* − Â)v + (T* − T̂))`, within `‖Â⁻¹‖∞ · max(E_A|v| + E_T)`; here `|v|` is
+    /// taken at the corner of the mesh's bounds farthest from its origin (all vertices). Putting the
+    /// composition's error on the vertices, not on the mapped ray, keeps it proportional to
+    /// the mesh's size rather than to the ray origin's distance. Zero for a matrix as read.
+    fn instance_vertex_error(&self, k: usize) -> f64 {
+        let composed = &self.instance_errors[k];
+        if *composed == glam::DMat4::ZERO {
+            return 0.0;
+        }
+        let instance = &self.instances[k];
+        let bounds = self.meshes[instance.mesh as usize].set.mesh.bounds();
+        let far = bounds.min.abs().max(bounds.max.abs());
+        up(instance.inverse_norm() * moved(composed, far))
     }
 }
 

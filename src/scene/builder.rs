@@ -5,6 +5,7 @@ use super::mesh::{Mesh, MeshSet, Positions};
 use super::shading::PartShading;
 use super::{near_origin, Object, ObjectKind, Part, PartKind, PoseInfo, Scene, StageInfo};
 use crate::accel::OctreeParams;
+use crate::bound::transform::BoundedMat4;
 use crate::camera::Camera;
 use crate::geometry::Aabb;
 use crate::quadric::Quadric;
@@ -28,7 +29,7 @@ struct Draft {
 /// One part as collected.
 #[derive(Debug)]
 enum Item {
-    Mesh(Arc<Mesh>, DMat4),
+    Mesh(Arc<Mesh>, Box<BoundedMat4>),
     /// A quadric and its material (1-based; 0: none).
     Quadric(Box<Quadric>, u32),
 }
@@ -83,9 +84,16 @@ impl SceneBuilder {
     /// Adds `mesh`, placed in the world by `world`, to object `id`. Pass the same `Arc` for
     /// every use of one mesh: a mesh used several times is stored once.
     pub fn place_mesh(&mut self, id: u32, mesh: Arc<Mesh>, world: DMat4) {
+        self.place_composed_mesh(id, mesh, BoundedMat4::exact(world));
+    }
+
+    /// [`SceneBuilder::place_mesh`] with a matrix composed from nested nodes, and the bound of
+    /// that composition (for the `error` and `certain` AOVs; the mesh is placed by
+    /// `world.value`).
+    pub fn place_composed_mesh(&mut self, id: u32, mesh: Arc<Mesh>, world: BoundedMat4) {
         if !mesh.is_empty() {
             let mesh = self.canonical(mesh);
-            self.push(id, mesh.len() as u32, Item::Mesh(mesh, world));
+            self.push(id, mesh.len() as u32, Item::Mesh(mesh, Box::new(world)));
         }
     }
 
@@ -222,6 +230,7 @@ impl SceneBuilder {
             parts,
             placement,
             shading,
+            instance_errors,
         } = layout;
         let bounds = points.iter().copied().fold(Aabb::EMPTY, Aabb::grow);
         let bounds = instances.iter().fold(bounds, |b, i| b.union(i.bounds()));
@@ -248,6 +257,7 @@ impl SceneBuilder {
             placement,
             shading,
             materials,
+            instance_errors,
             objects,
             cameras,
             warnings,
@@ -288,7 +298,7 @@ fn store_instanced(items: &[(u32, u32, Item)]) -> (Vec<StoredMesh>, HashMap<usiz
     for (_, _, item) in items {
         if let Item::Mesh(mesh, world) = item {
             let key = Arc::as_ptr(mesh) as usize;
-            if instanced(mesh, world, uses[&key]) && !mesh_of.contains_key(&key) {
+            if instanced(mesh, &world.value, uses[&key]) && !mesh_of.contains_key(&key) {
                 mesh_of.insert(key, unique.len() as u32);
                 unique.push(Arc::clone(mesh));
             }
@@ -319,6 +329,7 @@ struct Layout {
     parts: Vec<Part>,
     placement: Vec<f64>,
     shading: Vec<PartShading>,
+    instance_errors: Vec<DMat4>,
 }
 
 impl Layout {
@@ -343,24 +354,26 @@ impl Layout {
             Item::Mesh(mesh, world) => {
                 let stored = mesh_of.get(&(Arc::as_ptr(&mesh) as usize));
                 let instance =
-                    stored.and_then(|&m| Instance::new(m, &meshes[m as usize], &world, part));
+                    stored.and_then(|&m| Instance::new(m, &meshes[m as usize], &world.value, part));
                 let attributes = mesh.attributes().cloned();
                 match instance {
                     Some(instance) => {
                         shading = PartShading::mesh(attributes, instance.to_world.matrix3, false);
                         self.instances.push(instance);
+                        self.instance_errors.push(world.error);
                         PartKind::Instance(self.instances.len() as u32 - 1)
                     }
                     None => {
-                        let swapped = world.determinant() < 0.0;
-                        shading = PartShading::mesh(attributes, DMat3::from_mat4(world), swapped);
+                        let swapped = world.value.determinant() < 0.0;
+                        shading =
+                            PartShading::mesh(attributes, DMat3::from_mat4(world.value), swapped);
                         let positions = mesh.positions();
                         placement = crate::bound::placement_error(
                             &world,
                             (0..positions.len() as u32).map(|v| positions.get(v)),
                         );
                         let first = self.triangles.len() as u32;
-                        mesh.place_into(&world, &mut self.points, &mut self.triangles);
+                        mesh.place_into(&world.value, &mut self.points, &mut self.triangles);
                         let count = self.triangles.len() as u32 - first;
                         self.world_parts
                             .extend(std::iter::repeat_n(part, count as usize));

@@ -226,6 +226,9 @@ pub struct Scene {
     shading: Vec<shading::PartShading>,
     /// The materials parts are bound to, named as the file names them.
     materials: Vec<String>,
+    /// Per instance, the entrywise bound of its placement matrix's composition from nested
+    /// nodes ([`crate::bound::transform`]; zero for a matrix as read).
+    instance_errors: Vec<glam::DMat4>,
     /// The object table, in id order.
     pub objects: Vec<Object>,
     /// Cameras defined by the file.

@@ -13,6 +13,7 @@ use super::node::{animated_transform, Node};
 use super::pose::Pose;
 use super::shading::MeshShading;
 use super::QUADRIC_EXTENSION;
+use crate::bound::transform::BoundedMat4;
 use crate::camera::Camera;
 use crate::quadric::{Quadric, QuadricSpec};
 use crate::scene::{Attributes, Mesh, Scene, SceneBuilder};
@@ -117,8 +118,9 @@ fn add_mesh_object(
     name: String,
     pointer: String,
     mesh: &Arc<Mesh>,
-    world: &DMat4,
+    placed: &BoundedMat4,
 ) -> Result<Option<u32>, Diagnostic> {
+    let world = &placed.value;
     if mesh.is_empty() {
         return Ok(None);
     }
@@ -137,7 +139,7 @@ fn add_mesh_object(
         ));
     }
     let id = builder.new_object(name, pointer);
-    builder.place_mesh(id, Arc::clone(mesh), *world);
+    builder.place_composed_mesh(id, Arc::clone(mesh), *placed);
     Ok(Some(id))
 }
 
@@ -263,10 +265,11 @@ struct Walk<'a> {
 impl Walk<'_> {
     fn walk(&mut self, roots: &[usize]) -> Result<(), Diagnostic> {
         let node_count = self.doc.list("nodes").len();
-        let mut stack: Vec<(usize, DMat4, usize)> = roots
+        // Each node's world matrix with the bound of its composition in f64.
+        let mut stack: Vec<(usize, BoundedMat4, usize)> = roots
             .iter()
             .rev()
-            .map(|&n| (n, DMat4::IDENTITY, 0))
+            .map(|&n| (n, BoundedMat4::exact(DMat4::IDENTITY), 0))
             .collect();
         let mut visits = 0usize;
         while let Some((index, parent, depth)) = stack.pop() {
@@ -287,11 +290,11 @@ impl Walk<'_> {
             })?;
             let mut sink = FailFast::default();
             let animated = self.animated.get(&index);
-            let world = parent * animated_transform(node.json, animated, &at, &mut sink);
+            let world = parent.then(&animated_transform(node.json, animated, &at, &mut sink));
             if let Some(error) = sink.error {
                 return Err(error);
             }
-            if !world.is_finite() {
+            if !world.value.is_finite() {
                 return Err(Diagnostic::error(
                     "NODE_TRANSFORM_NOT_FINITE",
                     at,
@@ -308,7 +311,8 @@ impl Walk<'_> {
 
     /// The node's mesh (once, or per GPU instance), quadric and camera. A node is one object
     /// (its mesh and its quadric together); each GPU instance is one object.
-    fn add_node(&mut self, node: &Node, world: &DMat4) -> Result<(), Diagnostic> {
+    fn add_node(&mut self, node: &Node, placed: &BoundedMat4) -> Result<(), Diagnostic> {
+        let world = &placed.value;
         let at = node.pointer();
         let name = node
             .name
@@ -318,8 +322,8 @@ impl Walk<'_> {
             let pose = self.pose_of(node, mesh).map_err(|e| e.within(&at))?;
             // A skinned mesh is placed by its joints: its vertices are posed in the world.
             let placement = &match pose.joints {
-                Some(_) => DMat4::IDENTITY,
-                None => *world,
+                Some(_) => BoundedMat4::exact(DMat4::IDENTITY),
+                None => *placed,
             };
             let posed;
             let local = if pose.is_rest() {
@@ -354,7 +358,7 @@ impl Walk<'_> {
                             format!("{name}[{k}]"),
                             pointer,
                             local,
-                            &(*placement * *instance),
+                            &placement.then(instance),
                         )?;
                     }
                 }
@@ -363,6 +367,7 @@ impl Walk<'_> {
         if let Some(ext) = extension(node.json, QUADRIC_EXTENSION) {
             let quadric = QuadricSpec::from_gltf_extension(ext)
                 .and_then(|spec| Quadric::new(&spec, *world))
+                .map(|quadric| quadric.with_composition(placed))
                 .map_err(|e| {
                     Diagnostic::error(
                         "QUADRIC_INVALID",

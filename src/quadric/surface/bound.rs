@@ -2,8 +2,13 @@
 //!
 //! # What is bounded
 //! The exact surface is the file's `Q`, `P`, `R` and clip box (as read into f64) placed by the
-//! f64 node matrix `[A | T]`, both taken as exact. With the anchor `c = A·a + T` (`a` the local
-//! anchor, any fixed point) the exact local ray is `x₀* = A⁻¹(o − c)`, `v* = A⁻¹d`, and the exact
+//! node matrix `[A* | T*]`, both taken as exact: the f64 matrix `[A | T]` as read, or for a
+//! nested glTF node the exact product of its ancestors' matrices, within the entrywise bound
+//! `[E_A | E_T]` of the f64 composition ([`crate::bound::transform`]). With the anchor
+//! `c* = A*·a + T*` (`a` the local anchor, any fixed point; within `E_A|a| + E_T` of the f64
+//! `A·a + T` beyond that product's own rounding) the exact local ray is `x₀* = A*⁻¹(o − c*)`,
+//! `v* = A*⁻¹d` (the residual of [`crate::bound::mapped`] gains `E_A|x|`, and `‖A*⁻¹‖∞` is
+//! bounded from `‖A⁻¹‖∞` by [`crate::bound::transform::perturbed_inverse_norm`]), and the exact
 //! crossings are the roots of `g*(t) = K*t² + L*t + M*` for the polynomial about `a`: `Q`,
 //! `∇f(a) = 2Qa + P`, `f(a)`. The same `t` in every frame.
 //!
@@ -30,15 +35,20 @@
 
 use super::Quadric;
 use crate::bound::bounded::{down, exact3, gamma, mat_vec, up, BMat3, BVec3, Bounded};
+use crate::bound::transform::BoundedMat4;
 use crate::bound::{mapped, Side};
 use glam::{DMat3, DVec3};
 use std::ops::{Add, Div, Mul, Neg, Sub};
+use std::sync::OnceLock;
 
 /// Bounds of the numbers a quadric's intersection starts from, kept by [`Quadric::new`].
 #[derive(Debug, Clone, PartialEq)]
 pub(in crate::quadric) struct Errors {
-    /// The object→world linear map `A`, and a bound on `‖A⁻¹‖∞`.
+    /// The object→world linear map `A`, a bound on its entries' distance from the exactly
+    /// composed one ([`crate::bound::transform`]), and a bound on `‖A*⁻¹‖∞` for every `A*`
+    /// within it.
     pub linear: DMat3,
+    pub linear_error: DMat3,
     pub inverse_norm: f64,
     /// Bound on each component of the computed anchor.
     pub anchor: DVec3,
@@ -82,18 +92,61 @@ pub struct QuadricBound {
     pub others: Others,
 }
 
+/// What [`Errors`] are made from, kept by [`Quadric::new`] and turned into them the first time
+/// a bound is asked for: a run without the `error` and `certain` AOVs never pays for them (a
+/// pointer per quadric, and a copy of its spec and matrix).
+#[derive(Debug, Clone)]
+pub(in crate::quadric) struct LazyErrors(Box<(ErrorInputs, OnceLock<Errors>)>);
+
+/// The quadric's spec as read, its object→world matrix and the power-of-two normalisation of
+/// its local polynomial.
+#[derive(Debug, Clone, PartialEq)]
+struct ErrorInputs {
+    spec: crate::quadric::QuadricSpec,
+    world: BoundedMat4,
+    scale: [f64; 2],
+}
+
+impl PartialEq for LazyErrors {
+    /// Equal inputs make equal bounds.
+    fn eq(&self, other: &LazyErrors) -> bool {
+        self.0 .0 == other.0 .0
+    }
+}
+
+impl LazyErrors {
+    /// Keeps the inputs; nothing is computed yet.
+    pub fn new(spec: &crate::quadric::QuadricSpec, world: BoundedMat4, scale: [f64; 2]) -> Self {
+        let inputs = ErrorInputs {
+            spec: spec.clone(),
+            world,
+            scale,
+        };
+        LazyErrors(Box::new((inputs, OnceLock::new())))
+    }
+
+    /// The same inputs with the node matrix's bound from its composition.
+    pub fn composed(mut self, world: BoundedMat4) -> Self {
+        self.0 .0.world = world;
+        self.0 .1 = OnceLock::new();
+        self
+    }
+}
+
 impl Errors {
     /// The bounds for a quadric with local polynomial coefficients `gradient` and `constant`
     /// (as computed, before normalisation by `scale`), `spec_q`, the local anchor, the
     /// object→world matrix's linear part and translation and its f64 inverse.
-    pub fn new(
+    fn new(
         spec: &crate::quadric::QuadricSpec,
         local_anchor: DVec3,
-        world: glam::DMat4,
+        placement: &BoundedMat4,
         to_local: DMat3,
         scale: [f64; 2],
     ) -> Errors {
+        let world = placement.value;
         let linear = DMat3::from_mat4(world);
+        let linear_error = DMat3::from_mat4(placement.error);
         let a = exact3(local_anchor);
         let q = rows(spec.q, 0.0);
         let qa = mat_vec(&q, &a);
@@ -108,10 +161,20 @@ impl Errors {
         let scaled = |e: f64| up(up(e * scale[0]) * scale[1]);
         let placed = mat_vec(&rows(linear, 0.0), &a);
         let translation = world.w_axis.truncate();
-        let anchor = [0, 1, 2].map(|i| placed[i].add(Bounded::exact(translation[i])).error);
+        let composed = crate::bound::transform::moved(&placement.error, local_anchor);
+        let anchor = [0, 1, 2].map(|i| {
+            let rounded = placed[i].add(Bounded::exact(translation[i])).error;
+            if composed == 0.0 {
+                rounded
+            } else {
+                up(rounded + composed)
+            }
+        });
+        let norm = crate::bound::inverse_norm(linear, to_local);
         Errors {
             linear,
-            inverse_norm: crate::bound::inverse_norm(linear, to_local),
+            linear_error,
+            inverse_norm: crate::bound::transform::perturbed_inverse_norm(norm, &linear_error),
             anchor: DVec3::from_array(anchor),
             gradient: DVec3::from_array(gradient.map(|g| scaled(g.error))),
             constant: scaled(constant.error),
@@ -134,6 +197,22 @@ struct Coefficients {
 }
 
 impl Quadric {
+    /// The bounds of the quadric's numbers ([`Errors`]), made on the first call.
+    fn errors(&self) -> &Errors {
+        let (inputs, errors) = &*self.errors.0;
+        errors.get_or_init(|| {
+            let (spec, world) = (&inputs.spec, inputs.world);
+            Errors::new(spec, self.local_anchor, &world, self.to_local, inputs.scale)
+        })
+    }
+
+    /// The quadric with the bound of its node matrix's composition from nested nodes
+    /// ([`crate::bound::transform`]); `world.value` must be the matrix it was placed by.
+    pub fn with_composition(mut self, world: &BoundedMat4) -> Quadric {
+        self.errors = self.errors.composed(*world);
+        self
+    }
+
     /// The crossings of the world ray `origin + t·dir` (exact numbers) with the quadric's
     /// whole surface, the roots as [`Quadric::intersect`] computes them, each with its bound
     /// and its place against the clip box (see the module docs).
@@ -176,14 +255,14 @@ impl Quadric {
     /// The local ray as computed, `x₀ = L(o − c)`, `v = L d`, bounded
     /// ([`crate::bound::mapped`]).
     fn bounded_ray(&self, origin: DVec3, dir: DVec3) -> (BVec3, BVec3) {
-        let e = &self.errors;
+        let e = self.errors();
         let anchor = [0, 1, 2].map(|i| Bounded::new(self.anchor[i], e.anchor[i]));
         let offset = [0, 1, 2].map(|i| Bounded::exact(origin[i]).sub(anchor[i]));
         let x0 = self.to_local * (origin - self.anchor);
         let v = self.to_local * dir;
         (
-            mapped(e.linear, e.inverse_norm, &offset, x0),
-            mapped(e.linear, e.inverse_norm, &exact3(dir), v),
+            mapped(e.linear, &e.linear_error, e.inverse_norm, &offset, x0),
+            mapped(e.linear, &e.linear_error, e.inverse_norm, &exact3(dir), v),
         )
     }
 
@@ -191,8 +270,8 @@ impl Quadric {
     fn coefficients(&self, x0: &BVec3, v: &BVec3) -> Coefficients {
         use crate::bound::bounded::dot3;
         let q = rows(self.local.q, 0.0);
-        let p = [0, 1, 2].map(|i| Bounded::new(self.local.p[i], self.errors.gradient[i]));
-        let r = Bounded::new(self.local.r, self.errors.constant);
+        let p = [0, 1, 2].map(|i| Bounded::new(self.local.p[i], self.errors().gradient[i]));
+        let r = Bounded::new(self.local.r, self.errors().constant);
         let qv = mat_vec(&q, v);
         let two = Bounded::exact(2.0);
         Coefficients {
@@ -210,8 +289,8 @@ impl Quadric {
         let tb = Bounded::exact(t);
         let point: BVec3 = [0, 1, 2].map(|i| x0[i].add(tb.mul(v[i])));
         let q = rows(self.local.q, 0.0);
-        let p = [0, 1, 2].map(|i| Bounded::new(self.local.p[i], self.errors.gradient[i]));
-        let r = Bounded::new(self.local.r, self.errors.constant);
+        let p = [0, 1, 2].map(|i| Bounded::new(self.local.p[i], self.errors().gradient[i]));
+        let r = Bounded::new(self.local.r, self.errors().constant);
         let qp = mat_vec(&q, &point);
         let value = dot3(&point, &qp).add(dot3(&p, &point)).add(r);
         let gradient: BVec3 = [0, 1, 2].map(|i| Bounded::exact(2.0).mul(qp[i]).add(p[i]));
@@ -247,7 +326,7 @@ impl Quadric {
 
     /// Where the exact point `x₀ + t·v + a` lies against the file's clip box.
     fn clip_side(&self, t: Bounded, x0: &BVec3, v: &BVec3) -> Side {
-        let Some([min, max]) = self.errors.clip else {
+        let Some([min, max]) = self.errors().clip else {
             return Side::Inside;
         };
         if !t.error.is_finite() {
