@@ -498,12 +498,23 @@ class Scene:
             except ValueError as e:
                 raise rays.named(e, start) from None
 
-        parts = [part for _, _, part in _chunks.pieces(len(rays), piece, progress)]
-        counts = np.concatenate([np.diff(part[0]) for part in parts])
-        splits = np.zeros(len(counts) + 1, dtype=np.uint64)
-        np.cumsum(counts, out=splits[1:])
-        t, ids, prims = (np.concatenate([part[k] for part in parts]) for k in (1, 2, 3))
-        ray_ids = np.repeat(np.arange(len(counts), dtype=np.uint32), counts.astype(np.int64))
+        # Each piece's lists are kept per column and joined column by column, each piece's
+        # column let go once copied: the peak is the output plus one column.
+        splits = np.zeros(len(rays) + 1, dtype=np.uint64)
+        parts = []
+        for start, stop, (own, t, ids, prims) in _chunks.pieces(len(rays), piece, progress):
+            splits[start + 1 : stop + 1] = own[1:] + splits[start]
+            counts = np.diff(own).astype(np.intp)
+            ray_ids = np.repeat(np.arange(start, stop, dtype=np.uint32), counts)
+            parts.append([t, ids, prims, ray_ids])
+
+        def joined(k):
+            whole = np.concatenate([part[k] for part in parts])
+            for part in parts:
+                part[k] = None
+            return whole
+
+        t, ids, prims, ray_ids = (joined(k) for k in range(4))
         return {"ray_splits": splits, "t": t, "id": ids, "prim": prims, "ray_ids": ray_ids}
 
     def count_intersections(
