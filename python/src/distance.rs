@@ -10,7 +10,7 @@ use numpy::PyReadonlyArray2;
 use pyo3::exceptions::{PyNotImplementedError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use raycast::query::{winding_number, NearestPoint, Query, Side};
+use raycast::query::{NearestPoint, SignRule, Signer};
 use rayon::prelude::*;
 
 /// The rows of `points`, after checking the shape, that the scene has no quadric (whose
@@ -105,56 +105,23 @@ pub fn signed_distance<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let points = rows(scene, &points)?;
     let query = scene.query();
-    let signed: Vec<f64> = match sign {
-        "crossings" => py.detach(|| threads::run(nthreads, || by_crossings(&query, &points)))?,
-        "winding" => py.detach(|| threads::run(nthreads, || by_winding(&query, &points)))?,
+    let rule = match sign {
+        "crossings" => SignRule::Crossings,
+        "winding" => SignRule::Winding,
         _ => {
             return Err(PyValueError::new_err(format!(
                 "unknown sign rule '{sign}' (choose crossings or winding)"
             )))
         }
     };
+    let signed: Vec<f64> = py.detach(|| {
+        threads::run(nthreads, || {
+            let signer = Signer::new(query, rule);
+            (0..points.nrows())
+                .into_par_iter()
+                .map(|i| signer.signed_distance(point(&points, i)))
+                .collect()
+        })
+    })?;
     array(py, &[signed.len()], signed)
-}
-
-/// Signed distances with the side from the crossing parity.
-fn by_crossings(query: &Query<'_>, points: &ArrayView2<'_, f64>) -> Vec<f64> {
-    let bounds = query.scene.world_bounds();
-    (0..points.nrows())
-        .into_par_iter()
-        .map(|i| {
-            let p = point(points, i);
-            let Some(c) = query.closest(p) else {
-                return f64::INFINITY;
-            };
-            query.side_by_crossings(p, c.distance, &bounds).sign() * c.distance
-        })
-        .collect()
-}
-
-/// Signed distances with the side from the winding number (every triangle for every point).
-fn by_winding(query: &Query<'_>, points: &ArrayView2<'_, f64>) -> Vec<f64> {
-    let scene = query.scene;
-    let triangles: Vec<_> = scene
-        .objects
-        .iter()
-        .flat_map(|o| scene.mesh_triangles(o))
-        .collect();
-    (0..points.nrows())
-        .into_par_iter()
-        .map(|i| {
-            let p = point(points, i);
-            let Some(c) = query.closest(p) else {
-                return f64::INFINITY;
-            };
-            let side = if c.distance == 0.0 {
-                Side::OnSurface
-            } else if winding_number(&triangles, p) > 0.5 {
-                Side::Inside
-            } else {
-                Side::Outside
-            };
-            side.sign() * c.distance
-        })
-        .collect()
 }

@@ -3,7 +3,8 @@
 
 use crate::{probe_usd, PathArgs, PoseArgs};
 use clap::{Args, ValueEnum};
-use raycast::job::distance::{self, DistanceJob, SignRule};
+use raycast::job::distance::{self, DistanceJob};
+use raycast::query::SignRule;
 use std::path::PathBuf;
 
 /// Arguments of `raycast distance`.

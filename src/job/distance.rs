@@ -12,30 +12,11 @@ use crate::error::{Error, Result};
 use crate::import::{self, LoadOptions};
 use crate::output::npy::{self, NpyData};
 use crate::output::{ownership, FileJob, Staging, DISTANCE_FILES as FILES};
-use crate::query::{winding_number, NearestPoint, Query, Side};
+use crate::query::{NearestPoint, Query, SignRule, Signer};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// How the side of a point is decided.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SignRule {
-    /// The parity of exact watertight crossing counts (certain for closed meshes).
-    Crossings,
-    /// The generalised winding number above 1/2 (for meshes that are not closed).
-    Winding,
-}
-
-impl SignRule {
-    /// The rule's name, as `--sign` takes it.
-    pub fn name(self) -> &'static str {
-        match self {
-            SignRule::Crossings => "crossings",
-            SignRule::Winding => "winding",
-        }
-    }
-}
 
 /// Everything a distance run needs.
 #[derive(Debug, Clone)]
@@ -135,29 +116,12 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
 
 /// Each point's nearest point (if the scene has triangles) and the sign of its distance.
 fn measure(query: &Query, points: &[DVec3], rule: SignRule) -> Vec<(Option<NearestPoint>, f64)> {
-    let scene = query.scene;
-    let bounds = scene.world_bounds();
-    let triangles: Vec<[DVec3; 3]> = match rule {
-        SignRule::Winding => scene
-            .objects
-            .iter()
-            .flat_map(|o| scene.mesh_triangles(o))
-            .collect(),
-        SignRule::Crossings => Vec::new(),
-    };
+    let signer = Signer::new(*query, rule);
     points
         .par_iter()
         .map(|&p| {
-            let Some(nearest) = query.closest(p) else {
-                return (None, 1.0);
-            };
-            let side = match rule {
-                SignRule::Crossings => query.side_by_crossings(p, nearest.distance, &bounds),
-                SignRule::Winding if nearest.distance == 0.0 => Side::OnSurface,
-                SignRule::Winding if winding_number(&triangles, p) > 0.5 => Side::Inside,
-                SignRule::Winding => Side::Outside,
-            };
-            (Some(nearest), side.sign())
+            let (nearest, side) = signer.measure(p);
+            (nearest, side.sign())
         })
         .collect()
 }

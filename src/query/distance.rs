@@ -121,6 +121,81 @@ impl Query<'_> {
     }
 }
 
+/// How the side of a point is decided.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SignRule {
+    /// The parity of exact watertight crossing counts (certain for closed meshes).
+    Crossings,
+    /// The generalised winding number above 1/2 (for meshes that are not closed).
+    Winding,
+}
+
+impl SignRule {
+    /// The rule's name, as `--sign` and Python's `sign=` take it.
+    pub fn name(self) -> &'static str {
+        match self {
+            SignRule::Crossings => "crossings",
+            SignRule::Winding => "winding",
+        }
+    }
+}
+
+/// Signed distances of many points in one scene: what [`Signer::measure`] needs, made once.
+pub struct Signer<'a> {
+    query: Query<'a>,
+    rule: SignRule,
+    bounds: Aabb,
+    /// Every triangle of the scene in world coordinates, for [`SignRule::Winding`].
+    triangles: Vec<[DVec3; 3]>,
+}
+
+impl<'a> Signer<'a> {
+    /// Prepares signed distances in `query`'s scene by `rule`.
+    pub fn new(query: Query<'a>, rule: SignRule) -> Signer<'a> {
+        let scene = query.scene;
+        let triangles = match rule {
+            SignRule::Winding => scene
+                .objects
+                .iter()
+                .flat_map(|o| scene.mesh_triangles(o))
+                .collect(),
+            SignRule::Crossings => Vec::new(),
+        };
+        Signer {
+            query,
+            rule,
+            bounds: scene.world_bounds(),
+            triangles,
+        }
+    }
+
+    /// The nearest point of `point` (`None` for a scene without triangles) and its side.
+    pub fn measure(&self, point: DVec3) -> (Option<NearestPoint>, Side) {
+        let Some(nearest) = self.query.closest(point) else {
+            return (None, Side::Outside);
+        };
+        let side = match self.rule {
+            SignRule::Crossings => {
+                self.query
+                    .side_by_crossings(point, nearest.distance, &self.bounds)
+            }
+            SignRule::Winding if nearest.distance == 0.0 => Side::OnSurface,
+            SignRule::Winding if winding_number(&self.triangles, point) > 0.5 => Side::Inside,
+            SignRule::Winding => Side::Outside,
+        };
+        (Some(nearest), side)
+    }
+
+    /// The signed distance of `point`: +inf without triangles, 0 on the surface.
+    pub fn signed_distance(&self, point: DVec3) -> f64 {
+        match self.measure(point) {
+            (None, _) => f64::INFINITY,
+            (Some(_), Side::OnSurface) => 0.0,
+            (Some(n), side) => side.sign() * n.distance,
+        }
+    }
+}
+
 /// The generalised winding number of `triangles` (world coordinates) at `point`: the sum of
 /// their signed solid angles over 4π (see the module docs).
 pub fn winding_number(triangles: &[[DVec3; 3]], point: DVec3) -> f64 {
