@@ -1,7 +1,9 @@
 //! `raycast info`: what the importer found in a scene.
 
 use crate::camera::Projection;
+use crate::check::geometry::topology;
 use crate::scene::{ObjectKind, PoseInfo, Scene, StageInfo};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt;
 
@@ -52,6 +54,11 @@ pub struct ObjectInfo {
     pub quadric_type: Option<&'static str>,
     /// World bounds `[min, max]`.
     pub bounds: [[f64; 3]; 2],
+    /// Whether its triangles form a closed, consistently wound surface (every edge, its
+    /// vertices welded by their exact coordinates, shared by two triangles in opposite
+    /// directions): where inside and outside, and so signed distances, are certain. Meshes only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub closed: Option<bool>,
 }
 
 /// One camera of [`SceneInfo`].
@@ -77,9 +84,11 @@ impl SceneInfo {
             triangles: scene.triangle_count(),
             quadrics: scene.quadrics().len(),
             bounds: (!bounds.is_empty()).then(|| [bounds.min.to_array(), bounds.max.to_array()]),
+            // In parallel: the closedness test welds every vertex (1.3 s of one core for the
+            // chess set's 1.4 million triangles).
             objects: scene
                 .objects
-                .iter()
+                .par_iter()
                 .map(|o| {
                     let b = scene.object_bounds(o);
                     ObjectInfo {
@@ -92,6 +101,8 @@ impl SceneInfo {
                             .quadric
                             .map(|q| scene.quadrics()[q as usize].kind().name()),
                         bounds: [b.min.to_array(), b.max.to_array()],
+                        closed: (o.kind == ObjectKind::Mesh)
+                            .then(|| topology(&scene.mesh_triangles(o)).closed()),
                     }
                 })
                 .collect(),
@@ -164,6 +175,11 @@ impl SceneInfo {
             let what = match o.quadric_type {
                 Some(kind) => format!("quadric ({kind})"),
                 None => count(o.triangles as usize, "triangle"),
+            };
+            let what = match o.closed {
+                Some(true) => format!("{what}, closed"),
+                Some(false) => format!("{what}, open"),
+                None => what,
             };
             writeln!(
                 f,

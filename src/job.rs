@@ -13,6 +13,7 @@ use stages::run_checked;
 use std::path::{Path, PathBuf};
 
 mod cryptomatte;
+pub mod distance;
 pub mod sequence;
 mod stages;
 mod view;
@@ -173,31 +174,41 @@ pub fn run_from(
     progress: impl FnMut(Progress) + Send,
 ) -> Result<Sidecar> {
     let formats = check_request(job)?;
-    into_folder(job, &formats, || {
+    into_job_folder(job, &formats, || {
         run_checked(job, source, &formats, progress)
     })
 }
 
-/// Runs `render` for `job` into its output folder: the folder is created if need be (and
-/// removed again when the render fails) and claimed for the job's scene first.
-fn into_folder(
+/// [`into_folder`] for a render job: its output folder, its inputs (the scene, the ray file)
+/// and the files it writes in `formats`.
+fn into_job_folder<T>(
     job: &RenderJob,
     formats: &[Format],
-    render: impl FnOnce() -> Result<Sidecar>,
-) -> Result<Sidecar> {
-    let out = job.out_dir();
-    let created = output::prepare_tracked_folder(&out)?;
-    let names = job.file_names(formats);
+    work: impl FnOnce() -> Result<T>,
+) -> Result<T> {
     let inputs: Vec<&Path> = std::iter::once(job.scene.as_path())
         .chain(job.rays.as_deref())
         .collect();
-    let result = ownership::refuse_inputs(&out, &names, &inputs)
-        .and_then(|()| ownership::claim(&out, &job.scene, &names))
-        .and_then(|_| render());
+    into_folder(&job.out_dir(), &inputs, &job.file_names(formats), work)
+}
+
+/// Runs `work` for a run of the scene `inputs[0]` (reading `inputs`) that writes `names` into
+/// the folder `out`: the folder is created if need be (and removed again when the run fails)
+/// and claimed for the scene first.
+fn into_folder<T>(
+    out: &Path,
+    inputs: &[&Path],
+    names: &[String],
+    work: impl FnOnce() -> Result<T>,
+) -> Result<T> {
+    let created = output::prepare_tracked_folder(out)?;
+    let result = ownership::refuse_inputs(out, names, inputs)
+        .and_then(|()| ownership::claim(out, inputs[0], names))
+        .and_then(|_| work());
     if result.is_err() {
-        request::remove_created_folder(&out, created.as_deref());
+        request::remove_created_folder(out, created.as_deref());
     }
-    output::untrack_created_folder(&out);
+    output::untrack_created_folder(out);
     result
 }
 

@@ -41,6 +41,8 @@ enum Command {
     /// Validate assets for CI (exit 0: no errors, 1: errors, or warnings with --strict, 2: usage
     /// or I/O problem).
     Check(Box<cli::check::CheckArgs>),
+    /// The nearest surface point and signed distance of each point of an (N, 3) .npy file.
+    Distance(Box<cli::distance::DistanceArgs>),
 }
 
 #[derive(Args)]
@@ -375,6 +377,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Some(Command::Info(args)) => info(args),
         Some(Command::Check(args)) => return cli::check::run(&args),
+        Some(Command::Distance(args)) => cli::distance::run(*args),
         None => render(cli.render),
     };
     match result {

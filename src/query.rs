@@ -5,6 +5,10 @@
 //! With `t_min = 0` the nearest hit is exactly [`crate::render::Tracer::trace`]'s (the same
 //! search), so buffers filled from it are bit-identical to the command line's rays mode.
 
+mod distance;
+
+pub use distance::{winding_number, NearestPoint, Side};
+
 use crate::accel::{test_primitive, Hit, Octree, PrimitiveSet, PACKET};
 use crate::geometry::Ray;
 use crate::render::RaySource;

@@ -17,11 +17,12 @@ import errno
 import json
 import os
 import warnings
+from pathlib import Path
 from typing import Iterable
 
 import numpy as np
 
-from . import _raycast, camera, errors
+from . import _chunks, _content, _raycast, camera, errors
 from .errors import RaycastError, RaycastWarning, SceneError, SceneNotFoundError, UsageError
 
 __all__ = [
@@ -58,6 +59,9 @@ CAST_OUTPUTS = (
 RENDER_OUTPUTS = (*CAST_OUTPUTS[:2], "depth", "z", *CAST_OUTPUTS[2:])
 #: The ``prim`` value of a miss.
 INVALID_PRIM = 2**32 - 1
+#: Whether a pickled scene refuses to load a file that changed since it was pickled (its
+#: content digest differs). Set it to False to load the files as they are now.
+CHECK_PICKLED_FILES = True
 
 
 def load(
@@ -103,11 +107,20 @@ def load(
     which = None if animation is None else str(animation)
     chosen = None if variants is None else [(str(k), str(v)) for k, v in variants.items()]
     try:
-        return Scene(_raycast.load_path(os.fspath(path), choice, time, which, chosen))
+        scene = Scene(_raycast.load_path(os.fspath(path), choice, time, which, chosen))
     except SceneNotFoundError as missing:
         missing.errno, missing.strerror = errno.ENOENT, os.strerror(errno.ENOENT)
         missing.filename = os.fspath(path)
         raise
+    scene._files = _content.stamp(Path(path))
+    return scene
+
+
+def _load_pickled(path, digest, scene, time, animation, variants) -> Scene:
+    """Unpickles a scene loaded from a file: the file must hold what it held when the scene
+    was pickled (unless :data:`CHECK_PICKLED_FILES` is False)."""
+    _content.check(Path(path), digest, CHECK_PICKLED_FILES)
+    return load(path, scene, time, animation, variants)
 
 
 def load_bytes(
@@ -188,18 +201,70 @@ class _Rays:
             ) from None
         return np.ascontiguousarray(full, dtype=np.float64).reshape(-1)
 
+    def __len__(self) -> int:
+        return len(self.flat[0])
+
+    def piece(self, start: int, stop: int) -> tuple:
+        """The flat rays ``start..stop``, as the compiled scene takes them."""
+        o, d, tmin, tmax = self.flat
+        cut = (x[start:stop] if len(x) > 1 else x for x in (tmin, tmax))
+        return (o[start:stop], d[start:stop], *cut)
+
     def shaped(self, array: np.ndarray) -> np.ndarray:
         """A per-ray result (N, ...) in the batch shape."""
         return array.reshape(self.shape + array.shape[1:])
 
-    def named(self, error: ValueError) -> ValueError:
-        """A compiled scene's error about flat ray ``i``, naming the ray by its batch index."""
-        text = str(error)
-        head, sep, rest = text.partition(": ")
-        if len(self.shape) > 1 and sep and head.startswith("ray ") and head[4:].isdigit():
-            index = np.unravel_index(int(head[4:]), self.shape)
-            return ValueError(f"ray {tuple(int(i) for i in index)}: {rest}")
+    def named(self, error: ValueError, offset: int = 0) -> ValueError:
+        """A compiled scene's error about flat ray ``i`` of a piece starting at ``offset``,
+        naming the ray by its batch index."""
+        return _renamed(error, "ray", offset, self.shape)
+
+    def run(self, call, progress) -> dict:
+        """``call(rays)`` over every ray, in pieces (see ``_chunks``), with ray errors named."""
+
+        def piece(start, stop):
+            try:
+                return call(self.piece(start, stop))
+            except ValueError as e:
+                raise self.named(e, start) from None
+
+        found = _chunks.gather(len(self), piece, progress)
+        return {k: self.shaped(v) for k, v in found.items()}
+
+
+def _threads(nthreads) -> int:
+    """``nthreads`` checked: a whole number, 0 for all cores."""
+    if isinstance(nthreads, bool) or int(nthreads) != nthreads or nthreads < 0:
+        raise ValueError(f"nthreads must be a whole number >= 0 (0: all cores), got {nthreads!r}")
+    return int(nthreads)
+
+
+def _renamed(error: ValueError, word: str, offset: int, shape: tuple) -> ValueError:
+    """A compiled scene's error about ``word`` ``i`` (``ray 7: ...``) of a piece starting at
+    ``offset``, naming it by its index in the batch ``shape``."""
+    head, sep, rest = str(error).partition(" ")
+    number, space, tail = rest.partition(" ")
+    if head != word or not sep or not number.rstrip(":").isdigit():
         return error
+    index = np.unravel_index(int(number.rstrip(":")) + offset, shape)
+    where = tuple(int(i) for i in index) if len(shape) > 1 else int(index[0])
+    return ValueError(f"{word} {where}{':' if number.endswith(':') else ''}{space}{tail}")
+
+
+def _per_point(points, call, progress) -> dict:
+    """``call`` over the (N, 3) rows of ``points`` (shape (..., 3)) in pieces, each result in
+    the points' batch shape."""
+    p = _batch(points, "points", 3)
+    flat = np.ascontiguousarray(p.reshape(-1, 3))
+
+    def piece(start, stop):
+        try:
+            return call(flat[start:stop])
+        except ValueError as e:
+            raise _renamed(e, "point", start, p.shape[:-1]) from None
+
+    found = _chunks.gather(len(flat), piece, progress)
+    return {k: v.reshape(p.shape[:-1] + v.shape[1:]) for k, v in found.items()}
 
 
 def _names(outputs: Iterable[str] | str) -> list[str]:
@@ -214,6 +279,8 @@ class Scene:
 
     def __init__(self, compiled: _raycast._Scene):
         self._scene = compiled
+        # For a scene loaded from a file: its files' sizes and times when it was loaded.
+        self._files = None
         self._warned: set[str] = set()
         for line in json.loads(compiled.info_json()).get("warnings", []):
             # stacklevel 3: the caller of load(), load_bytes(), at() or from_arrays().
@@ -255,7 +322,8 @@ class Scene:
             return (Scene.from_arrays, arrays)
         data, name, choice, time, animation, variants = self._scene.source()
         if name is None:
-            return (load, (data, choice, time, animation, dict(variants) or None))
+            digest = _content.digest_unchanged_since(Path(data), self._files)
+            return (_load_pickled, (data, digest, choice, time, animation, dict(variants) or None))
         return (load_bytes, (data, name, choice, time, animation))
 
     def at(self, time: float) -> Scene:
@@ -277,7 +345,9 @@ class Scene:
         Scene
             A new scene; this one is unchanged.
         """
-        return Scene(self._scene.at(float(time)))
+        posed = Scene(self._scene.at(float(time)))
+        posed._files = self._files
+        return posed
 
     @property
     def objects(self) -> list[dict]:
@@ -329,6 +399,9 @@ class Scene:
         tmin=0.0,
         tmax=np.inf,
         aovs=("t", "distance", "normal", "id", "prim"),
+        *,
+        nthreads: int = 0,
+        progress=None,
     ) -> dict:
         """The nearest hit of each ray ``origin + t * direction`` with ``tmin < t <= tmax``.
 
@@ -344,6 +417,15 @@ class Scene:
             ``tmin >= 0``.
         aovs : sequence of str
             Outputs to compute, from :data:`CAST_OUTPUTS`.
+        nthreads : int
+            Threads to trace on (0, the default: one per core; more than the cores are
+            brought down to the cores). The results do not depend on it.
+        progress : callable or tqdm-like, optional
+            Told how far a long call got: called as ``progress(done, total)`` (rays), or, for
+            an object with ``update`` (a ``tqdm`` bar), given the rays done since the last
+            report. Every query and :meth:`render` take ``nthreads`` and ``progress``; all of
+            them run in pieces of a few hundredths of a second, so that Ctrl-C interrupts
+            them (``KeyboardInterrupt``) within about 0.1 s.
 
         Returns
         -------
@@ -378,22 +460,22 @@ class Scene:
         names = _names(aovs)
         rays = _Rays(origins, directions, tmin, tmax)
         self._warn_missing([n for n in names if n != "z"])
-        try:
-            hits = self._scene.cast(rays.flat, names)
-        except ValueError as e:
-            raise rays.named(e) from None
-        return {k: rays.shaped(v) for k, v in hits.items()}
+        threads = _threads(nthreads)
+        return rays.run(lambda flat: self._scene.cast(flat, names, threads), progress)
 
-    def occluded(self, origins, directions=None, tmin=0.0, tmax=np.inf) -> np.ndarray:
+    def occluded(
+        self, origins, directions=None, tmin=0.0, tmax=np.inf, *, nthreads=0, progress=None
+    ) -> np.ndarray:
         """Whether each ray hits anything with ``tmin < t <= tmax``: a bool array of the
         rays' batch shape. Arguments and errors as for :meth:`cast`."""
         rays = _Rays(origins, directions, tmin, tmax)
-        try:
-            return rays.shaped(self._scene.occluded(rays.flat))
-        except ValueError as e:
-            raise rays.named(e) from None
+        threads = _threads(nthreads)
+        found = rays.run(lambda flat: {"hit": self._scene.occluded(flat, threads)}, progress)
+        return found["hit"]
 
-    def list_intersections(self, origins, directions=None, tmin=0.0, tmax=np.inf) -> dict:
+    def list_intersections(
+        self, origins, directions=None, tmin=0.0, tmax=np.inf, *, nthreads=0, progress=None
+    ) -> dict:
         """Every surface crossing of each ray with ``tmin < t <= tmax``, nearest first.
 
         A ray through an edge or a vertex shared by triangles of a consistently wound mesh
@@ -408,26 +490,36 @@ class Scene:
             uint32; ``ray_ids`` uint32 (the ray of each hit).
         """
         rays = _Rays(origins, directions, tmin, tmax)
-        try:
-            splits, t, ids, prims = self._scene.crossings(rays.flat)
-        except ValueError as e:
-            raise rays.named(e) from None
-        ray_ids = np.repeat(
-            np.arange(len(splits) - 1, dtype=np.uint32), np.diff(splits).astype(np.int64)
-        )
+        threads = _threads(nthreads)
+
+        def piece(start, stop):
+            try:
+                return self._scene.crossings(rays.piece(start, stop), threads)
+            except ValueError as e:
+                raise rays.named(e, start) from None
+
+        parts = [part for _, _, part in _chunks.pieces(len(rays), piece, progress)]
+        counts = np.concatenate([np.diff(part[0]) for part in parts])
+        splits = np.zeros(len(counts) + 1, dtype=np.uint64)
+        np.cumsum(counts, out=splits[1:])
+        t, ids, prims = (np.concatenate([part[k] for part in parts]) for k in (1, 2, 3))
+        ray_ids = np.repeat(np.arange(len(counts), dtype=np.uint32), counts.astype(np.int64))
         return {"ray_splits": splits, "t": t, "id": ids, "prim": prims, "ray_ids": ray_ids}
 
-    def count_intersections(self, origins, directions=None, tmin=0.0, tmax=np.inf) -> np.ndarray:
+    def count_intersections(
+        self, origins, directions=None, tmin=0.0, tmax=np.inf, *, nthreads=0, progress=None
+    ) -> np.ndarray:
         """The number of surface crossings of each ray, as :meth:`list_intersections`
         counts them: a uint32 array of the rays' batch shape."""
         rays = _Rays(origins, directions, tmin, tmax)
-        try:
-            splits = self._scene.crossings(rays.flat)[0]
-        except ValueError as e:
-            raise rays.named(e) from None
-        return rays.shaped(np.diff(splits).astype(np.uint32))
+        threads = _threads(nthreads)
 
-    def contains(self, points) -> np.ndarray:
+        def count(flat):
+            return {"n": np.diff(self._scene.crossings(flat, threads)[0]).astype(np.uint32)}
+
+        return rays.run(count, progress)["n"]
+
+    def contains(self, points, *, nthreads=0, progress=None) -> np.ndarray:
         """Whether each point (an array of shape (..., 3)) lies inside the scene's closed
         surfaces: a bool array of the points' batch shape.
 
@@ -435,11 +527,74 @@ class Scene:
         majority, so that a ray that grazes an edge cannot decide alone. Meaningful for
         closed, consistently wound surfaces; a point on a surface may count either way.
         """
-        p = _batch(points, "points", 3)
-        inside = self._scene.contains(np.ascontiguousarray(p.reshape(-1, 3)))
-        return inside.reshape(p.shape[:-1])
+        threads = _threads(nthreads)
+        found = _per_point(points, lambda p: {"in": self._scene.contains(p, threads)}, progress)
+        return found["in"]
 
-    def render(self, camera: camera.Camera, width: int, height: int, aovs=("depth",)) -> dict:
+    def closest_points(self, points, *, nthreads=0, progress=None) -> dict:
+        """The nearest surface point of each query point (an array of shape (..., 3)).
+
+        Found through the octree and measured exactly in float64 on the triangle (the error
+        is a few ulps of the triangle's size; on the face, of the distance itself). Triangles
+        only: a scene with quadrics raises ``NotImplementedError``.
+
+        Returns
+        -------
+        dict of numpy.ndarray
+            In the points' batch shape (written (N,)): ``point`` (N, 3) float64;
+            ``distance`` (N,) float64; ``id`` (N,) uint32, the 1-based object id; ``prim``
+            (N,) uint32, the triangle's index in the object; ``bary`` (N, 3) float64, the
+            nearest point's barycentric weights of the triangle's vertices; ``normal`` (N, 3)
+            float64, the triangle's unit geometric normal. A scene without triangles gives
+            +inf points and distances, id 0 and ``INVALID_PRIM``.
+        """
+        threads = _threads(nthreads)
+        return _per_point(
+            points, lambda p: _raycast.closest_points(self._scene, p, threads), progress
+        )
+
+    def distance(self, points, *, nthreads=0, progress=None) -> np.ndarray:
+        """The distance from each point (shape (..., 3)) to the nearest surface: the
+        ``distance`` of :meth:`closest_points`."""
+        return self.closest_points(points, nthreads=nthreads, progress=progress)["distance"]
+
+    def signed_distance(
+        self, points, sign: str = "crossings", *, nthreads=0, progress=None
+    ) -> np.ndarray:
+        """The signed distance of each point (shape (..., 3)): negative inside, positive
+        outside, and exactly 0 where the side cannot be certain.
+
+        ``sign="crossings"``: the parity of exact watertight crossing counts (see
+        :meth:`contains`), exact for closed, consistently wound meshes; a point nearer to a
+        surface than the test's rounding margin (about 1e-14 of the scene's size) gets 0.
+        ``sign="winding"``: the generalised winding number above 1/2, for meshes that are not
+        closed (it visits every triangle for every point). Triangles only.
+        """
+        threads = _threads(nthreads)
+
+        def signed(p):
+            return {"d": _raycast.signed_distance(self._scene, p, sign, threads)}
+
+        return _per_point(points, signed, progress)["d"]
+
+    def occupancy(self, points, nsamples: int = 1, *, nthreads=0, progress=None) -> np.ndarray:
+        """1.0 for each point (shape (..., 3)) inside the closed surfaces, else 0.0 (float32,
+        as Open3D's ``compute_occupancy``): :meth:`contains`. ``nsamples`` is accepted for
+        Open3D's signature; the crossing parity is exact, so no votes are needed."""
+        if int(nsamples) < 1:
+            raise ValueError(f"nsamples must be at least 1, got {nsamples}")
+        return self.contains(points, nthreads=nthreads, progress=progress).astype(np.float32)
+
+    def render(
+        self,
+        camera: camera.Camera,
+        width: int,
+        height: int,
+        aovs=("depth",),
+        *,
+        nthreads: int = 0,
+        progress=None,
+    ) -> dict:
         """An image seen by ``camera``: one ray per pixel through its centre, row 0 at the top.
 
         Parameters
@@ -458,12 +613,18 @@ class Scene:
         dict of numpy.ndarray
             Arrays of shape (height, width) or (height, width, 3), with the values and misses
             of :meth:`cast`; bit-identical to the command line's buffers for the same camera.
+            ``nthreads`` and ``progress`` (told image rows) as for :meth:`cast`.
         """
-        names = _names(aovs)
+        width, height, names = int(width), int(height), _names(aovs)
         self._warn_missing(names)
-        return self._scene.render(camera, int(width), int(height), names)
+        threads = _threads(nthreads)
 
-    def render_views(self, views, aovs=("depth",)):
+        def rows(first, last):
+            return self._scene.render(camera, width, height, names, (first, last), threads)
+
+        return _chunks.gather(height, rows, progress, unit=max(1, width))
+
+    def render_views(self, views, aovs=("depth",), *, nthreads=0):
         """Renders each of ``views`` (from :func:`raycast.camera.read_views`) at its own size,
         one after another over this scene's one octree.
 
@@ -473,11 +634,9 @@ class Scene:
             The view's name and its images, as :meth:`render` gives them; one view at a time,
             so that a long list does not hold every image in memory.
         """
-        names = _names(aovs)
-        self._warn_missing(names)
         for name, view in views:
             width, height = view.size
-            yield name, self._scene.render(view, width, height, names)
+            yield name, self.render(view, width, height, aovs, nthreads=nthreads)
 
     def __repr__(self) -> str:
         if self._scene.is_arrays():

@@ -2,6 +2,7 @@
 //! as numpy arrays. The buffers are made by `raycast::render::trace`, the loop that makes the
 //! command line's buffers, so the values are bit-identical to the command line's files.
 
+use crate::threads;
 use numpy::ndarray::{ArrayD, IxDyn};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
@@ -36,20 +37,24 @@ pub fn parse(name: &str, camera: bool) -> Result<Aov, String> {
 }
 
 /// Traces `rays` and returns a dict of `outputs` (with their names), arrays of shape `shape`
-/// (+ `(2,)` for uv, `(3,)` for vectors), or the first refused ray. The tracing runs with the GIL released.
+/// (+ `(2,)` for uv, `(3,)` for vectors), or the first refused ray. The tracing runs with the GIL
+/// released, on `nthreads` threads (0: all cores).
 pub fn trace_dict<'py, S, R>(
     py: Python<'py>,
     tracer: &Tracer,
     rays: &Rays<S, R>,
     outputs: &[(String, Aov)],
     shape: &[usize],
+    nthreads: usize,
 ) -> PyResult<Result<Bound<'py, PyDict>, usize>>
 where
     S: RaySource + ?Sized,
     R: Fn(usize) -> (f64, f64) + Sync,
 {
     let aovs: Vec<Aov> = outputs.iter().map(|(_, a)| *a).collect();
-    let buffers = match py.detach(|| render::trace(tracer, rays, &aovs, |_| {})) {
+    let traced =
+        py.detach(|| threads::run(nthreads, || render::trace(tracer, rays, &aovs, |_| {})));
+    let buffers = match traced? {
         Ok(buffers) => buffers,
         Err(i) => return Ok(Err(i)),
     };

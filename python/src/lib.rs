@@ -9,8 +9,10 @@
 
 mod arrays;
 mod camera;
+mod distance;
 mod fill;
 mod scene;
+mod threads;
 
 use pyo3::prelude::*;
 use pyo3::types::PyType;
@@ -42,6 +44,8 @@ fn _raycast(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scene::load_path, m)?)?;
     m.add_function(wrap_pyfunction!(scene::load_bytes, m)?)?;
     m.add_function(wrap_pyfunction!(scene::load_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(distance::closest_points, m)?)?;
+    m.add_function(wrap_pyfunction!(distance::signed_distance, m)?)?;
     m.add_function(wrap_pyfunction!(camera::look_at, m)?)?;
     m.add_function(wrap_pyfunction!(camera::pinhole, m)?)?;
     m.add_function(wrap_pyfunction!(camera::read_views, m)?)?;

@@ -3,6 +3,7 @@
 use crate::arrays::RayArrays;
 use crate::camera::PyCamera;
 use crate::fill::{array, trace_dict};
+use crate::threads;
 use glam::DVec3;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
@@ -12,7 +13,7 @@ use pyo3::types::{PyBytes, PyDict, PyTuple};
 use raycast::accel::{Octree, OctreeParams};
 use raycast::import::{self, LoadOptions};
 use raycast::query::Query;
-use raycast::render::{Aov, RaySource, Rays, Tracer};
+use raycast::render::{Aov, CameraView, RaySource, Rays, Tracer};
 use raycast::scene::Scene;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -122,11 +123,17 @@ impl PyScene {
         })
     }
 
-    fn query(&self) -> Query<'_> {
+    /// The scene and its octree, for queries.
+    pub(crate) fn query(&self) -> Query<'_> {
         Query {
             scene: &self.scene,
             octree: &self.octree,
         }
+    }
+
+    /// The scene.
+    pub(crate) fn scene(&self) -> &Scene {
+        &self.scene
     }
 
     /// The scene and its octree as the tracer of the command line's buffers.
@@ -142,6 +149,7 @@ impl PyScene {
         range: R,
         outputs: &[(String, Aov)],
         shape: &[usize],
+        nthreads: usize,
     ) -> PyResult<Result<Bound<'py, PyDict>, usize>>
     where
         S: RaySource + ?Sized,
@@ -152,7 +160,7 @@ impl PyScene {
             range,
             refuse_untraceable: true,
         };
-        trace_dict(py, &self.tracer(), &rays, outputs, shape)
+        trace_dict(py, &self.tracer(), &rays, outputs, shape, nthreads)
     }
 }
 
@@ -286,6 +294,7 @@ impl PyScene {
         py: Python<'py>,
         rays: RayArgs<'py>,
         outputs: Vec<String>,
+        nthreads: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
         let outputs = parse_outputs(&outputs, false)?;
         let rays = self::rays(&rays)?;
@@ -293,37 +302,50 @@ impl PyScene {
         // Contiguous arrays with one range are read without a choice per ray.
         let traced = match rays.contiguous() {
             Some((contiguous, range)) => {
-                self.cast_rays(py, &contiguous, |_| range, &outputs, &shape)
+                self.cast_rays(py, &contiguous, |_| range, &outputs, &shape, nthreads)
             }
-            None => self.cast_rays(py, &rays, |i| rays.range(i), &outputs, &shape),
+            None => self.cast_rays(py, &rays, |i| rays.range(i), &outputs, &shape, nthreads),
         }?;
         traced.map_err(|i| rays.error(i))
     }
 
     /// Whether each ray hits anything in `(tmin, tmax]`.
-    fn occluded<'py>(&self, py: Python<'py>, rays: RayArgs<'py>) -> PyResult<Bound<'py, PyAny>> {
+    fn occluded<'py>(
+        &self,
+        py: Python<'py>,
+        rays: RayArgs<'py>,
+        nthreads: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let rays = self::rays(&rays)?;
         let query = self.query();
         let hit: Vec<bool> = py.detach(|| {
-            (0..rays.len())
-                .into_par_iter()
-                .map(|i| {
-                    let (t0, t1) = rays.range(i);
-                    query.occluded(&rays.ray(i), t0, t1)
-                })
-                .collect()
-        });
+            threads::run(nthreads, || {
+                (0..rays.len())
+                    .into_par_iter()
+                    .map(|i| {
+                        let (t0, t1) = rays.range(i);
+                        query.occluded(&rays.ray(i), t0, t1)
+                    })
+                    .collect()
+            })
+        })?;
         py.detach(|| rays.check(|i| !hit[i]))?;
         array(py, &[hit.len()], hit)
     }
 
     /// Every surface crossing of each ray in `(tmin, tmax]`, in CSR form:
     /// (ray_splits uint64 (N+1,), t float64, id uint32, prim uint32).
-    fn crossings<'py>(&self, py: Python<'py>, rays: RayArgs<'py>) -> PyResult<Bound<'py, PyTuple>> {
+    fn crossings<'py>(
+        &self,
+        py: Python<'py>,
+        rays: RayArgs<'py>,
+        nthreads: usize,
+    ) -> PyResult<Bound<'py, PyTuple>> {
         let rays = self::rays(&rays)?;
         let query = self.query();
         let lists = py.detach(|| {
-            let lists = query.hit_lists(&rays, |i| rays.range(i), usize::MAX);
+            let trace = || query.hit_lists(&rays, |i| rays.range(i), usize::MAX);
+            let lists = threads::run(nthreads, trace)?;
             rays.check(|i| lists.splits[i] == lists.splits[i + 1])?;
             PyResult::Ok(lists)
         })?;
@@ -344,6 +366,7 @@ impl PyScene {
         &self,
         py: Python<'py>,
         points: PyReadonlyArray2<'py, f64>,
+        nthreads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
         let points = points.as_array();
         if points.ncols() != 3 {
@@ -351,15 +374,23 @@ impl PyScene {
         }
         let query = self.query();
         let inside: Vec<bool> = py.detach(|| {
-            (0..points.nrows())
-                .into_par_iter()
-                .map(|i| query.contains(DVec3::new(points[[i, 0]], points[[i, 1]], points[[i, 2]])))
-                .collect()
-        });
+            threads::run(nthreads, || {
+                (0..points.nrows())
+                    .into_par_iter()
+                    .map(|i| {
+                        let p = DVec3::new(points[[i, 0]], points[[i, 1]], points[[i, 2]]);
+                        query.contains(p)
+                    })
+                    .collect()
+            })
+        })?;
         array(py, &[inside.len()], inside)
     }
 
-    /// An image of `width`×`height` pixels seen by `camera`: a dict of (H, W[, 3]) arrays.
+    /// Rows `first..last` of an image of `width`×`height` pixels seen by `camera`: a dict of
+    /// (last − first, W[, 3]) arrays (the rows of the whole image, bit for bit: each pixel's
+    /// ray is its own).
+    #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
         py: Python<'py>,
@@ -367,15 +398,29 @@ impl PyScene {
         width: usize,
         height: usize,
         outputs: Vec<String>,
+        rows: (usize, usize),
+        nthreads: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
         let outputs = parse_outputs(&outputs, true)?;
         let view = crate::camera::view(camera, width, height)?;
+        let (first, last) = rows;
+        if first > last || last > height {
+            return Err(PyValueError::new_err(format!(
+                "rows {first}..{last} are not within the image's {height}"
+            )));
+        }
+        let window = Rows {
+            view: &view,
+            start: first * width,
+            len: (last - first) * width,
+        };
         let rays = Rays {
-            source: &view,
+            source: &window,
             range: |_| (0.0, f64::INFINITY),
             refuse_untraceable: false,
         };
-        trace_dict(py, &self.tracer(), &rays, &outputs, &[height, width])?
+        let shape = [last - first, width];
+        trace_dict(py, &self.tracer(), &rays, &outputs, &shape, nthreads)?
             .map_err(|i| PyValueError::new_err(format!("camera ray {i} cannot be traced")))
     }
 
@@ -519,4 +564,29 @@ fn parse_outputs(names: &[String], camera: bool) -> PyResult<Vec<(String, Aov)>>
         .map(|n| crate::fill::parse(n, camera).map(|o| (n.clone(), o)))
         .collect::<Result<_, _>>()
         .map_err(PyValueError::new_err)
+}
+
+/// Consecutive pixels of a camera image (whole rows), as a ray source of their own.
+struct Rows<'a> {
+    view: &'a CameraView,
+    start: usize,
+    len: usize,
+}
+
+impl RaySource for Rows<'_> {
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    fn ray(&self, index: usize) -> raycast::geometry::Ray {
+        self.view.ray(self.start + index)
+    }
+
+    fn view_axis(&self) -> Option<(DVec3, DVec3)> {
+        self.view.view_axis()
+    }
+
+    fn row_width(&self) -> Option<usize> {
+        self.view.row_width()
+    }
 }

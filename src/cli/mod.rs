@@ -3,6 +3,7 @@
 
 pub mod camera;
 pub mod check;
+pub mod distance;
 pub mod signals;
 pub mod slips;
 pub mod threads;

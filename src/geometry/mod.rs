@@ -2,6 +2,7 @@
 //! pre-filter) and the triangle/box tests.
 
 mod aabb;
+pub mod closest;
 mod ray;
 mod reach;
 pub mod triangle;

@@ -8,7 +8,7 @@
 //! is read.
 
 use super::stages::{self, Target};
-use super::{check_request, into_folder, Progress, RenderJob};
+use super::{check_request, into_job_folder, Progress, RenderJob};
 use crate::camera::views::View;
 use crate::error::{Error, Result};
 use crate::output::sidecar::Sidecar;
@@ -102,7 +102,7 @@ pub fn run(
     let built = stages::build(job, &loaded.scene);
     let mut sidecars = Vec::with_capacity(jobs.len());
     for (i, (one, target)) in jobs.iter().zip(&targets).enumerate() {
-        let sidecar = into_folder(one, &formats, || {
+        let sidecar = into_job_folder(one, &formats, || {
             stages::trace_and_write(one, &formats, &loaded, &built, target, |e| progress(i, e))
         })
         .map_err(|e| at_view(e, i, &views[i]))?;

@@ -88,11 +88,23 @@ fn untrack_partial(path: &Path) {
     files.retain(|f| f != path);
 }
 
+/// The files of a `raycast distance` run ([`crate::job::distance`]), its sidecar last.
+pub const DISTANCE_FILES: [&str; 7] = [
+    "distance.npy",
+    "signed_distance.npy",
+    "point.npy",
+    "id.npy",
+    "prim.npy",
+    "normal.npy",
+    ownership::SIDECAR,
+];
+
 /// Whether `name` is a file name raycast writes into an output folder.
 fn is_output_name(name: &str) -> bool {
     name == "raycast.json"
         || name == npz::HITS_FILE
         || name == cryptomatte::FILE
+        || DISTANCE_FILES.contains(&name)
         || name
             .split_once('.')
             .is_some_and(|(aov, ext)| aov.parse::<Aov>().is_ok() && ext.parse::<Format>().is_ok())

@@ -160,47 +160,97 @@ fn parse_array(bytes: &[u8]) -> std::result::Result<(Vec<usize>, Vec<f64>), Stri
     Ok((header.shape, values))
 }
 
-fn parse_rays(bytes: &[u8]) -> std::result::Result<RayFile, String> {
-    let header = parse_header(bytes)?;
-    let (rows, columns) = match header.shape[..] {
-        [rows, columns @ (6 | 8)] => (rows, columns),
-        _ => {
+/// A two-dimensional float32 or float64 array of an `.npy` file, read in place.
+struct Table<'a> {
+    data: &'a [u8],
+    width: usize,
+    fortran: bool,
+    rows: usize,
+    columns: usize,
+}
+
+impl<'a> Table<'a> {
+    /// The (N, C) float table of `bytes`, `C` one of `columns`; `shapes` says which shapes
+    /// are expected, for the error.
+    fn parse(
+        bytes: &'a [u8],
+        columns: &[usize],
+        shapes: &str,
+    ) -> std::result::Result<Table<'a>, String> {
+        let header = parse_header(bytes)?;
+        let (rows, width_columns) = match header.shape[..] {
+            [rows, c] if columns.contains(&c) => (rows, c),
+            _ => return Err(format!("expected shape {shapes}, found {:?}", header.shape)),
+        };
+        let width = match header.descr.as_str() {
+            "<f4" => 4,
+            "<f8" => 8,
+            other => {
+                return Err(format!(
+                    "expected float32 or float64 little-endian data, found '{other}'"
+                ))
+            }
+        };
+        let data = &bytes[header.data_offset..];
+        let needed = rows
+            .checked_mul(width_columns * width)
+            .ok_or("array too large")?;
+        if data.len() != needed {
             return Err(format!(
-                "expected shape (N, 6) (origin, direction) or (N, 8) (origin, direction, tmin, \
-                 tmax), found {:?}",
-                header.shape
-            ))
+                "data holds {} bytes, shape needs {needed}",
+                data.len()
+            ));
         }
-    };
-    let width = match header.descr.as_str() {
-        "<f4" => 4,
-        "<f8" => 8,
-        other => {
-            return Err(format!(
-                "expected float32 or float64 little-endian data, found '{other}'"
-            ))
-        }
-    };
-    let data = &bytes[header.data_offset..];
-    let needed = rows.checked_mul(columns * width).ok_or("array too large")?;
-    if data.len() != needed {
-        return Err(format!(
-            "data holds {} bytes, shape needs {needed}",
-            data.len()
-        ));
+        Ok(Table {
+            data,
+            width,
+            fortran: header.fortran,
+            rows,
+            columns: width_columns,
+        })
     }
-    let value = |i: usize| -> f64 {
-        let b = &data[i * width..(i + 1) * width];
-        match width {
+
+    /// Element (r, c): C order stores rows one after another, Fortran order columns.
+    fn at(&self, r: usize, c: usize) -> f64 {
+        let i = match self.fortran {
+            false => r * self.columns + c,
+            true => c * self.rows + r,
+        };
+        let b = &self.data[i * self.width..(i + 1) * self.width];
+        match self.width {
             4 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
             _ => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
         }
-    };
-    // Element (r, c): C order stores rows one after another, Fortran order columns.
-    let at = |r: usize, c: usize| match header.fortran {
-        false => value(r * columns + c),
-        true => value(c * rows + r),
-    };
+    }
+}
+
+/// Reads an (N, 3) float32 or float64 array (C or Fortran order) of points; every point must
+/// be finite (the error names the first that is not).
+pub fn read_points(path: &Path) -> Result<Vec<DVec3>> {
+    let bytes =
+        std::fs::read(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
+    parse_points(&bytes).map_err(|m| Error::in_file(path, m))
+}
+
+fn parse_points(bytes: &[u8]) -> std::result::Result<Vec<DVec3>, String> {
+    let table = Table::parse(bytes, &[3], "(N, 3) (x, y, z)")?;
+    let points: Vec<DVec3> = (0..table.rows)
+        .map(|r| DVec3::new(table.at(r, 0), table.at(r, 1), table.at(r, 2)))
+        .collect();
+    match points.iter().position(|p| !p.is_finite()) {
+        Some(i) => Err(format!("point {i} is not finite: {}", points[i])),
+        None => Ok(points),
+    }
+}
+
+fn parse_rays(bytes: &[u8]) -> std::result::Result<RayFile, String> {
+    let table = Table::parse(
+        bytes,
+        &[6, 8],
+        "(N, 6) (origin, direction) or (N, 8) (origin, direction, tmin, tmax)",
+    )?;
+    let (rows, columns) = (table.rows, table.columns);
+    let at = |r: usize, c: usize| table.at(r, c);
     let rays: Vec<Ray> = (0..rows)
         .map(|r| {
             let v = |c: usize| at(r, c);

@@ -26,6 +26,7 @@ mod builder;
 mod hits;
 pub mod instance;
 pub mod mesh;
+mod proximity;
 mod shading;
 
 pub use attributes::Attributes;
@@ -33,6 +34,7 @@ pub use builder::SceneBuilder;
 pub use hits::{Crossing, EdgeRule};
 pub use instance::{Instance, StoredMesh};
 pub use mesh::{Mesh, MeshSet, Positions};
+pub use proximity::Nearest;
 pub use shading::Attribute;
 
 use crate::accel::{

@@ -21,6 +21,14 @@ COMMANDS = {
         "end_to_end",
         "1024² depth render from the file: raycast vs Open3D vs trimesh+Embree",
     ),
+    "signed-check": (
+        "signed_check",
+        "signed distance signs against exact truth on closed meshes (reports/signed_distance.md)",
+    ),
+    "python-calls": (
+        "python_calls",
+        "Ctrl-C latency of long Python calls and list_intersections' transient memory",
+    ),
     "python-bench": (
         "python_bench",
         "raycast.load + cast vs trimesh and Open3D on the bunny (reports/python_bench.md)",

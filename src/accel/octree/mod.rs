@@ -72,6 +72,7 @@ mod arena;
 mod build;
 mod lanes;
 mod leaf;
+mod nearest;
 mod packet;
 mod traverse;
 mod wide;

@@ -1,0 +1,238 @@
+//! `raycast distance`: the nearest surface point and the signed distance of every point of a
+//! points file, written as `.npy` files with a `raycast.json` sidecar, by the same rules as a
+//! render's folder (nothing half-written, nothing of another scene's run removed).
+//!
+//! The queries are [`Query::closest`] and [`Query::side_by_crossings`] or the winding number
+//! (see [`crate::query`]'s distance module), the ones the Python package's `closest_points`
+//! and `signed_distance` call. Triangles only: a scene with quadrics is refused.
+
+use super::into_folder;
+use crate::accel::{Octree, OctreeParams};
+use crate::error::{Error, Result};
+use crate::import::{self, LoadOptions};
+use crate::output::npy::{self, NpyData};
+use crate::output::{ownership, FileJob, Staging, DISTANCE_FILES as FILES};
+use crate::query::{winding_number, NearestPoint, Query, Side};
+use glam::DVec3;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// How the side of a point is decided.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SignRule {
+    /// The parity of exact watertight crossing counts (certain for closed meshes).
+    Crossings,
+    /// The generalised winding number above 1/2 (for meshes that are not closed).
+    Winding,
+}
+
+impl SignRule {
+    /// The rule's name, as `--sign` takes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            SignRule::Crossings => "crossings",
+            SignRule::Winding => "winding",
+        }
+    }
+}
+
+/// Everything a distance run needs.
+#[derive(Debug, Clone)]
+pub struct DistanceJob {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// Importer options.
+    pub load: LoadOptions,
+    /// The (N, 3) float32 or float64 `.npy` file of query points.
+    pub points: PathBuf,
+    /// Output folder; `None` for `<scene stem>.distance`.
+    pub out: Option<PathBuf>,
+    /// How signs are decided.
+    pub sign: SignRule,
+}
+
+/// What a finished run did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DistanceOutcome {
+    /// The folder written.
+    pub folder: PathBuf,
+    /// Points measured.
+    pub points: usize,
+    /// Points within the rounding margin of a surface, whose sign is 0.
+    pub uncertain: usize,
+    /// Seconds to load the scene, build the octree and measure.
+    pub seconds: [f64; 3],
+}
+
+impl DistanceJob {
+    /// The output folder.
+    pub fn out_dir(&self) -> PathBuf {
+        self.out.clone().unwrap_or_else(|| {
+            let stem = self.scene.file_stem().unwrap_or_default().to_string_lossy();
+            PathBuf::from(format!("{stem}.distance"))
+        })
+    }
+}
+
+/// Runs a distance job.
+pub fn run(job: &DistanceJob) -> Result<DistanceOutcome> {
+    if job.out.as_deref() == Some(Path::new("-")) {
+        return Err(Error::usage(
+            "--out -: a distance run writes a folder of files, not standard output; name a folder",
+        ));
+    }
+    let names: Vec<String> = FILES.iter().map(|s| s.to_string()).collect();
+    let out = job.out_dir();
+    let inputs = [job.scene.as_path(), job.points.as_path()];
+    into_folder(&out, &inputs, &names, || measure_and_write(job, &out))
+}
+
+/// Loads, builds, measures and writes (in `out`, claimed already).
+fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
+    let points = npy::read_points(&job.points)?;
+    let clock = Instant::now();
+    let scene = import::load(&job.scene, &job.load)?;
+    if !scene.quadrics().is_empty() {
+        return Err(Error::in_file(
+            &job.scene,
+            format!(
+                "distance queries do not handle quadrics yet ({} in this scene)",
+                scene.quadrics().len()
+            ),
+        )
+        .as_usage());
+    }
+    let load = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    scene.build_instances();
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let build = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let query = Query {
+        scene: &scene,
+        octree: &octree,
+    };
+    let measured = measure(&query, &points, job.sign);
+    let seconds = [load, build, clock.elapsed().as_secs_f64()];
+    let uncertain = measured.iter().filter(|m| m.1 == 0.0).count();
+    let mut staging = Staging::for_render(out, &job.scene)?;
+    staging.protect(&job.scene);
+    staging.protect(&job.points);
+    write(&mut staging, &measured)?;
+    let sidecar = sidecar(job, &scene, points.len(), uncertain, seconds);
+    staging.write(ownership::SIDECAR, |w| {
+        serde_json::to_writer_pretty(&mut *w, &sidecar).map_err(|e| format!("cannot write: {e}"))
+    })?;
+    staging.commit()?;
+    Ok(DistanceOutcome {
+        folder: out.to_path_buf(),
+        points: points.len(),
+        uncertain,
+        seconds,
+    })
+}
+
+/// Each point's nearest point (if the scene has triangles) and the sign of its distance.
+fn measure(query: &Query, points: &[DVec3], rule: SignRule) -> Vec<(Option<NearestPoint>, f64)> {
+    let scene = query.scene;
+    let bounds = scene.world_bounds();
+    let triangles: Vec<[DVec3; 3]> = match rule {
+        SignRule::Winding => scene
+            .objects
+            .iter()
+            .flat_map(|o| scene.mesh_triangles(o))
+            .collect(),
+        SignRule::Crossings => Vec::new(),
+    };
+    points
+        .par_iter()
+        .map(|&p| {
+            let Some(nearest) = query.closest(p) else {
+                return (None, 1.0);
+            };
+            let side = match rule {
+                SignRule::Crossings => query.side_by_crossings(p, nearest.distance, &bounds),
+                SignRule::Winding if nearest.distance == 0.0 => Side::OnSurface,
+                SignRule::Winding if winding_number(&triangles, p) > 0.5 => Side::Inside,
+                SignRule::Winding => Side::Outside,
+            };
+            (Some(nearest), side.sign())
+        })
+        .collect()
+}
+
+/// Writes the buffers: misses (a scene without triangles) are +inf distances and points, id
+/// 0, prim `u32::MAX` and a zero normal, as the render's buffers have them.
+fn write(staging: &mut Staging, measured: &[(Option<NearestPoint>, f64)]) -> Result<()> {
+    let n = measured.len();
+    let distance: Vec<f64> = measured
+        .iter()
+        .map(|(m, _)| m.map_or(f64::INFINITY, |m| m.distance))
+        .collect();
+    let signed: Vec<f64> = measured
+        .iter()
+        .zip(&distance)
+        .map(|((_, sign), d)| if *sign == 0.0 { 0.0 } else { sign * d })
+        .collect();
+    let vector = |f: fn(&NearestPoint) -> DVec3, miss: f64| -> Vec<f64> {
+        measured
+            .iter()
+            .flat_map(|(m, _)| m.as_ref().map_or([miss; 3], |m| f(m).to_array()))
+            .collect()
+    };
+    let point = vector(|m| m.point, f64::INFINITY);
+    let normal = vector(|m| m.normal, 0.0);
+    let id: Vec<u32> = measured
+        .iter()
+        .map(|(m, _)| m.map_or(0, |m| m.id))
+        .collect();
+    let prim: Vec<u32> = measured
+        .iter()
+        .map(|(m, _)| m.map_or(u32::MAX, |m| m.prim))
+        .collect();
+    fn file<'a>(name: &'static str, shape: Vec<usize>, data: NpyData<'a>) -> FileJob<'a> {
+        FileJob::new(name, move |w| npy::write(w, &shape, data))
+    }
+    let jobs = vec![
+        file(FILES[0], vec![n], NpyData::F64(&distance)),
+        file(FILES[1], vec![n], NpyData::F64(&signed)),
+        file(FILES[2], vec![n, 3], NpyData::F64(&point)),
+        file(FILES[3], vec![n], NpyData::U32(&id)),
+        file(FILES[4], vec![n], NpyData::U32(&prim)),
+        file(FILES[5], vec![n, 3], NpyData::F64(&normal)),
+    ];
+    staging.write_all(jobs, |_| {})
+}
+
+/// The run's `raycast.json`: what was measured, from what, how, and the files (the fields
+/// [`ownership`] reads: `scene`, `scene_file`, `files`).
+fn sidecar(
+    job: &DistanceJob,
+    scene: &crate::scene::Scene,
+    points: usize,
+    uncertain: usize,
+    [load, build, measure]: [f64; 3],
+) -> serde_json::Value {
+    let closed: Vec<serde_json::Value> = crate::info::SceneInfo::new(scene)
+        .objects
+        .into_iter()
+        .filter_map(|o| {
+            o.closed
+                .map(|c| serde_json::json!({"id": o.id, "name": o.name, "closed": c}))
+        })
+        .collect();
+    serde_json::json!({
+        "raycast": env!("CARGO_PKG_VERSION"),
+        "command": "distance",
+        "scene": job.scene.display().to_string(),
+        "scene_file": ownership::scene_key(&job.scene),
+        "points_file": job.points.display().to_string(),
+        "points": points,
+        "sign": job.sign.name(),
+        "uncertain_signs": uncertain,
+        "meshes": closed,
+        "timings": {"load": load, "build": build, "measure": measure},
+        "files": FILES,
+    })
+}

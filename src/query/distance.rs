@@ -1,0 +1,225 @@
+//! Distance queries: the nearest surface point, and which side of the surface a point is on.
+//!
+//! # The nearest point
+//! [`Query::closest`] searches the octree best first ([`Scene::nearest_point`]) and measures
+//! each candidate triangle exactly in f64 (see [`crate::geometry::closest`] for the error: a
+//! small multiple of ε times the triangle's size and the query's distance from it). Triangles
+//! only: scenes with quadrics are refused by the callers.
+//!
+//! # The side, by crossings
+//! [`Query::side_by_crossings`] counts the crossings of rays from the point with the
+//! watertight ownership rule of [`crate::geometry::triangle::WatertightRay::crossing`]: the
+//! edge functions of a shared edge are exact negatives in both triangles, so a ray through an
+//! edge or a vertex of a closed, consistently wound mesh crosses it exactly once, and a ray
+//! that grazes a silhouette crosses both sides or neither. The parity of the count is
+//! therefore exact whatever the ray passes through, except for the decision `t > 0` on a
+//! crossing right at the point: the computed `t` of a crossing is off by less than
+//! `32 ε R` (`R` bounding the distance from the point to any vertex, plus the point's own
+//! magnitude for the instance frames' rounding; a generous multiple of the test's forward
+//! error, which is a few ε times the vertices' distances from the origin along the ray). So a
+//! point farther than [`Query::surface_margin`] from every surface gets a certain side, and
+//! a nearer one is reported as on the surface (sign 0). Certain only for closed meshes (every
+//! edge shared by two triangles in opposite directions, as `raycast info` reports per
+//! object); for open ones the parity is a guess.
+//!
+//! # The side, by winding number
+//! [`winding_number`] sums the signed solid angles of all triangles seen from the point
+//! (Van Oosterom and Strackee's formula), over 4π: 1 inside a closed, outward-wound surface,
+//! 0 outside, and a smooth value in between where the surface has holes, so that a point is
+//! inside when the number exceeds 1/2. Every triangle is visited for every point: O(N) per
+//! point.
+
+use super::Query;
+use crate::geometry::Aabb;
+use crate::scene::Nearest;
+use glam::DVec3;
+
+/// The unit roundoff of f64.
+const EPS: f64 = f64::EPSILON / 2.0;
+
+/// The nearest surface point to a query point, resolved to the scene's objects.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NearestPoint {
+    /// The nearest point (world coordinates).
+    pub point: DVec3,
+    /// Its distance from the query, measured from the triangle's vertices (not from
+    /// `point`, which is rounded to world coordinates).
+    pub distance: f64,
+    /// The 1-based object id.
+    pub id: u32,
+    /// The triangle's number in its object (as the `prim` buffer counts).
+    pub prim: u32,
+    /// The barycentric weights of the triangle's vertices, in the mesh's order.
+    pub bary: [f64; 3],
+    /// The triangle's unit geometric normal (world), as the `normal` buffer gives it.
+    pub normal: DVec3,
+}
+
+/// Which side of the scene's surfaces a point is on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    /// Inside: an odd number of surfaces around it (by crossings) or a winding number above
+    /// 1/2.
+    Inside,
+    /// Outside.
+    Outside,
+    /// Within [`Query::surface_margin`] of a surface: no side is certain.
+    OnSurface,
+}
+
+impl Side {
+    /// The sign of the signed distance: −1 inside, +1 outside, 0 on the surface.
+    pub fn sign(self) -> f64 {
+        match self {
+            Side::Inside => -1.0,
+            Side::Outside => 1.0,
+            Side::OnSurface => 0.0,
+        }
+    }
+}
+
+impl Query<'_> {
+    /// The triangle point nearest to `point`; `None` for a point that is not finite or a
+    /// scene without triangles. Quadrics are not considered.
+    pub fn closest(&self, point: DVec3) -> Option<NearestPoint> {
+        let Nearest { closest, crossing } = self.scene.nearest_point(self.octree, point)?;
+        let at = point + closest.offset;
+        // The normal's fallback for a degenerate triangle: towards the query.
+        let located = self.scene.locate_crossing(&crossing, point, at - point);
+        Some(NearestPoint {
+            point: at,
+            distance: closest.distance,
+            id: located.object.id,
+            prim: located.prim,
+            bary: closest.bary,
+            normal: located.normal,
+        })
+    }
+
+    /// The distance below which [`Query::side_by_crossings`] cannot be sure of the side of
+    /// `point`, for a scene whose world bounds are `bounds` (see the module docs).
+    pub fn surface_margin(point: DVec3, bounds: &Aabb) -> f64 {
+        let far = bounds
+            .corners()
+            .into_iter()
+            .map(|c| (c - point).abs().max_element())
+            .fold(0.0, f64::max);
+        32.0 * EPS * (far + point.abs().max_element()) * 3f64.sqrt()
+    }
+
+    /// The side of `point`, at `distance` from the nearest surface, by the parity of the
+    /// crossings of rays from it (certain for closed meshes; see the module docs); `bounds` are
+    /// the scene's world bounds.
+    pub fn side_by_crossings(&self, point: DVec3, distance: f64, bounds: &Aabb) -> Side {
+        if distance <= Query::surface_margin(point, bounds) || distance.is_nan() {
+            Side::OnSurface
+        } else if self.contains(point) {
+            Side::Inside
+        } else {
+            Side::Outside
+        }
+    }
+}
+
+/// The generalised winding number of `triangles` (world coordinates) at `point`: the sum of
+/// their signed solid angles over 4π (see the module docs).
+pub fn winding_number(triangles: &[[DVec3; 3]], point: DVec3) -> f64 {
+    let total: f64 = triangles
+        .iter()
+        .map(|tri| {
+            let [a, b, c] = tri.map(|v| v - point);
+            let (la, lb, lc) = (a.length(), b.length(), c.length());
+            let numerator = a.dot(b.cross(c));
+            let denominator = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+            2.0 * numerator.atan2(denominator)
+        })
+        .sum();
+    total / (4.0 * std::f64::consts::PI)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::{Octree, OctreeParams};
+    use crate::scene::{Scene, SceneBuilder};
+
+    /// The unit cube [0, 1]³, wound outward (12 triangles).
+    fn cube() -> Vec<[DVec3; 3]> {
+        let v = |i: u32| DVec3::new(f64::from(i & 1), f64::from(i >> 1 & 1), f64::from(i >> 2));
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        quads
+            .iter()
+            .flat_map(|q| [[v(q[0]), v(q[1]), v(q[2])], [v(q[0]), v(q[2]), v(q[3])]])
+            .collect()
+    }
+
+    fn scene_of(triangles: Vec<[DVec3; 3]>) -> (Scene, Octree) {
+        let mut builder = SceneBuilder::new();
+        builder.add_mesh("cube".into(), "test".into(), triangles);
+        let scene = builder.finish("cube".into());
+        let octree = Octree::build(&scene, OctreeParams::default());
+        (scene, octree)
+    }
+
+    #[test]
+    fn the_cube_is_wound_outward() {
+        for tri in cube() {
+            let [a, b, c] = tri;
+            let n = (b - a).cross(c - a);
+            let centre = (a + b + c) / 3.0 - DVec3::splat(0.5);
+            assert!(n.dot(centre) > 0.0, "{tri:?}");
+        }
+    }
+
+    #[test]
+    fn distances_to_a_cube_by_hand() {
+        let (scene, octree) = scene_of(cube());
+        let query = Query {
+            scene: &scene,
+            octree: &octree,
+        };
+        let bounds = scene.world_bounds();
+        // Centre, a point beyond a corner, one on a face, one above an edge.
+        let cases = [
+            (DVec3::splat(0.5), 0.5, Side::Inside),
+            (DVec3::splat(-0.5), 0.75f64.sqrt(), Side::Outside),
+            (DVec3::new(0.3, 0.0, 0.6), 0.0, Side::OnSurface),
+            (DVec3::new(0.5, 2.0, 2.0), 2f64.sqrt(), Side::Outside),
+            (DVec3::new(1e-12, 0.5, 0.5), 1e-12, Side::Inside),
+            (DVec3::new(-1e-12, 0.5, 0.5), 1e-12, Side::Outside),
+        ];
+        for (p, distance, side) in cases {
+            let got = query.closest(p).expect("a cube has a nearest point");
+            // A few ε of the cube's size (see `geometry::closest`).
+            assert!((got.distance - distance).abs() <= 4.0 * EPS, "{p}: {got:?}");
+            assert!((got.point - p).length() - distance <= 1e-15, "{p}: {got:?}");
+            assert_eq!(
+                query.side_by_crossings(p, got.distance, &bounds),
+                side,
+                "{p}"
+            );
+        }
+    }
+
+    #[test]
+    fn winding_numbers_of_a_closed_and_an_open_cube() {
+        let closed = cube();
+        assert!((winding_number(&closed, DVec3::splat(0.5)) - 1.0).abs() < 1e-14);
+        assert!(winding_number(&closed, DVec3::splat(3.0)).abs() < 1e-14);
+        // The top face missing: the centre sees 5/6 of the sphere covered.
+        let open: Vec<_> = closed
+            .iter()
+            .copied()
+            .filter(|t| t.iter().any(|v| v.z < 1.0))
+            .collect();
+        assert_eq!(open.len(), 10);
+        assert!((winding_number(&open, DVec3::splat(0.5)) - 5.0 / 6.0).abs() < 1e-14);
+    }
+}
