@@ -282,3 +282,29 @@ def test_an_unreadable_attribute_buffer_leaves_the_attribute_out(tmp_path):
     assert any(line.startswith("shading_normal: 4 of 4 objects") for line in lines), lines
     assert (hits["shading_normal"] == 0).all()
     assert np.isfinite(hits["uv"]).all()
+
+
+@pytest.mark.parametrize(
+    ("name", "time"),
+    [("CesiumMan.glb", 0.5), ("RiggedFigure.glb", 0.7), ("AnimatedMorphCube.glb", 0.5)],
+)
+def test_posed_shading_normals_follow_the_posed_surface(name, time):
+    """Skinned normals (by the inverse transpose of the blended joint matrices) and morphed
+    ones (NORMAL deltas) face as the posed triangles do: the file's normals left in the rest
+    pose would not (CesiumMan's skin turns the whole figure)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", raycast.RaycastWarning)
+        scene = raycast.load(ROOT / "fixtures" / "posed" / name, time=time)
+    lo, hi = scene.bounds
+    rng = np.random.default_rng(1)
+    around = rng.normal(size=(5000, 3))
+    origins = (lo + hi) / 2 + around / np.linalg.norm(
+        around, axis=1, keepdims=True
+    ) * np.linalg.norm(hi - lo)
+    targets = lo + rng.uniform(size=(5000, 3)) * (hi - lo)
+    hits = scene.cast(origins, targets - origins, aovs=("normal", "shading_normal", "id"))
+    hit = hits["id"] > 0
+    assert hit.sum() > 1000
+    dot = np.einsum("ij,ij->i", hits["normal"][hit], hits["shading_normal"][hit])
+    assert (dot > 0.5).mean() > 0.99
+    assert np.median(dot) > 0.98

@@ -82,33 +82,47 @@ impl Document {
 
 /// The attributes of a mesh's triangles gathered primitive by primitive: where some primitives
 /// have texture coordinates or normals and others not, the others' corners hold the miss
-/// values (infinite texture coordinates, zero normals, which the lookups give as misses).
+/// values (infinite texture coordinates, zero normals, which the lookups give as misses). A
+/// list is only made once a primitive has that attribute.
 #[derive(Debug, Default)]
 pub struct MeshShading {
-    uv: Vec<[[f32; 2]; 3]>,
-    normals: Vec<[[f32; 3]; 3]>,
-    has_uv: bool,
-    has_normals: bool,
+    uv: Option<Vec<[[f32; 2]; 3]>>,
+    normals: Option<Vec<[[f32; 3]; 3]>>,
     materials: Vec<u32>,
+}
+
+/// Appends one corner value per triangle of `corners` to `list`: `value(vertex)` where the
+/// primitive has the attribute (`list` started, filled with `miss` for the triangles before,
+/// if it was not), `miss` where only other primitives have it.
+fn extend<T: Copy>(
+    list: &mut Option<Vec<[T; 3]>>,
+    before: usize,
+    corners: &[[u32; 3]],
+    value: Option<impl Fn(u32) -> T>,
+    miss: T,
+) {
+    match (list.as_mut(), value) {
+        (None, None) => {}
+        (Some(list), None) => list.extend(std::iter::repeat_n([miss; 3], corners.len())),
+        (list_now, Some(value)) => {
+            let list = match list_now {
+                Some(list) => list,
+                None => list.insert(vec![[miss; 3]; before]),
+            };
+            list.extend(corners.iter().map(|c| c.map(&value)));
+        }
+    }
 }
 
 impl MeshShading {
     /// Adds the triangles `corners` (vertex index triples) of `geometry`.
     pub fn add(&mut self, geometry: &Geometry, corners: &[[u32; 3]]) {
-        let uv = geometry.uv.as_deref();
-        let normals = geometry.normals.as_deref();
-        self.has_uv |= uv.is_some();
-        self.has_normals |= normals.is_some();
-        for corner in corners {
-            self.uv.push(corner.map(|v| match uv {
-                Some(uv) => uv[v as usize].map(|x| x as f32),
-                None => [f32::INFINITY; 2],
-            }));
-            self.normals.push(corner.map(|v| match normals {
-                Some(n) => n[v as usize].as_vec3().to_array(),
-                None => [0.0; 3],
-            }));
-        }
+        let before = self.materials.len();
+        let uv = (geometry.uv.as_deref()).map(|uv| |v: u32| uv[v as usize].map(|x| x as f32));
+        extend(&mut self.uv, before, corners, uv, [f32::INFINITY; 2]);
+        let normals =
+            (geometry.normals.as_deref()).map(|n| |v: u32| n[v as usize].as_vec3().to_array());
+        extend(&mut self.normals, before, corners, normals, [0.0; 3]);
         let material = geometry.material.map_or(0, |m| m as u32 + 1);
         self.materials
             .extend(std::iter::repeat_n(material, corners.len()));
@@ -117,13 +131,34 @@ impl MeshShading {
     /// The gathered attributes (material `m` of the file is the scene's material `m + 1`).
     pub fn finish(self) -> Attributes {
         Attributes {
-            uv: if self.has_uv { self.uv } else { Vec::new() },
-            normals: if self.has_normals {
-                self.normals
-            } else {
-                Vec::new()
-            },
+            uv: self.uv.unwrap_or_default(),
+            normals: self.normals.unwrap_or_default(),
             materials: runs(&self.materials),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A primitive without texture coordinates before or after one with them: its triangles
+    /// hold the miss value, the others their own.
+    #[test]
+    fn primitives_without_an_attribute_hold_the_miss_value() {
+        let corners = [[0, 1, 2]];
+        for with_first in [true, false] {
+            let mut list = None;
+            let value = |v: u32| v as f32;
+            for (k, has) in [with_first, !with_first].into_iter().enumerate() {
+                extend(&mut list, k, &corners, has.then_some(value), f32::INFINITY);
+            }
+            let (own, miss) = ([0.0, 1.0, 2.0], [f32::INFINITY; 3]);
+            let expected = if with_first { [own, miss] } else { [miss, own] };
+            assert_eq!(list, Some(expected.to_vec()));
+        }
+        let mut none: Option<Vec<[f32; 3]>> = None;
+        extend(&mut none, 0, &corners, None::<fn(u32) -> f32>, 0.0);
+        assert_eq!(none, None);
     }
 }
