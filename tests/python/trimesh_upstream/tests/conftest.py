@@ -5,8 +5,8 @@ build an intersector themselves.
 
 generic.py and test_ray.py (and data/ray_data.json) are trimesh's files, kept whole, from
 trimesh's repository (github.com/mikedh/trimesh) at commit a513c0e2, with the models they
-load; MIT licence (../LICENSE.md). tools/test.sh runs them with the rest of tests/python; they
-fetch nothing.
+load; MIT licence (../LICENSE.md). tools/test.sh runs them in a pytest process of their own
+(generic.py turns trimesh's strict mode on for the whole process); they fetch nothing.
 """
 
 import pytest
