@@ -7,7 +7,7 @@
 
 mod distance;
 
-pub use distance::{winding_number, NearestPoint, Side, SignRule, Signer};
+pub use distance::{signed, winding_number, NearestPoint, Side, SignRule, Signer};
 
 use crate::accel::{test_primitive, Hit, Octree, PrimitiveSet, PACKET};
 use crate::geometry::Ray;

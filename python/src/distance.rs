@@ -11,7 +11,6 @@ use pyo3::exceptions::{PyNotImplementedError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use raycast::query::{NearestPoint, SignRule, Signer};
-use rayon::prelude::*;
 
 /// The rows of `points`, after checking the shape, that the scene has no quadric (whose
 /// nearest points are not computed yet) and that every point is finite.
@@ -56,13 +55,8 @@ pub fn closest_points<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let points = rows(scene, &points)?;
     let query = scene.query();
-    let found: Vec<Option<NearestPoint>> = py.detach(|| {
-        threads::run(nthreads, || {
-            (0..points.nrows())
-                .into_par_iter()
-                .map(|i| query.closest(point(&points, i)))
-                .collect()
-        })
+    let found: Vec<Option<NearestPoint>> = threads::map(py, nthreads, points.nrows(), |i| {
+        query.closest(point(&points, i))
     })?;
     let n = found.len();
     let column = |f: &dyn Fn(&NearestPoint) -> [f64; 3], miss: f64| {
@@ -114,14 +108,9 @@ pub fn signed_distance<'py>(
             )))
         }
     };
-    let signed: Vec<f64> = py.detach(|| {
-        threads::run(nthreads, || {
-            let signer = Signer::new(query, rule);
-            (0..points.nrows())
-                .into_par_iter()
-                .map(|i| signer.signed_distance(point(&points, i)))
-                .collect()
-        })
+    let signer = py.detach(|| Signer::new(query, rule));
+    let signed = threads::map(py, nthreads, points.nrows(), |i| {
+        signer.signed_distance(point(&points, i))
     })?;
     array(py, &[signed.len()], signed)
 }

@@ -15,7 +15,6 @@ use raycast::import::{self, LoadOptions};
 use raycast::query::Query;
 use raycast::render::{Aov, CameraView, RaySource, Rays, Tracer};
 use raycast::scene::Scene;
-use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -318,16 +317,9 @@ impl PyScene {
     ) -> PyResult<Bound<'py, PyAny>> {
         let rays = self::rays(&rays)?;
         let query = self.query();
-        let hit: Vec<bool> = py.detach(|| {
-            threads::run(nthreads, || {
-                (0..rays.len())
-                    .into_par_iter()
-                    .map(|i| {
-                        let (t0, t1) = rays.range(i);
-                        query.occluded(&rays.ray(i), t0, t1)
-                    })
-                    .collect()
-            })
+        let hit = threads::map(py, nthreads, rays.len(), |i| {
+            let (t0, t1) = rays.range(i);
+            query.occluded(&rays.ray(i), t0, t1)
         })?;
         py.detach(|| rays.check(|i| !hit[i]))?;
         array(py, &[hit.len()], hit)
@@ -373,16 +365,8 @@ impl PyScene {
             return Err(PyValueError::new_err("points must be (N, 3)"));
         }
         let query = self.query();
-        let inside: Vec<bool> = py.detach(|| {
-            threads::run(nthreads, || {
-                (0..points.nrows())
-                    .into_par_iter()
-                    .map(|i| {
-                        let p = DVec3::new(points[[i, 0]], points[[i, 1]], points[[i, 2]]);
-                        query.contains(p)
-                    })
-                    .collect()
-            })
+        let inside = threads::map(py, nthreads, points.nrows(), |i| {
+            query.contains(DVec3::new(points[[i, 0]], points[[i, 1]], points[[i, 2]]))
         })?;
         array(py, &[inside.len()], inside)
     }

@@ -5,8 +5,20 @@
 
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
+use rayon::prelude::*;
 use rayon::{ThreadPool, ThreadPoolBuilder};
 use std::sync::{Arc, Mutex};
+
+/// `each(i)` for `i` in `0..n`, in parallel on `nthreads` threads (0: all cores), with the GIL
+/// released: the loop of every per-ray and per-point query.
+pub fn map<T: Send>(
+    py: Python<'_>,
+    nthreads: usize,
+    n: usize,
+    each: impl Fn(usize) -> T + Sync + Send,
+) -> PyResult<Vec<T>> {
+    py.detach(|| run(nthreads, || (0..n).into_par_iter().map(each).collect()))
+}
 
 /// The pools made so far, by thread count.
 static POOLS: Mutex<Vec<(usize, Arc<ThreadPool>)>> = Mutex::new(Vec::new());

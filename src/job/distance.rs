@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::import::{self, LoadOptions};
 use crate::output::npy::{self, NpyData};
 use crate::output::{ownership, FileJob, Staging, DISTANCE_FILES as FILES};
-use crate::query::{NearestPoint, Query, SignRule, Signer};
+use crate::query::{self, NearestPoint, Query, Side, SignRule, Signer};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -96,7 +96,7 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
     };
     let measured = measure(&query, &points, job.sign);
     let seconds = [load, build, clock.elapsed().as_secs_f64()];
-    let uncertain = measured.iter().filter(|m| m.1 == 0.0).count();
+    let uncertain = measured.iter().filter(|m| m.1 == Side::OnSurface).count();
     let mut staging = Staging::for_render(out, &job.scene)?;
     staging.protect(&job.scene);
     staging.protect(&job.points);
@@ -114,31 +114,21 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
     })
 }
 
-/// Each point's nearest point (if the scene has triangles) and the sign of its distance.
-fn measure(query: &Query, points: &[DVec3], rule: SignRule) -> Vec<(Option<NearestPoint>, f64)> {
+/// Each point's nearest point (if the scene has triangles) and its side.
+fn measure(query: &Query, points: &[DVec3], rule: SignRule) -> Vec<(Option<NearestPoint>, Side)> {
     let signer = Signer::new(*query, rule);
-    points
-        .par_iter()
-        .map(|&p| {
-            let (nearest, side) = signer.measure(p);
-            (nearest, side.sign())
-        })
-        .collect()
+    points.par_iter().map(|&p| signer.measure(p)).collect()
 }
 
 /// Writes the buffers: misses (a scene without triangles) are +inf distances and points, id
 /// 0, prim `u32::MAX` and a zero normal, as the render's buffers have them.
-fn write(staging: &mut Staging, measured: &[(Option<NearestPoint>, f64)]) -> Result<()> {
+fn write(staging: &mut Staging, measured: &[(Option<NearestPoint>, Side)]) -> Result<()> {
     let n = measured.len();
     let distance: Vec<f64> = measured
         .iter()
         .map(|(m, _)| m.map_or(f64::INFINITY, |m| m.distance))
         .collect();
-    let signed: Vec<f64> = measured
-        .iter()
-        .zip(&distance)
-        .map(|((_, sign), d)| if *sign == 0.0 { 0.0 } else { sign * d })
-        .collect();
+    let signed: Vec<f64> = measured.iter().map(|&m| query::signed(m)).collect();
     let vector = |f: fn(&NearestPoint) -> DVec3, miss: f64| -> Vec<f64> {
         measured
             .iter()

@@ -188,11 +188,17 @@ impl<'a> Signer<'a> {
 
     /// The signed distance of `point`: +inf without triangles, 0 on the surface.
     pub fn signed_distance(&self, point: DVec3) -> f64 {
-        match self.measure(point) {
-            (None, _) => f64::INFINITY,
-            (Some(_), Side::OnSurface) => 0.0,
-            (Some(n), side) => side.sign() * n.distance,
-        }
+        signed(self.measure(point))
+    }
+}
+
+/// The signed distance a [`Signer::measure`] result gives: +inf without a nearest point, 0 on
+/// the surface.
+pub fn signed((nearest, side): (Option<NearestPoint>, Side)) -> f64 {
+    match (nearest, side) {
+        (None, _) => f64::INFINITY,
+        (Some(_), Side::OnSurface) => 0.0,
+        (Some(n), side) => side.sign() * n.distance,
     }
 }
 
