@@ -204,7 +204,13 @@ fn main() {
             accel = a;
             build_times.push(s);
         }
-        let stats = accel_stats(&accel, prims);
+        let mut stats = accel_stats(&accel, prims);
+        // Everything a trace reads: the structure, the triangles and the instanced meshes.
+        let geometry = scene.trace_bytes();
+        stats["geometry_bytes"] = json!(geometry);
+        stats["total_bytes_per_prim"] = json!(
+            (stats["bytes"].as_u64().unwrap_or(0) as usize + geometry) as f64 / prims.max(1) as f64
+        );
         let tracer = Tracer {
             scene: &scene,
             accel: accel.view(),

@@ -53,6 +53,11 @@ impl StoredMesh {
     pub fn bytes(&self) -> usize {
         self.set.mesh.bytes() + self.octree.get().map_or(0, Octree::bytes)
     }
+
+    /// [`StoredMesh::bytes`] without the shading attributes: what a trace reads.
+    pub fn trace_bytes(&self) -> usize {
+        self.set.mesh.trace_bytes() + self.octree.get().map_or(0, Octree::bytes)
+    }
 }
 
 /// One placement of a stored mesh.

@@ -230,7 +230,12 @@ impl Mesh {
     /// Bytes of vertex, index and attribute data.
     pub fn bytes(&self) -> usize {
         let attributes = self.attributes.as_ref().map_or(0, |a| a.bytes());
-        self.positions.bytes() + self.triangles.len() * 12 + attributes
+        self.trace_bytes() + attributes
+    }
+
+    /// Bytes of what a ray test reads: the vertices and the index triples.
+    pub fn trace_bytes(&self) -> usize {
+        self.positions.bytes() + self.triangles.len() * 12
     }
 
     /// Bounds of all vertices used by a triangle, in the mesh frame.

@@ -342,6 +342,20 @@ impl Scene {
             + self.quadrics.len() * std::mem::size_of::<Quadric>()
     }
 
+    /// Bytes of what tracing reads besides the top-level octree: the world's vertices and
+    /// index triples, the instanced meshes' with their octrees, the instance records and the
+    /// quadrics (not the shading attributes, nor the part indices the id buffers read).
+    pub fn trace_bytes(&self) -> usize {
+        self.world.mesh.trace_bytes()
+            + self
+                .meshes
+                .iter()
+                .map(StoredMesh::trace_bytes)
+                .sum::<usize>()
+            + self.instances.len() * std::mem::size_of::<Instance>()
+            + self.quadrics.len() * std::mem::size_of::<Quadric>()
+    }
+
     /// The quadrics, in primitive order.
     pub fn quadrics(&self) -> &[Quadric] {
         &self.quadrics
