@@ -429,7 +429,9 @@ impl Scene {
     /// Points whose projections frame the scene for the automatic camera: every vertex of
     /// the scene's triangles in world coordinates (instances placed) and the corners of each
     /// quadric's bounds; past [`FRAMING_POINTS`] vertices, the corners of the remaining
-    /// objects' bounds instead.
+    /// objects' bounds instead. Each point once (a mesh's corners repeat its shared vertices
+    /// about six times): the framing takes only extremes over the points, which repeats do
+    /// not change, and its bisection passes over them some 120 times.
     pub fn framing_points(&self) -> Vec<DVec3> {
         let mut points = Vec::new();
         for object in &self.objects {
@@ -444,6 +446,8 @@ impl Scene {
             }
             points.extend(self.mesh_triangles(object).into_iter().flatten());
         }
+        let mut seen = std::collections::HashSet::with_capacity(points.len());
+        points.retain(|p| seen.insert(p.to_array().map(f64::to_bits)));
         points
     }
 
