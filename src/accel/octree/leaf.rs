@@ -109,27 +109,6 @@ fn leaf_words(layout: &Layout, at: usize, parts: &[[f32; 6]]) -> (usize, Vec<u32
     (at + HEADER + count, words.collect())
 }
 
-/// The references of the leaf `child` names whose boxes the ray `ray` may enter with `0 <= t
-/// <= t_best`, in their order in the leaf (all of them when the ray does not cull).
-#[inline(always)]
-pub(super) fn survivors<'a>(
-    layout: &'a Layout,
-    kernel: Kernel,
-    child: u32,
-    ray: &'a Lanes,
-    t_best: f32,
-) -> Survivors<'a> {
-    Survivors {
-        prims: layout.leaf(child),
-        boxes: Boxes::of(layout, child),
-        kernel,
-        ray,
-        t_best,
-        next: 0,
-        mask: 0,
-    }
-}
-
 /// Bit `j` set when the ray `ray` may enter the box of reference `first + j` of the leaf
 /// `child` with `0 <= t <= t_best` (`first` a multiple of eight; bits past the leaf's end
 /// clear).
@@ -164,41 +143,6 @@ pub(super) fn chunk_node(layout: &Layout, child: u32, first: usize) -> Wide {
                 Wide::EMPTY
             }
         }),
-    }
-}
-
-/// The iterator of [`survivors`]: the leaf's references tested eight at a time.
-pub(super) struct Survivors<'a> {
-    prims: &'a [u32],
-    boxes: Boxes<'a>,
-    kernel: Kernel,
-    ray: &'a Lanes,
-    t_best: f32,
-    /// The first reference not yet tested.
-    next: usize,
-    /// The kept ones of the eight before `next` not yet returned.
-    mask: u32,
-}
-
-impl Iterator for Survivors<'_> {
-    type Item = u32;
-
-    #[inline(always)]
-    fn next(&mut self) -> Option<u32> {
-        loop {
-            if self.mask != 0 {
-                let lane = self.mask.trailing_zeros() as usize;
-                self.mask &= self.mask - 1;
-                return Some(self.prims[self.next - 8 + lane]);
-            }
-            if self.next >= self.prims.len() {
-                return None;
-            }
-            let (kernel, ray) = (self.kernel, self.ray);
-            let lanes = self.boxes.lanes(self.next);
-            self.mask = self.boxes.test(self.next, kernel, ray, self.t_best) & lanes;
-            self.next += 8;
-        }
     }
 }
 

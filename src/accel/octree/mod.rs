@@ -267,14 +267,20 @@ impl Octree {
             let ray = given
                 .unwrap_or_else(|| own.get_or_insert_with(|| prepare_ray(set, local_origin, dir)));
             let bound = f32_above(best.map_or(t_max, |b| b.t));
-            let kept = leaf::survivors(&self.layout, self.kernel, child, &lanes, bound);
-            test_leaf(
-                set,
-                kept.filter(|&prim| tested.check_in(prim)),
-                ray,
-                t_max,
-                &mut best,
-            );
+            let prims = self.layout.leaf(child);
+            let mut batch = Batch::default();
+            // Eight references' boxes to a filter test (a written-out loop: the iterator it
+            // replaced cost about 26 instructions more per incoherent bunny ray).
+            for first in (0..prims.len()).step_by(8) {
+                let kept = leaf::chunk_mask(&self.layout, self.kernel, child, first, &lanes, bound);
+                for j in set_bits(kept) {
+                    let prim = prims[first + j];
+                    if tested.check_in(prim) {
+                        batch.push(set, prim, ray, t_max, &mut best);
+                    }
+                }
+            }
+            batch.finish(set, ray, t_max, &mut best);
             best.map_or(t_max, |b| b.t)
         };
         traverse::run(
@@ -470,17 +476,50 @@ fn test_leaf<P: PrimitiveSet>(
     t_max: f64,
     best: &mut Option<Hit>,
 ) {
-    let mut group = [0; GROUP];
-    let mut len = 0;
+    let mut batch = Batch::default();
     for prim in prims {
-        group[len] = prim;
-        len += 1;
-        if len == GROUP {
-            test_group(set, &group, ray, t_max, best);
-            len = 0;
+        batch.push(set, prim, ray, t_max, best);
+    }
+    batch.finish(set, ray, t_max, best);
+}
+
+/// A ray's primitives gathered [`GROUP`] at a time for [`test_group`].
+#[derive(Default)]
+struct Batch {
+    prims: [u32; GROUP],
+    len: usize,
+}
+
+impl Batch {
+    /// Adds `prim`; a full group is tested at once.
+    #[inline(always)]
+    fn push<P: PrimitiveSet>(
+        &mut self,
+        set: &P,
+        prim: u32,
+        ray: &PreparedRay<P::RayData>,
+        t_max: f64,
+        best: &mut Option<Hit>,
+    ) {
+        self.prims[self.len] = prim;
+        self.len += 1;
+        if self.len == GROUP {
+            test_group(set, &self.prims, ray, t_max, best);
+            self.len = 0;
         }
     }
-    test_group(set, &group[..len], ray, t_max, best);
+
+    /// Tests what is left.
+    #[inline(always)]
+    fn finish<P: PrimitiveSet>(
+        &self,
+        set: &P,
+        ray: &PreparedRay<P::RayData>,
+        t_max: f64,
+        best: &mut Option<Hit>,
+    ) {
+        test_group(set, &self.prims[..self.len], ray, t_max, best);
+    }
 }
 
 /// Tests the primitives `group` against `ray` ([`PrimitiveSet::intersect_group`]) and keeps in

@@ -4,7 +4,7 @@
 use super::super::traverse::{self, Unobserved};
 use super::super::{Octree, OctreeParams};
 use super::*;
-use crate::accel::{brute_force, prepare_ray, PrimitiveSet};
+use crate::accel::{brute_force, prepare_ray, set_bits, PrimitiveSet};
 use crate::scene::{Scene, SceneBuilder};
 use crate::test_rng::Rng;
 use glam::DVec3;
@@ -100,12 +100,16 @@ fn audit(
         let lanes = Lanes::new(origin, dir + DVec3::ZERO, octree.scale);
         let mut kept = HashSet::new();
         let visit = |child: u32, _, _| {
-            let survived = survivors(layout, kernel, child, &lanes, f32::INFINITY)
-                .inspect(|&prim| {
-                    kept.insert(prim);
-                })
-                .count();
-            dropped += layout.leaf(child).len() - survived;
+            let prims = layout.leaf(child);
+            let mut survived = 0;
+            for first in (0..prims.len()).step_by(8) {
+                let mask = chunk_mask(layout, kernel, child, first, &lanes, f32::INFINITY);
+                for j in set_bits(mask) {
+                    kept.insert(prims[first + j]);
+                    survived += 1;
+                }
+            }
+            dropped += prims.len() - survived;
             f64::INFINITY
         };
         traverse::run(
