@@ -446,7 +446,8 @@ impl Scene {
             }
             points.extend(self.mesh_triangles(object).into_iter().flatten());
         }
-        let mut seen = std::collections::HashSet::with_capacity(points.len());
+        let mut seen = rustc_hash::FxHashSet::default();
+        seen.reserve(points.len());
         points.retain(|p| seen.insert(p.to_array().map(f64::to_bits)));
         points
     }
