@@ -7,8 +7,9 @@
 //! stored, instance meshes placed by their f64 matrix, world meshes with the rounding of their
 //! f64 placement bounded, see [`placement_error`]), or the quadric's nearest root (its file
 //! coefficients and clip box placed by its node matrix); a glTF node matrix is the exact
-//! product of the matrices above it, the f64 composition's rounding carried in
-//! [`transform::BoundedMat4`]. When `certain` is 1, that crossing
+//! product of the transforms above it (a translation/rotation/scale node's matrix that of its
+//! exactly normalized quaternion), the f64 normalization's, multiplying out's and
+//! composition's rounding carried in [`transform::BoundedMat4`]. When `certain` is 1, that crossing
 //! is the exact nearest hit. It is a forward error analysis of the operations the tracer
 //! performs, carried in [`bounded::Bounded`] (value plus bound, Higham's `γₙ`); the derivations
 //! are in [`triangle`] and [`crate::quadric::Quadric::bound_roots`]. `+∞` where no bound can be
@@ -24,8 +25,8 @@
 //! the root, so a primitive whose stored geometry or mapped ray may be off by more than 1e-10
 //! of its octree's root counts as a possible crossing.
 //!
-//! Not covered (the bound takes them as exact): the rounding of a glTF node's own TRS
-//! multiplied out into a matrix and of USD transform ops composed in f64, of decimal numbers
+//! Not covered (the bound takes them as exact): the rounding of USD transform ops composed in
+//! f64, of an animation's interpolated translation, rotation and scale, of decimal numbers
 //! read into f64, of posed (skinned, morphed) vertices, and of the camera's ray generation
 //! (the ray traced is the one bounded).
 

@@ -10,8 +10,11 @@
 //! `(P*L)ᵢⱼ`: each product's and sum's actual rounding (two-product, two-sum) plus the
 //! parent's bound carried through `|L|`. Never more than Higham's `γ₄|P̂||L| + E_P|L|`, and
 //! usually far less (a product of short mantissas, an affine matrix's last row, are exact). A
-//! node's own matrix is taken as the numbers the file gives (a `matrix`: as read; translation,
-//! rotation and scale: as multiplied out in f64, not bounded).
+//! node's own `matrix` is taken as the numbers the file gives; a translation, rotation and
+//! scale stand for `T · R(q/|q|) · S` with the quaternion normalized exactly, and the f64
+//! normalization and multiplying out ([`BoundedMat4::trs`]) are bounded the same way, the
+//! local bound then carried through the parent's product ([`BoundedMat4::then_bounded`]:
+//! `|P̂||E_L| + E_P|L̂| + E_P E_L` beside the roundings).
 //!
 //! # Where it enters the bounds
 //! - A mesh drawn once is placed by `M̂`: each placed coordinate moves by at most
@@ -23,8 +26,8 @@
 //!   translation moves by `E_A|a| + E_T`.
 
 use super::bounded::{down, up, Bounded};
-use glam::{DMat3, DMat4, DVec3, DVec4};
-use std::ops::{Add, Mul};
+use glam::{DMat3, DMat4, DQuat, DVec3, DVec4};
+use std::ops::{Add, Div, Mul, Sub};
 
 /// An f64 affine matrix and a bound on each entry's distance from the exact one.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -50,38 +53,96 @@ impl BoundedMat4 {
     /// within their bounds and the local matrix exact, so the bound holds the actual roundings
     /// rather than `γ₄`'s worst case. A root's exact identity parent adds no error.
     pub fn then(&self, local: &DMat4) -> BoundedMat4 {
-        let value = self.value * *local;
+        self.then_bounded(&BoundedMat4::exact(*local))
+    }
+
+    /// [`BoundedMat4::then`] for a local matrix that is itself within a bound of the exact one
+    /// (a node's translation, rotation and scale multiplied out: [`BoundedMat4::trs`]).
+    pub fn then_bounded(&self, local: &BoundedMat4) -> BoundedMat4 {
+        let value = self.value * local.value;
         if self.value == DMat4::IDENTITY && self.is_exact() {
             return BoundedMat4 {
                 value,
-                error: DMat4::ZERO,
+                error: local.error,
             };
         }
-        let (p, e, l) = (
+        let (p, e) = (
             self.value.transpose().to_cols_array_2d(),
             self.error.transpose().to_cols_array_2d(),
-            local.to_cols_array_2d(),
+        );
+        let (l, f) = (
+            local.value.to_cols_array_2d(),
+            local.error.to_cols_array_2d(),
         );
         let mut error = [[0.0; 4]; 4];
-        for (j, column) in l.iter().enumerate() {
+        for (j, (column, column_error)) in l.iter().zip(&f).enumerate() {
             for i in 0..4 {
-                let term = |k: usize| Bounded::new(p[i][k], e[i][k]).mul(Bounded::exact(column[k]));
+                let term = |k: usize| {
+                    Bounded::new(p[i][k], e[i][k]).mul(Bounded::new(column[k], column_error[k]))
+                };
                 let entry = term(0).add(term(1)).add(term(2)).add(term(3));
                 error[j][i] = entry.error;
             }
         }
         // Two affine matrices: the last row (0, 0, 0, 1) is computed exactly (the products'
         // underflow allowance is not needed there).
-        if self.value.row(3) == DVec4::W
-            && local.row(3) == DVec4::W
-            && self.error.row(3) == DVec4::ZERO
-        {
+        let exact_row =
+            |m: &BoundedMat4| m.value.row(3) == DVec4::W && m.error.row(3) == DVec4::ZERO;
+        if exact_row(self) && exact_row(local) {
             for column in &mut error {
                 column[3] = 0.0;
             }
         }
         BoundedMat4 {
             value,
+            error: DMat4::from_cols_array_2d(&error),
+        }
+    }
+
+    /// The matrix `T · R · S` of a translation, a rotation given by the quaternion `rotation`
+    /// as read (normalized here, as the importer does) and a scale, as glam computes it
+    /// (`DQuat::normalize`, then `DMat4::from_scale_rotation_translation`: the same value, bit
+    /// for bit), with a bound on each entry's distance from the exact matrix of the exact unit
+    /// quaternion `rotation / |rotation|`: the same operations in [`Bounded`] arithmetic. The
+    /// translation and the last row are exact.
+    pub fn trs(translation: DVec3, rotation: DQuat, scale: DVec3) -> BoundedMat4 {
+        if rotation == DQuat::IDENTITY {
+            // Every operation is exact: products with 0 and 1, and 1 − 0 (the bounded products
+            // would add their underflow allowance).
+            let value = DMat4::from_scale_rotation_translation(scale, rotation, translation);
+            return BoundedMat4::exact(value);
+        }
+        let q = rotation.to_array().map(Bounded::exact);
+        // `DVec4::normalize`: the product with the reciprocal of the length.
+        let length = q[0]
+            .mul(q[0])
+            .add(q[1].mul(q[1]))
+            .add(q[2].mul(q[2]))
+            .add(q[3].mul(q[3]));
+        let recip = Bounded::exact(1.0).div(length.sqrt());
+        let [x, y, z, w] = q.map(|c| c.mul(recip));
+        // `DMat4::quat_to_axes`.
+        let (x2, y2, z2) = (x.add(x), y.add(y), z.add(z));
+        let (xx, xy, xz) = (x.mul(x2), x.mul(y2), x.mul(z2));
+        let (yy, yz, zz) = (y.mul(y2), y.mul(z2), z.mul(z2));
+        let (wx, wy, wz) = (w.mul(x2), w.mul(y2), w.mul(z2));
+        let one = Bounded::exact(1.0);
+        let axes = [
+            [one.sub(yy.add(zz)), xy.add(wz), xz.sub(wy)],
+            [xy.sub(wz), one.sub(xx.add(zz)), yz.add(wx)],
+            [xz.add(wy), yz.sub(wx), one.sub(xx.add(yy))],
+        ];
+        let mut value = [[0.0; 4]; 4];
+        let mut error = [[0.0; 4]; 4];
+        for (j, axis) in axes.iter().enumerate() {
+            for (i, entry) in axis.iter().enumerate() {
+                let scaled = entry.mul(Bounded::exact(scale[j]));
+                (value[j][i], error[j][i]) = (scaled.value, scaled.error);
+            }
+        }
+        value[3] = translation.extend(1.0).to_array();
+        BoundedMat4 {
+            value: DMat4::from_cols_array_2d(&value),
             error: DMat4::from_cols_array_2d(&error),
         }
     }
@@ -149,6 +210,57 @@ mod tests {
         let grand = child.then(&DMat4::from_scale(DVec3::splat(2.0)));
         assert!(grand.error.x_axis.x >= 2.0 * child.error.x_axis.x);
         assert!(BoundedMat4::exact(DMat4::IDENTITY).then(&local).is_exact());
+    }
+
+    /// The bounded TRS matrix is glam's (after the importer's normalization), bit for bit,
+    /// for random translations, rotations (not unit, as files give them) and scales.
+    #[test]
+    fn trs_is_glams_matrix() {
+        let mut rng = crate::test_rng::Rng(7);
+        for _ in 0..2000 {
+            let t = rng.point(-1e4, 1e4);
+            let s = rng.point(-3.0, 3.0);
+            let (xyz, w) = (rng.point(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+            let q = DQuat::from_xyzw(xyz.x, xyz.y, xyz.z, w);
+            let bounded = BoundedMat4::trs(t, q, s);
+            let glam = DMat4::from_scale_rotation_translation(s, q.normalize(), t);
+            assert_eq!(bounded.value.to_cols_array(), glam.to_cols_array());
+            assert!(bounded.error.is_finite() && bounded.error.row(3) == DVec4::ZERO);
+            assert!(
+                bounded.error.w_axis == DVec4::ZERO,
+                "the translation is exact"
+            );
+        }
+    }
+
+    /// The quarter turn about z, `(0, 0, sin 45°, cos 45°)` in f64, is not exactly unit: its
+    /// matrix's zero entries keep only the products' underflow allowance, while the entries
+    /// near 0.0 and 1 carry the normalization's and the products' roundings, a few units of
+    /// 2⁻⁵³. The identity rotation gives an exact matrix; and a parent over a bounded child
+    /// carries the child's bound.
+    #[test]
+    fn trs_bounds_the_rotation_s_roundings() {
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let m = BoundedMat4::trs(DVec3::ZERO, DQuat::from_xyzw(0.0, 0.0, h, h), DVec3::ONE);
+        assert!(
+            m.error.x_axis.x > 0.0 && m.error.x_axis.x < 1e-15,
+            "{:?}",
+            m.error
+        );
+        assert!(
+            m.error.x_axis.y > 0.0 && m.error.x_axis.y < 1e-15,
+            "{:?}",
+            m.error
+        );
+        assert!(m.error.x_axis.z < 1e-300, "{:?}", m.error);
+        assert!(BoundedMat4::trs(DVec3::X, DQuat::IDENTITY, DVec3::splat(2.0)).is_exact());
+        let parent = BoundedMat4::exact(DMat4::from_translation(DVec3::splat(3.0)));
+        let child = parent.then_bounded(&m);
+        assert!(
+            child.error.x_axis.y >= m.error.x_axis.y,
+            "{:?}",
+            child.error
+        );
     }
 
     #[test]

@@ -46,9 +46,14 @@ def dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
+def exact(x):
+    """A number as a Fraction: a Fraction stays, a float is taken exactly."""
+    return x if isinstance(x, Fraction) else Fraction(float(x))
+
+
 def place(matrix_cols, point):
     """An exact column-major 4×4 affine matrix applied to a point (Fractions)."""
-    m = [Fraction(float(x)) for x in matrix_cols]
+    m = [exact(x) for x in matrix_cols]
     return [
         m[r] * point[0] + m[4 + r] * point[1] + m[8 + r] * point[2] + m[12 + r] for r in range(3)
     ]
@@ -56,13 +61,38 @@ def place(matrix_cols, point):
 
 def compose(a_cols, b_cols):
     """The exact product a·b of two column-major 4×4 matrices (Fractions, column-major)."""
-    a = [Fraction(float(x)) if not isinstance(x, Fraction) else x for x in a_cols]
-    b = [Fraction(float(x)) if not isinstance(x, Fraction) else x for x in b_cols]
+    a = [exact(x) for x in a_cols]
+    b = [exact(x) for x in b_cols]
     out = [Fraction(0)] * 16
     for c in range(4):
         for r in range(4):
             out[c * 4 + r] = sum(a[k * 4 + r] * b[c * 4 + k] for k in range(4))
     return out
+
+
+def trs(translation, rotation, scale):
+    """The column-major matrix T·R·S of a glTF node's translation, rotation quaternion (x, y,
+    z, w; normalized exactly, as the file means it) and scale: Fractions within 2⁻⁴⁰⁰ of the
+    exact entries (the normalization's square root is irrational), from mpmath at 460 bits."""
+    with mpmath.workprec(460):
+        q = [mpmath.mpf(float(c)) for c in rotation]
+        n = mpmath.sqrt(sum(c * c for c in q))
+        x, y, z, w = (c / n for c in q)
+        r = [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+
+        def frac(v):
+            v = mpmath.mpf(v)
+            man, exp = v.man_exp  # the magnitude's mantissa and exponent: the sign apart
+            return (-1 if v < 0 else 1) * Fraction(man) * Fraction(2) ** exp if man else Fraction(0)
+
+        cols = []
+        for c in range(3):
+            cols += [frac(r[row][c]) * exact(scale[c]) for row in range(3)] + [Fraction(0)]
+    return cols + [exact(t) for t in translation] + [Fraction(1)]
 
 
 @dataclass

@@ -16,7 +16,10 @@ fraction of uncertain rays. Exit status 0 when no case has an exception.
 
 `nested` (instances under a parent node matrix, the matrices composed in f64 by the importer)
 is covered like the others: the bound carries the composition's rounding
-(src/bound/transform.rs) against the exact product of the file's matrices.
+(src/bound/transform.rs) against the exact product of the file's matrices. `nested TRS` gives
+every node a translation, a not exactly unit rotation and a scale instead: the truth is the
+matrix of the exactly normalized quaternion (bound_truth.trs), the bound carries the rounding
+of the normalization and of multiplying them out.
 """
 
 from __future__ import annotations
@@ -117,11 +120,29 @@ def random_matrix(rng, reach: float, scale: float):
     return m.T.flatten().tolist()
 
 
+def random_trs(rng, reach: float, scale: float):
+    """A node's translation, rotation and scale as a file gives them: the quaternion not
+    exactly unit (a random direction in 4-D, written to 8 decimals)."""
+    q = rng.normal(size=4)
+    q = [round(float(c), 8) for c in q / np.linalg.norm(q)]
+    return {
+        "translation": rng.uniform(-reach, reach, 3).tolist(),
+        "rotation": q,
+        "scale": (rng.uniform(0.5, 2.0, 3) * scale).tolist(),
+    }
+
+
+def trs_matrix(props):
+    """The exact matrix of random_trs's properties (bound_truth.trs)."""
+    return bt.trs(props["translation"], props["rotation"], props["scale"])
+
+
 def gltf_scene(path: Path, rng, layout: str):
     """A glTF of one f32 mesh drawn by node matrices: `placed` (one node, the mesh placed in
     the world), `instanced` (three nodes: instances), `nested` (a parent matrix over three
     children: instances under composed matrices), `nested once` (a parent matrix over one
-    child: the mesh placed in the world by the composed matrix)."""
+    child: the mesh placed in the world by the composed matrix), `nested TRS` (as `nested`,
+    every node by translation, rotation and scale instead of a matrix)."""
     pts, faces = terrain(rng, 4, 2.0)
     pts32 = pts.astype(np.float32)
     g = Gltf("raycast_tools error-bounds")
@@ -130,7 +151,15 @@ def gltf_scene(path: Path, rng, layout: str):
     mesh = g.mesh("m", [{"attributes": {"POSITION": acc}, "indices": idx}])
     local = [bt.frac3(p) for p in pts32.astype(np.float64)]
     draws = []  # (node name, exact column-major world matrix)
-    if layout.startswith("nested"):
+    if layout == "nested TRS":
+        parent = random_trs(rng, 1e4, 50.0)
+        kids = []
+        for k in range(3):
+            m = random_trs(rng, 3.0, 0.5)
+            kids.append(g.node(f"leaf{k}", mesh=mesh, **m))
+            draws.append((f"leaf{k}", bt.compose(trs_matrix(parent), trs_matrix(m))))
+        roots = [g.node("parent", children=kids, **parent)]
+    elif layout.startswith("nested"):
         parent = random_matrix(rng, 1e4, 50.0)
         kids = []
         for k in range(3 if layout == "nested" else 1):
@@ -337,7 +366,7 @@ def run_all(raycast, n: int, seed: int, work: Path) -> list[Tally]:
         o, d = mesh_rays(world_triangles(truth), n, rng)
         run_case(raycast, path, truth, o, d, t, work)
         tallies.append(t)
-    for layout in ("placed", "instanced", "nested", "nested once"):
+    for layout in ("placed", "instanced", "nested", "nested once", "nested TRS"):
         t = Tally(f"glTF {layout}")
         path = work / f"{layout.replace(' ', '_')}.gltf"
         truth = gltf_scene(path, rng, layout)

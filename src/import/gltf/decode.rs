@@ -18,7 +18,8 @@ use super::diagnostics::{Diagnostic, Sink};
 use super::document::{extension, index_of, Document};
 use super::mesh::{Geometry, TriangleMode, DRACO};
 use super::{draco, instancing, meshopt};
-use glam::{DMat4, DVec3};
+use crate::bound::transform::BoundedMat4;
+use glam::DVec3;
 use serde_json::Value;
 
 /// The codes of the diagnostics the decoders give (Draco, meshopt, GPU instancing data that
@@ -168,7 +169,7 @@ pub fn gpu_instances(
     doc: &Document,
     node: usize,
     ext: &Value,
-) -> Result<Option<Vec<DMat4>>, Diagnostic> {
+) -> Result<Option<Vec<BoundedMat4>>, Diagnostic> {
     let at = format!("/nodes/{node}/extensions/{GPU_INSTANCING}");
     let invalid = |e: String| Diagnostic::error("INSTANCING_INVALID", &at, e);
     let accessors = instancing::accessors(ext).map_err(invalid)?;

@@ -2,7 +2,8 @@
 //! accessors. Each instance's matrix applies in the node's space: world = node world x
 //! instance T x R x S.
 
-use glam::{DMat4, DQuat, DVec3};
+use crate::bound::transform::BoundedMat4;
+use glam::{DQuat, DVec3};
 use serde_json::Value;
 
 /// Extension name.
@@ -67,9 +68,9 @@ pub fn accessors(extension: &Value) -> Result<InstanceAccessors, String> {
     Ok(found)
 }
 
-/// The instance matrices (in the node's space), one per row; all given attributes must have
-/// the same count.
-pub fn matrices(values: &InstanceValues) -> Result<Vec<DMat4>, String> {
+/// The instance matrices (in the node's space), one per row, each with the bound of its
+/// multiplication ([`BoundedMat4::trs`]); all given attributes must have the same count.
+pub fn matrices(values: &InstanceValues) -> Result<Vec<BoundedMat4>, String> {
     let counts = [
         values.translation.as_ref().map(Vec::len),
         values.rotation.as_ref().map(Vec::len),
@@ -97,8 +98,8 @@ pub fn matrices(values: &InstanceValues) -> Result<Vec<DMat4>, String> {
                 None => DQuat::IDENTITY,
                 Some(r) => rotation(r[i]).map_err(|e| format!("{EXTENSION}: instance {i}: {e}"))?,
             };
-            let m = DMat4::from_scale_rotation_translation(s, r, t);
-            if m.is_finite() {
+            let m = BoundedMat4::trs(t, r, s);
+            if m.value.is_finite() {
                 Ok(m)
             } else {
                 Err(format!(
@@ -109,13 +110,13 @@ pub fn matrices(values: &InstanceValues) -> Result<Vec<DMat4>, String> {
         .collect()
 }
 
-/// A unit quaternion from stored (x, y, z, w), normalized as node rotations are.
+/// A quaternion from stored (x, y, z, w), to be normalized as node rotations are.
 fn rotation([x, y, z, w]: [f64; 4]) -> Result<DQuat, String> {
     let q = DQuat::from_xyzw(x, y, z, w);
     if !q.is_finite() || q.length_squared() == 0.0 {
         return Err(format!("rotation {:?} is not a rotation", [x, y, z, w]));
     }
-    Ok(q.normalize())
+    Ok(q)
 }
 
 #[cfg(test)]
@@ -147,9 +148,11 @@ mod tests {
         };
         let m = matrices(&values).unwrap();
         assert_eq!(m.len(), 2);
-        let p = m[0].transform_point3(DVec3::X);
+        let p = m[0].value.transform_point3(DVec3::X);
         assert!((p - DVec3::new(10.0, 2.0, 0.0)).length() < 1e-15, "{p}");
-        assert_eq!(m[1], DMat4::IDENTITY);
+        // The identity rotation is exact; the unnormalized quarter turn is not.
+        assert_eq!(m[1], BoundedMat4::exact(glam::DMat4::IDENTITY));
+        assert!(!m[0].is_exact());
     }
 
     #[test]

@@ -5,6 +5,7 @@
 use super::animation::Animated;
 use super::diagnostics::{Diagnostic, Sink};
 use super::document::{array, as_index, index_of, Document};
+use crate::bound::transform::BoundedMat4;
 use crate::camera::Projection;
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
@@ -172,6 +173,36 @@ pub fn animated_transform(
     at: &str,
     sink: &mut dyn Sink,
 ) -> DMat4 {
+    match read_local(node, animated, at, sink) {
+        Local::Matrix(m) => m,
+        Local::Trs(t, r, s) => DMat4::from_scale_rotation_translation(s, r.normalize(), t),
+    }
+}
+
+/// [`animated_transform`] with a bound on each entry's distance from the exact matrix of the
+/// numbers it is made of ([`BoundedMat4::trs`]; a `matrix` is taken as read, exact).
+pub fn bounded_transform(
+    node: &Value,
+    animated: Option<&Animated>,
+    at: &str,
+    sink: &mut dyn Sink,
+) -> BoundedMat4 {
+    match read_local(node, animated, at, sink) {
+        Local::Matrix(m) => BoundedMat4::exact(m),
+        Local::Trs(t, r, s) => BoundedMat4::trs(t, r, s),
+    }
+}
+
+/// A node's local transform as the file gives it.
+enum Local {
+    /// Its `matrix`.
+    Matrix(DMat4),
+    /// Its translation, rotation (the quaternion as given, not yet normalized) and scale.
+    Trs(DVec3, DQuat, DVec3),
+}
+
+/// The local transform of [`animated_transform`], read and checked.
+fn read_local(node: &Value, animated: Option<&Animated>, at: &str, sink: &mut dyn Sink) -> Local {
     let mut read = |key: &str, len: usize| -> Option<Vec<f64>> {
         let list = node
             .get(key)?
@@ -191,7 +222,8 @@ pub fn animated_transform(
         }
     };
     if node.get("matrix").is_some() {
-        return read("matrix", 16).map_or(DMat4::IDENTITY, |m| DMat4::from_cols_slice(&m));
+        let matrix = read("matrix", 16).map_or(DMat4::IDENTITY, |m| DMat4::from_cols_slice(&m));
+        return Local::Matrix(matrix);
     }
     let animated = animated.cloned().unwrap_or_default();
     let t = match animated.translation {
@@ -211,7 +243,7 @@ pub fn animated_transform(
         Some(q) => {
             let q = DQuat::from_xyzw(q[0], q[1], q[2], q[3]);
             if q.length_squared() > 0.0 {
-                q.normalize()
+                q
             } else {
                 sink.error(
                     "ROTATION_NON_UNIT",
@@ -222,5 +254,5 @@ pub fn animated_transform(
             }
         }
     };
-    DMat4::from_scale_rotation_translation(s, r, t)
+    Local::Trs(t, r, s)
 }

@@ -9,7 +9,7 @@ use super::decode::{self, GPU_INSTANCING, MESHOPT};
 use super::diagnostics::{Diagnostic, FailFast};
 use super::document::{array, as_index, extension, index_of, Document};
 use super::mesh::DRACO;
-use super::node::{animated_transform, Node};
+use super::node::{bounded_transform, Node};
 use super::pose::Pose;
 use super::shading::MeshShading;
 use super::QUADRIC_EXTENSION;
@@ -290,7 +290,8 @@ impl Walk<'_> {
             })?;
             let mut sink = FailFast::default();
             let animated = self.animated.get(&index);
-            let world = parent.then(&animated_transform(node.json, animated, &at, &mut sink));
+            let local = bounded_transform(node.json, animated, &at, &mut sink);
+            let world = parent.then_bounded(&local);
             if let Some(error) = sink.error {
                 return Err(error);
             }
@@ -358,7 +359,7 @@ impl Walk<'_> {
                             format!("{name}[{k}]"),
                             pointer,
                             local,
-                            &placement.then(instance),
+                            &placement.then_bounded(instance),
                         )?;
                     }
                 }
