@@ -17,4 +17,4 @@ mod tests;
 
 pub use kind::QuadricKind;
 pub use spec::QuadricSpec;
-pub use surface::{Others, Quadric, QuadricBound, RootBound};
+pub use surface::{Others, Quadric, QuadricBound, QuadricClosest, RootBound};
