@@ -74,6 +74,9 @@ class Clipped:
         self.a_inv = [[inverse[i, j] for j in range(3)] for i in range(3)]
         at = _transpose(self.a)
         self.g = [[_dot(at[i], at[j]) for j in range(3)] for i in range(3)]
+        # The world length of the local gradient of x_k: a local offset h across the plane
+        # x_k = m is a world distance h / |row k of A⁻¹|.
+        self.across = [mpmath.sqrt(_dot(row, row)) for row in self.a_inv]
 
     def f(self, x):
         return _dot(x, _apply(self.q, x)) + _dot(self.p, x) + self.r
@@ -198,8 +201,9 @@ class Clipped:
                 if x is not None:
                     found.append(x)
         if self.box is not None:
-            found.extend(self._on_faces(xp, directions // 2))
             found.extend(self._on_edges())
+            bound = min((self.distance(x, xp) for x in found), default=mpmath.inf)
+            found.extend(self._on_faces(xp, directions // 2, bound))
         try:
             c = mpmath.lu_solve(mpmath.matrix(self.q), mpmath.matrix(self.p))
             c = [-c[i] / 2 for i in range(3)]
@@ -212,10 +216,13 @@ class Clipped:
         best = min(found, key=lambda x: self.distance(x, xp))
         return self.distance(best, xp), best
 
-    def _on_faces(self, xp, directions):
+    def _on_faces(self, xp, directions, bound):
+        """Candidates on the faces whose plane is nearer than `bound`."""
         out = []
         for k in range(3):
             for m in (self.box[0][k], self.box[1][k]):
+                if abs(xp[k] - m) / self.across[k] > bound:
+                    continue
                 foot = list(xp)
                 foot[k] = m
                 middle = self.centre()
@@ -269,7 +276,7 @@ class Clipped:
                 ratio = (mpmath.sqrt(5) - 1) / 2
                 a, b = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
                 fa, fb = dist(a), dist(b)
-                for _ in range(130):
+                for _ in range(100):
                     if fa <= fb:
                         hi, b, fb = b, a, fa
                         a = hi - ratio * (hi - lo)

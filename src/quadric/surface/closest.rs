@@ -15,8 +15,8 @@
 //!    and the edge's point nearest the query when the edge lies on the surface.
 //!
 //! Each candidate is settled on the surface (Newton steps along the gradient, restricted to
-//! the face's plane for a face's; then steps to the foot of the query on the tangent plane,
-//! kept while they bring it nearer), kept only if it then lies on the surface to rounding and
+//! the face's plane for a face's; then Newton steps for the distance along the surface, kept
+//! while they bring it nearer), kept only if it then lies on the surface to rounding and
 //! in the box as stated (not the intersection test's widened box), and the nearest kept one
 //! wins. When the nearest of the unclipped surface's candidates is in the box, it is the
 //! answer and the box's faces and edges are not searched; faces and edges farther from the
@@ -32,6 +32,8 @@
 
 mod critical;
 mod roots;
+#[cfg(test)]
+mod tests;
 
 use super::Quadric;
 use crate::quadric::eigen::symmetric_eigen;
@@ -46,7 +48,7 @@ const EPS: f64 = f64::EPSILON / 2.0;
 /// Newton steps onto the surface, at most.
 const NEWTON_STEPS: usize = 8;
 
-/// Steps towards the query's foot on the tangent plane, at most.
+/// Steps along the surface towards a critical point, at most.
 const TANGENT_STEPS: usize = 4;
 
 /// A point counts as on the surface when `|f|` is at most this many times its rounding bound.
@@ -277,15 +279,10 @@ impl Quadric {
     ) -> Option<DVec3> {
         let mut w = self.onto_surface(w, along).filter(|&w| keep(w))?;
         for _ in 0..TANGENT_STEPS {
-            let normal = along.project(self.world.gradient(w));
-            let length = normal.length();
-            if !(length > 0.0) {
+            let Some(step) = self.tangent_step(w, query, along) else {
                 break;
-            }
-            let normal = normal / length;
-            let towards = along.project(query - w);
-            let step = towards - normal * normal.dot(towards);
-            if step.length() <= 4.0 * EPS * (w.length() + towards.length()) {
+            };
+            if step.length() <= 4.0 * EPS * (w.length() + (query - w).length()) {
                 break;
             }
             match self.onto_surface(w + step, along) {
@@ -296,6 +293,36 @@ impl Quadric {
             }
         }
         Some(w)
+    }
+
+    /// A step along the surface at `w` (on it) towards being critical for the distance from
+    /// `query`, in the tangent directions `along` allows: Newton's, `s` solving
+    /// `T(I − 2νQ)T s = T(query − w)` with `ν = g·(w − query)/|g|²` the Lagrange multiplier
+    /// (`g` the gradient, projected by `along`), where that Hessian is positive definite (a
+    /// minimum nearby); else the foot of `query` on the tangent plane. `None` where the
+    /// gradient vanishes.
+    fn tangent_step(&self, w: DVec3, query: DVec3, along: Along) -> Option<DVec3> {
+        let g = along.project(self.world.gradient(w));
+        let n = g.try_normalize()?;
+        let towards = query - w;
+        let nu = g.dot(-towards) / g.length_squared();
+        let hessian = |a: DVec3, b: DVec3| a.dot(b) - 2.0 * nu * a.dot(self.world.q * b);
+        let newton = match along {
+            Along::Plane(m, _) => m.cross(n).try_normalize().and_then(|t| {
+                let h = hessian(t, t);
+                (h > 0.0).then(|| t * (t.dot(towards) / h))
+            }),
+            Along::Surface => {
+                let t1 = n.any_orthonormal_vector();
+                let t2 = n.cross(t1);
+                let (a, b, c) = (hessian(t1, t1), hessian(t1, t2), hessian(t2, t2));
+                let det = a * c - b * b;
+                let (r1, r2) = (t1.dot(towards), t2.dot(towards));
+                (a > 0.0 && det > 0.0)
+                    .then(|| t1 * ((c * r1 - b * r2) / det) + t2 * ((a * r2 - b * r1) / det))
+            }
+        };
+        Some(newton.unwrap_or(towards - n * n.dot(towards)))
     }
 
     /// Newton steps on `f` along its gradient (restricted by `along`) from `w`; the point if
