@@ -56,7 +56,8 @@ impl Polynomial {
     /// ulps of the sum of the terms' magnitudes, `|x|·|Q|·|x| + |P|·|x| + |R|`.
     pub fn value_rounding(&self, x: DVec3) -> f64 {
         let x_abs = x.abs();
-        8.0 * f64::EPSILON * (x_abs.dot(self.q_abs * x_abs) + self.p.abs().dot(x_abs) + self.r.abs())
+        8.0 * f64::EPSILON
+            * (x_abs.dot(self.q_abs * x_abs) + self.p.abs().dot(x_abs) + self.r.abs())
     }
 
     /// `∇f(x) = 2Qx + P`.

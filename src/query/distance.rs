@@ -186,10 +186,14 @@ impl<'a> Signer<'a> {
     /// one line naming the object.
     pub fn new(query: Query<'a>, rule: SignRule) -> Result<Signer<'a>, String> {
         let scene = query.scene;
-        let refused = scene.quadrics().iter().enumerate().find(|(_, q)| match rule {
-            SignRule::Crossings => !q.encloses(),
-            SignRule::Winding => true,
-        });
+        let refused = scene
+            .quadrics()
+            .iter()
+            .enumerate()
+            .find(|(_, q)| match rule {
+                SignRule::Crossings => !q.encloses(),
+                SignRule::Winding => true,
+            });
         if let Some((index, quadric)) = refused {
             let object = scene.quadric_object(index);
             let what = format!(
@@ -200,9 +204,9 @@ impl<'a> Signer<'a> {
             );
             return Err(match rule {
                 SignRule::Crossings => format!(
-                    "signed distance needs closed surfaces, and {what} that its clip box leaves \
-                     open, with no inside (only an ellipsoid its box does not cut is closed); \
-                     distances alone are defined"
+                    "{what} clipped open by its box: it has no inside, so no signed distance \
+                     (only an ellipsoid that its clip box does not cut is closed); its \
+                     distance alone is defined (Python's Scene.distance and closest_points)"
                 ),
                 SignRule::Winding => format!(
                     "sign=winding sums the solid angles of triangles and has no rule for \

@@ -92,16 +92,16 @@ impl Scene {
                     }
                 })
             }
-            Top::Quadric(q) => nearest_on_quadric(&self.quadrics[q], point, limit).map(|closest| {
-                Nearest {
+            Top::Quadric(q) => {
+                nearest_on_quadric(&self.quadrics[q], point, limit).map(|closest| Nearest {
                     closest,
                     crossing: Crossing {
                         t: 1.0,
                         top,
                         inner: None,
                     },
-                }
-            }),
+                })
+            }
         }
     }
 }

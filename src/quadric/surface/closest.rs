@@ -211,11 +211,7 @@ impl Quadric {
         let e2 = (e2 - e1 * e1.dot(e2)).normalize();
         let q = self.world.q;
         let (a, b, c) = (e1.dot(q * e1), e1.dot(q * e2), e2.dot(q * e2));
-        let conic = DMat3::from_cols(
-            DVec3::new(a, b, 0.0),
-            DVec3::new(b, c, 0.0),
-            DVec3::ZERO,
-        );
+        let conic = DMat3::from_cols(DVec3::new(a, b, 0.0), DVec3::new(b, c, 0.0), DVec3::ZERO);
         let (lambda, rotation) = symmetric_eigen(conic);
         let gradient = self.world.gradient(foot);
         let linear = DVec3::new(e1.dot(gradient), e2.dot(gradient), 0.0);
@@ -236,8 +232,12 @@ impl Quadric {
         };
         for axis in 0..3 {
             let (j, k) = ((axis + 1) % 3, (axis + 2) % 3);
-            for (a, b) in [(min[j], min[k]), (min[j], max[k]), (max[j], min[k]), (max[j], max[k])]
-            {
+            for (a, b) in [
+                (min[j], min[k]),
+                (min[j], max[k]),
+                (max[j], min[k]),
+                (max[j], max[k]),
+            ] {
                 let mut start = min;
                 start[j] = a;
                 start[k] = b;
@@ -333,7 +333,7 @@ impl Quadric {
             let value = self.world.value(w);
             let gradient = along.project(self.world.gradient(w));
             let squared = gradient.length_squared();
-            if value == 0.0 || !(squared > 0.0) {
+            if value == 0.0 || squared.is_nan() || squared == 0.0 {
                 break;
             }
             let step = gradient * (value / squared);

@@ -32,7 +32,8 @@ impl Quadric {
     pub fn inside(&self, point: DVec3) -> Option<bool> {
         let u = point - self.anchor;
         let value = self.world.value(u);
-        if !(value.abs() > ON_SURFACE * self.world.value_rounding(u)) {
+        let rounding = ON_SURFACE * self.world.value_rounding(u);
+        if value.is_nan() || rounding.is_nan() || value.abs() <= rounding {
             return None;
         }
         let q = self.world.q;

@@ -162,9 +162,8 @@ impl Diagonal {
             return;
         }
         let lambda = self.lambda[pole];
-        let shares = |i: usize| {
-            s.curved[i] && (self.lambda[i] - lambda).abs() <= SAME_POLE * lambda.abs()
-        };
+        let shares =
+            |i: usize| s.curved[i] && (self.lambda[i] - lambda).abs() <= SAME_POLE * lambda.abs();
         if (0..pole).any(shares) {
             return;
         }
@@ -176,7 +175,7 @@ impl Diagonal {
             rest += self.lambda[i] * z * z;
         }
         let radius_squared = -rest / lambda;
-        if !(radius_squared >= 0.0) {
+        if radius_squared.is_nan() || radius_squared < 0.0 {
             return;
         }
         let length = (0..3)
@@ -225,7 +224,12 @@ mod tests {
     fn nearest(d: &Diagonal, p: [f64; 3]) -> f64 {
         let mut out = Vec::new();
         d.candidates(p, &mut out);
-        let f = |y: &[f64; 3]| (0..3).map(|i| d.lambda[i] * y[i] * y[i] + d.b[i] * y[i]).sum::<f64>() + d.r;
+        let f = |y: &[f64; 3]| {
+            (0..3)
+                .map(|i| d.lambda[i] * y[i] * y[i] + d.b[i] * y[i])
+                .sum::<f64>()
+                + d.r
+        };
         out.iter()
             .filter(|y| f(y).abs() < 1e-9)
             .map(|y| (0..3).map(|i| (y[i] - p[i]).powi(2)).sum::<f64>().sqrt())

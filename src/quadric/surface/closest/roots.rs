@@ -140,7 +140,10 @@ mod tests {
         want.sort_by(f64::total_cmp);
         assert_eq!(roots.len(), 4, "{roots:?}");
         for (got, want) in roots.iter().zip(want) {
-            assert!((got - want).abs() <= 1e-12 * want.abs().max(1.0), "{got} {want}");
+            assert!(
+                (got - want).abs() <= 1e-12 * want.abs().max(1.0),
+                "{got} {want}"
+            );
         }
     }
 

@@ -22,7 +22,11 @@ fn check(q: &Quadric, point: [f64; 3], want: f64, scale: f64) -> DVec3 {
     let point = DVec3::from_array(point);
     let found = q.closest(point, f64::INFINITY).expect("a nearest point");
     let error = (found.distance - want).abs() / (EPS * scale);
-    assert!(error <= 8.0, "{point}: {} against {want} ({error} ε)", found.distance);
+    assert!(
+        error <= 8.0,
+        "{point}: {} against {want} ({error} ε)",
+        found.distance
+    );
     assert!(((found.offset).length() - found.distance).abs() <= 2.0 * EPS * scale);
     point + found.offset
 }
@@ -32,7 +36,10 @@ fn a_sphere_s_centre_axis_surface_and_far_points() {
     let sphere = quadric([1.0; 3], [0.0; 3], -4.0, None);
     let at = check(&sphere, [0.0; 3], 2.0, 2.0);
     assert!((at.length() - 2.0).abs() <= 4.0 * EPS);
-    assert_eq!(check(&sphere, [0.0, 0.0, 5.0], 3.0, 5.0), DVec3::new(0.0, 0.0, 2.0));
+    assert_eq!(
+        check(&sphere, [0.0, 0.0, 5.0], 3.0, 5.0),
+        DVec3::new(0.0, 0.0, 2.0)
+    );
     check(&sphere, [0.0, 2.0, 0.0], 0.0, 2.0);
     check(&sphere, [0.0, 0.0, 2.0 - 1e-12], 1e-12, 2.0);
     check(&sphere, [1e6, 0.0, 0.0], 1e6 - 2.0, 1e6);
@@ -52,7 +59,12 @@ fn a_cylinder_s_axis_and_its_rim() {
 
 #[test]
 fn one_nappe_of_a_cone_is_nearest_at_its_apex() {
-    let nappe = quadric([1.0, 1.0, -1.0], [0.0; 3], 0.0, Some([[-2.0, -2.0, 0.0], [2.0; 3]]));
+    let nappe = quadric(
+        [1.0, 1.0, -1.0],
+        [0.0; 3],
+        0.0,
+        Some([[-2.0, -2.0, 0.0], [2.0; 3]]),
+    );
     let at = check(&nappe, [0.0, 0.0, -1.0], 1.0, 2.0);
     assert!(at.length() <= 4.0 * EPS, "{at}");
     // Beside it, the nearest generator: 45° lines, so 3/√2 from (3, 0, 0).
@@ -62,21 +74,41 @@ fn one_nappe_of_a_cone_is_nearest_at_its_apex() {
 #[test]
 fn the_box_may_cut_the_unclipped_nearest_point_away() {
     // z² − x² − y² = 1, only its upper sheet: from below, (0, 0, 1) at 2.5.
-    let sheet = quadric([-1.0, -1.0, 1.0], [0.0; 3], -1.0, Some([[-3.0, -3.0, 0.5], [3.0; 3]]));
+    let sheet = quadric(
+        [-1.0, -1.0, 1.0],
+        [0.0; 3],
+        -1.0,
+        Some([[-3.0, -3.0, 0.5], [3.0; 3]]),
+    );
     check(&sheet, [0.0, 0.0, -1.5], 2.5, 3.0);
     // The unit sphere's lower half: from (0, 0, 0.5) the rim at z = 0 (√1.25) beats the far
     // pole (1.5); from (0, 0, −0.5) the pole, at 0.5.
-    let bowl = quadric([1.0; 3], [0.0; 3], -1.0, Some([[-1.0, -1.0, -1.0], [1.0, 1.0, 0.0]]));
+    let bowl = quadric(
+        [1.0; 3],
+        [0.0; 3],
+        -1.0,
+        Some([[-1.0, -1.0, -1.0], [1.0, 1.0, 0.0]]),
+    );
     check(&bowl, [0.0, 0.0, 0.5], 1.25f64.sqrt(), 1.0);
     check(&bowl, [0.0, 0.0, -0.5], 0.5, 1.0);
 }
 
 #[test]
 fn a_paraboloid_s_vertex_and_a_saddle_point_on_the_surface() {
-    let bowl = quadric([1.0, 1.0, 0.0], [0.0, 0.0, -1.0], 0.0, Some([[-2.0; 3], [2.0; 3]]));
+    let bowl = quadric(
+        [1.0, 1.0, 0.0],
+        [0.0, 0.0, -1.0],
+        0.0,
+        Some([[-2.0; 3], [2.0; 3]]),
+    );
     check(&bowl, [0.0, 0.0, -1.0], 1.0, 2.0);
     check(&bowl, [0.0, 0.0, 1.0], 0.75f64.sqrt(), 2.0);
-    let saddle = quadric([1.0, -1.0, 0.0], [0.0, 0.0, -1.0], 0.0, Some([[-2.0; 3], [2.0; 3]]));
+    let saddle = quadric(
+        [1.0, -1.0, 0.0],
+        [0.0, 0.0, -1.0],
+        0.0,
+        Some([[-2.0; 3], [2.0; 3]]),
+    );
     check(&saddle, [0.0; 3], 0.0, 2.0);
 }
 
