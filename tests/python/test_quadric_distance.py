@@ -134,7 +134,9 @@ def test_quadric_distances_agree_with_mpmath(tmp_path, name, offset):
     ERRORS[(name, offset)] = max(errors)
     print(f"{name} at {offset:g}: max |d - d_ref| = {max(errors):.2f} eps * scale")
     for (d, ref, scale), e, point in zip(rows, errors, points):
-        assert e <= BOUND, f"{name}: point {point}: raycast {d!r}, mpmath {ref!r}, {e:.1f} eps·scale"
+        assert e <= BOUND, (
+            f"{name}: point {point}: raycast {d!r}, mpmath {ref!r}, {e:.1f} eps·scale"
+        )
     # The points returned are on the clipped surface and at the distance reported.
     for i, point in enumerate(points):
         x = clipped.local([mpmath.mpf(v) for v in found["point"][i]])
@@ -153,7 +155,9 @@ def test_a_sphere_by_hand(tmp_path):
     """A unit sphere at the origin: its centre (every point nearest), a point on an axis,
     one 1e-12 inside, one far away."""
     path = tmp_path / "sphere.gltf"
-    write_scene(path, [1.0, 1.0, 1.0], [0, 0, 0], -1.0, None, np.hstack([np.eye(3), np.zeros((3, 1))]))
+    write_scene(
+        path, [1.0, 1.0, 1.0], [0, 0, 0], -1.0, None, np.hstack([np.eye(3), np.zeros((3, 1))])
+    )
     scene = raycast.load(str(path))
     points = np.array([[0, 0, 0], [0, 0, 3], [1 - 1e-12, 0, 0], [1e6, 0, 0]], dtype=float)
     found = scene.closest_points(points)

@@ -8,13 +8,12 @@ and the world distance is the metric `G = AᵀA` in local coordinates. The neare
 clipped surface is the nearest of:
 
 - points of the surface on lines through the query and through the box centre in many
-  directions (64 by default; exact roots of a quadratic), kept when in the box: they bound the answer from
-  above and are the starting points;
+  directions (64 by default; exact roots of a quadratic), kept when in the box: they bound
+  the answer from above and are the starting points;
 - Newton's method at 50 digits on the stationarity system `G(x − x_p) = ν(Qx + P/2)`,
   `f(x) = 0` from the nearest of those points, and on the same system restricted to each face
   plane `x_k = m` from points of the face's conic (on lines in the plane through the query's
-  foot and through the face's centre), kept when they converge
-  in the box;
+  foot and through the face's centre), kept when they converge in the box;
 - the roots of `f` along the box's twelve edges (exact), and the centre where `∇f = 0` when
   it lies on the surface (a cone's apex);
 - on each face, golden-section search for the minima of the distance along the
@@ -294,11 +293,11 @@ class Clipped:
         out = []
         lo, hi = self.box
         for k in range(3):
-            j, l = (k + 1) % 3, (k + 2) % 3
+            j, i = (k + 1) % 3, (k + 2) % 3
             for a in (lo[j], hi[j]):
-                for b in (lo[l], hi[l]):
+                for b in (lo[i], hi[i]):
                     x0 = [mpmath.mpf(0)] * 3
-                    x0[k], x0[j], x0[l] = lo[k], a, b
+                    x0[k], x0[j], x0[i] = lo[k], a, b
                     d = [mpmath.mpf(0)] * 3
                     d[k] = hi[k] - lo[k]
                     out.extend(x for x in self.on_line(x0, d) if self.in_box(x))

@@ -61,14 +61,18 @@ fn horner(c: &[f64], x: f64) -> f64 {
     c.iter().rev().fold(0.0, |acc, &ci| acc.mul_add(x, ci))
 }
 
-/// A root of `c` in `[a, b]`, where `c(a) = fa` and `c(b)` differ in strict sign: regula
-/// falsi steps alternating with halvings in the order of the doubles, until no double lies
-/// between the ends.
+/// A root of `c` in `[a, b]`, where `c(a) = fa` and `c(b)` differ in strict sign: Illinois
+/// steps (regula falsi, halving the value kept at an end that stays twice), every fourth
+/// step a halving in the order of the doubles, until the ends are within a few ulps.
 fn bisect(c: &[f64], mut a: f64, mut b: f64, mut fa: f64) -> f64 {
     let mut fb = horner(c, b);
+    let mut kept = 0i8; // +1: `a` kept last step, −1: `b`.
     for step in 0..256 {
+        if b - a <= 2.0 * f64::EPSILON * a.abs().max(b.abs()) {
+            break;
+        }
         let secant = a - fa * (b - a) / (fb - fa);
-        let x = if step % 2 == 0 && secant > a && secant < b {
+        let x = if step % 4 != 3 && secant > a && secant < b {
             secant
         } else {
             midpoint(a, b)
@@ -82,8 +86,16 @@ fn bisect(c: &[f64], mut a: f64, mut b: f64, mut fa: f64) -> f64 {
         }
         if (fx < 0.0) == (fa < 0.0) {
             (a, fa) = (x, fx);
+            if kept == -1 {
+                fb *= 0.5;
+            }
+            kept = -1;
         } else {
             (b, fb) = (x, fx);
+            if kept == 1 {
+                fa *= 0.5;
+            }
+            kept = 1;
         }
     }
     if fa.abs() <= fb.abs() {
