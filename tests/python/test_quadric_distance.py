@@ -24,7 +24,7 @@ from raycast_tools.quadric_distance_reference import Clipped
 EPS = np.finfo(np.float64).eps / 2
 
 # The bound on |d − d_ref| in units of EPS · scale (see the module docs).
-BOUND = 64.0
+BOUND = 8.0
 
 # Canonical local forms: Q (diagonal), P, R and the clip box (None: unclipped).
 KINDS = {
