@@ -241,6 +241,11 @@ impl<'a> Query<'a> {
     /// surface is not crossed but touched; three rays are wrong only when two of them do. A
     /// point on the surface may count either way.
     pub fn contains(&self, point: DVec3) -> bool {
+        self.parity_vote(point, |_| true)
+    }
+
+    /// [`Query::contains`] counting only the crossings that `counts` keeps.
+    pub(crate) fn parity_vote(&self, point: DVec3, counts: impl Fn(&Crossing) -> bool) -> bool {
         if !point.is_finite() || self.scene.is_empty() {
             return false;
         }
@@ -248,7 +253,8 @@ impl<'a> Query<'a> {
             .iter()
             .filter(|d| {
                 let ray = Ray::new(point, DVec3::from_array(**d));
-                self.crossings(&ray, 0.0, f64::INFINITY).len() % 2 == 1
+                let crossings = self.crossings(&ray, 0.0, f64::INFINITY);
+                crossings.iter().filter(|c| counts(c)).count() % 2 == 1
             })
             .count();
         odd >= 2

@@ -546,18 +546,21 @@ class Scene:
         """The nearest surface point of each query point (an array of shape (..., 3)).
 
         Found through the octree and measured exactly in float64 on the triangle (the error
-        is a few ulps of the triangle's size; on the face, of the distance itself). Triangles
-        only: a scene with quadrics raises ``NotImplementedError``.
+        is a few ulps of the triangle's size; on the face, of the distance itself), and on a
+        clipped quadric by the Lagrange condition in its eigenbasis and its clip box's faces
+        and edges (a few ulps of the point's distance from the box centre plus the box's size
+        and position; docs/python.md, "Distances").
 
         Returns
         -------
         dict of numpy.ndarray
             In the points' batch shape (written (N,)): ``point`` (N, 3) float64;
             ``distance`` (N,) float64; ``id`` (N,) uint32, the 1-based object id; ``prim``
-            (N,) uint32, the triangle's index in the object; ``bary`` (N, 3) float64, the
-            nearest point's barycentric weights of the triangle's vertices; ``normal`` (N, 3)
-            float64, the triangle's unit geometric normal. A scene without triangles gives
-            +inf points and distances, id 0 and ``INVALID_PRIM``.
+            (N,) uint32, the triangle's (or quadric's) index in the object; ``bary`` (N, 3)
+            float64, the nearest point's barycentric weights of the triangle's vertices (for a
+            quadric: the point in the quadric's own coordinates); ``normal`` (N, 3) float64,
+            the triangle's unit geometric normal (a quadric's unit gradient). An empty scene
+            gives +inf points and distances, id 0 and ``INVALID_PRIM``.
         """
         threads = _threads(nthreads)
         return _per_point(
@@ -579,7 +582,10 @@ class Scene:
         :meth:`contains`), exact for closed, consistently wound meshes; a point nearer to a
         surface than the test's rounding margin (about 1e-14 of the scene's size) gets 0.
         ``sign="winding"``: the generalised winding number above 1/2, for meshes that are not
-        closed (it visits every triangle for every point). Triangles only.
+        closed (it visits every triangle for every point). Quadrics: an ellipsoid that its clip
+        box leaves whole has the side of its polynomial's sign; any other quadric is open, with
+        no inside, and raises ValueError naming the object (as does ``sign="winding"`` on any
+        quadric); :meth:`distance` is defined for them.
         """
         threads = _threads(nthreads)
 

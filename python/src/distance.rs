@@ -7,27 +7,16 @@ use crate::threads;
 use glam::DVec3;
 use numpy::ndarray::ArrayView2;
 use numpy::PyReadonlyArray2;
-use pyo3::exceptions::{PyNotImplementedError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use raycast::query::{NearestPoint, SignRule, Signer};
 
-/// The rows of `points`, after checking the shape, that the scene has no quadric (whose
-/// nearest points are not computed yet) and that every point is finite.
-fn rows<'a>(
-    scene: &PyScene,
-    points: &'a PyReadonlyArray2<'_, f64>,
-) -> PyResult<ArrayView2<'a, f64>> {
+/// The rows of `points`, after checking the shape and that every point is finite.
+fn rows<'a>(points: &'a PyReadonlyArray2<'_, f64>) -> PyResult<ArrayView2<'a, f64>> {
     let points = points.as_array();
     if points.ncols() != 3 {
         return Err(PyValueError::new_err("points must be (N, 3)"));
-    }
-    let quadrics = scene.scene().quadrics().len();
-    if quadrics > 0 {
-        return Err(PyNotImplementedError::new_err(format!(
-            "{}: distance queries do not handle quadrics yet ({quadrics} in this scene)",
-            scene.scene().path.display()
-        )));
     }
     if let Some(i) = (0..points.nrows()).find(|&i| !points.row(i).iter().all(|v| v.is_finite())) {
         return Err(PyValueError::new_err(format!(
@@ -43,9 +32,9 @@ fn point(points: &ArrayView2<'_, f64>, i: usize) -> DVec3 {
 }
 
 /// The nearest surface point of each (N, 3) point: a dict of `point` (N, 3), `distance` (N,),
-/// `id` (N,), `prim` (N,), `bary` (N, 3) and `normal` (N, 3), on `nthreads` threads (0: all
-/// cores). A scene without triangles gives infinite points and distances, id 0 and prim
-/// `u32::MAX`.
+/// `id` (N,), `prim` (N,), `bary` (N, 3) (a quadric's: the point in its own coordinates) and
+/// `normal` (N, 3), on `nthreads` threads (0: all cores). An empty scene gives infinite
+/// points and distances, id 0 and prim `u32::MAX`.
 #[pyfunction]
 pub fn closest_points<'py>(
     py: Python<'py>,
@@ -53,7 +42,7 @@ pub fn closest_points<'py>(
     points: PyReadonlyArray2<'py, f64>,
     nthreads: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let points = rows(scene, &points)?;
+    let points = rows(&points)?;
     let query = scene.query();
     let found: Vec<Option<NearestPoint>> = threads::map(py, nthreads, points.nrows(), |i| {
         query.closest(point(&points, i))
@@ -88,7 +77,9 @@ pub fn closest_points<'py>(
 
 /// The signed distance of each (N, 3) point: negative inside, 0 where no side is certain
 /// (within the crossing test's margin of a surface), by `sign` = "crossings" (exact parity,
-/// for closed meshes) or "winding" (the generalised winding number above 1/2).
+/// for closed meshes and closed ellipsoids) or "winding" (the generalised winding number
+/// above 1/2, triangles only). A scene whose sign is not defined raises ValueError naming
+/// the object (see `Signer::new`).
 #[pyfunction]
 pub fn signed_distance<'py>(
     py: Python<'py>,
@@ -97,7 +88,7 @@ pub fn signed_distance<'py>(
     sign: &str,
     nthreads: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let points = rows(scene, &points)?;
+    let points = rows(&points)?;
     let query = scene.query();
     let rule = match sign {
         "crossings" => SignRule::Crossings,
@@ -108,7 +99,10 @@ pub fn signed_distance<'py>(
             )))
         }
     };
-    let signer = py.detach(|| Signer::new(query, rule));
+    let path = scene.scene().path.display().to_string();
+    let signer = py
+        .detach(|| Signer::new(query, rule))
+        .map_err(|e| PyValueError::new_err(format!("{path}: {e}")))?;
     let signed = threads::map(py, nthreads, points.nrows(), |i| {
         signer.signed_distance(point(&points, i))
     })?;

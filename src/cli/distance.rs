@@ -10,7 +10,9 @@ use std::path::PathBuf;
 /// Arguments of `raycast distance`.
 #[derive(Args)]
 pub struct DistanceArgs {
-    /// Scene file (.gltf, .glb, .obj, .ply, .stl, .usda, .usdc, .usd, .usdz); triangles only.
+    /// Scene file (.gltf, .glb, .obj, .ply, .stl, .usda, .usdc, .usd, .usdz). Quadrics count;
+    /// one that bounds no volume (anything but an ellipsoid its clip box leaves whole) has no
+    /// sign, and the run is refused.
     scene: PathBuf,
     /// Query points: an (N, 3) float32 or float64 .npy file.
     points: PathBuf,

@@ -4,7 +4,10 @@
 //!
 //! The queries are [`Query::closest`] and [`Query::side_by_crossings`] or the winding number
 //! (see [`crate::query`]'s distance module), the ones the Python package's `closest_points`
-//! and `signed_distance` call. Triangles only: a scene with quadrics is refused.
+//! and `signed_distance` call. Quadrics count (see [`crate::quadric::Quadric::closest`]);
+//! since every run writes signed distances, a scene whose sign is not defined (a quadric
+//! that is not a closed ellipsoid, or any quadric with `--sign winding`: see
+//! [`Signer::new`]) is refused, naming the object.
 
 use super::into_folder;
 use crate::accel::{Octree, OctreeParams};
@@ -74,16 +77,6 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
     let points = npy::read_points(&job.points)?;
     let clock = Instant::now();
     let scene = import::load(&job.scene, &job.load)?;
-    if !scene.quadrics().is_empty() {
-        return Err(Error::in_file(
-            &job.scene,
-            format!(
-                "distance queries do not handle quadrics yet ({} in this scene)",
-                scene.quadrics().len()
-            ),
-        )
-        .as_usage());
-    }
     let load = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
     scene.build_instances();
@@ -94,7 +87,9 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
         scene: &scene,
         octree: &octree,
     };
-    let measured = measure(&query, &points, job.sign);
+    let signer =
+        Signer::new(query, job.sign).map_err(|e| Error::in_file(&job.scene, e).as_usage())?;
+    let measured: Vec<_> = points.par_iter().map(|&p| signer.measure(p)).collect();
     let seconds = [load, build, clock.elapsed().as_secs_f64()];
     let uncertain = measured.iter().filter(|m| m.1 == Side::OnSurface).count();
     let mut staging = Staging::for_render(out, &job.scene)?;
@@ -114,13 +109,7 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
     })
 }
 
-/// Each point's nearest point (if the scene has triangles) and its side.
-fn measure(query: &Query, points: &[DVec3], rule: SignRule) -> Vec<(Option<NearestPoint>, Side)> {
-    let signer = Signer::new(*query, rule);
-    points.par_iter().map(|&p| signer.measure(p)).collect()
-}
-
-/// Writes the buffers: misses (a scene without triangles) are +inf distances and points, id
+/// Writes the buffers: misses (an empty scene) are +inf distances and points, id
 /// 0, prim `u32::MAX` and a zero normal, as the render's buffers have them.
 fn write(staging: &mut Staging, measured: &[(Option<NearestPoint>, Side)]) -> Result<()> {
     let n = measured.len();

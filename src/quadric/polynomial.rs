@@ -52,6 +52,14 @@ impl Polynomial {
         x.dot(self.q * x) + self.p.dot(x) + self.r
     }
 
+    /// A bound on the rounding error of [`Polynomial::value`] at `x`, itself exact: a few
+    /// ulps of the sum of the terms' magnitudes, `|x|·|Q|·|x| + |P|·|x| + |R|`.
+    pub fn value_rounding(&self, x: DVec3) -> f64 {
+        let x_abs = x.abs();
+        8.0 * f64::EPSILON
+            * (x_abs.dot(self.q_abs * x_abs) + self.p.abs().dot(x_abs) + self.r.abs())
+    }
+
     /// `∇f(x) = 2Qx + P`.
     pub fn gradient(&self, x: DVec3) -> DVec3 {
         2.0 * (self.q * x) + self.p

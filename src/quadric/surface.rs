@@ -10,8 +10,11 @@ use super::polynomial::{power_of_two_normaliser, Polynomial};
 use super::spec::QuadricSpec;
 
 mod bound;
+mod closest;
+mod side;
 
 pub use bound::{Others, QuadricBound, RootBound};
+pub use closest::QuadricClosest;
 
 /// World matrices whose determinant is below this fraction of the cube of the longest column
 /// count as singular (a condition number of about 1e14 or worse).
@@ -46,10 +49,14 @@ pub struct Quadric {
     local: Polynomial,
     /// The world→local linear map `A⁻¹`: `local = A⁻¹ u + local_anchor`.
     to_local: DMat3,
+    /// The local→world linear map `A`.
+    to_world: DMat3,
     /// The anchor in local coordinates.
     local_anchor: DVec3,
     /// Clip box in local coordinates, widened by [`CLIP_TOLERANCE`].
     clip: Option<[DVec3; 2]>,
+    /// Clip box in local coordinates as stated (for [`Quadric::closest`]).
+    stated_clip: Option<[DVec3; 2]>,
     /// Conservative world AABB of the clipped surface, for the bounds pre-test.
     reach: ReachBox,
     /// The same bounds from the clip box as given, not widened ([`Quadric::own_bounds`]).
@@ -93,8 +100,10 @@ impl Quadric {
             world: Polynomial::new(q_world, p_world, r_world),
             local: Polynomial::new(spec.q, gradient, r_world),
             to_local,
+            to_world: linear,
             local_anchor,
             clip: spec.bounds.map(widen_clip_box),
+            stated_clip: spec.bounds,
             reach: ReachBox::new(Aabb::new(anchor, anchor)),
             own: [anchor, anchor],
             kind: QuadricKind::Empty,

@@ -3,8 +3,10 @@
 //! # The nearest point
 //! [`Query::closest`] searches the octree best first ([`Scene::nearest_point`]) and measures
 //! each candidate triangle exactly in f64 (see [`crate::geometry::closest`] for the error: a
-//! small multiple of ε times the triangle's size and the query's distance from it). Triangles
-//! only: scenes with quadrics are refused by the callers.
+//! small multiple of ε times the triangle's size and the query's distance from it) and each
+//! candidate quadric with [`Quadric::closest`] (the Lagrange condition in the quadric's
+//! eigenbasis and the clip box's faces and edges; a few ε of the query's distance from the
+//! quadric's anchor plus its size).
 //!
 //! # The side, by crossings
 //! [`Query::side_by_crossings`] counts the crossings of rays from the point with the
@@ -22,15 +24,26 @@
 //! edge shared by two triangles in opposite directions, as `raycast info` reports per
 //! object); for open ones the parity is a guess.
 //!
+//! Quadrics take part only when every one bounds a volume ([`Quadric::encloses`]: an
+//! ellipsoid its clip box does not cut); any other quadric is an open surface with no
+//! inside, and [`Signer::new`] refuses the scene, naming the object. A closed ellipsoid's
+//! side is not counted along the rays but read from the sign of its polynomial at the point
+//! ([`Quadric::inside`], certain off the surface to rounding, sign 0 on it), and its parity
+//! joins the triangles' crossing parity: the rays' roots on a quadric are not exact, a
+//! tangent ray touches it once, and a sign cannot be fooled that way.
+//!
 //! # The side, by winding number
 //! [`winding_number`] sums the signed solid angles of all triangles seen from the point
 //! (Van Oosterom and Strackee's formula), over 4π: 1 inside a closed, outward-wound surface,
 //! 0 outside, and a smooth value in between where the surface has holes, so that a point is
 //! inside when the number exceeds 1/2. Every triangle is visited for every point: O(N) per
-//! point.
+//! point. Triangles only: a scene with quadrics is refused (a quadric's solid angle is not
+//! summed).
 
 use super::Query;
 use crate::geometry::Aabb;
+#[cfg(doc)]
+use crate::quadric::Quadric;
 use crate::scene::Nearest;
 use glam::DVec3;
 
@@ -42,16 +55,20 @@ const EPS: f64 = f64::EPSILON / 2.0;
 pub struct NearestPoint {
     /// The nearest point (world coordinates).
     pub point: DVec3,
-    /// Its distance from the query, measured from the triangle's vertices (not from
-    /// `point`, which is rounded to world coordinates).
+    /// Its distance from the query, measured from the triangle's vertices or about the
+    /// quadric's anchor (not from `point`, which is rounded to world coordinates).
     pub distance: f64,
     /// The 1-based object id.
     pub id: u32,
-    /// The triangle's number in its object (as the `prim` buffer counts).
+    /// The triangle's number in its object, or the quadric's (as the `prim` buffer counts).
     pub prim: u32,
-    /// The barycentric weights of the triangle's vertices, in the mesh's order.
+    /// The barycentric weights of the triangle's vertices, in the mesh's order; for a
+    /// quadric, the nearest point in the quadric's own coordinates (where its coefficients
+    /// are written).
     pub bary: [f64; 3],
-    /// The triangle's unit geometric normal (world), as the `normal` buffer gives it.
+    /// The triangle's unit geometric normal (world), or the quadric's unit gradient at the
+    /// point (towards `f > 0`; towards the query where the gradient vanishes, as at a cone's
+    /// apex), as the `normal` buffer gives it.
     pub normal: DVec3,
 }
 
@@ -79,8 +96,8 @@ impl Side {
 }
 
 impl Query<'_> {
-    /// The triangle point nearest to `point`; `None` for a point that is not finite or a
-    /// scene without triangles. Quadrics are not considered.
+    /// The surface point nearest to `point`, on a triangle or a quadric; `None` for a point
+    /// that is not finite or an empty scene.
     pub fn closest(&self, point: DVec3) -> Option<NearestPoint> {
         let Nearest { closest, crossing } = self.scene.nearest_point(self.octree, point)?;
         let at = point + closest.offset;
@@ -108,12 +125,26 @@ impl Query<'_> {
     }
 
     /// The side of `point`, at `distance` from the nearest surface, by the parity of the
-    /// crossings of rays from it (certain for closed meshes; see the module docs); `bounds` are
-    /// the scene's world bounds.
+    /// crossings of rays from it (certain for closed meshes; see the module docs) and the
+    /// sides of the closed quadrics; `bounds` are the scene's world bounds. Meaningful when
+    /// every quadric [`Quadric::encloses`] a volume ([`Signer::new`] checks).
     pub fn side_by_crossings(&self, point: DVec3, distance: f64, bounds: &Aabb) -> Side {
         if distance <= Query::surface_margin(point, bounds) || distance.is_nan() {
-            Side::OnSurface
-        } else if self.contains(point) {
+            return Side::OnSurface;
+        }
+        let quadrics = self.scene.quadrics();
+        let mut inside = if quadrics.is_empty() {
+            self.contains(point)
+        } else {
+            self.parity_vote(point, |c| !self.scene.is_quadric(c.top))
+        };
+        for quadric in quadrics {
+            match quadric.inside(point) {
+                Some(within) => inside ^= within,
+                None => return Side::OnSurface,
+            }
+        }
+        if inside {
             Side::Inside
         } else {
             Side::Outside
@@ -150,9 +181,39 @@ pub struct Signer<'a> {
 }
 
 impl<'a> Signer<'a> {
-    /// Prepares signed distances in `query`'s scene by `rule`.
-    pub fn new(query: Query<'a>, rule: SignRule) -> Signer<'a> {
+    /// Prepares signed distances in `query`'s scene by `rule`. Errors: a quadric that does
+    /// not bound a volume (see the module docs), or any quadric for [`SignRule::Winding`],
+    /// one line naming the object.
+    pub fn new(query: Query<'a>, rule: SignRule) -> Result<Signer<'a>, String> {
         let scene = query.scene;
+        let refused = scene
+            .quadrics()
+            .iter()
+            .enumerate()
+            .find(|(_, q)| match rule {
+                SignRule::Crossings => !q.encloses(),
+                SignRule::Winding => true,
+            });
+        if let Some((index, quadric)) = refused {
+            let object = scene.quadric_object(index);
+            let what = format!(
+                "object '{}' (id {}) is a quadric ({})",
+                object.name,
+                object.id,
+                quadric.kind().name()
+            );
+            return Err(match rule {
+                SignRule::Crossings => format!(
+                    "{what} clipped open by its box: it has no inside, so no signed distance \
+                     (only an ellipsoid that its clip box does not cut is closed); its \
+                     distance alone is defined (Python's Scene.distance and closest_points)"
+                ),
+                SignRule::Winding => format!(
+                    "sign=winding sums the solid angles of triangles and has no rule for \
+                     quadrics, and {what}; use sign=crossings (closed ellipsoids)"
+                ),
+            });
+        }
         let triangles = match rule {
             SignRule::Winding => scene
                 .objects
@@ -161,15 +222,15 @@ impl<'a> Signer<'a> {
                 .collect(),
             SignRule::Crossings => Vec::new(),
         };
-        Signer {
+        Ok(Signer {
             query,
             rule,
             bounds: scene.world_bounds(),
             triangles,
-        }
+        })
     }
 
-    /// The nearest point of `point` (`None` for a scene without triangles) and its side.
+    /// The nearest point of `point` (`None` for an empty scene) and its side.
     pub fn measure(&self, point: DVec3) -> (Option<NearestPoint>, Side) {
         let Some(nearest) = self.query.closest(point) else {
             return (None, Side::Outside);
@@ -186,7 +247,7 @@ impl<'a> Signer<'a> {
         (Some(nearest), side)
     }
 
-    /// The signed distance of `point`: +inf without triangles, 0 on the surface.
+    /// The signed distance of `point`: +inf for an empty scene, 0 on the surface.
     pub fn signed_distance(&self, point: DVec3) -> f64 {
         signed(self.measure(point))
     }

@@ -361,6 +361,16 @@ impl Scene {
         &self.quadrics
     }
 
+    /// The object quadric `q` (an index into [`Scene::quadrics`]) belongs to.
+    pub fn quadric_object(&self, q: usize) -> &Object {
+        &self.objects[self.parts[self.quadric_parts[q] as usize].object as usize]
+    }
+
+    /// Whether top-level primitive `top` (as [`Crossing::top`] names it) is a quadric.
+    pub fn is_quadric(&self, top: u32) -> bool {
+        matches!(self.top(top as usize), Top::Quadric(_))
+    }
+
     /// World-space bounds of everything in the scene (empty box for an empty scene).
     pub fn world_bounds(&self) -> Aabb {
         let local = (0..self.len())

@@ -2,17 +2,16 @@
 //!
 //! The octree's boxes are searched best first ([`Octree::nearest`]) with a lower bound
 //! on the distance to each box; a leaf's world triangles are measured exactly
-//! ([`closest_on_triangle`]) and an instance's mesh is searched through its own octree, its
-//! boxes and triangles placed in the world by the instance's transform. Distances are world
+//! ([`closest_on_triangle`]), an instance's mesh is searched through its own octree, its
+//! boxes and triangles placed in the world by the instance's transform, and a quadric is
+//! measured whole by [`Quadric::closest`] (its box in the octree bounds its clipped surface
+//! as a triangle's bounds the triangle, so the same lower bounds hold). Distances are world
 //! distances for every kind of placement, so an instance scaled unevenly is measured as drawn.
-//!
-//! Quadrics are not searched: the nearest point of a clipped quadric needs its own algorithm
-//! (the Lagrange condition in the quadric's eigenbasis and the clip box's edges) that is not
-//! written yet, so callers refuse scenes with quadrics ([`Scene::quadrics`]).
 
 use super::{Crossing, Instance, Scene, StoredMesh, Top};
 use crate::accel::Octree;
 use crate::geometry::closest::{closest_on_triangle, Closest};
+use crate::quadric::Quadric;
 use glam::DVec3;
 
 /// The unit roundoff of f64.
@@ -21,10 +20,12 @@ const EPS: f64 = f64::EPSILON / 2.0;
 /// The nearest surface point to a query point.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Nearest {
-    /// The nearest point and its distance, as measured on the triangle (offset from the
-    /// query, distance, barycentric weights of the triangle's vertices in the mesh's order).
+    /// The nearest point and its distance, as measured on the primitive (offset from the
+    /// query, distance, barycentric weights of the triangle's vertices in the mesh's order;
+    /// for a quadric, the nearest point in the quadric's own coordinates instead).
     pub closest: Closest,
-    /// The top-level primitive, and for an instance the triangle's index in its mesh.
+    /// The top-level primitive, and for an instance the triangle's index in its mesh, as
+    /// the crossing of the ray from the query along `closest.offset` at `t = 1`.
     pub crossing: Crossing,
 }
 
@@ -43,8 +44,8 @@ impl Nearest {
 
 impl Scene {
     /// The surface point nearest to `point` among the scene's triangles (world and
-    /// instanced), searched through `octree` (built over this scene); `None` for a scene
-    /// without triangles or a point that is not finite. Quadrics are not considered.
+    /// instanced) and quadrics, searched through `octree` (built over this scene); `None` for
+    /// an empty scene or a point that is not finite.
     pub fn nearest_point(&self, octree: &Octree, point: DVec3) -> Option<Nearest> {
         if !point.is_finite() {
             return None;
@@ -72,7 +73,7 @@ impl Scene {
             Top::Triangle(i) => Some(Nearest {
                 closest: closest_on_triangle(point, &self.world.mesh.triangle(i)),
                 crossing: Crossing {
-                    t: 0.0,
+                    t: 1.0,
                     top,
                     inner: None,
                 },
@@ -84,14 +85,23 @@ impl Scene {
                     Nearest {
                         closest,
                         crossing: Crossing {
-                            t: 0.0,
+                            t: 1.0,
                             top,
                             inner: Some(inner),
                         },
                     }
                 })
             }
-            Top::Quadric(_) => None,
+            Top::Quadric(q) => {
+                nearest_on_quadric(&self.quadrics[q], point, limit).map(|closest| Nearest {
+                    closest,
+                    crossing: Crossing {
+                        t: 1.0,
+                        top,
+                        inner: None,
+                    },
+                })
+            }
         }
     }
 }
@@ -145,6 +155,17 @@ fn nearest_in_instance(
         },
     );
     best
+}
+
+/// The nearest point of a quadric to `point`, with the point in the quadric's own
+/// coordinates where a triangle's has its barycentric weights.
+fn nearest_on_quadric(quadric: &Quadric, point: DVec3, limit: f64) -> Option<Closest> {
+    let found = quadric.closest(point, limit)?;
+    Some(Closest {
+        offset: found.offset,
+        distance: found.distance,
+        bary: found.local.to_array(),
+    })
 }
 
 /// The distance from `p` to the box `b` (rows `min x, y, z, max x, y, z`), as computed.

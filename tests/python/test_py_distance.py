@@ -139,11 +139,18 @@ def test_shapes_misses_and_refusals():
         scene.signed_distance([[0, 0, 0]], sign="votes")
 
 
-def test_quadric_scenes_are_refused_not_answered_wrong():
-    root = Path(__file__).resolve().parents[2]
-    scene = raycast.load(root / "fixtures" / "quadrics" / "ellipsoid.gltf")
-    with pytest.raises(NotImplementedError, match="quadrics"):
-        scene.closest_points([[0.0, 0.0, 5.0]])
+def test_quadric_signs_only_where_the_quadric_is_closed():
+    """The lecture's sphere (radius 2, closed) has distances and signs; the clipped cylinder
+    fixture's objects are open: distances, and a one-line refusal of the sign naming the
+    object (tests/python/test_quadric_distance.py checks the distances against mpmath)."""
+    root = Path(__file__).resolve().parents[2] / "fixtures" / "quadrics"
+    sphere = raycast.load(root / "sphere_coefficients.gltf")
+    points = np.array([[0.0, 0.0, 5.0], [0.0, 1.0, 0.0]])
+    assert np.allclose(sphere.signed_distance(points), [3.0, -1.0], rtol=0, atol=1e-15)
+    cylinder = raycast.load(root / "cylinder.gltf")
+    assert cylinder.distance(points).shape == (2,)
+    with pytest.raises(ValueError, match=r"object 'scaled' \(id 1\).*no inside"):
+        cylinder.signed_distance(points)
 
 
 def convex_truth(mesh, points):
@@ -323,11 +330,12 @@ def test_the_command_line_gives_the_exact_distances_and_signs(tmp_path):
     sidecar = json.loads((tmp_path / "d" / "raycast.json").read_text())
     assert sidecar["points"] == len(points) and sidecar["sign"] == "crossings"
     assert sidecar["meshes"][0]["closed"] is True
-    quadrics = Path(__file__).resolve().parents[2] / "fixtures" / "quadrics" / "ellipsoid.gltf"
+    # A clipped cylinder is open: no sign, so the run (which writes signs) is refused.
+    quadrics = Path(__file__).resolve().parents[2] / "fixtures" / "quadrics" / "cylinder.gltf"
     refused = subprocess.run(
         [binary, "distance", quadrics, tmp_path / "points.npy", "--out", tmp_path / "q"],
         capture_output=True,
         text=True,
     )
-    assert refused.returncode == 2 and "do not handle quadrics" in refused.stderr
+    assert refused.returncode == 2 and "no inside" in refused.stderr
     assert not (tmp_path / "q").exists()

@@ -1,0 +1,94 @@
+//! `raycast distance` on quadric fixtures: the lecture's sphere of radius 2 at the origin
+//! (closed: distances and signs), and clipped cylinders (open: refused, naming the object).
+//! Expected values follow from the geometry.
+
+mod common;
+use common::*;
+
+#[test]
+fn distances_and_signs_on_the_lecture_s_sphere() {
+    let dir = temp_dir("distance-sphere");
+    std::fs::create_dir_all(&dir).unwrap();
+    let points = dir.join("points.npy");
+    // From (0, 0, 10): 8 to (0, 0, 2); from the centre: 2 (every point is nearest); from
+    // (3, 4, 0): 3 to (1.2, 1.6, 0); from (0, 1, 0), inside: 1 to (0, 2, 0).
+    write_rays::<3>(
+        &points,
+        &[
+            [0.0, 0.0, 10.0],
+            [0.0, 0.0, 0.0],
+            [3.0, 4.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ],
+    );
+    let scene = fixture("quadrics/sphere_coefficients.gltf");
+    let out = dir.join("d");
+    let run = raycast(&[
+        "distance",
+        scene.to_str().unwrap(),
+        points.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let (_, distance) = read_f64(&out.join("distance.npy"));
+    let (_, signed) = read_f64(&out.join("signed_distance.npy"));
+    let (_, point) = read_f64(&out.join("point.npy"));
+    let (_, normal) = read_f64(&out.join("normal.npy"));
+    let (_, id) = read_u32(&out.join("id.npy"));
+    let (_, prim) = read_u32(&out.join("prim.npy"));
+    let want = [8.0, 2.0, 3.0, 1.0];
+    for (got, want) in distance.iter().zip(want) {
+        assert!(
+            (got - want).abs() <= 4.0 * f64::EPSILON * 10.0,
+            "{distance:?}"
+        );
+    }
+    assert_eq!(
+        signed.iter().map(|s| s.signum()).collect::<Vec<_>>(),
+        [1.0, -1.0, 1.0, -1.0]
+    );
+    for (got, want) in point[6..9].iter().zip([1.2, 1.6, 0.0]) {
+        assert!((got - want).abs() <= 1e-15, "{point:?}");
+    }
+    for (got, want) in normal[..3].iter().zip([0.0, 0.0, 1.0]) {
+        assert!((got - want).abs() <= 1e-15, "{normal:?}");
+    }
+    // The centre's nearest point lies on the sphere, whichever it is.
+    let centre_nearest = point[3..6].iter().map(|v| v * v).sum::<f64>().sqrt();
+    assert!((centre_nearest - 2.0).abs() <= 1e-15);
+    assert_eq!(id, [1, 1, 1, 1]);
+    assert_eq!(prim, [0, 0, 0, 0]);
+}
+
+#[test]
+fn an_open_quadric_s_sign_is_refused_naming_the_object() {
+    let dir = temp_dir("distance-open");
+    std::fs::create_dir_all(&dir).unwrap();
+    let points = dir.join("points.npy");
+    write_rays::<3>(&points, &[[0.0, 0.0, 0.0]]);
+    let scene = fixture("quadrics/cylinder.gltf");
+    let out = dir.join("d");
+    let run = raycast(&[
+        "distance",
+        scene.to_str().unwrap(),
+        points.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("cylinder.gltf"), "{stderr}");
+    assert!(stderr.contains("object 'scaled' (id 1)"), "{stderr}");
+    assert!(
+        stderr.contains("elliptic_cylinder") && stderr.contains("no inside"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(!out.exists());
+}
