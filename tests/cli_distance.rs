@@ -4,33 +4,43 @@
 
 mod common;
 use common::*;
+use std::path::PathBuf;
 
-#[test]
-fn distances_and_signs_on_the_lecture_s_sphere() {
-    let dir = temp_dir("distance-sphere");
+/// `raycast distance` on the fixture `scene` for `points`, in a fresh folder named for
+/// `name`: the run and its output folder.
+fn distance(name: &str, scene: &str, points: &[[f64; 3]]) -> (std::process::Output, PathBuf) {
+    let dir = temp_dir(name);
     std::fs::create_dir_all(&dir).unwrap();
-    let points = dir.join("points.npy");
-    // From (0, 0, 10): 8 to (0, 0, 2); from the centre: 2 (every point is nearest); from
-    // (3, 4, 0): 3 to (1.2, 1.6, 0); from (0, 1, 0), inside: 1 to (0, 2, 0).
-    write_rays::<3>(
-        &points,
-        &[
-            [0.0, 0.0, 10.0],
-            [0.0, 0.0, 0.0],
-            [3.0, 4.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ],
-    );
-    let scene = fixture("quadrics/sphere_coefficients.gltf");
+    let file = dir.join("points.npy");
+    write_rays::<3>(&file, points);
+    let scene = fixture(scene);
     let out = dir.join("d");
     let run = raycast(&[
         "distance",
         scene.to_str().unwrap(),
-        points.to_str().unwrap(),
+        file.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
         "-q",
     ]);
+    (run, out)
+}
+
+#[test]
+fn distances_and_signs_on_the_lecture_s_sphere() {
+    // From (0, 0, 10): 8 to (0, 0, 2); from the centre: 2 (every point is nearest); from
+    // (3, 4, 0): 3 to (1.2, 1.6, 0); from (0, 1, 0), inside: 1 to (0, 2, 0).
+    let points = [
+        [0.0, 0.0, 10.0],
+        [0.0, 0.0, 0.0],
+        [3.0, 4.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let (run, out) = distance(
+        "distance-sphere",
+        "quadrics/sphere_coefficients.gltf",
+        &points,
+    );
     assert!(
         run.status.success(),
         "{}",
@@ -68,19 +78,11 @@ fn distances_and_signs_on_the_lecture_s_sphere() {
 
 #[test]
 fn an_open_quadric_s_sign_is_refused_naming_the_object() {
-    let dir = temp_dir("distance-open");
-    std::fs::create_dir_all(&dir).unwrap();
-    let points = dir.join("points.npy");
-    write_rays::<3>(&points, &[[0.0, 0.0, 0.0]]);
-    let scene = fixture("quadrics/cylinder.gltf");
-    let out = dir.join("d");
-    let run = raycast(&[
-        "distance",
-        scene.to_str().unwrap(),
-        points.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (run, out) = distance(
+        "distance-open",
+        "quadrics/cylinder.gltf",
+        &[[0.0, 0.0, 0.0]],
+    );
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("cylinder.gltf"), "{stderr}");

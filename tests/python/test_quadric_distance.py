@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 import raycast
+from raycast_tools.gltf_writer import quadric_document
 from raycast_tools.quadric_distance_reference import Clipped
 
 EPS = np.finfo(np.float64).eps / 2
@@ -61,20 +62,7 @@ def write_scene(path, q, p, r, box, affine):
     quadric["R"] = float(r)
     if box is not None:
         quadric["bounds"] = {"min": [float(v) for v in box[0]], "max": [float(v) for v in box[1]]}
-    doc = {
-        "asset": {"version": "2.0"},
-        "extensionsUsed": ["RAYCAST_quadric"],
-        "extensionsRequired": ["RAYCAST_quadric"],
-        "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [
-            {
-                "name": "q",
-                "matrix": [float(v) for v in matrix.T.ravel()],
-                "extensions": {"RAYCAST_quadric": quadric},
-            }
-        ],
-    }
+    doc = quadric_document(quadric, [float(v) for v in matrix.T.ravel()])
     path.write_text(json.dumps(doc))
 
 

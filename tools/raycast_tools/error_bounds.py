@@ -36,7 +36,7 @@ import numpy as np
 from . import bound_truth as bt
 from . import quadric_reference, random_quadric_scenes
 from .cli import prog
-from .gltf_writer import Gltf
+from .gltf_writer import Gltf, quadric_document
 from .paths import ROOT, raycast_or_exit
 from .rays import quadric_rays
 from .runner import run_rays
@@ -339,18 +339,8 @@ def stiff_cases(raycast, tally: Tally, work: Path):
         ext = dict(case["quadric"])
         if case["bounds"]:
             ext["bounds"] = {"min": case["bounds"][0], "max": case["bounds"][1]}
-        doc = {
-            "asset": {"version": "2.0"},
-            "extensionsUsed": ["RAYCAST_quadric"],
-            "extensionsRequired": ["RAYCAST_quadric"],
-            "scene": 0,
-            "scenes": [{"nodes": [0]}],
-            "nodes": [
-                {"name": "q", "matrix": case["world"], "extensions": {"RAYCAST_quadric": ext}}
-            ],
-        }
         path = work / f"stiff_{case['name']}.gltf"
-        path.write_text(json.dumps(doc))
+        path.write_text(json.dumps(quadric_document(ext, case["world"])))
         truth = bt.Truth([], [quadric_prim(ext, case["world"], "q")], [None])
         o, d = np.array([case["origin"]]), np.array([case["dir"]])
         run_case(raycast, path, truth, o, d, tally, work / "stiff")

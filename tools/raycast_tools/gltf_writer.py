@@ -194,3 +194,16 @@ def iminmax(a: np.ndarray, which: int) -> list[int]:
     """Per-component min (`which` 0) or max (1) of integer rows, as ints."""
     v = a.min(axis=0) if which == 0 else a.max(axis=0)
     return [int(x) for x in v]
+
+
+def quadric_document(quadric: dict, matrix: list) -> dict:
+    """A glTF document of one node, named `q`, holding the RAYCAST_quadric extension object
+    `quadric` placed by the column-major `matrix` (16 numbers)."""
+    return {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["RAYCAST_quadric"],
+        "extensionsRequired": ["RAYCAST_quadric"],
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "q", "matrix": matrix, "extensions": {"RAYCAST_quadric": quadric}}],
+    }

@@ -173,36 +173,18 @@ pub fn animated_transform(
     at: &str,
     sink: &mut dyn Sink,
 ) -> DMat4 {
-    match read_local(node, animated, at, sink) {
-        Local::Matrix(m) => m,
-        Local::Trs(t, r, s) => DMat4::from_scale_rotation_translation(s, r.normalize(), t),
-    }
+    bounded_transform(node, animated, at, sink).value
 }
 
 /// [`animated_transform`] with a bound on each entry's distance from the exact matrix of the
-/// numbers it is made of ([`BoundedMat4::trs`]; a `matrix` is taken as read, exact).
+/// numbers it is made of ([`BoundedMat4::trs`], whose value is glam's product after
+/// normalizing the quaternion; a `matrix` is taken as read, exact).
 pub fn bounded_transform(
     node: &Value,
     animated: Option<&Animated>,
     at: &str,
     sink: &mut dyn Sink,
 ) -> BoundedMat4 {
-    match read_local(node, animated, at, sink) {
-        Local::Matrix(m) => BoundedMat4::exact(m),
-        Local::Trs(t, r, s) => BoundedMat4::trs(t, r, s),
-    }
-}
-
-/// A node's local transform as the file gives it.
-enum Local {
-    /// Its `matrix`.
-    Matrix(DMat4),
-    /// Its translation, rotation (the quaternion as given, not yet normalized) and scale.
-    Trs(DVec3, DQuat, DVec3),
-}
-
-/// The local transform of [`animated_transform`], read and checked.
-fn read_local(node: &Value, animated: Option<&Animated>, at: &str, sink: &mut dyn Sink) -> Local {
     let mut read = |key: &str, len: usize| -> Option<Vec<f64>> {
         let list = node
             .get(key)?
@@ -223,7 +205,7 @@ fn read_local(node: &Value, animated: Option<&Animated>, at: &str, sink: &mut dy
     };
     if node.get("matrix").is_some() {
         let matrix = read("matrix", 16).map_or(DMat4::IDENTITY, |m| DMat4::from_cols_slice(&m));
-        return Local::Matrix(matrix);
+        return BoundedMat4::exact(matrix);
     }
     let animated = animated.cloned().unwrap_or_default();
     let t = match animated.translation {
@@ -254,5 +236,5 @@ fn read_local(node: &Value, animated: Option<&Animated>, at: &str, sink: &mut dy
             }
         }
     };
-    Local::Trs(t, r, s)
+    BoundedMat4::trs(t, r, s)
 }
