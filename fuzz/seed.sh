@@ -1,6 +1,8 @@
 #!/bin/sh
-# Fills fuzz/corpus/<target>/ with seed inputs from the fixtures (files under 64 KiB) and
-# fuzz/seeds/<target>/ (for ply and stl: the corpus their first runs grew, kept whole).
+# Fills fuzz/corpus/<target>/ with seed inputs from the fixtures (files under 64 KiB),
+# fuzz/seeds/<target>/ (for ply and stl: the corpus their first runs grew, kept whole) and
+# fuzz/seeds/<target>-corpus.tar.xz (obj, usd, gltf: the corpus their 10^6-execution
+# campaigns grew, reduced by libFuzzer's -set_cover_merge=1; reports/fuzzing.md).
 # Run from the repository root: fuzz/seed.sh
 set -eu
 seed() {
@@ -19,6 +21,9 @@ seed ply '\.ply$' fixtures/ply fixtures/bad
 seed ply '' fuzz/seeds/ply
 seed stl '\.stl$' fixtures/stl fixtures/bad
 seed stl '' fuzz/seeds/stl
+for t in obj usd gltf; do
+    tar -xJf "fuzz/seeds/$t-corpus.tar.xz" -C "fuzz/corpus/$t" --strip-components=1
+done
 for t in gltf obj usd ply stl; do
     echo "$t: $(ls "fuzz/corpus/$t" | wc -l) seeds"
 done
