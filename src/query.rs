@@ -11,6 +11,7 @@ pub use distance::{signed, winding_number, NearestPoint, Side, SignRule, Signer}
 
 use crate::accel::{test_primitive, Hit, Octree, PrimitiveSet, PACKET};
 use crate::geometry::Ray;
+use crate::quadric::Quadric;
 use crate::render::RaySource;
 use crate::scene::{Crossing, EdgeRule, Scene};
 use glam::DVec3;
@@ -235,17 +236,40 @@ impl<'a> Query<'a> {
         lists
     }
 
-    /// Whether `point` lies inside the scene's closed surfaces: the parity of the crossings
-    /// of three rays from it in fixed, unrelated directions, by majority. A single ray can
-    /// only be wrong where it passes exactly through a silhouette edge or a vertex where the
-    /// surface is not crossed but touched; three rays are wrong only when two of them do. A
-    /// point on the surface may count either way.
+    /// Whether `point` lies inside the scene's closed surfaces. Triangles and open quadrics
+    /// count by [`Query::crossing_parity`]; a closed ellipsoid ([`Quadric::encloses`]) counts
+    /// by the sign of its polynomial at the point ([`Query::ellipsoid_parity`]), so that a ray
+    /// tangent to it cannot flip the count. A point on a surface may count either way.
     pub fn contains(&self, point: DVec3) -> bool {
-        self.parity_vote(point, |_| true)
+        self.crossing_parity(point) ^ self.ellipsoid_parity(point).0
     }
 
-    /// [`Query::contains`] counting only the crossings that `counts` keeps.
-    pub(crate) fn parity_vote(&self, point: DVec3, counts: impl Fn(&Crossing) -> bool) -> bool {
+    /// The parity of the crossings of triangles and open quadrics (every quadric but those
+    /// that [`Quadric::encloses`]) along three rays from `point` in fixed, unrelated
+    /// directions, by majority. A single ray can only be wrong where it passes exactly through
+    /// a silhouette edge or a vertex where the surface is not crossed but touched, or touches
+    /// an open quadric; three rays are wrong only when two of them are.
+    pub fn crossing_parity(&self, point: DVec3) -> bool {
+        let by_side = |c: &Crossing| self.scene.quadric_at(c.top).is_some_and(Quadric::encloses);
+        self.parity_vote(point, |c| !by_side(c))
+    }
+
+    /// The parity of the closed ellipsoids ([`Quadric::encloses`]) around `point`, each by
+    /// [`Quadric::inside`], and whether `point` lies on one of them to rounding (that one
+    /// then left out of the parity).
+    pub fn ellipsoid_parity(&self, point: DVec3) -> (bool, bool) {
+        let closed = self.scene.quadrics().iter().filter(|q| q.encloses());
+        closed.fold((false, false), |(odd, on), quadric| {
+            match quadric.inside(point) {
+                Some(within) => (odd ^ within, on),
+                None => (odd, true),
+            }
+        })
+    }
+
+    /// The parity of the crossings that `counts` keeps along three rays from `point`, by
+    /// majority (see [`Query::crossing_parity`]).
+    fn parity_vote(&self, point: DVec3, counts: impl Fn(&Crossing) -> bool) -> bool {
         if !point.is_finite() || self.scene.is_empty() {
             return false;
         }

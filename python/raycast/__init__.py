@@ -13,12 +13,13 @@ parameter in units of ``|direction|``. See docs/python.md.
 
 from __future__ import annotations
 
+import dataclasses
 import errno
 import json
 import os
 import warnings
 from pathlib import Path
-from typing import Iterable
+from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
@@ -28,6 +29,7 @@ from .errors import RaycastError, RaycastWarning, SceneError, SceneNotFoundError
 __all__ = [
     "CAST_OUTPUTS",
     "RENDER_OUTPUTS",
+    "Quadric",
     "RaycastError",
     "RaycastWarning",
     "Scene",
@@ -267,6 +269,60 @@ def _per_point(points, call, progress) -> dict:
     return {k: v.reshape(p.shape[:-1] + v.shape[1:]) for k, v in found.items()}
 
 
+@dataclasses.dataclass(frozen=True)
+class Quadric:
+    """A quadric surface for :meth:`Scene.from_objects`, as a file's ``RAYCAST_quadric`` node
+    gives one.
+
+    ``coefficients`` are the ten numbers A..J of A x² + B y² + C z² + D xy + E xz + F yz
+    + G x + H y + I z + J = 0 in the quadric's own coordinates; ``bounds``, ``(min, max)``
+    in those coordinates, clips it to a box (every surface but an ellipsoid needs one);
+    ``matrix``, a 4×4 affine matrix acting on column vectors (world = matrix @ [x, y, z, 1]),
+    places it in the world (None: as written).
+    """
+
+    coefficients: Sequence[float]
+    bounds: tuple[Sequence[float], Sequence[float]] | None = None
+    matrix: Sequence[Sequence[float]] | np.ndarray | None = None
+
+    def _args(self, name: str) -> tuple:
+        """The quadric as ``_raycast.load_objects`` takes it (the matrix column by column)."""
+        c = np.asarray(self.coefficients, dtype=np.float64)
+        if c.shape != (10,):
+            raise ValueError(f"quadric {name!r}: coefficients must be 10 numbers, got {c.shape}")
+        bounds = None
+        if self.bounds is not None:
+            box = np.asarray(self.bounds, dtype=np.float64)
+            if box.shape != (2, 3):
+                raise ValueError(f"quadric {name!r}: bounds must be (min, max), got {box.shape}")
+            bounds = [list(map(float, box[0])), list(map(float, box[1]))]
+        m = np.eye(4) if self.matrix is None else np.asarray(self.matrix, dtype=np.float64)
+        if m.shape != (4, 4):
+            raise ValueError(f"quadric {name!r}: matrix must be 4x4, got {m.shape}")
+        return (name, [float(x) for x in c], bounds, [float(x) for x in m.T.ravel()])
+
+
+def _named(objects, prefix: str) -> list[tuple[str, object]]:
+    """``(name, object)`` pairs of a mapping, or of a sequence named ``<prefix>0``, ..."""
+    if isinstance(objects, Mapping):
+        return [(str(name), value) for name, value in objects.items()]
+    return [(f"{prefix}{k}", value) for k, value in enumerate(objects)]
+
+
+def _mesh_arrays(vertices, faces) -> tuple[np.ndarray, np.ndarray]:
+    """``vertices`` as (N, 3) float64 and ``faces`` as (M, 3) int64, C-ordered."""
+    v = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
+    f = np.asarray(faces)
+    if f.size and not np.issubdtype(f.dtype, np.integer):
+        raise ValueError(f"faces must be integers, got {f.dtype}")
+    return v, np.ascontiguousarray(f, dtype=np.int64).reshape(-1, 3)
+
+
+def _load_objects(meshes, quadrics) -> Scene:
+    """A pickled scene made from arrays, made again."""
+    return Scene(_raycast.load_objects(meshes, quadrics))
+
+
 def _names(outputs: Iterable[str] | str) -> list[str]:
     if isinstance(outputs, str):
         return [outputs]
@@ -309,17 +365,42 @@ class Scene:
             A wrong shape, a face index outside 0..N, or a vertex that is not finite (the
             message names the first).
         """
-        v = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
-        f = np.asarray(faces)
-        if f.size and not np.issubdtype(f.dtype, np.integer):
-            raise ValueError(f"faces must be integers, got {f.dtype}")
-        f = np.ascontiguousarray(f, dtype=np.int64).reshape(-1, 3)
-        return Scene(_raycast.load_arrays(v, f))
+        return Scene(_raycast.load_arrays(*_mesh_arrays(vertices, faces)))
+
+    @staticmethod
+    def from_objects(meshes=(), quadrics=()) -> Scene:
+        """A scene of several objects from arrays and coefficients, without a file.
+
+        Parameters
+        ----------
+        meshes : mapping or sequence
+            ``{name: (vertices, faces)}``, or a sequence of ``(vertices, faces)`` (named
+            ``mesh0``, ``mesh1``, ...), each as :meth:`from_arrays` takes them.
+        quadrics : mapping or sequence of Quadric
+            ``{name: Quadric}``, or a sequence of :class:`Quadric` (named ``quadric0``, ...).
+
+        Returns
+        -------
+        Scene
+            One object per mesh, then one per quadric, with ids 1, 2, ... in that order;
+            ``prim`` is a face's row in its ``faces``, 0 for a quadric. Pickles as its arrays.
+
+        Raises
+        ------
+        ValueError
+            The first mesh or quadric that is wrong, named, and what is wrong with it (as
+            :meth:`from_arrays` for a mesh; for a quadric, coefficients that are not finite
+            or describe no surface, an unbounded surface without ``bounds``, a box whose min
+            exceeds its max, a matrix that is not affine and invertible).
+        """
+        mesh_args = [(name, *_mesh_arrays(v, f)) for name, (v, f) in _named(meshes, "mesh")]
+        quadric_args = [q._args(name) for name, q in _named(quadrics, "quadric")]
+        return Scene(_raycast.load_objects(mesh_args, quadric_args))
 
     def __reduce__(self):
         arrays = self._scene.arrays()
         if arrays is not None:
-            return (Scene.from_arrays, arrays)
+            return (_load_objects, arrays)
         data, name, choice, time, animation, variants = self._scene.source()
         if name is None:
             digest = _content.digest_unchanged_since(Path(data), self._files)
@@ -535,8 +616,10 @@ class Scene:
         surfaces: a bool array of the points' batch shape.
 
         The parity of the crossings of three rays from the point in fixed directions, by
-        majority, so that a ray that grazes an edge cannot decide alone. Meaningful for
-        closed, consistently wound surfaces; a point on a surface may count either way.
+        majority, so that a ray that grazes an edge cannot decide alone; a closed ellipsoid
+        counts by the sign of its polynomial at the point instead, so a ray tangent to it
+        cannot flip the count. Meaningful for closed, consistently wound surfaces; a point on
+        a surface may count either way.
         """
         threads = _threads(nthreads)
         found = _per_point(points, lambda p: {"in": self._scene.contains(p, threads)}, progress)

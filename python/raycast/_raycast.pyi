@@ -7,6 +7,9 @@ import numpy as np
 import numpy.typing as npt
 
 F64 = npt.NDArray[np.float64]
+#: A quadric for load_objects: name, coefficients A..J, clip box (min, max) or None, and the
+#: object-to-world matrix column by column.
+QuadricArgs = tuple[str, list[float], list[list[float]] | None, list[float]]
 # (origins (N, 3), directions (N, 3), tmin (N,) or (1,), tmax (N,) or (1,)), all float64
 Rays = tuple[F64, F64, F64, F64]
 
@@ -45,7 +48,9 @@ class _Scene:
     def info_json(self) -> str: ...
     def at(self, time: float) -> _Scene: ...
     def is_arrays(self) -> bool: ...
-    def arrays(self) -> tuple[F64, npt.NDArray[np.int64]] | None: ...
+    def arrays(
+        self,
+    ) -> tuple[list[tuple[str, F64, npt.NDArray[np.int64]]], list[QuadricArgs]] | None: ...
     def source(
         self,
     ) -> tuple[
@@ -72,6 +77,9 @@ def load_bytes(
     animation: str | None = None,
 ) -> _Scene: ...
 def load_arrays(vertices: F64, faces: npt.NDArray[np.int64]) -> _Scene: ...
+def load_objects(
+    meshes: list[tuple[str, F64, npt.NDArray[np.int64]]], quadrics: list[QuadricArgs]
+) -> _Scene: ...
 def look_at(
     eye: tuple[float, float, float],
     target: tuple[float, float, float],

@@ -11,6 +11,7 @@ mod arrays;
 mod camera;
 mod distance;
 mod fill;
+mod objects;
 mod scene;
 mod threads;
 
@@ -43,7 +44,8 @@ fn _raycast(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<camera::PyCamera>()?;
     m.add_function(wrap_pyfunction!(scene::load_path, m)?)?;
     m.add_function(wrap_pyfunction!(scene::load_bytes, m)?)?;
-    m.add_function(wrap_pyfunction!(scene::load_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(objects::load_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(objects::load_objects, m)?)?;
     m.add_function(wrap_pyfunction!(distance::closest_points, m)?)?;
     m.add_function(wrap_pyfunction!(distance::signed_distance, m)?)?;
     m.add_function(wrap_pyfunction!(camera::look_at, m)?)?;

@@ -3,10 +3,10 @@
 use crate::arrays::RayArrays;
 use crate::camera::PyCamera;
 use crate::fill::{array, trace_dict};
+use crate::objects::{MeshArrays, Objects, QuadricArgs};
 use crate::threads;
 use glam::DVec3;
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple};
@@ -15,22 +15,19 @@ use raycast::import::{self, LoadOptions};
 use raycast::query::Query;
 use raycast::render::{Aov, CameraView, RaySource, Rays, Tracer};
 use raycast::scene::Scene;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 /// Where a scene came from, so that it can be loaded again (pickling).
 #[derive(Debug, Clone)]
-enum Source {
+pub(crate) enum Source {
     Path(PathBuf),
     Bytes {
         data: Vec<u8>,
         name: PathBuf,
     },
-    /// `Scene.from_arrays`: the arrays, kept for pickling.
-    Arrays {
-        vertices: Vec<[f64; 3]>,
-        faces: Vec<[u32; 3]>,
-    },
+    /// `Scene.from_arrays` or `Scene.from_objects`: the objects, kept for pickling.
+    Arrays(Objects),
 }
 
 /// What poses a scene: the glTF animation time and animation (`--time`, `--animation`), or
@@ -60,7 +57,8 @@ pub struct PyScene {
 }
 
 impl PyScene {
-    fn build(
+    /// The scene `source` gives, posed, with its octree.
+    pub(crate) fn build(
         py: Python<'_>,
         source: Source,
         choice: Option<String>,
@@ -91,7 +89,7 @@ impl PyScene {
         let opened = py.detach(|| match &source {
             Source::Path(path) => import::open(path, &options),
             Source::Bytes { data, name } => import::open_bytes(data.clone(), name, &options),
-            Source::Arrays { vertices, faces } => Ok(arrays_source(vertices, faces)),
+            Source::Arrays(objects) => Ok(objects.source()),
         });
         let opened = Arc::new(opened.map_err(|e| crate::to_pyerr(py, e))?);
         PyScene::posed(py, source, choice, pose, opened)
@@ -161,66 +159,6 @@ impl PyScene {
         };
         trace_dict(py, &self.tracer(), &rays, outputs, shape, nthreads)
     }
-}
-
-/// A mesh as numpy arrays: (N, 3) float64 vertices and (M, 3) int64 faces.
-type MeshArrays<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
-
-/// The one-mesh scene of `vertices` and `faces` (checked by [`load_arrays`]).
-fn arrays_source(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> import::Source {
-    let positions = vertices.iter().map(|&v| DVec3::from_array(v)).collect();
-    let mesh = raycast::scene::Mesh::new(positions, faces.to_vec());
-    let objects = mesh
-        .map(|m| vec![("mesh".to_string(), m)])
-        .unwrap_or_default();
-    let scene = import::mesh_file_scene(Path::new("arrays"), "arrays", Vec::new(), objects);
-    import::Source::Fixed(Box::new(scene))
-}
-
-/// A scene of one mesh from `vertices` (N, 3) and triangle `faces` (M, 3) of vertex indices:
-/// every index in 0..N and every vertex finite, else a ValueError naming the first that is
-/// not.
-#[pyfunction]
-pub fn load_arrays(
-    py: Python<'_>,
-    vertices: PyReadonlyArray2<'_, f64>,
-    faces: PyReadonlyArray2<'_, i64>,
-) -> PyResult<PyScene> {
-    let (v, f) = (vertices.as_array(), faces.as_array());
-    if v.ncols() != 3 || f.ncols() != 3 {
-        return Err(PyValueError::new_err(format!(
-            "vertices must be (N, 3) and faces (M, 3), got {:?} and {:?}",
-            v.shape(),
-            f.shape()
-        )));
-    }
-    let vertices: Vec<[f64; 3]> = v.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
-    if let Some(i) = vertices
-        .iter()
-        .position(|p| p.iter().any(|c| !c.is_finite()))
-    {
-        return Err(PyValueError::new_err(format!(
-            "vertex {i} is not finite: {:?}",
-            vertices[i]
-        )));
-    }
-    let n = vertices.len() as i64;
-    let index = |i: i64| u32::try_from(i).ok().filter(|_| i < n);
-    let mut triangles = Vec::with_capacity(f.nrows());
-    for (k, r) in f.rows().into_iter().enumerate() {
-        let (Some(a), Some(b), Some(c)) = (index(r[0]), index(r[1]), index(r[2])) else {
-            return Err(PyValueError::new_err(format!(
-                "face {k} is {:?}: its vertex indices must lie in 0..{n}",
-                [r[0], r[1], r[2]]
-            )));
-        };
-        triangles.push([a, b, c]);
-    }
-    let source = Source::Arrays {
-        vertices,
-        faces: triangles,
-    };
-    PyScene::build(py, source, None, Pose::default())
 }
 
 /// Loads the scene file `path` (`scene`: a glTF scene by index or name, a USD prim path;
@@ -517,28 +455,29 @@ impl PyScene {
                 variants,
             )
                 .into_pyobject(py),
-            Source::Arrays { .. } => Err(PyValueError::new_err(
+            Source::Arrays(_) => Err(PyValueError::new_err(
                 "a scene made from arrays has no file; see arrays()",
             )),
         }
     }
 
-    /// Whether `Scene.from_arrays` made this scene (without copying its arrays out).
+    /// Whether `Scene.from_arrays` or `Scene.from_objects` made this scene (without copying
+    /// its arrays out).
     fn is_arrays(&self) -> bool {
-        matches!(self.source, Source::Arrays { .. })
+        matches!(self.source, Source::Arrays(_))
     }
 
-    /// The (vertices, faces) a scene made by `Scene.from_arrays` was made from; None for a
-    /// scene loaded from a file.
-    fn arrays<'py>(&self, py: Python<'py>) -> Option<MeshArrays<'py>> {
-        let Source::Arrays { vertices, faces } = &self.source else {
-            return None;
-        };
-        let v: Vec<f64> = vertices.iter().flatten().copied().collect();
-        let f: Vec<i64> = faces.iter().flatten().map(|&i| i64::from(i)).collect();
-        let v = Array2::from_shape_vec((vertices.len(), 3), v).ok()?;
-        let f = Array2::from_shape_vec((faces.len(), 3), f).ok()?;
-        Some((v.into_pyarray(py), f.into_pyarray(py)))
+    /// The (meshes, quadrics) a scene made from arrays was made from, as `load_objects`
+    /// takes them; None for a scene loaded from a file.
+    #[allow(clippy::type_complexity)]
+    fn arrays<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Option<(Vec<MeshArrays<'py>>, Vec<QuadricArgs>)>> {
+        match &self.source {
+            Source::Arrays(objects) => objects.arrays(py).map(Some),
+            _ => Ok(None),
+        }
     }
 }
 

@@ -12,17 +12,19 @@ use std::path::PathBuf;
 pub struct DistanceArgs {
     /// Scene file (.gltf, .glb, .obj, .ply, .stl, .usda, .usdc, .usd, .usdz). Quadrics count;
     /// one that bounds no volume (anything but an ellipsoid its clip box leaves whole) has no
-    /// sign, and the run is refused.
+    /// sign, and the run is refused unless --sign none.
     scene: PathBuf,
     /// Query points: an (N, 3) float32 or float64 .npy file.
     points: PathBuf,
     /// Output folder (default: <scene stem>.distance), holding distance.npy,
-    /// signed_distance.npy, point.npy, id.npy, prim.npy, normal.npy and raycast.json.
+    /// signed_distance.npy (not with --sign none), point.npy, id.npy, prim.npy, normal.npy and
+    /// raycast.json.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// How the sign is decided: crossings (exact parity; certain for closed meshes, 0 within
     /// the rounding margin of a surface) or winding (the generalised winding number, for
-    /// meshes that are not closed; visits every triangle for every point).
+    /// meshes that are not closed; visits every triangle for every point), or none (distances
+    /// only, in any scene: no signed_distance.npy).
     #[arg(long, value_enum, default_value_t = Sign::Crossings)]
     sign: Sign,
     /// Worker threads (default: all cores). The output does not depend on it.
@@ -48,6 +50,7 @@ pub struct DistanceArgs {
 enum Sign {
     Crossings,
     Winding,
+    None,
 }
 
 /// Runs `raycast distance`.
@@ -73,18 +76,22 @@ pub fn run(args: DistanceArgs) -> raycast::Result<()> {
         points: args.points,
         out: args.out,
         sign: match args.sign {
-            Sign::Crossings => SignRule::Crossings,
-            Sign::Winding => SignRule::Winding,
+            Sign::Crossings => Some(SignRule::Crossings),
+            Sign::Winding => Some(SignRule::Winding),
+            Sign::None => None,
         },
     };
     let outcome = distance::run(&job)?;
     if !args.quiet {
         let [load, build, measure] = outcome.seconds;
+        let signs = match outcome.uncertain {
+            Some(n) => format!(" ({n} signs within the rounding margin: 0)"),
+            None => " (no signs)".to_string(),
+        };
         eprintln!(
-            "raycast: {} points -> {} ({} signs within the rounding margin: 0); load {load:.3}s, build {build:.3}s, measure {measure:.3}s",
+            "raycast: {} points -> {}{signs}; load {load:.3}s, build {build:.3}s, measure {measure:.3}s",
             outcome.points,
             outcome.folder.display(),
-            outcome.uncertain,
         );
     }
     Ok(())

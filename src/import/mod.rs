@@ -10,6 +10,7 @@ pub mod stl;
 pub mod usd;
 
 use crate::error::{Error, ErrorKind, Result};
+use crate::quadric::Quadric;
 use crate::scene::{Mesh, Scene, SceneBuilder};
 use glam::{DMat4, DVec3, DVec4};
 use std::path::Path;
@@ -121,25 +122,30 @@ fn load_whole(path: &Path, load_bytes: fn(&[u8], &Path) -> Result<Scene>) -> Res
 }
 
 /// The scene of a mesh file (PLY, STL) or of arrays (the Python package's
-/// `Scene.from_arrays`): its reader's `warnings`, then one object per `(name, mesh)` with
-/// source `<kind>:<name>`, placed as stored; an empty scene with the readers'
-/// [`EMPTY_SCENE`] warning when there is none.
+/// `Scene.from_arrays` and `Scene.from_objects`): its reader's `warnings`, then one object
+/// per `(name, mesh)`, placed as stored, then one per `(name, quadric)` (placed already), each
+/// with source `<kind>:<name>`; an empty scene with the readers' [`EMPTY_SCENE`] warning when
+/// there is none.
 pub fn mesh_file_scene(
     path: &Path,
     kind: &str,
     warnings: Vec<String>,
-    objects: Vec<(String, Mesh)>,
+    meshes: Vec<(String, Mesh)>,
+    quadrics: Vec<(String, Quadric)>,
 ) -> Scene {
     let mut builder = SceneBuilder::new();
     for warning in warnings {
         builder.warn(warning);
     }
-    if objects.is_empty() {
+    if meshes.is_empty() && quadrics.is_empty() {
         builder.warn(EMPTY_SCENE);
     }
-    for (name, mesh) in objects {
+    for (name, mesh) in meshes {
         let id = builder.new_object(name.clone(), format!("{kind}:{name}"));
         builder.place_mesh(id, Arc::new(mesh), DMat4::IDENTITY);
+    }
+    for (name, quadric) in quadrics {
+        builder.add_quadric(name.clone(), format!("{kind}:{name}"), quadric);
     }
     builder.finish(path.to_path_buf())
 }

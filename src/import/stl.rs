@@ -158,7 +158,7 @@ pub fn scene(mesh: StlMesh, path: &Path) -> Scene {
         };
         (name, solid.mesh)
     });
-    super::mesh_file_scene(path, "stl", mesh.warnings, objects.collect())
+    super::mesh_file_scene(path, "stl", mesh.warnings, objects.collect(), Vec::new())
 }
 
 /// Reads an STL file held in `bytes`.

@@ -5,9 +5,10 @@
 //! The queries are [`Query::closest`] and [`Query::side_by_crossings`] or the winding number
 //! (see [`crate::query`]'s distance module), the ones the Python package's `closest_points`
 //! and `signed_distance` call. Quadrics count (see [`crate::quadric::Quadric::closest`]);
-//! since every run writes signed distances, a scene whose sign is not defined (a quadric
-//! that is not a closed ellipsoid, or any quadric with `--sign winding`: see
-//! [`Signer::new`]) is refused, naming the object.
+//! a run that writes signed distances in a scene whose sign is not defined (a quadric that
+//! is not a closed ellipsoid, or any quadric with `--sign winding`: see [`Signer::new`]) is
+//! refused, naming the object; a run without signs (`--sign none`) measures distances in any
+//! scene and writes no `signed_distance.npy`.
 
 use super::into_folder;
 use crate::accel::{Octree, OctreeParams};
@@ -32,8 +33,8 @@ pub struct DistanceJob {
     pub points: PathBuf,
     /// Output folder; `None` for `<scene stem>.distance`.
     pub out: Option<PathBuf>,
-    /// How signs are decided.
-    pub sign: SignRule,
+    /// How signs are decided; `None` for no signs (no `signed_distance.npy`).
+    pub sign: Option<SignRule>,
 }
 
 /// What a finished run did.
@@ -43,8 +44,8 @@ pub struct DistanceOutcome {
     pub folder: PathBuf,
     /// Points measured.
     pub points: usize,
-    /// Points within the rounding margin of a surface, whose sign is 0.
-    pub uncertain: usize,
+    /// Points within the rounding margin of a surface, whose sign is 0 (`None` without signs).
+    pub uncertain: Option<usize>,
     /// Seconds to load the scene, build the octree and measure.
     pub seconds: [f64; 3],
 }
@@ -57,7 +58,22 @@ impl DistanceJob {
             PathBuf::from(format!("{stem}.distance"))
         })
     }
+
+    /// The files the run writes: every one of [`FILES`], but `signed_distance.npy` only with
+    /// signs.
+    fn files(&self) -> Vec<&'static str> {
+        FILES
+            .into_iter()
+            .filter(|&name| self.sign.is_some() || name != SIGNED_FILE)
+            .collect()
+    }
 }
+
+/// The one file of [`FILES`] a run without signs does not write.
+const SIGNED_FILE: &str = FILES[1];
+
+/// A point's nearest surface point (`None` in an empty scene) and, with signs, its side.
+type Measured = (Option<NearestPoint>, Option<Side>);
 
 /// Runs a distance job.
 pub fn run(job: &DistanceJob) -> Result<DistanceOutcome> {
@@ -66,7 +82,7 @@ pub fn run(job: &DistanceJob) -> Result<DistanceOutcome> {
             "--out -: a distance run writes a folder of files, not standard output; name a folder",
         ));
     }
-    let names: Vec<String> = FILES.iter().map(|s| s.to_string()).collect();
+    let names: Vec<String> = job.files().iter().map(|s| s.to_string()).collect();
     let out = job.out_dir();
     let inputs = [job.scene.as_path(), job.points.as_path()];
     into_folder(&out, &inputs, &names, || measure_and_write(job, &out))
@@ -87,11 +103,26 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
         scene: &scene,
         octree: &octree,
     };
-    let signer =
-        Signer::new(query, job.sign).map_err(|e| Error::in_file(&job.scene, e).as_usage())?;
-    let measured: Vec<_> = points.par_iter().map(|&p| signer.measure(p)).collect();
+    let measured: Vec<Measured> = match job.sign {
+        Some(rule) => {
+            let signer =
+                Signer::new(query, rule).map_err(|e| Error::in_file(&job.scene, e).as_usage())?;
+            let measure = |&p: &DVec3| {
+                let (nearest, side) = signer.measure(p);
+                (nearest, Some(side))
+            };
+            points.par_iter().map(measure).collect()
+        }
+        None => points
+            .par_iter()
+            .map(|&p| (query.closest(p), None))
+            .collect(),
+    };
     let seconds = [load, build, clock.elapsed().as_secs_f64()];
-    let uncertain = measured.iter().filter(|m| m.1 == Side::OnSurface).count();
+    let uncertain = job.sign.map(|_| {
+        let on_surface = |m: &&Measured| m.1 == Some(Side::OnSurface);
+        measured.iter().filter(on_surface).count()
+    });
     let mut staging = Staging::for_render(out, &job.scene)?;
     staging.protect(&job.scene);
     staging.protect(&job.points);
@@ -110,14 +141,18 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
 }
 
 /// Writes the buffers: misses (an empty scene) are +inf distances and points, id
-/// 0, prim `u32::MAX` and a zero normal, as the render's buffers have them.
-fn write(staging: &mut Staging, measured: &[(Option<NearestPoint>, Side)]) -> Result<()> {
+/// 0, prim `u32::MAX` and a zero normal, as the render's buffers have them; signed distances
+/// when the points have sides.
+fn write(staging: &mut Staging, measured: &[Measured]) -> Result<()> {
     let n = measured.len();
     let distance: Vec<f64> = measured
         .iter()
         .map(|(m, _)| m.map_or(f64::INFINITY, |m| m.distance))
         .collect();
-    let signed: Vec<f64> = measured.iter().map(|&m| query::signed(m)).collect();
+    let signed: Option<Vec<f64>> = measured
+        .iter()
+        .map(|&(m, side)| side.map(|side| query::signed((m, side))))
+        .collect();
     let vector = |f: fn(&NearestPoint) -> DVec3, miss: f64| -> Vec<f64> {
         measured
             .iter()
@@ -137,14 +172,16 @@ fn write(staging: &mut Staging, measured: &[(Option<NearestPoint>, Side)]) -> Re
     fn file<'a>(name: &'static str, shape: Vec<usize>, data: NpyData<'a>) -> FileJob<'a> {
         FileJob::new(name, move |w| npy::write(w, &shape, data))
     }
-    let jobs = vec![
-        file(FILES[0], vec![n], NpyData::F64(&distance)),
-        file(FILES[1], vec![n], NpyData::F64(&signed)),
+    let mut jobs = vec![file(FILES[0], vec![n], NpyData::F64(&distance))];
+    if let Some(signed) = &signed {
+        jobs.push(file(SIGNED_FILE, vec![n], NpyData::F64(signed)));
+    }
+    jobs.extend([
         file(FILES[2], vec![n, 3], NpyData::F64(&point)),
         file(FILES[3], vec![n], NpyData::U32(&id)),
         file(FILES[4], vec![n], NpyData::U32(&prim)),
         file(FILES[5], vec![n, 3], NpyData::F64(&normal)),
-    ];
+    ]);
     staging.write_all(jobs, |_| {})
 }
 
@@ -154,7 +191,7 @@ fn sidecar(
     job: &DistanceJob,
     scene: &crate::scene::Scene,
     points: usize,
-    uncertain: usize,
+    uncertain: Option<usize>,
     [load, build, measure]: [f64; 3],
 ) -> serde_json::Value {
     let closed: Vec<serde_json::Value> = crate::info::SceneInfo::new(scene)
@@ -172,10 +209,10 @@ fn sidecar(
         "scene_file": ownership::scene_key(&job.scene),
         "points_file": job.points.display().to_string(),
         "points": points,
-        "sign": job.sign.name(),
+        "sign": job.sign.map_or("none", SignRule::name),
         "uncertain_signs": uncertain,
         "meshes": closed,
         "timings": {"load": load, "build": build, "measure": measure},
-        "files": FILES,
+        "files": job.files(),
     })
 }

@@ -132,19 +132,11 @@ impl Query<'_> {
         if distance <= Query::surface_margin(point, bounds) || distance.is_nan() {
             return Side::OnSurface;
         }
-        let quadrics = self.scene.quadrics();
-        let mut inside = if quadrics.is_empty() {
-            self.contains(point)
-        } else {
-            self.parity_vote(point, |c| !self.scene.is_quadric(c.top))
-        };
-        for quadric in quadrics {
-            match quadric.inside(point) {
-                Some(within) => inside ^= within,
-                None => return Side::OnSurface,
-            }
+        let (ellipsoids, on_ellipsoid) = self.ellipsoid_parity(point);
+        if on_ellipsoid {
+            return Side::OnSurface;
         }
-        if inside {
+        if self.crossing_parity(point) ^ ellipsoids {
             Side::Inside
         } else {
             Side::Outside
@@ -206,7 +198,8 @@ impl<'a> Signer<'a> {
                 SignRule::Crossings => format!(
                     "{what} clipped open by its box: it has no inside, so no signed distance \
                      (only an ellipsoid that its clip box does not cut is closed); its \
-                     distance alone is defined (Python's Scene.distance and closest_points)"
+                     distance alone is defined (Python's Scene.distance and closest_points, \
+                     raycast distance --sign none)"
                 ),
                 SignRule::Winding => format!(
                     "sign=winding sums the solid angles of triangles and has no rule for \

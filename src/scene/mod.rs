@@ -366,9 +366,12 @@ impl Scene {
         &self.objects[self.parts[self.quadric_parts[q] as usize].object as usize]
     }
 
-    /// Whether top-level primitive `top` (as [`Crossing::top`] names it) is a quadric.
-    pub fn is_quadric(&self, top: u32) -> bool {
-        matches!(self.top(top as usize), Top::Quadric(_))
+    /// The quadric top-level primitive `top` is (as [`Crossing::top`] names it), if it is one.
+    pub fn quadric_at(&self, top: u32) -> Option<&Quadric> {
+        match self.top(top as usize) {
+            Top::Quadric(q) => Some(&self.quadrics[q]),
+            _ => None,
+        }
     }
 
     /// World-space bounds of everything in the scene (empty box for an empty scene).

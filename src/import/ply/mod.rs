@@ -201,7 +201,7 @@ pub fn scene(mesh: PlyMesh, path: &Path) -> Scene {
         let drawn = Mesh::from_parts(Positions::exact(mesh.positions), mesh.triangles);
         vec![(super::file_stem(path), drawn.with_attributes(attributes))]
     };
-    super::mesh_file_scene(path, "ply", mesh.warnings, objects)
+    super::mesh_file_scene(path, "ply", mesh.warnings, objects, Vec::new())
 }
 
 /// Reads a PLY file held in `bytes`. An ASCII body is read as one stream of values (as rply

@@ -3,10 +3,10 @@ engines: every `Trimesh` made during a test of this folder gets `raycast.trimesh
 RayMeshIntersector` as its `ray`, whether it asked for Embree or not, and so do the tests that
 build an intersector themselves.
 
-generic.py and test_ray.py (and data/ray_data.json) are trimesh's files, kept whole, from
-trimesh's repository (github.com/mikedh/trimesh) at commit a513c0e2, with the models they
-load; MIT licence (../LICENSE.md). tools/test.sh runs them in a pytest process of their own
-(generic.py turns trimesh's strict mode on for the whole process); they fetch nothing.
+generic.py, test_ray.py and test_ray_upstream.py (and data/ray_data.json) are trimesh's files,
+kept whole, from trimesh's repository (github.com/mikedh/trimesh) at commit a513c0e2, with the
+models they load; MIT licence (../LICENSE.md). tools/test.sh runs them in a pytest process of
+their own (generic.py turns trimesh's strict mode on for the whole process); they fetch nothing.
 """
 
 import pytest
