@@ -116,9 +116,6 @@ impl std::str::FromStr for HitLimit {
 /// Default image width and height.
 const DEFAULT_SIZE: usize = 512;
 
-/// Largest image side accepted.
-pub const MAX_SIDE: usize = 1 << 15;
-
 impl RenderJob {
     /// The names of the files this job writes in `formats`, `raycast.json` last.
     pub fn file_names(&self, formats: &[Format]) -> Vec<String> {

@@ -253,7 +253,7 @@ struct RenderArgs {
     threads: Option<u32>,
     /// Refuse a render whose buffers would need more memory than this (bytes; K, M, G, T
     /// suffixes; default: the memory the system reports available).
-    #[arg(long, value_name = "SIZE", value_parser = raycast::check::parse_size)]
+    #[arg(long, value_name = "SIZE", value_parser = raycast::sizes::parse_size)]
     max_memory: Option<u64>,
     /// Distances mapped to the depth and z previews, NEAR,FAR (default: the 1st to 99th
     /// percentile of the hits).
@@ -314,10 +314,10 @@ fn parse_vec3(text: &str) -> Result<DVec3, String> {
 /// An image side in pixels: 1 to 32768.
 fn parse_side(text: &str) -> Result<usize, String> {
     match text.trim().parse::<usize>() {
-        Ok(n) if (1..=job::MAX_SIDE).contains(&n) => Ok(n),
+        Ok(n) if (1..=raycast::camera::MAX_SIDE).contains(&n) => Ok(n),
         _ => Err(format!(
             "'{text}' is not an image side (1 to {} pixels)",
-            job::MAX_SIDE
+            raycast::camera::MAX_SIDE
         )),
     }
 }
@@ -466,7 +466,7 @@ fn info(args: InfoArgs) -> raycast::Result<()> {
     }
 }
 
-/// Reads a USD scene in a child process first (see [`raycast::check::usd::probe`]), unless
+/// Reads a USD scene in a child process first (see [`raycast::import::usd::child::probe`]), unless
 /// this process is that child; other formats pass.
 fn probe_usd(path: &Path, timeout: f64, child_args: &[std::ffi::OsString]) -> raycast::Result<()> {
     let extension = path
@@ -474,13 +474,13 @@ fn probe_usd(path: &Path, timeout: f64, child_args: &[std::ffi::OsString]) -> ra
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     let usd = matches!(extension.as_deref(), Some("usda" | "usdc" | "usd" | "usdz"));
-    if !usd || std::env::var_os(raycast::check::usd::PROBE_CHILD).is_some() {
+    if !usd || std::env::var_os(raycast::import::usd::child::PROBE_CHILD).is_some() {
         return Ok(());
     }
     let Ok(exe) = std::env::current_exe() else {
         return Ok(());
     };
-    raycast::check::usd::probe(&exe, path, child_args, Duration::from_secs_f64(timeout))
+    raycast::import::usd::child::probe(&exe, path, child_args, Duration::from_secs_f64(timeout))
         .map_err(raycast::Error::msg)
 }
 

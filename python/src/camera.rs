@@ -5,8 +5,8 @@ use glam::DVec3;
 use numpy::PyReadonlyArray2;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use raycast::camera::{camera_to_world, Camera, CameraAxes, Pinhole, Projection};
-use raycast::render::CameraView;
+use raycast_core::camera::{camera_to_world, Camera, CameraAxes, Pinhole, Projection};
+use raycast_core::render::CameraView;
 
 /// A camera: from a scene file, `raycast.camera.look_at` or `raycast.camera.pinhole` (a
 /// library camera with a pinhole projection: the command line's `--K` and `--cam-to-world`).
@@ -145,9 +145,9 @@ pub fn read_views(
     width: Option<usize>,
     height: Option<usize>,
 ) -> PyResult<Vec<(Option<String>, PyCamera)>> {
-    let views = raycast::camera::views::read(&path, width.zip(height))
+    let views = raycast_core::camera::views::read(&path, width.zip(height))
         .map_err(|e| crate::to_pyerr(py, e))?;
-    let camera = |view: &raycast::camera::views::View| PyCamera {
+    let camera = |view: &raycast_core::camera::views::View| PyCamera {
         camera: Camera::pinhole(
             view.pinhole,
             view.to_world,
@@ -160,7 +160,7 @@ pub fn read_views(
 
 /// Refuses an image side of 0 or more than the command line's largest.
 fn check_size(width: usize, height: usize) -> PyResult<()> {
-    let max = raycast::job::MAX_SIDE;
+    let max = raycast_core::camera::MAX_SIDE;
     if width == 0 || height == 0 || width > max || height > max {
         return Err(PyValueError::new_err(format!(
             "image size {width}x{height} is out of range (1 to {max} per side)"

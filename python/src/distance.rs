@@ -10,7 +10,7 @@ use numpy::PyReadonlyArray2;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use raycast::query::{NearestPoint, SignRule, Signer};
+use raycast_core::query::{NearestPoint, SignRule, Signer};
 
 /// The rows of `points`, after checking the shape and that every point is finite.
 fn rows<'a>(points: &'a PyReadonlyArray2<'_, f64>) -> PyResult<ArrayView2<'a, f64>> {

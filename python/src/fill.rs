@@ -1,5 +1,5 @@
 //! The outputs ("AOVs") of `cast` and `render`: their Python names, and the library's buffers
-//! as numpy arrays. The buffers are made by `raycast::render::trace`, the loop that makes the
+//! as numpy arrays. The buffers are made by `raycast_core::render::trace`, the loop that makes the
 //! command line's buffers, so the values are bit-identical to the command line's files.
 
 use crate::threads;
@@ -7,7 +7,7 @@ use numpy::ndarray::{ArrayD, IxDyn};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use raycast::render::{self, Aov, Column, RaySource, Rays, Tracer};
+use raycast_core::render::{self, Aov, Column, RaySource, Rays, Tracer};
 
 /// The output called `name` (`distance` is the command line's `depth`, and `depth` is
 /// accepted too).

@@ -2,7 +2,7 @@
 //!
 //! Thin by design: it converts numpy arrays to the library's rays and the library's answers to
 //! numpy arrays, releases the GIL while the library traces (on rayon's threads), and maps the
-//! library's [`raycast::error::ErrorKind`] to the exception classes of `raycast.errors`. Shapes,
+//! library's [`raycast_core::error::ErrorKind`] to the exception classes of `raycast.errors`. Shapes,
 //! dtypes and argument names are checked by the Python layer (`raycast/__init__.py`), which
 //! hands over float64 arrays; what only a pass over the data can find (a NaN, a zero
 //! direction) is found here, in parallel.
@@ -19,8 +19,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyType;
 
 /// The exception for a library error: `raycast.errors.<class>` chosen by its kind.
-pub(crate) fn to_pyerr(py: Python<'_>, error: raycast::Error) -> PyErr {
-    use raycast::error::ErrorKind;
+pub(crate) fn to_pyerr(py: Python<'_>, error: raycast_core::Error) -> PyErr {
+    use raycast_core::error::ErrorKind;
     let class = match error.kind {
         ErrorKind::Usage => "UsageError",
         ErrorKind::NotFound => "SceneNotFoundError",

@@ -8,9 +8,9 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use raycast::import;
-use raycast::quadric::{Quadric, QuadricSpec};
-use raycast::scene::Mesh;
+use raycast_core::quadric::{Quadric, QuadricSpec};
+use raycast_core::scene::Mesh;
+use raycast_io::import;
 use std::path::Path;
 
 /// A named mesh as numpy arrays: its name, (N, 3) float64 vertices and (M, 3) int64 faces.

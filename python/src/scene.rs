@@ -10,11 +10,11 @@ use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple};
-use raycast::accel::{Octree, OctreeParams};
-use raycast::import::{self, LoadOptions};
-use raycast::query::Query;
-use raycast::render::{Aov, CameraView, RaySource, Rays, Tracer};
-use raycast::scene::Scene;
+use raycast_core::accel::{Octree, OctreeParams};
+use raycast_core::query::Query;
+use raycast_core::render::{Aov, CameraView, RaySource, Rays, Tracer};
+use raycast_core::scene::Scene;
+use raycast_io::import::{self, LoadOptions};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -357,7 +357,7 @@ impl PyScene {
             .into_iter()
             .map(|(_, a)| a)
             .collect();
-        Ok(raycast::render::attribute_warnings(&self.scene, &aovs))
+        Ok(raycast_core::render::attribute_warnings(&self.scene, &aovs))
     }
 
     /// The object table: a list of dicts (id, name, kind, source, triangles, bounds).
@@ -370,8 +370,8 @@ impl PyScene {
                 d.set_item("id", o.id)?;
                 d.set_item("name", &o.name)?;
                 let kind = match o.kind {
-                    raycast::scene::ObjectKind::Mesh => "mesh",
-                    raycast::scene::ObjectKind::Quadric => "quadric",
+                    raycast_core::scene::ObjectKind::Mesh => "mesh",
+                    raycast_core::scene::ObjectKind::Quadric => "quadric",
                 };
                 d.set_item("kind", kind)?;
                 d.set_item("source", &o.source)?;
@@ -424,7 +424,7 @@ impl PyScene {
 
     /// What `raycast info --json` prints, as a JSON string.
     fn info_json(&self) -> PyResult<String> {
-        let info = raycast::info::SceneInfo::new(&self.scene);
+        let info = raycast_io::info::SceneInfo::new(&self.scene);
         serde_json::to_string(&info).map_err(|e| PyValueError::new_err(e.to_string()))
     }
 
@@ -501,7 +501,7 @@ impl RaySource for Rows<'_> {
         self.len
     }
 
-    fn ray(&self, index: usize) -> raycast::geometry::Ray {
+    fn ray(&self, index: usize) -> raycast_core::geometry::Ray {
         self.view.ray(self.start + index)
     }
 

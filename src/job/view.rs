@@ -2,7 +2,8 @@
 //! automatic framing camera, or a pinhole camera given by its intrinsics (`--K`) and
 //! placement (`--cam-to-world`), with the command line's projection overrides.
 
-use super::{CameraChoice, RenderJob, DEFAULT_SIZE, MAX_SIDE};
+use super::{CameraChoice, RenderJob, DEFAULT_SIZE};
+use crate::camera::MAX_SIDE;
 use crate::camera::{Camera, Pinhole, Projection};
 use crate::error::{Error, Result};
 use crate::render::CameraView;

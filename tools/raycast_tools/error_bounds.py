@@ -16,10 +16,10 @@ fraction of uncertain rays. Exit status 0 when no case has an exception.
 
 `nested` (instances under a parent node matrix, the matrices composed in f64 by the importer)
 is covered like the others: the bound carries the composition's rounding
-(src/bound/transform.rs) against the exact product of the file's matrices. `nested TRS` gives
-every node a translation, a not exactly unit rotation and a scale instead: the truth is the
-matrix of the exactly normalized quaternion (bound_truth.trs), the bound carries the rounding
-of the normalization and of multiplying them out.
+(crates/core/src/bound/transform.rs) against the exact product of the file's matrices.
+`nested TRS` gives every node a translation, a not exactly unit rotation and a scale instead:
+the truth is the matrix of the exactly normalized quaternion (bound_truth.trs), the bound
+carries the rounding of the normalization and of multiplying them out.
 """
 
 from __future__ import annotations

@@ -1,0 +1,21 @@
+//! # raycast-core
+//!
+//! The layer of raycast that knows no file format: exact ray-triangle and ray-quadric
+//! [`geometry`] and [`quadric`]s, rounding [`bound`]s, the [`accel::Octree`] over both kinds of
+//! primitive, the world-space [`scene::Scene`] it is built over, [`camera`]s, tracing
+//! ([`render`]) and point and ray [`query`]s. It depends on glam, rayon, serde and a few
+//! numeric crates only; the readers and writers are raycast-io's.
+
+pub mod accel;
+pub mod bound;
+pub mod camera;
+pub mod error;
+pub mod geometry;
+pub mod quadric;
+pub mod query;
+pub mod render;
+pub mod scene;
+
+pub use error::{Error, Result};
+#[cfg(test)]
+mod test_rng;
