@@ -811,7 +811,7 @@ def summary_text(rows, infos):
 
 def stiff_table() -> str:
     """Every stiff and extreme case with its measured error and bound, from the Rust test
-    tests/stiff.rs (expected values: mpmath at 200 bits, fixtures/stiff/cases.json)."""
+    tests/it/stiff.rs (expected values: mpmath at 200 bits, fixtures/stiff/cases.json)."""
     with tempfile.TemporaryDirectory(prefix="stiff") as td:
         table = Path(td) / "stiff.md"
         env = dict(os.environ, RAYCAST_STIFF_REPORT=str(table))
@@ -824,7 +824,7 @@ def stiff_table() -> str:
         )
         if run.returncode != 0 or not table.exists():
             return (
-                "**The stiff-case test failed** (`cargo test --release --test stiff`):\n\n"
+                "**The stiff-case test failed** (`cargo test --release --test it stiff::`):\n\n"
                 "```\n" + (run.stdout + run.stderr)[-3000:] + "\n```"
             )
         return table.read_text()
@@ -947,10 +947,10 @@ def write_report(rows, infos, mach, args, elapsed, md_path, png_path, stiff):
     L.append("## Stiff and extreme cases")
     L.append("")
     L.append(
-        "From `cargo test --release --test stiff` (tests/stiff.rs), which checks each case of "
-        "`fixtures/stiff/cases.json` against its expected value, computed offline in mpmath "
-        "at 200 bits by `python -m raycast_tools stiff-cases`, and against the case's own bound "
-        "(derivations "
+        "From `cargo test --release --test it stiff::` (tests/it/stiff.rs), which checks each "
+        "case of `fixtures/stiff/cases.json` against its expected value, computed offline in "
+        "mpmath at 200 bits by `python -m raycast_tools stiff-cases`, and against the case's own "
+        "bound (derivations "
         "in `fixtures/stiff/README.md`; near tangency the bound scales with the root's "
         "condition, and ambiguous cases accept either a hit or a miss). *result* is the "
         "depth raycast computed, or what happened; the test fails if any case leaves its "

@@ -7,7 +7,7 @@ byte-identical files. The geometry is the fixtures' cube ([-1,1]^3, fixtures/REA
 written in each encoding the readers must take; fixtures/ply/README.md and
 fixtures/stl/README.md say what each file holds. The answers are checked against trimesh's
 readers by tests/python/test_mesh_formats.py and worked out by hand in
-tests/mesh_formats.rs.
+tests/it/mesh_formats.rs.
 """
 
 from __future__ import annotations

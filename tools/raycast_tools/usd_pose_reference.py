@@ -1,4 +1,4 @@
-"""usd-core's reading of the posed USD fixtures (issue 28): the reference of tests/usd_pose.rs.
+"""usd-core's reading of the posed USD fixtures (issue 28): the reference of tests/it/usd_pose.rs.
 
 For fixtures/usd/posed/time_samples.usda at several time codes (and the default one), and for
 fixtures/usd/posed/variants.usda with several `--variant` selections, writes what usd-core

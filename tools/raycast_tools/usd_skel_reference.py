@@ -1,4 +1,5 @@
-"""UsdSkel fixtures and usd-core's skinning of them: the reference of tests/usd_pose.rs (issue 28).
+"""UsdSkel fixtures and usd-core's skinning of them: the reference of tests/it/usd_pose.rs
+(issue 28).
 
 Writes fixtures/usd/posed/skel.usda with usd-core's authoring API, then, at the default time code
 and several time codes, what usd-core poses from it, in world space:

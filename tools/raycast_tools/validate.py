@@ -162,12 +162,12 @@ def find_scenes(paths):
             if "bad" in f.parts[:-1]:
                 out.append((f, "in a bad/ folder (expected to fail)"))
             elif {"fuzz", "fuzz-hang"} & set(f.parts[:-1]):
-                # Inputs that once crashed a reader; tests/check.rs and tests/cli_messages.rs
+                # Inputs that once crashed a reader; tests/it/check.rs and tests/it/cli_messages.rs
                 # hold what raycast must say about them.
                 out.append((f, "in a fuzz/ folder (a fuzzing regression input)"))
             elif "posed" in f.parts[:-1]:
                 # trimesh draws neither skins nor morph targets; three.js is the reference
-                # for these (tests/gltf_pose.rs, fixtures/posed/three).
+                # for these (tests/it/gltf_pose.rs, fixtures/posed/three).
                 out.append((f, "in a posed/ folder (three.js is its reference: gltf_pose.rs)"))
             elif poses(f):
                 out.append((f, "skinned or morphed (trimesh poses neither; see gltf_pose.rs)"))

@@ -111,7 +111,7 @@ fn validator_suite_agreement() {
     let mut md = String::new();
     md.push_str("# glTF-Validator suite: agreement of `raycast check`\n\n");
     md.push_str(
-        "Written by `tests/check.rs` (`cargo test --test check validator_suite_agreement`) from\n",
+        "Written by `tests/it/check.rs` (`cargo test --test it check::validator_suite_agreement`) from\n",
     );
     md.push_str("`fixtures/gltf-validator/` (the Khronos glTF-Validator `test/base/data`, each file with the\n");
     md.push_str("validator's own `report.json`). Do not edit by hand.\n\n");

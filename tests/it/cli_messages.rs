@@ -1,6 +1,6 @@
 //! Messages a new user meets: wrong kinds of input named for what they are, help text, `info`.
 
-mod common;
+use crate::common;
 use common::*;
 
 /// A stderr as text.

@@ -1,7 +1,7 @@
 //! What a render writes, and what it refuses before doing any work: memory, formats, the
 //! output folder, interrupted and repeated runs.
 
-mod common;
+use crate::common;
 use common::*;
 
 /// The partial files (`.NAME.partial-PID`) left in `dir`.

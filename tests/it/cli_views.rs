@@ -5,7 +5,7 @@
 //! (u + ½, v + ½), ray K⁻¹ (u + ½, v + ½, 1) in OpenCV's axes), with a plane; bad view files
 //! are one-line errors naming the frame.
 
-mod common;
+use crate::common;
 use common::{arg, file_names, fixture, raycast, raycast_ok, read_f64, temp_dir, temp_file};
 use glam::{DMat3, DVec3};
 use std::path::Path;

@@ -1,6 +1,6 @@
 //! The command line as a user runs it: outputs, conventions, exit codes and error messages.
 
-mod common;
+use crate::common;
 use common::*;
 use std::path::PathBuf;
 

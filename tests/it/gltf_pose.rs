@@ -6,7 +6,7 @@
 //! three.js's triangles, ids and prims included: a hit must name, by its object's glTF node and
 //! its prim, a triangle of the file's numbering that the ray crosses at that depth.
 
-mod common;
+use crate::common;
 use common::*;
 use glam::DVec3;
 use raycast::geometry::Ray;

@@ -2,7 +2,7 @@
 //! per-ray `tmin`/`tmax` from an (N, 8) ray file, `--hits` (a CSR `hits.npz`), and their bad
 //! input. Expected values follow from the geometry (a single triangle, the cube [-1, 1]³).
 
-mod common;
+use crate::common;
 use common::*;
 use std::io::Read;
 use std::path::{Path, PathBuf};

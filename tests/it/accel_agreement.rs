@@ -3,7 +3,7 @@
 //! near the origin and far from it, with random, axis-parallel and far-away rays. Only rays
 //! where two primitives hit within 1e-9 relative of each other may differ in the primitive.
 
-mod common;
+use crate::common;
 use common::*;
 use glam::DVec3;
 use raycast::accel::{

@@ -3,7 +3,7 @@
 //! coefficient forms, the clip box, cameras inside surfaces, the far sphere, the boundary trap
 //! with a large quadric, the mixed octree against brute force, and the extension's errors.
 
-mod common;
+use crate::common;
 use common::*;
 use glam::DVec3;
 use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams};

@@ -7,7 +7,7 @@
 //! from comparing the ray's coordinates with the edge's (a margin of 1e-7, far above f64
 //! rounding at 1e6).
 
-mod common;
+use crate::common;
 
 use common::{cast, cast_one, fixture, load, ray, Rng};
 use glam::{DMat4, DQuat, DVec3};

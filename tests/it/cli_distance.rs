@@ -2,7 +2,7 @@
 //! (closed: distances and signs), and clipped cylinders (open: signs refused, naming the
 //! object; distances alone with `--sign none`). Expected values follow from the geometry.
 
-mod common;
+use crate::common;
 use common::*;
 use std::path::{Path, PathBuf};
 

@@ -2,7 +2,7 @@
 //! `raycast_tools usd-fixtures`, answers in `fixtures/usd/README.md`), the cross-format
 //! comparison with the glTF fixtures, and the real usd-wg assets against usd-core's counts.
 
-mod common;
+use crate::common;
 
 use common::*;
 use raycast::import::{self, LoadOptions};

@@ -7,7 +7,7 @@
 //! the test only triangulates usd-core's faces as fans and, for spheres, intersects rays with
 //! usd-core's sphere in its own frame.
 
-mod common;
+use crate::common;
 use common::*;
 use glam::{DMat4, DVec3};
 use raycast::import::{self, usd::Choice, LoadOptions};

@@ -1,7 +1,7 @@
 //! `raycast check` as a new user runs it: paths without assets, empty files, machine output,
 //! and USD layers a ray caster does not need.
 
-mod common;
+use crate::common;
 use common::*;
 
 /// The text of an output stream.

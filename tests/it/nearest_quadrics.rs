@@ -3,7 +3,7 @@
 //! it: the quadrics' boxes in the octree bound their clipped surfaces, so no leaf that could
 //! hold the nearest point is skipped.
 
-mod common;
+use crate::common;
 use common::*;
 use glam::DVec3;
 use raycast::accel::{Octree, OctreeParams};

@@ -3,7 +3,7 @@
 //! cube of fixtures/README.md), the broken ones refused with their check codes. The same
 //! fixtures are compared with trimesh's readers in tests/python/test_mesh_formats.py.
 
-mod common;
+use crate::common;
 
 use common::{assert_hit, cast_one, fixture, load};
 use glam::DVec3;

@@ -3,7 +3,7 @@
 //! same fixture (`trimesh.load(..., split_objects=True, group_material=False,
 //! maintain_order=True, process=False)`), not raycast's own output.
 
-mod common;
+use crate::common;
 
 use common::{assert_hit, cast_one, load};
 

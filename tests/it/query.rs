@@ -2,7 +2,7 @@
 //! vertices, the parameter range, containment, loading from bytes, typed errors.
 //! Expected values from the geometry (analysis), not from the code under test.
 
-mod common;
+use crate::common;
 
 use glam::DVec3;
 use raycast::accel::{Octree, OctreeParams};

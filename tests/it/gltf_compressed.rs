@@ -3,7 +3,7 @@
 //! official decoders (draco3dgltf, meshoptimizer) read the same file. Our Draco and meshopt
 //! decoders must give the same positions and triangles, bit for bit.
 
-mod common;
+use crate::common;
 use common::*;
 use glam::DVec3;
 use raycast::scene::Scene;

@@ -6,7 +6,7 @@
 //! Set `RAYCAST_STIFF_REPORT=FILE` to also write a Markdown table of every case's measured
 //! error against its bound.
 
-mod common;
+use crate::common;
 use common::fixture;
 use glam::{DMat4, DVec3};
 use raycast::quadric::{Quadric, QuadricSpec};

@@ -1,7 +1,7 @@
 //! The octree must return exactly what a brute-force loop over all primitives returns,
 //! including in the lecture's boundary trap and for rays lying on cell planes.
 
-mod common;
+use crate::common;
 use common::*;
 use glam::DVec3;
 use raycast::accel::{

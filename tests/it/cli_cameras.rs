@@ -1,6 +1,6 @@
 //! The automatic camera and camera choice as a user meets them.
 
-mod common;
+use crate::common;
 use common::*;
 
 /// The rows and columns of an (H, W) id buffer that hold a hit: (first row, last row, first

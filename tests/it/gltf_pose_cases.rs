@@ -2,7 +2,7 @@
 //! two skin influence sets (three.js reads JOINTS_0 only), and what bad skin data and bad
 //! `--time` / `--animation` requests give (one-line errors naming the file, never a panic).
 
-mod common;
+use crate::common;
 use common::*;
 use glam::DVec3;
 use raycast::import::{self, LoadOptions};

@@ -8,7 +8,7 @@ use raycast::import::{self, LoadOptions};
 use raycast::quadric::{Quadric, QuadricSpec};
 use raycast::render::{self, Aov, Tracer};
 use raycast::scene::{Scene, SceneBuilder};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Path of a file under `fixtures/`.
 pub fn fixture(relative: &str) -> PathBuf {
@@ -305,15 +305,22 @@ pub fn raycast_ok(args: &[&str]) -> std::process::Output {
     result
 }
 
-/// A fresh (removed) temporary folder path for one test.
+/// A fresh (removed) temporary folder path for one test. `name` need only be unique within the
+/// calling test file: the folder is named for the file too, since every file's tests run in
+/// the one process of the `it` test binary.
+#[track_caller]
 pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("raycast-cli-{}-{name}", std::process::id()));
+    let caller = Path::new(std::panic::Location::caller().file());
+    let file = caller.file_stem().and_then(|s| s.to_str()).unwrap_or("it");
+    let pid = std::process::id();
+    let dir = std::env::temp_dir().join(format!("raycast-cli-{pid}-{file}-{name}"));
     let _ = std::fs::remove_dir_all(&dir);
     dir
 }
 
 /// Writes `contents` as file `name` in a fresh temporary folder for test `test`; returns its
 /// path.
+#[track_caller]
 pub fn temp_file(test: &str, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
     let dir = temp_dir(test);
     std::fs::create_dir_all(&dir).unwrap();

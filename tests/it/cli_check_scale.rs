@@ -2,7 +2,7 @@
 //! fit, `--strict`, `--exclude`, `--root-layers-only`, `--max-findings`, `--validator-json`.
 //! (docs/ci.md's workflows and the summary's Markdown are run in tests/python/test_check_ci.py.)
 
-mod common;
+use crate::common;
 use common::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};

@@ -1,6 +1,6 @@
 //! Importer tests against the analytic answers documented in fixtures/README.md.
 
-mod common;
+use crate::common;
 use common::*;
 use raycast::import::{self, LoadOptions};
 

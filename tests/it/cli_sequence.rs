@@ -3,7 +3,7 @@
 //! run); bad ranges are usage errors in one line; the output folders follow the ownership and
 //! interrupt rules of single runs.
 
-mod common;
+use crate::common;
 use common::{arg, file_names, fixture, raycast, raycast_ok, temp_dir};
 use std::path::Path;
 
