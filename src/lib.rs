@@ -12,6 +12,8 @@
 //! quadrics, the octree, scenes, cameras, tracing), [`raycast_io`] (readers and writers) and
 //! [`raycast_check`] (`raycast check`).
 
+#![warn(missing_docs)]
+
 pub use raycast_check as check;
 pub use raycast_core::{accel, bound, camera, error, geometry, quadric, query, render, scene};
 pub use raycast_core::{Error, Result};

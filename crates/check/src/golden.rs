@@ -105,8 +105,11 @@ fn certain(b: &Buffers) -> &[u8] {
 /// depth's bound and whether its decision is certain.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pixel {
+    /// Distance to the hit; `+∞` for a miss.
     pub depth: f64,
+    /// The hit object's id (0 for a miss), as the id buffer stores it.
     pub id: f64,
+    /// The depth's error bound and whether the decision is certain, when the view has them.
     pub bound: Option<(f64, bool)>,
 }
 

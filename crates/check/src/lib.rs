@@ -12,6 +12,8 @@
 //! importer allocates them, external files resolve only inside the asset's folder unless
 //! [`CheckOptions::allow_outside`], and nothing is fetched from the network.
 
+#![warn(missing_docs)]
+
 pub mod geometry;
 pub mod gltf;
 pub mod golden;

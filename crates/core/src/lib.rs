@@ -6,6 +6,8 @@
 //! ([`render`]) and point and ray [`query`]s. It depends on glam, rayon, serde and a few
 //! numeric crates only; the readers and writers are raycast-io's.
 
+#![warn(missing_docs)]
+
 pub mod accel;
 pub mod bound;
 pub mod camera;

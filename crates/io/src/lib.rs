@@ -5,6 +5,8 @@
 //! (EXR, PNG, NPY, NPZ) and their JSON sidecar, atomically (the default feature `output`);
 //! [`info`] describes a scene; [`sizes`] reads and prints byte counts.
 
+#![warn(missing_docs)]
+
 pub mod import;
 pub mod info;
 #[cfg(feature = "output")]

@@ -231,8 +231,9 @@ pub fn certain(
 /// ray's watertight set-up made once for all candidates.
 #[derive(Debug, Clone, Copy)]
 pub struct Probe<'a> {
-    /// The ray's f64 origin and direction, taken as exact.
+    /// The ray's f64 origin, taken as exact.
     pub origin: DVec3,
+    /// The ray's f64 direction, taken as exact.
     pub dir: DVec3,
     /// The same ray prepared for the watertight test's frame.
     pub watertight: WatertightRay,

@@ -20,13 +20,21 @@ pub enum Format {
 /// `float64`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Scalar {
+    /// `char`, `int8`.
     I8,
+    /// `uchar`, `uint8`.
     U8,
+    /// `short`, `int16`.
     I16,
+    /// `ushort`, `uint16`.
     U16,
+    /// `int`, `int32`.
     I32,
+    /// `uint`, `uint32`.
     U32,
+    /// `float`, `float32`.
     F32,
+    /// `double`, `float64`.
     F64,
 }
 
