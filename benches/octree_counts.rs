@@ -9,8 +9,9 @@
 
 use raycast::accel::{prepare_ray, test_primitive, Hit, Octree, OctreeParams};
 use raycast::camera::Camera;
+use raycast::geometry::RaySource;
 use raycast::import::{self, LoadOptions};
-use raycast::render::{CameraView, RaySource};
+use raycast::render::CameraView;
 use std::collections::HashSet;
 use std::path::Path;
 

@@ -5,7 +5,7 @@ use numpy::ndarray::{ArrayView1, ArrayView2};
 use pyo3::exceptions::PyValueError;
 use pyo3::{PyErr, PyResult};
 use raycast_core::geometry::Ray;
-use raycast_core::render::RaySource;
+use raycast_core::geometry::RaySource;
 use rayon::prelude::*;
 
 /// The rows of an (N, 3) array: a slice of rows when it is C-contiguous (read without index

@@ -6,6 +6,7 @@
 use super::view::camera_view;
 use super::{HitLimit, Progress, RenderJob};
 use crate::error::{Error, Result};
+use crate::geometry::RaySource;
 use crate::import;
 use crate::output::colormap::Colormap;
 use crate::output::cryptomatte;
@@ -15,7 +16,7 @@ use crate::output::request::{self, buffer_bytes, check_memory};
 use crate::output::sidecar::{self, CameraInfo, HitsInfo, Sidecar, Stats, Timings};
 use crate::output::{self, npz, ownership, Format, Layout, Staging};
 use crate::query::HitLists;
-use crate::render::{self, AccelKind, AccelStructure, Buffers, CameraView, RaySource};
+use crate::render::{self, AccelKind, AccelStructure, Buffers, CameraView};
 use crate::render::{Rays, Tracer};
 use crate::scene::Scene;
 use std::io::Write;

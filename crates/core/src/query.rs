@@ -10,9 +10,8 @@ mod distance;
 pub use distance::{signed, winding_number, NearestPoint, Side, SignRule, Signer};
 
 use crate::accel::{test_primitive, Hit, Octree, PrimitiveSet, PACKET};
-use crate::geometry::Ray;
+use crate::geometry::{Ray, RaySource};
 use crate::quadric::Quadric;
-use crate::render::RaySource;
 use crate::scene::{Crossing, EdgeRule, Scene};
 use glam::DVec3;
 use rayon::prelude::*;

@@ -10,7 +10,7 @@ pub mod triangle_box;
 pub mod triangle_packet;
 
 pub use aabb::Aabb;
-pub use ray::Ray;
+pub use ray::{Ray, RaySource};
 pub use reach::ReachBox;
 
 /// A triangle in the plane z = 0 around the origin, for the unit tests of [`triangle`] and

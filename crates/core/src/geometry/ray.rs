@@ -28,3 +28,34 @@ impl Ray {
         self.origin.is_finite() && self.dir.is_finite() && self.dir != DVec3::ZERO
     }
 }
+
+/// Something that yields rays by index: a camera image or a list of rays.
+pub trait RaySource: Sync {
+    /// Number of rays.
+    fn len(&self) -> usize;
+    /// True when there are no rays.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Ray number `index`.
+    fn ray(&self, index: usize) -> Ray;
+    /// Eye and unit view direction, for the `z` AOV (cameras only).
+    fn view_axis(&self) -> Option<(DVec3, DVec3)> {
+        None
+    }
+    /// Rays per image row, for a source whose rays are an image's pixels in row-major order:
+    /// the trace then groups them in small tiles, which neighbouring rays share more of the
+    /// octree than rows do. `None` (the default) keeps the source's order.
+    fn row_width(&self) -> Option<usize> {
+        None
+    }
+}
+
+impl RaySource for Vec<Ray> {
+    fn len(&self) -> usize {
+        Vec::len(self)
+    }
+    fn ray(&self, index: usize) -> Ray {
+        self[index]
+    }
+}

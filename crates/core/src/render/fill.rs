@@ -5,9 +5,10 @@
 //! The command line's buffers and the Python package's `cast` and `render` are all made by
 //! [`trace`], so they share this loop.
 
-use super::{Aov, RaySource, Tracer};
+use super::{Aov, Tracer};
 use crate::bound::HitBound;
 use crate::geometry::Ray;
+use crate::geometry::RaySource;
 use crate::query::traceable;
 use crate::scene::{Crossing, Located};
 use glam::DVec3;

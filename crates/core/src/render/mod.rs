@@ -10,7 +10,7 @@ pub use fill::{trace, Buffers, Column, Rays};
 
 use crate::accel::{prepare_ray, Bvh, BvhKind, Hit, Octree, OctreeParams, PACKET};
 use crate::camera::Camera;
-use crate::geometry::Ray;
+use crate::geometry::{Ray, RaySource};
 use crate::query::Query;
 use crate::scene::{Crossing, Scene};
 use glam::DVec3;
@@ -129,28 +129,6 @@ impl FromStr for Aov {
     }
 }
 
-/// Something that yields rays by index: a camera image or a list of rays.
-pub trait RaySource: Sync {
-    /// Number of rays.
-    fn len(&self) -> usize;
-    /// True when there are no rays.
-    fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-    /// Ray number `index`.
-    fn ray(&self, index: usize) -> Ray;
-    /// Eye and unit view direction, for the `z` AOV (cameras only).
-    fn view_axis(&self) -> Option<(DVec3, DVec3)> {
-        None
-    }
-    /// Rays per image row, for a source whose rays are an image's pixels in row-major order:
-    /// the trace then groups them in small tiles, which neighbouring rays share more of the
-    /// octree than rows do. `None` (the default) keeps the source's order.
-    fn row_width(&self) -> Option<usize> {
-        None
-    }
-}
-
 /// A camera image: one ray per pixel, row-major from the top row.
 #[derive(Debug, Clone)]
 pub struct CameraView {
@@ -195,15 +173,6 @@ impl RaySource for CameraView {
     }
     fn row_width(&self) -> Option<usize> {
         Some(self.width)
-    }
-}
-
-impl RaySource for Vec<Ray> {
-    fn len(&self) -> usize {
-        Vec::len(self)
-    }
-    fn ray(&self, index: usize) -> Ray {
-        self[index]
     }
 }
 

@@ -2,8 +2,9 @@
 //! through each pixel's centre (Cryptomatte's coverage): `side`×`side` rays per pixel through
 //! the centres of a regular grid over it, pixel by pixel, for a band of rows.
 
-use super::{CameraView, RaySource};
+use super::CameraView;
 use crate::geometry::Ray;
+use crate::geometry::RaySource;
 use std::ops::Range;
 
 /// The samples of the pixels of rows `rows` of `view`, `side`² per pixel, ordered by pixel

@@ -23,7 +23,7 @@
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
-use super::wide::Wide;
+use super::wide::{Wide, LIMIT};
 use crate::accel::{f32_above, f32_below};
 use glam::DVec3;
 
@@ -59,10 +59,6 @@ impl Kernel {
         }
     }
 }
-
-/// Below this magnitude `|r|` loses relative precision in f32; above `2¹⁰⁰` for `s` the
-/// products come near the f32 range. Either way the axis does not cull.
-pub(super) const LIMIT: f64 = (1u128 << 100) as f64;
 
 /// The unit roundoff of f32, `2⁻²⁴`.
 pub(super) const UNIT: f64 = 1.0 / 16777216.0;

@@ -184,7 +184,7 @@ impl Octree {
         // not all be quantised does not cull.
         let scale = layout
             .largest
-            .filter(|&largest| largest <= lanes::LIMIT)
+            .filter(|&largest| largest <= wide::LIMIT)
             .unwrap_or(f64::INFINITY);
         Octree {
             root,

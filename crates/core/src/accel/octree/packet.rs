@@ -12,9 +12,10 @@
 //! never culled for it; the shared front-to-back order is exact for every direction in the
 //! octant; and the boundary-trap rule is applied per ray.
 
-use super::lanes::{Kernel, Lanes, LIMIT, TINY, UNIT};
+use super::lanes::{Kernel, Lanes, TINY, UNIT};
 use super::leaf;
 use super::traverse::{self, Unobserved, STACK};
+use super::wide::LIMIT;
 use super::wide::{Layout, Wide, LEAF};
 use crate::accel::{f32_above, set_bits as bits};
 use glam::DVec3;

@@ -22,9 +22,13 @@ use std::arch::x86_64::*;
 /// reference count, followed by its references); otherwise it names a node.
 pub(super) const LEAF: u32 = 1 << 31;
 
-/// Planes beyond this magnitude are not quantised: the octree then does not cull (see
-/// [`super::lanes::LIMIT`]).
-const RANGE: f64 = super::lanes::LIMIT;
+/// Below this magnitude a ray's `|r|` loses relative precision in f32, and above it for `s`
+/// the node test's products come near the f32 range: either way that axis does not cull
+/// ([`super::lanes`]). Planes beyond it are not quantised: the octree then does not cull.
+pub(super) const LIMIT: f64 = (1u128 << 100) as f64;
+
+/// The largest plane magnitude quantised.
+const RANGE: f64 = LIMIT;
 
 /// An interior cell: per axis the quantisation frame, its children's occupied boxes as
 /// quantised planes (rows `lo x, lo y, lo z, hi x, hi y, hi z`, one lane per octant, rounded

@@ -16,7 +16,7 @@
 use super::accessor::NO_DATA;
 use super::diagnostics::{Diagnostic, Sink};
 use super::document::{extension, index_of, Document};
-use super::mesh::{Geometry, TriangleMode, DRACO};
+use super::geometry::{Geometry, TriangleMode, DRACO};
 use super::{draco, instancing, meshopt};
 use crate::bound::transform::BoundedMat4;
 use glam::DVec3;

@@ -26,6 +26,7 @@ pub mod decode;
 pub mod diagnostics;
 pub mod document;
 pub mod draco;
+pub mod geometry;
 pub mod instancing;
 pub mod integrity;
 pub mod mesh;
@@ -53,7 +54,7 @@ pub const QUADRIC_EXTENSION: &str = "RAYCAST_quadric";
 const HONOURED_REQUIRED: &[&str] = &[
     "KHR_mesh_quantization",
     QUADRIC_EXTENSION,
-    mesh::DRACO,
+    geometry::DRACO,
     decode::MESHOPT[0],
     decode::MESHOPT[1],
     decode::GPU_INSTANCING,

@@ -18,7 +18,7 @@ use super::animation::NodeValues;
 use super::decode;
 use super::diagnostics::{Diagnostic, FailFast};
 use super::document::{array, as_index, index_of, numbers, Document};
-use super::mesh::Geometry;
+use super::geometry::Geometry;
 use super::node::animated_transform;
 use crate::scene::{AnimationInfo, PoseInfo};
 use glam::{DMat4, DVec3};

@@ -8,7 +8,7 @@ use super::buffers::Need;
 use super::decode::{self, GPU_INSTANCING, MESHOPT};
 use super::diagnostics::{Diagnostic, FailFast};
 use super::document::{array, as_index, extension, index_of, Document};
-use super::mesh::DRACO;
+use super::geometry::DRACO;
 use super::node::{bounded_transform, Node};
 use super::pose::Pose;
 use super::shading::MeshShading;

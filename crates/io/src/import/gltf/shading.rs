@@ -5,7 +5,7 @@
 
 use super::decode;
 use super::document::{index_of, Document};
-use super::mesh::Geometry;
+use super::geometry::Geometry;
 use crate::scene::attributes::{runs, Attributes};
 use glam::DVec3;
 
