@@ -14,8 +14,8 @@
 
 use raycast::accel::{BvhKind, OctreeParams, PrimitiveSet};
 use raycast::geometry::Ray;
+use raycast::import::npy;
 use raycast::import::{self, LoadOptions};
-use raycast::output::npy;
 use raycast::render::{self, AccelKind, AccelStructure, Aov, Tracer};
 use raycast::scene::Scene;
 use serde_json::{json, Value};

@@ -90,7 +90,7 @@ pub fn run(job: &DistanceJob) -> Result<DistanceOutcome> {
 
 /// Loads, builds, measures and writes (in `out`, claimed already).
 fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
-    let points = npy::read_points(&job.points)?;
+    let points = crate::import::npy::read_points(&job.points)?;
     let clock = Instant::now();
     let scene = import::load(&job.scene, &job.load)?;
     let load = clock.elapsed().as_secs_f64();

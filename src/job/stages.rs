@@ -8,9 +8,9 @@ use super::{HitLimit, Progress, RenderJob};
 use crate::error::{Error, Result};
 use crate::geometry::RaySource;
 use crate::import;
+use crate::import::npy::RayFile;
 use crate::output::colormap::Colormap;
 use crate::output::cryptomatte;
-use crate::output::npy::RayFile;
 use crate::output::png::DistancePng;
 use crate::output::request::{self, buffer_bytes, check_memory};
 use crate::output::sidecar::{self, CameraInfo, HitsInfo, Sidecar, Stats, Timings};
@@ -355,7 +355,7 @@ pub(super) fn hits_need_octree() -> Error {
 /// Reads a ray file. Untraceable rays are misses with one warning, or with `--strict-rays` an
 /// error naming the first. Per-ray ranges (an (N, 8) file) need the octree.
 fn read_rays(path: &Path, job: &RenderJob, warnings: &mut Vec<String>) -> Result<RayFile> {
-    let file = output::npy::read_rays(path)?;
+    let file = crate::import::npy::read_rays(path)?;
     if file.ranges.is_some() && job.accel != AccelKind::Octree {
         return Err(Error::in_file(
             path,

@@ -798,8 +798,8 @@ fn golden_comparison() {
     // rounding could explain that, so it is no finding; moved by four times the bound (twice
     // the sum of both, still far below 1e-6 of the scene's size), it is.
     let view = golden.join("cube.gltf");
-    let (_, depth) = raycast::output::npy::read(&view.join("view0.depth.npy")).unwrap();
-    let (_, error) = raycast::output::npy::read(&view.join("view0.error.npy")).unwrap();
+    let (_, depth) = raycast::import::npy::read(&view.join("view0.depth.npy")).unwrap();
+    let (_, error) = raycast::import::npy::read(&view.join("view0.error.npy")).unwrap();
     assert!(error.iter().any(|&e| e > 0.0) && error.iter().all(|&e| e < 1e-12));
     let moved = |by: f64| {
         let shifted: Vec<f64> = depth.iter().zip(&error).map(|(d, e)| d + by * e).collect();

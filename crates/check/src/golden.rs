@@ -12,7 +12,8 @@ use super::Findings;
 use crate::accel::{Octree, OctreeParams};
 use crate::bound::bounded::up;
 use crate::camera::Camera;
-use crate::output::npy::{self, NpyData};
+use crate::import::npy;
+use crate::output::npy::{self as npy_out, NpyData};
 use crate::output::{png, Staging};
 use crate::render::{self, Aov, Buffers, CameraView, Tracer};
 use crate::scene::Scene;
@@ -146,7 +147,7 @@ fn store(dir: &Path, index: usize, buffers: &Buffers) -> Result<(), Failure> {
     for (aov, data) in files {
         let name = format!("view{index}.{aov}.npy");
         staging
-            .write(&name, |out| npy::write(out, &shape, data))
+            .write(&name, |out| npy_out::write(out, &shape, data))
             .map_err(fail)?;
     }
     staging.commit().map_err(fail)

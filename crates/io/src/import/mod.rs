@@ -1,6 +1,7 @@
 //! Importers: turn a scene file into a [`Scene`](crate::scene::Scene).
 
 pub mod gltf;
+pub mod npy;
 pub mod obj;
 pub mod obj_text;
 pub mod paths;
