@@ -3,8 +3,7 @@
 //! placement (`--cam-to-world`), with the command line's projection overrides.
 
 use super::{CameraChoice, RenderJob, DEFAULT_SIZE};
-use crate::camera::MAX_SIDE;
-use crate::camera::{Camera, Pinhole, Projection};
+use crate::camera::{Camera, Pinhole, Projection, MAX_SIDE};
 use crate::error::{Error, Result};
 use crate::render::CameraView;
 use crate::scene::Scene;

@@ -6,7 +6,6 @@ use super::{Walker, MAX_NODE_DEPTH};
 use crate::import::gltf::document::{array, as_index, index_of, numbers};
 use crate::import::gltf::node::local_transform;
 use crate::import::gltf::QUADRIC_EXTENSION;
-use crate::quadric::QuadricSpec;
 use glam::DMat4;
 use serde_json::Value;
 use std::collections::HashSet;
@@ -142,8 +141,8 @@ impl Walker<'_, '_> {
                 .get("extensions")
                 .and_then(|e| e.get(QUADRIC_EXTENSION))
             {
-                let spec =
-                    QuadricSpec::from_gltf_extension(ext).and_then(|s| s.validate().map(|()| s));
+                let spec = crate::import::gltf::quadric_extension::quadric_spec(ext)
+                    .and_then(|s| s.validate().map(|()| s));
                 if let Err(e) = spec {
                     self.f.error(
                         "QUADRIC_INVALID",

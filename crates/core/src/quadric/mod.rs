@@ -2,7 +2,7 @@
 //! world space about a local anchor, classification, bounds, ray intersection and nearest
 //! points ([`Quadric::closest`]) in f64, and the side of a closed one ([`Quadric::inside`]).
 //!
-//! The module depends only on `glam`, `serde_json`, `twofloat` and, for the error bound of a
+//! The module depends only on `glam`, `twofloat` and, for the error bound of a
 //! crossing ([`Quadric::bound_roots`]), on [`crate::bound`]'s bounded arithmetic.
 
 mod eigen;
@@ -11,7 +11,7 @@ mod kind;
 mod polynomial;
 #[cfg(test)]
 mod regression_tests;
-mod spec;
+pub mod spec;
 mod surface;
 #[cfg(test)]
 mod tests;

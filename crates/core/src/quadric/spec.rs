@@ -1,7 +1,7 @@
-//! Quadric coefficients as written in a scene file, and the `RAYCAST_quadric` glTF extension.
+//! Quadric coefficients as written in a scene file (the glTF extension `RAYCAST_quadric` is
+//! read by raycast-io, `import::gltf::quadric_extension`).
 
 use glam::{DMat3, DVec3};
-use serde_json::{Map, Value};
 
 use super::eigen::is_definite;
 
@@ -78,23 +78,6 @@ impl QuadricSpec {
         Ok(spec)
     }
 
-    /// Parses the `RAYCAST_quadric` extension object: either `coefficients` (ten numbers) or
-    /// `Q` (nine), `P` (three) and `R`, plus optional `bounds: {min: [3], max: [3]}`.
-    /// Unknown keys are ignored. The error message does not name the node.
-    pub fn from_gltf_extension(v: &Value) -> Result<Self, String> {
-        let object = v
-            .as_object()
-            .ok_or("RAYCAST_quadric must be a JSON object")?;
-        let bounds = object.get("bounds").map(parse_bounds).transpose()?;
-        let matrix_form = ["Q", "P", "R"].iter().any(|k| object.contains_key(*k));
-        match (object.get("coefficients"), matrix_form) {
-            (Some(_), true) => Err("give either `coefficients` or `Q`/`P`/`R`, not both".into()),
-            (Some(c), false) => Self::from_coefficients(numbers(c, "coefficients")?, bounds),
-            (None, true) => parse_matrix_form(object, bounds),
-            (None, false) => Err("missing `coefficients` (or `Q`, `P` and `R`)".into()),
-        }
-    }
-
     /// Checks the invariants every constructor guarantees: finite numbers, symmetric `Q`,
     /// `Q` and `P` not both zero, `min <= max` in the clip box, and a clip box for every
     /// surface that is not bounded by itself (bounded iff `Q` is definite).
@@ -124,59 +107,8 @@ impl QuadricSpec {
     }
 }
 
-/// The matrix form `Q`, `P`, `R` of the extension; all three keys are required.
-fn parse_matrix_form(
-    object: &Map<String, Value>,
-    bounds: Option<[DVec3; 2]>,
-) -> Result<QuadricSpec, String> {
-    let field = |key: &str| object.get(key).ok_or(format!("missing `{key}`"));
-    let q = numbers::<9>(field("Q")?, "Q")?;
-    let p = numbers::<3>(field("P")?, "P")?;
-    let r = number(field("R")?, "R")?;
-    QuadricSpec::from_matrices(q, p, r, bounds)
-}
-
-/// Parses `{"min": [x, y, z], "max": [x, y, z]}`.
-fn parse_bounds(v: &Value) -> Result<[DVec3; 2], String> {
-    let object = v
-        .as_object()
-        .ok_or("`bounds` must be an object with `min` and `max`")?;
-    let corner = |key: &str| -> Result<DVec3, String> {
-        let value = object.get(key).ok_or(format!("missing `bounds.{key}`"))?;
-        Ok(DVec3::from_array(numbers(value, &format!("bounds.{key}"))?))
-    };
-    Ok([corner("min")?, corner("max")?])
-}
-
-/// A JSON array of exactly `N` finite numbers.
-fn numbers<const N: usize>(v: &Value, what: &str) -> Result<[f64; N], String> {
-    let items = v
-        .as_array()
-        .ok_or(format!("`{what}` must be an array of {N} numbers"))?;
-    if items.len() != N {
-        return Err(format!(
-            "`{what}` has {} numbers, expected {N}",
-            items.len()
-        ));
-    }
-    let mut out = [0.0; N];
-    for (slot, item) in out.iter_mut().zip(items) {
-        *slot = number(item, what)?;
-    }
-    Ok(out)
-}
-
-/// A finite JSON number.
-fn number(v: &Value, what: &str) -> Result<f64, String> {
-    let x = v
-        .as_f64()
-        .ok_or(format!("`{what}` must contain only numbers"))?;
-    check_finite(what, &[x])?;
-    Ok(x)
-}
-
-/// Rejects NaN and infinities.
-fn check_finite(what: &str, values: &[f64]) -> Result<(), String> {
+/// Rejects NaN and infinities: `Err` names `what`.
+pub fn check_finite(what: &str, values: &[f64]) -> Result<(), String> {
     if values.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {

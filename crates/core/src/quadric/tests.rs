@@ -1,7 +1,6 @@
 //! Exact-expectation tests for the quadric module.
 
 use glam::{DMat3, DMat4, DQuat, DVec3};
-use serde_json::json;
 
 use super::{Quadric, QuadricKind, QuadricSpec};
 
@@ -478,87 +477,6 @@ fn classification_survives_random_placement() {
         QuadricKind::HyperboloidOneSheet.name(),
         "hyperboloid_one_sheet"
     );
-}
-
-/// The error message for an extension object, which must fail.
-fn extension_error(v: serde_json::Value) -> String {
-    QuadricSpec::from_gltf_extension(&v).unwrap_err()
-}
-
-#[test]
-fn extension_parses_both_forms() {
-    let a = QuadricSpec::from_gltf_extension(&json!({
-        "coefficients": [1, 1, 0, 0, 0, 0, 0, 0, 0, -1],
-        "bounds": {"min": [-1, -1, -2], "max": [1, 1, 2]},
-        "extras": {"ignored": true}
-    }))
-    .unwrap();
-    let b = QuadricSpec::from_gltf_extension(&json!({
-        "Q": [1, 0, 0, 0, 1, 0, 0, 0, 0], "P": [0, 0, 0], "R": -1,
-        "bounds": {"min": [-1, -1, -2], "max": [1, 1, 2]}
-    }))
-    .unwrap();
-    assert_eq!(a, b);
-    assert_eq!(
-        a.bounds,
-        Some([DVec3::new(-1.0, -1.0, -2.0), DVec3::new(1.0, 1.0, 2.0)])
-    );
-    let sphere =
-        QuadricSpec::from_gltf_extension(&json!({"coefficients": [1, 1, 1, 0, 0, 0, 0, 0, 0, -1]}));
-    assert_eq!(sphere.unwrap().bounds, None);
-}
-
-#[test]
-fn extension_errors() {
-    let sphere = json!([1, 1, 1, 0, 0, 0, 0, 0, 0, -1]);
-    let both =
-        json!({"coefficients": sphere, "Q": [1, 0, 0, 0, 1, 0, 0, 0, 1], "P": [0, 0, 0], "R": -1});
-    assert!(extension_error(both).contains("not both"));
-    assert!(extension_error(json!({})).contains("missing"));
-    assert!(extension_error(json!([1, 2])).contains("object"));
-    assert!(extension_error(json!({"coefficients": [1, 1, 1]})).contains("expected 10"));
-    assert!(
-        extension_error(json!({"Q": [1, 0, 0, 0, 1, 0, 0, 0, 1], "P": [0, 0], "R": -1}))
-            .contains("expected 3")
-    );
-    assert!(
-        extension_error(json!({"Q": [1, 0, 0, 0, 1, 0, 0, 0, 1], "P": [0, 0, 0]}))
-            .contains("missing `R`")
-    );
-    assert!(
-        extension_error(json!({"coefficients": [1, 1, 1, 0, 0, 0, 0, 0, "x", -1]}))
-            .contains("numbers")
-    );
-    assert!(
-        extension_error(json!({"Q": [1, 0.5, 0, 0, 1, 0, 0, 0, 1], "P": [0, 0, 0], "R": -1}))
-            .contains("symmetric")
-    );
-    assert!(
-        extension_error(json!({"coefficients": [0, 0, 0, 0, 0, 0, 0, 0, 0, 1]})).contains("zero")
-    );
-    assert!(
-        extension_error(json!({"coefficients": [1, 1, 0, 0, 0, 0, 0, 0, 0, -1]}))
-            .contains("bounds")
-    );
-    let inverted = json!({"coefficients": sphere, "bounds": {"min": [0, 0, 1], "max": [1, 1, 0]}});
-    assert!(extension_error(inverted).contains("exceeds"));
-    let short = json!({"coefficients": sphere, "bounds": {"min": [0, 0], "max": [1, 1, 1]}});
-    assert!(extension_error(short).contains("bounds.min"));
-    assert!(
-        extension_error(json!({"coefficients": sphere, "bounds": [0, 1]})).contains("`bounds`")
-    );
-    let nan = QuadricSpec::from_coefficients(
-        [f64::NAN, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
-        None,
-    );
-    assert!(nan.unwrap_err().contains("non-finite"));
-    let inf = QuadricSpec::from_matrices(
-        [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
-        [0.0; 3],
-        f64::INFINITY,
-        None,
-    );
-    assert!(inf.unwrap_err().contains("non-finite"));
 }
 
 #[test]

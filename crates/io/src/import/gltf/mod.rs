@@ -33,6 +33,7 @@ pub mod mesh;
 pub mod meshopt;
 pub mod node;
 pub mod pose;
+pub mod quadric_extension;
 pub mod scene;
 pub mod shading;
 pub mod structure;

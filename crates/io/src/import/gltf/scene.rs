@@ -15,7 +15,7 @@ use super::shading::MeshShading;
 use super::QUADRIC_EXTENSION;
 use crate::bound::transform::BoundedMat4;
 use crate::camera::Camera;
-use crate::quadric::{Quadric, QuadricSpec};
+use crate::quadric::Quadric;
 use crate::scene::{Attributes, Mesh, Scene, SceneBuilder};
 use glam::{DMat4, DVec3};
 use serde_json::Value;
@@ -366,7 +366,7 @@ impl Walk<'_> {
             }
         }
         if let Some(ext) = extension(node.json, QUADRIC_EXTENSION) {
-            let quadric = QuadricSpec::from_gltf_extension(ext)
+            let quadric = crate::import::gltf::quadric_extension::quadric_spec(ext)
                 .and_then(|spec| Quadric::new(&spec, *world))
                 .map(|quadric| quadric.with_composition(placed))
                 .map_err(|e| {
