@@ -15,6 +15,9 @@ echo "== ruff check / ruff format --check (ruff.toml)"
 echo "== cargo fmt / clippy (the library, the binary and the Python extension python/)"
 cargo fmt --all -- --check
 cargo clippy --release --workspace --all-targets --locked -- -D warnings
+# The Python extension on its own: raycast-io then builds without its `output` feature, as
+# the wheel does (a workspace-wide build turns the feature on for everyone).
+cargo clippy --release -p raycast-python --locked -- -D warnings
 
 echo "== cargo test"
 cargo build --release --locked

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Thread scaling of raycast's octree and of the obvhs BVH2 backend: runs
-# `python -m raycast_tools thread-scaling` (tools/raycast_tools/thread_scaling.py, standard
+# `python -m raycast_tools thread-scaling` (tools/raycast_tools/bench/thread_scaling.py, standard
 # library only), with the repository's .venv when there is one, else a bare python3 that
 # finds the package in tools/. Options as before, from the environment: RAYCAST, OUT,
 # BIG_SCENE (a further scene, such as the 1M-triangle one `python -m raycast_tools bench`

@@ -1,4 +1,4 @@
-//! PLY and STL (issue 29): the fixtures of tools/raycast_tools/make_mesh_fixtures.py read as
+//! PLY and STL (issue 29): the fixtures of tools/raycast_tools/fixtures/make_mesh_fixtures.py read as
 //! their geometry is worked out by hand (fixtures/ply/README.md, fixtures/stl/README.md, the
 //! cube of fixtures/README.md), the broken ones refused with their check codes. The same
 //! fixtures are compared with trimesh's readers in tests/python/test_mesh_formats.py.

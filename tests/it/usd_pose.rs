@@ -1,6 +1,6 @@
 //! USD at a time code and with chosen variants (issue 28), against usd-core. The expected
 //! values in fixtures/usd/posed/*.reference.json are usd-core's reading of the fixtures
-//! (tools/raycast_tools/usd_pose_reference.py, made by tools/make_usd_pose_fixtures.sh):
+//! (tools/raycast_tools/reference/usd_pose_reference.py, made by tools/make_usd_pose_fixtures.sh):
 //! world-space mesh points through `UsdGeom.XformCache(time)` and `Get(time)`, PointInstancer
 //! instances through `ComputeInstanceTransformsAtTime`, gprim sizes and world matrices, and
 //! what usd-core composes with each variant selection. Nothing here poses with raycast's code:

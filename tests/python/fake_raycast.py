@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from raycast_tools import quadric_reference as qref
-from raycast_tools import validate
 from raycast_tools.rays import camera_rays
+from raycast_tools.reference import quadric_reference as qref
+from raycast_tools.validate import validate
 
 
 def main():

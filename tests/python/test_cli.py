@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from raycast_tools import paths, thread_scaling
+from raycast_tools import paths
+from raycast_tools.bench import thread_scaling
 from raycast_tools.cli import COMMANDS, main
 
 

@@ -107,7 +107,7 @@ def test_report_summary_and_list(corpus):
 
 
 def test_depth_verdicts_tell_geometry_from_numbering():
-    from raycast_tools.corpus_report import depth_verdict
+    from raycast_tools.validate.corpus_report import depth_verdict
 
     def record(**depth):
         return {"reference": {"depth": depth}}

@@ -5,7 +5,7 @@ Every scene of the tool (meshes far from the origin, placed, instanced and neste
 random quadrics, the stiff cases) with a few hundred rays: no hit's |depth − exact| exceeds its
 `error`, no ray whose decision differs from the exact one is `certain`, and the median bound
 is within two decimal digits of the actual error. The exact answers come from rational
-arithmetic and mpmath (tools/raycast_tools/bound_truth.py), not from raycast.
+arithmetic and mpmath (tools/raycast_tools/reference/bound_truth.py), not from raycast.
 
 Run: .venv/bin/python -m pytest tests/python/test_error_bounds.py
 """
@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raycast_tools import error_bounds
+from raycast_tools.validate import error_bounds
 
 ROOT = Path(__file__).resolve().parents[2]
 RAYCAST = Path(os.environ.get("RAYCAST", ROOT / "target" / "release" / "raycast"))

@@ -20,8 +20,10 @@ pytest.importorskip("trimesh")
 import trimesh
 from binary import RAYCAST, ROOT, needs_binary
 
-from raycast_tools import exact_depth, exact_readers, make_exact_fixtures
+from raycast_tools.fixtures import make_exact_fixtures
 from raycast_tools.rays import make_rays
+from raycast_tools.reference import exact_readers
+from raycast_tools.validate import exact_depth
 
 USD = ROOT / "fixtures" / "usd"
 EXACT = ROOT / "fixtures" / "exact"

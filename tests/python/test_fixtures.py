@@ -361,8 +361,8 @@ def test_bad_npy_shapes():
 
 def test_fixtures_are_reproducible(tmp_path, monkeypatch):
     """Rerunning the generator gives byte-identical files."""
-    from raycast_tools import make_fixtures as mod
-    from raycast_tools.fixture_files import FixtureFiles
+    from raycast_tools.fixtures import make_fixtures as mod
+    from raycast_tools.fixtures.fixture_files import FixtureFiles
 
     monkeypatch.setattr(mod, "FILES", FixtureFiles(tmp_path))
     for attr in ("FIX", "GLTF_DIR", "OBJ_DIR", "BAD_DIR"):

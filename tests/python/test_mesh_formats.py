@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from raycast_tools.open3d_meshes import canonical
+from raycast_tools.reference.open3d_meshes import canonical
 
 raycast = pytest.importorskip("raycast")
 

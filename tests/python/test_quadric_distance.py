@@ -1,7 +1,7 @@
 """raycast's nearest points on clipped quadrics against a 50-digit mpmath reference that works
-by another method (tools/raycast_tools/quadric_distance_reference.py: sampling and Newton in
-the quadric's own coordinates, nothing diagonalised), on random placements of every kind of
-quadric: points random around the clip box, 1e-12 off the surface, at the centre and 1e-13
+by another method (tools/raycast_tools/reference/quadric_distance_reference.py: sampling and
+Newton in the quadric's own coordinates, nothing diagonalised), on random placements of every
+kind of quadric: points random around the clip box, 1e-12 off the surface, at the centre and 1e-13
 off it (on an axis), 1e6 away, and the same about a quadric placed 1e6 from the origin.
 
 The bound is stated in ε (2⁻⁵³) times the scale `|p − c| + h + |c|`, `c` the clip box's
@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 
 import raycast
-from raycast_tools.gltf_writer import quadric_document
-from raycast_tools.quadric_distance_reference import Clipped
+from raycast_tools.fixtures.gltf_writer import quadric_document
+from raycast_tools.reference.quadric_distance_reference import Clipped
 
 EPS = np.finfo(np.float64).eps / 2
 

@@ -2,10 +2,10 @@
 
 The quadric issue's acceptance check: on random scenes (scale 0.5..2, shear up to 0.3, random
 clip boxes, random rotations of the coefficient frame) and random rays, raycast agrees with
-the object-space reference (tools/raycast_tools/quadric_reference.py) on hit/miss and id for
-every ray that is not within 1e-6 of a clip-box face or a tangent, with relative depth error
-<= 1e-9 and normal angle <= 1e-6 rad (the tolerances live in tools/raycast_tools/validate.py's
-TOL).
+the object-space reference (tools/raycast_tools/reference/quadric_reference.py) on hit/miss
+and id for every ray that is not within 1e-6 of a clip-box face or a tangent, with relative
+depth error <= 1e-9 and normal angle <= 1e-6 rad (the tolerances live in
+tools/raycast_tools/validate/validate.py's TOL).
 """
 
 import os
@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from raycast_tools import random_quadric_scenes, validate
+from raycast_tools.fixtures import random_quadric_scenes
+from raycast_tools.validate import validate
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -1,4 +1,4 @@
-"""Tests of tools/raycast_tools/tessellate.py and the tessellation convergence check.
+"""Tests of tools/raycast_tools/fixtures/tessellate.py and the tessellation convergence check.
 
 Run: .venv/bin/python -m pytest tests/python/test_tessellation.py
 The raycast part of the convergence check skips when target/release/raycast is absent.
@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raycast_tools import quadric_reference as qr
-from raycast_tools import tessellate as tess
-from raycast_tools import tessellation_check as tc
+from raycast_tools.fixtures import tessellate as tess
+from raycast_tools.reference import quadric_reference as qr
+from raycast_tools.validate import tessellation_check as tc
 
 ROOT = Path(__file__).resolve().parents[2]
 

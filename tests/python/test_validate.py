@@ -1,5 +1,5 @@
-"""Tests of `python -m raycast_tools validate` (tools/raycast_tools/validate.py) and
-the quadric reference (tools/raycast_tools/quadric_reference.py).
+"""Tests of `python -m raycast_tools validate` (tools/raycast_tools/validate/validate.py) and
+the quadric reference (tools/raycast_tools/reference/quadric_reference.py).
 
 Run: .venv/bin/python -m pytest tests/python
 The end-to-end checks against the real binary skip when target/release/raycast
@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 from binary import RAYCAST, ROOT, needs_binary
 
-from raycast_tools import quadric_reference as qr
-from raycast_tools import validate
 from raycast_tools.rays import camera_rays
+from raycast_tools.reference import quadric_reference as qr
+from raycast_tools.validate import validate
 
 FIXTURES = ROOT / "fixtures"
 
@@ -477,7 +477,7 @@ def test_bench_rays_in_tiles_are_4x2_pixel_tiles():
 def test_bench_rounds_merge_into_medians():
     # Three rounds of one backend: times 2, 1 and 4 s for 1e6 rays give the median 2 s and
     # 0.5 Mrays/s; every round's runs are kept; names and counts come through unchanged.
-    from raycast_tools.bench import merge_rounds
+    from raycast_tools.bench.bench import merge_rounds
 
     def round_(t, build):
         trace = {"rays": "coherent", "count": 1_000_000, "median_s": t, "runs_s": [t, t + 1]}

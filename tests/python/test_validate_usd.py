@@ -16,7 +16,7 @@ pytest.importorskip("pxr")
 
 from binary import RAYCAST, ROOT, needs_binary
 
-from raycast_tools import validate_usd
+from raycast_tools.validate import validate_usd
 
 USD = ROOT / "fixtures" / "usd"
 

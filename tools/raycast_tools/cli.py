@@ -14,78 +14,99 @@ PROG = "python -m raycast_tools"
 
 # command -> (module, one line on what it does)
 COMMANDS = {
-    "validate": ("validate", "compare raycast with trimesh and the quadric reference, ray by ray"),
-    "validate-usd": ("validate_usd", "compare raycast's USD import with usd-core + trimesh"),
-    "bench": ("bench", "octree vs obvhs vs Embree vs trimesh (reports/bench.md)"),
+    "validate": (
+        "validate.validate",
+        "compare raycast with trimesh and the quadric reference, ray by ray",
+    ),
+    "validate-usd": (
+        "validate.validate_usd",
+        "compare raycast's USD import with usd-core + trimesh",
+    ),
+    "bench": ("bench.bench", "octree vs obvhs vs Embree vs trimesh (reports/bench.md)"),
     "end-to-end": (
-        "end_to_end",
+        "bench.end_to_end",
         "1024² depth render from the file: raycast vs Open3D vs trimesh+Embree",
     ),
     "signed-check": (
-        "signed_check",
+        "validate.signed_check",
         "signed distance signs against exact truth on closed meshes (reports/signed_distance.md)",
     ),
     "python-calls": (
-        "python_calls",
+        "bench.python_calls",
         "Ctrl-C latency of long Python calls and list_intersections' transient memory",
     ),
     "python-bench": (
-        "python_bench",
+        "bench.python_bench",
         "raycast.load + cast vs trimesh and Open3D on the bunny (reports/python_bench.md)",
     ),
-    "error-vs-time": ("error_vs_time", "depth error against run time (reports/error_vs_time.md)"),
-    "fixtures": ("make_fixtures", "write the glTF/OBJ fixtures under fixtures/"),
-    "mesh-fixtures": ("make_mesh_fixtures", "write the PLY and STL fixtures (ply/, stl/, bad/)"),
+    "error-vs-time": (
+        "validate.error_vs_time",
+        "depth error against run time (reports/error_vs_time.md)",
+    ),
+    "fixtures": ("fixtures.make_fixtures", "write the glTF/OBJ fixtures under fixtures/"),
+    "mesh-fixtures": (
+        "fixtures.make_mesh_fixtures",
+        "write the PLY and STL fixtures (ply/, stl/, bad/)",
+    ),
     "exact-fixtures": (
-        "make_exact_fixtures",
+        "fixtures.make_exact_fixtures",
         "write fixtures/exact/ (far OBJ, nested far glTF, PointInstancer)",
     ),
-    "quadric-fixtures": ("make_quadric_fixtures", "write the RAYCAST_quadric fixtures"),
-    "usd-fixtures": ("export_usd_fixtures", "write the USD fixtures under fixtures/usd/"),
-    "stiff-cases": ("stiff_cases", "write fixtures/stiff/cases.json (200-bit mpmath answers)"),
-    "tessellate": ("tessellate", "tessellate a glTF's quadric nodes into a glTF mesh"),
-    "tessellation-check": ("tessellation_check", "tessellation error against the exact quadric"),
+    "quadric-fixtures": ("fixtures.make_quadric_fixtures", "write the RAYCAST_quadric fixtures"),
+    "usd-fixtures": ("fixtures.export_usd_fixtures", "write the USD fixtures under fixtures/usd/"),
+    "stiff-cases": (
+        "fixtures.stiff_cases",
+        "write fixtures/stiff/cases.json (200-bit mpmath answers)",
+    ),
+    "tessellate": ("fixtures.tessellate", "tessellate a glTF's quadric nodes into a glTF mesh"),
+    "tessellation-check": (
+        "validate.tessellation_check",
+        "tessellation error against the exact quadric",
+    ),
     "quadric-reference": (
-        "quadric_reference",
+        "reference.quadric_reference",
         "trace rays with the object-space quadric reference",
     ),
-    "random-quadrics": ("random_quadric_scenes", "write random quadric scenes for validation"),
-    "usd-counts": ("usd_counts", "count what a USD stage draws, with usd-core"),
+    "random-quadrics": (
+        "fixtures.random_quadric_scenes",
+        "write random quadric scenes for validation",
+    ),
+    "usd-counts": ("reference.usd_counts", "count what a USD stage draws, with usd-core"),
     "usd-pose-reference": (
-        "usd_pose_reference",
+        "reference.usd_pose_reference",
         "usd-core's reading of fixtures/usd/posed at time codes and variants (issue 28)",
     ),
     "usd-skel-reference": (
-        "usd_skel_reference",
+        "reference.usd_skel_reference",
         "fixtures/usd/posed/skel.usda and usd-core's skinning of it at time codes (issue 28)",
     ),
     "views-bench": (
-        "views_bench",
+        "bench.views_bench",
         "N views in one --views run against N single runs (reports/views.md)",
     ),
-    "thread-scaling": ("thread_scaling", "octree and BVH2 trace time from 1 to 16 threads"),
+    "thread-scaling": ("bench.thread_scaling", "octree and BVH2 trace time from 1 to 16 threads"),
     "check-scale": (
-        "check_scale",
+        "bench.check_scale",
         "raycast check shards, merge, throughput and the Khronos validator (check_scale.md)",
     ),
     "error-bounds": (
-        "error_bounds",
+        "validate.error_bounds",
         "raycast's error and certain AOVs against exact answers (reports/error_bounds.md)",
     ),
     "exact-depth": (
-        "exact_depth",
+        "validate.exact_depth",
         "USD/glTF/OBJ depth against an outside float64 reading + ray/triangle test (1e-12)",
     ),
     "corpus": (
-        "corpus",
+        "validate.corpus",
         "render, info and check every file of a corpus beside the validator, usd-core, trimesh",
     ),
     "open3d-meshes": (
-        "open3d_meshes",
+        "reference.open3d_meshes",
         "PLY/STL triangles beside Open3D's reader: dump (here), compare (Open3D's venv)",
     ),
     "instancing-bench": (
-        "instancing_bench",
+        "bench.instancing_bench",
         "memory and build time of instanced scenes, two binaries (reports/instancing.md)",
     ),
 }

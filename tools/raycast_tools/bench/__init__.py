@@ -1,0 +1,2 @@
+"""Benchmarks against the peers (Embree, Open3D, trimesh, obvhs) and the reports they write,
+with the machine description they share."""
