@@ -17,6 +17,7 @@ pub mod quadric;
 pub mod query;
 pub mod render;
 pub mod scene;
+pub mod simd;
 
 pub use error::{Error, Result};
 #[cfg(test)]

@@ -62,7 +62,7 @@ impl<'a> Query<'a> {
     /// that the common range from 0 does not pay for its set-up.
     #[inline(never)]
     fn nearest_beyond(&self, local: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<Crossing> {
-        let prepared = crate::accel::prepare_ray(self.scene, local, dir);
+        let prepared = crate::accel::prepare_ray_with(self.scene, self.octree.kernel(), local, dir);
         let mut best: Option<Crossing> = None;
         let mut found = Vec::new();
         self.octree.traverse(local, dir, t_max, |refs, _, _| {
@@ -128,7 +128,8 @@ impl<'a> Query<'a> {
             return false;
         }
         let local = ray.origin - self.scene.anchor;
-        let prepared = crate::accel::prepare_ray(self.scene, local, ray.dir);
+        let prepared =
+            crate::accel::prepare_ray_with(self.scene, self.octree.kernel(), local, ray.dir);
         // Returned to the traversal once a crossing is found: no leaf is entered below it.
         let stop = f64::NEG_INFINITY;
         let mut hit = false;
@@ -173,7 +174,8 @@ impl<'a> Query<'a> {
             return found;
         }
         let local = ray.origin - self.scene.anchor;
-        let prepared = crate::accel::prepare_ray(self.scene, local, ray.dir);
+        let prepared =
+            crate::accel::prepare_ray_with(self.scene, self.octree.kernel(), local, ray.dir);
         self.octree.traverse(local, ray.dir, t_max, |refs, _, _| {
             for &prim in refs {
                 let range = (t_min, t_max);

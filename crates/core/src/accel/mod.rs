@@ -8,6 +8,7 @@ pub mod bvh;
 pub mod octree;
 
 use crate::geometry::Aabb;
+pub use crate::simd::Kernel;
 use glam::DVec3;
 
 pub use bvh::{Bvh, BvhKind, BvhStats};
@@ -23,6 +24,8 @@ pub struct PreparedRay<R> {
     pub dir: DVec3,
     /// Per-ray data of the primitive set.
     pub extra: R,
+    /// The kernel of every SIMD test this ray goes through.
+    pub kernel: Kernel,
 }
 
 /// The closest hit of a ray: its parameter and the global primitive index.
@@ -220,11 +223,22 @@ pub fn prepare_ray<P: PrimitiveSet>(
     local_origin: DVec3,
     dir: DVec3,
 ) -> PreparedRay<P::RayData> {
+    prepare_ray_with(set, Kernel::detect(), local_origin, dir)
+}
+
+/// [`prepare_ray`] for the kernel `kernel` (which the CPU must run).
+pub fn prepare_ray_with<P: PrimitiveSet>(
+    set: &P,
+    kernel: Kernel,
+    local_origin: DVec3,
+    dir: DVec3,
+) -> PreparedRay<P::RayData> {
     let dir = dir + DVec3::ZERO;
     PreparedRay {
         local_origin,
         dir,
         extra: set.prepare(local_origin, dir),
+        kernel,
     }
 }
 

@@ -4,6 +4,7 @@
 
 use super::Aabb;
 use crate::accel::PACKET;
+use crate::simd::Kernel;
 use glam::DVec3;
 
 /// A primitive's world bounds, with what the pre-test's margin needs.
@@ -51,18 +52,19 @@ impl ReachBox {
     }
 
     /// [`ReachBox::may_reach`] for the rays `active` (bit `i` for ray `i`) of a packet, given
-    /// as (origin, direction): the mask of those it lets through. Every ray is tested, without
-    /// branches, so that the loop compiles to straight-line code.
+    /// as (origin, direction): the mask of those it lets through, by `kernel`. Every ray is
+    /// tested, without branches, so that the loop compiles to straight-line code.
     #[inline]
     pub fn reaching(
         &self,
+        kernel: Kernel,
         rays: &[(DVec3, DVec3); PACKET],
         active: u32,
         t_max: &[f64; PACKET],
     ) -> u32 {
         #[cfg(target_arch = "x86_64")]
-        if is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2.
+        if kernel == Kernel::Avx2 {
+            // SAFETY: the Avx2 kernel is only chosen where the CPU has AVX2 (and FMA).
             return unsafe { self.reaching_avx2(rays, active, t_max) };
         }
         self.reaching_with(rays, active, t_max)
@@ -142,11 +144,16 @@ mod tests {
                 m | u32::from(reach.may_reach(rays[i].0, rays[i].1.recip(), limits[i])) << i
             });
             assert_eq!(expected, 0b0110_1101, "round {round}");
-            assert_eq!(reach.reaching(&rays, 0xff, &limits), expected);
-            assert_eq!(
-                reach.reaching(&rays, 0b1010_0101, &limits),
-                expected & 0b1010_0101
-            );
+            for kernel in [Kernel::Avx2, Kernel::Portable]
+                .into_iter()
+                .filter(|k| k.available())
+            {
+                assert_eq!(reach.reaching(kernel, &rays, 0xff, &limits), expected);
+                assert_eq!(
+                    reach.reaching(kernel, &rays, 0b1010_0101, &limits),
+                    expected & 0b1010_0101
+                );
+            }
         }
     }
 }

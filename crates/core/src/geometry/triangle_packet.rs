@@ -14,8 +14,8 @@
 //! instructions per four pairs where the single-ray test spends some sixty per pair.
 
 use super::triangle::WatertightRay;
-use crate::accel::octree::Kernel;
 use crate::accel::PACKET;
+use crate::simd::Kernel;
 use glam::DVec3;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -37,14 +37,17 @@ pub struct WatertightPacket {
 impl WatertightPacket {
     /// The rays `ray(0)`, ..., `ray(PACKET - 1)` as one packet, or `None` when they do not
     /// share an axis permutation (their dominant direction axes differ); then each goes
-    /// through the single-ray test.
-    pub fn new<'r>(ray: impl Fn(usize) -> &'r WatertightRay) -> Option<WatertightPacket> {
+    /// through the single-ray test. `kernel` runs [`WatertightPacket::candidates`].
+    pub fn new<'r>(
+        kernel: Kernel,
+        ray: impl Fn(usize) -> &'r WatertightRay,
+    ) -> Option<WatertightPacket> {
         let axes = ray(0).axes;
         let mut packet = WatertightPacket {
             axes,
             origin: [[0.0; PACKET]; 3],
             shear: [[0.0; PACKET]; 2],
-            avx2: Kernel::Avx2.available(),
+            avx2: kernel == Kernel::Avx2,
         };
         for i in 0..PACKET {
             let ray = ray(i);
@@ -153,13 +156,10 @@ impl WatertightRay {
     /// Of the triangles `tris[i]` with bit `i` of `active` set, those
     /// [`WatertightRay::intersect`] may find a hit with: all but those its edge functions
     /// already refuse (four triangles per AVX2 register, exactly as
-    /// [`WatertightPacket::candidates`] takes four rays).
-    pub fn candidates(&self, tris: &[[DVec3; 3]; 4], active: u32) -> u32 {
-        // AVX2 alone, checked here rather than through `Kernel::Avx2.available()` (which also
-        // asks for FMA): this runs once per group of four, and the second check cost about 8
-        // instructions per incoherent ray.
+    /// [`WatertightPacket::candidates`] takes four rays), by `kernel`.
+    pub fn candidates(&self, kernel: Kernel, tris: &[[DVec3; 3]; 4], active: u32) -> u32 {
         #[cfg(target_arch = "x86_64")]
-        if is_x86_feature_detected!("avx2") {
+        if kernel == Kernel::Avx2 {
             // SAFETY: the CPU has AVX2.
             return unsafe { self.candidates_avx2(tris, active) };
         }

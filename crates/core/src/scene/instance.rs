@@ -8,6 +8,7 @@ use super::mesh::MeshSet;
 use crate::accel::{set_bits, Hit, Octree, OctreeParams, PreparedRay, PACKET};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::{Aabb, ReachBox};
+use crate::simd::Kernel;
 use glam::{DAffine3, DMat4, DVec3};
 use std::sync::OnceLock;
 
@@ -127,15 +128,34 @@ impl Instance {
         dir: DVec3,
         t_max: f64,
     ) -> Option<Hit> {
+        self.intersect_by(stored.octree().kernel(), stored, origin, dir, t_max)
+    }
+
+    /// [`Instance::intersect`] by `kernel`: that of the traversal the ray comes from.
+    pub fn intersect_by(
+        &self,
+        kernel: Kernel,
+        stored: &StoredMesh,
+        origin: DVec3,
+        dir: DVec3,
+        t_max: f64,
+    ) -> Option<Hit> {
         if !self.may_reach(origin, dir, t_max) {
             return None;
         }
-        self.trace(stored, origin, dir, t_max)
+        self.trace(kernel, stored, origin, dir, t_max)
     }
 
-    /// [`Instance::intersect`] for a ray [`Instance::may_reach`] has let through.
-    fn trace(&self, stored: &StoredMesh, origin: DVec3, dir: DVec3, t_max: f64) -> Option<Hit> {
-        let ray = self.local_ray(stored, origin, dir);
+    /// [`Instance::intersect_by`] for a ray [`Instance::may_reach`] has let through.
+    fn trace(
+        &self,
+        kernel: Kernel,
+        stored: &StoredMesh,
+        origin: DVec3,
+        dir: DVec3,
+        t_max: f64,
+    ) -> Option<Hit> {
+        let ray = self.local_ray(kernel, stored, origin, dir);
         stored.octree().intersect(&stored.set, &ray, t_max)
     }
 
@@ -154,20 +174,21 @@ impl Instance {
     /// their directions in the mesh frame can go as one packet, else one by one.
     pub fn intersect_packet(
         &self,
+        kernel: Kernel,
         stored: &StoredMesh,
         rays: [(DVec3, DVec3); PACKET],
         active: u32,
         t_max: &[f64; PACKET],
     ) -> [Option<Hit>; PACKET] {
-        let active = self.reach.reaching(&rays, active, t_max);
+        let active = self.reach.reaching(kernel, &rays, active, t_max);
         if active.count_ones() as usize >= PACKET_FROM {
-            if let Some(hits) = self.trace_packet(stored, rays, active, t_max) {
+            if let Some(hits) = self.trace_packet(kernel, stored, rays, active, t_max) {
                 return hits;
             }
         }
         let mut hits = [None; PACKET];
         for i in set_bits(active) {
-            hits[i] = self.trace(stored, rays[i].0, rays[i].1, t_max[i]);
+            hits[i] = self.trace(kernel, stored, rays[i].0, rays[i].1, t_max[i]);
         }
         hits
     }
@@ -176,6 +197,7 @@ impl Instance {
     /// when they cannot go as one ([`Octree::intersect_packet`]).
     fn trace_packet(
         &self,
+        kernel: Kernel,
         stored: &StoredMesh,
         rays: [(DVec3, DVec3); PACKET],
         active: u32,
@@ -184,13 +206,13 @@ impl Instance {
         // The rays not taking part stand in for the first one that does, with a limit of -inf.
         let first = active.trailing_zeros() as usize;
         let (origin, dir) = rays[first];
-        let stand_in = self.local_ray(stored, origin, dir);
+        let stand_in = self.local_ray(kernel, stored, origin, dir);
         let mut limits = [f64::NEG_INFINITY; PACKET];
         let mut local = [stand_in; PACKET];
         for i in set_bits(active) {
             let (origin, dir) = rays[i];
             if i != first {
-                local[i] = self.local_ray(stored, origin, dir);
+                local[i] = self.local_ray(kernel, stored, origin, dir);
             }
             limits[i] = t_max[i];
         }
@@ -202,6 +224,7 @@ impl Instance {
     /// The world ray `origin + t · dir` in the mesh frame, prepared for its octree.
     fn local_ray(
         &self,
+        kernel: Kernel,
         stored: &StoredMesh,
         origin: DVec3,
         dir: DVec3,
@@ -216,6 +239,7 @@ impl Instance {
             local_origin: o - stored.set.anchor,
             dir: d,
             extra: WatertightRay::new(o, d),
+            kernel,
         }
     }
 }
@@ -276,7 +300,7 @@ mod tests {
                 let target = world.transform_point3((tri[0] + tri[1] + tri[2]) / 3.0);
                 let origin = target + rng.point(-5.0 * scale, 5.0 * scale);
                 let dir = target - origin;
-                let ray = instance.local_ray(&stored, origin, dir);
+                let ray = instance.local_ray(Kernel::detect(), &stored, origin, dir);
                 if let Some(hit) = stored.octree().intersect(&stored.set, &ray, f64::INFINITY) {
                     assert!(instance.may_reach(origin, dir, hit.t), "round {round}");
                     hits += 1;

@@ -15,6 +15,7 @@ use crate::geometry::triangle::{self, WatertightRay};
 use crate::geometry::triangle_box;
 use crate::geometry::triangle_packet::WatertightPacket;
 use crate::geometry::Aabb;
+use crate::simd::Kernel;
 use glam::{DAffine3, DVec3, Vec3};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -338,12 +339,13 @@ impl MeshSet {
 
     /// [`PrimitiveSet::intersect_group`] for the triangles `indices` and one ray prepared in
     /// the mesh frame: the four-triangle pre-filter (for two triangles or more), then the
-    /// single-ray test for the triangles it keeps.
+    /// single-ray test for the triangles it keeps; the pre-filter by `kernel`.
     #[inline(always)]
     pub fn intersect_triangles(
         &self,
         indices: &[u32],
         ray: &WatertightRay,
+        kernel: Kernel,
         t_max: f64,
         ts: &mut [f64; GROUP],
     ) -> u32 {
@@ -361,7 +363,7 @@ impl MeshSet {
             *tri = self.mesh.triangle(i as usize);
         }
         let mut hits = 0;
-        for k in set_bits(ray.candidates(&tris, (1 << indices.len()) - 1)) {
+        for k in set_bits(ray.candidates(kernel, &tris, (1 << indices.len()) - 1)) {
             if let Some(t) = ray.intersect(&tris[k], t_max) {
                 ts[k] = t;
                 hits |= 1 << k;
@@ -422,13 +424,13 @@ impl PrimitiveSet for MeshSet {
         t_max: f64,
         ts: &mut [f64; GROUP],
     ) -> u32 {
-        self.intersect_triangles(indices, &ray.extra, t_max, ts)
+        self.intersect_triangles(indices, &ray.extra, ray.kernel, t_max, ts)
     }
 
     type PacketData = Option<WatertightPacket>;
 
     fn prepare_packet(&self, rays: &[PreparedRay<WatertightRay>; PACKET]) -> Self::PacketData {
-        WatertightPacket::new(|i| &rays[i].extra)
+        WatertightPacket::new(rays[0].kernel, |i| &rays[i].extra)
     }
 
     fn intersect_packet(

@@ -633,7 +633,8 @@ impl PrimitiveSet for Scene {
     ) -> u32 {
         let triangles = self.world.mesh.len();
         if indices.iter().all(|&i| (i as usize) < triangles) {
-            return (self.world).intersect_triangles(indices, &ray.extra.triangle, t_max, ts);
+            let (world, kernel) = (&self.world, ray.kernel);
+            return world.intersect_triangles(indices, &ray.extra.triangle, kernel, t_max, ts);
         }
         intersect_one_by_one(self, indices, ray, t_max, ts)
     }
@@ -641,7 +642,7 @@ impl PrimitiveSet for Scene {
     type PacketData = Option<WatertightPacket>;
 
     fn prepare_packet(&self, rays: &[PreparedRay<SceneRay>; PACKET]) -> Self::PacketData {
-        WatertightPacket::new(|i| &rays[i].extra.triangle)
+        WatertightPacket::new(rays[0].kernel, |i| &rays[i].extra.triangle)
     }
 
     /// The world's triangles through the packet pre-filter, instances as packets through
@@ -684,7 +685,7 @@ impl Scene {
                 let instance = &self.instances[k];
                 let stored = &self.meshes[instance.mesh as usize];
                 instance
-                    .intersect(stored, origin, ray.dir, t_max)
+                    .intersect_by(ray.kernel, stored, origin, ray.dir, t_max)
                     .map(|hit| hit.t)
             }
             Top::Quadric(q) => self.quadrics[q].intersect(origin, ray.dir, t_max),
@@ -708,7 +709,7 @@ impl Scene {
         let instance = &self.instances[k];
         let stored = &self.meshes[instance.mesh as usize];
         let world = rays.map(|ray| (ray.extra.world_origin, ray.dir));
-        let hits = instance.intersect_packet(stored, world, active, t_max);
+        let hits = instance.intersect_packet(rays[0].kernel, stored, world, active, t_max);
         let mut hit_rays = 0;
         for (i, hit) in hits.iter().enumerate() {
             if let Some(hit) = hit {

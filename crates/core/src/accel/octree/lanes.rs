@@ -25,40 +25,8 @@ use std::arch::x86_64::*;
 
 use super::wide::{Wide, LIMIT};
 use crate::accel::{f32_above, f32_below};
+pub use crate::simd::Kernel;
 use glam::DVec3;
-
-/// Which implementation of the node test runs. Every kernel is conservative in the same
-/// sense, so the octree's answers are the same, bit for bit, whichever runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Kernel {
-    /// AVX2 with FMA (x86-64, chosen at run time when the CPU has both).
-    Avx2,
-    /// Plain Rust over `[f32; 8]` (a multiply and an add per plane), which the compiler
-    /// vectorises for the target's baseline (SSE2, NEON).
-    Portable,
-}
-
-impl Kernel {
-    /// The fastest kernel this CPU runs.
-    pub fn detect() -> Kernel {
-        if Kernel::Avx2.available() {
-            Kernel::Avx2
-        } else {
-            Kernel::Portable
-        }
-    }
-
-    /// True when this CPU can run the kernel.
-    pub fn available(self) -> bool {
-        match self {
-            Kernel::Portable => true,
-            #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"),
-            #[cfg(not(target_arch = "x86_64"))]
-            Kernel::Avx2 => false,
-        }
-    }
-}
 
 /// The unit roundoff of f32, `2⁻²⁴`.
 pub(super) const UNIT: f64 = 1.0 / 16777216.0;

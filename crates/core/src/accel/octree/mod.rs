@@ -77,11 +77,11 @@ mod packet;
 mod traverse;
 mod wide;
 
-use super::{f32_above, prepare_ray, set_bits, Hit, PreparedRay, PrimitiveSet, GROUP};
+use super::{f32_above, prepare_ray_with, set_bits, Hit, PreparedRay, PrimitiveSet, GROUP};
 use crate::geometry::Aabb;
+pub use crate::simd::Kernel;
 use build::{cube_around, Builder};
 use glam::DVec3;
-pub use lanes::Kernel;
 use lanes::Lanes;
 pub use packet::WIDTH as PACKET;
 use rayon::prelude::*;
@@ -238,7 +238,7 @@ impl Octree {
     }
 
     /// [`Octree::intersect`] for the ray `local_origin + t · dir`, prepared for the primitive
-    /// tests ([`prepare_ray`]) only when it reaches a leaf: most camera rays reach none.
+    /// tests ([`super::prepare_ray`]) only when it reaches a leaf: most camera rays reach none.
     pub fn intersect_ray<P: PrimitiveSet>(
         &self,
         set: &P,
@@ -250,7 +250,7 @@ impl Octree {
     }
 
     /// [`Octree::intersect`], with the ray prepared for the primitive tests as `given`, or
-    /// else by [`prepare_ray`] when it first reaches a leaf.
+    /// else by [`super::prepare_ray`] when it first reaches a leaf.
     fn intersect_with<P: PrimitiveSet>(
         &self,
         set: &P,
@@ -262,17 +262,20 @@ impl Octree {
         let mut best: Option<Hit> = None;
         let mut own = None;
         let mut tested = Mailbox::default();
+        // A ray prepared elsewhere brings its kernel (an instance's rays, the top octree's).
+        let kernel = given.map_or(self.kernel, |ray| ray.kernel);
         let lanes = Lanes::new(local_origin, dir + DVec3::ZERO, self.scale);
         let visit = |child, _, _| {
-            let ray = given
-                .unwrap_or_else(|| own.get_or_insert_with(|| prepare_ray(set, local_origin, dir)));
+            let ray = given.unwrap_or_else(|| {
+                own.get_or_insert_with(|| prepare_ray_with(set, kernel, local_origin, dir))
+            });
             let bound = f32_above(best.map_or(t_max, |b| b.t));
             let prims = self.layout.leaf(child);
             let mut batch = Batch::default();
             // Eight references' boxes to a filter test (a written-out loop: the iterator it
             // replaced cost about 26 instructions more per incoherent bunny ray).
             for first in (0..prims.len()).step_by(8) {
-                let kept = leaf::chunk_mask(&self.layout, self.kernel, child, first, &lanes, bound);
+                let kept = leaf::chunk_mask(&self.layout, kernel, child, first, &lanes, bound);
                 for j in set_bits(kept) {
                     let prim = prims[first + j];
                     if tested.check_in(prim) {
@@ -283,14 +286,7 @@ impl Octree {
             batch.finish(set, ray, t_max, &mut best);
             best.map_or(t_max, |b| b.t)
         };
-        traverse::run(
-            &self.layout,
-            self.kernel,
-            &lanes,
-            t_max,
-            visit,
-            &mut Unobserved,
-        );
+        traverse::run(&self.layout, kernel, &lanes, t_max, visit, &mut Unobserved);
         best
     }
 
@@ -341,7 +337,7 @@ impl Octree {
     }
 
     /// [`Octree::intersect_packet_into`], with the rays prepared for the primitive tests as
-    /// `given`, or else by [`prepare_ray`] when the first of them reaches a leaf.
+    /// `given`, or else by [`super::prepare_ray`] when the first of them reaches a leaf.
     fn intersect_packet_with<P: PrimitiveSet>(
         &self,
         set: &P,
@@ -355,9 +351,10 @@ impl Octree {
         let mut packet_data = None;
         let mut tested = PacketMailbox::default();
         let mut ts = [0.0; PACKET];
+        let kernel = given.map_or(self.kernel, |rays| rays[0].kernel);
         packet::run(
             &self.layout,
-            self.kernel,
+            kernel,
             local_origins,
             dirs,
             self.scale,
@@ -365,7 +362,9 @@ impl Octree {
             |rays, refs, reach, limits| {
                 let prepared = given.unwrap_or_else(|| {
                     own.get_or_insert_with(|| {
-                        std::array::from_fn(|i| prepare_ray(set, local_origins[i], dirs[i]))
+                        std::array::from_fn(|i| {
+                            prepare_ray_with(set, kernel, local_origins[i], dirs[i])
+                        })
                     })
                 });
                 let kept = refs.iter().zip(reach).filter(|(_, &rays)| rays != 0);

@@ -54,7 +54,7 @@ fn the_filter_keeps_rays_through_the_triangle_and_refuses_rays_beside_it() {
             std::array::from_fn(|_| origin + rng.point(-(1e-3 * size), 1e-3 * size));
         let rays: [WatertightRay; PACKET] =
             std::array::from_fn(|i| WatertightRay::new(origins[i], targets[i] - origins[i]));
-        let Some(packet) = WatertightPacket::new(|i| &rays[i]) else {
+        let Some(packet) = WatertightPacket::new(Kernel::detect(), |i| &rays[i]) else {
             continue;
         };
         packets += 1;
@@ -108,7 +108,7 @@ fn no_ray_the_single_ray_test_hits_is_refused() {
             };
             WatertightRay::new(origin, target)
         });
-        let Some(packet) = WatertightPacket::new(|i| &rays[i]) else {
+        let Some(packet) = WatertightPacket::new(Kernel::detect(), |i| &rays[i]) else {
             continue;
         };
         let expected = (0..PACKET)
@@ -133,11 +133,11 @@ fn rays_with_different_dominant_axes_do_not_form_a_packet() {
         };
         WatertightRay::new(DVec3::ZERO, dir)
     });
-    assert!(WatertightPacket::new(|i| &rays[i]).is_none());
+    assert!(WatertightPacket::new(Kernel::detect(), |i| &rays[i]).is_none());
     let same: [WatertightRay; PACKET] = std::array::from_fn(|i| {
         WatertightRay::new(DVec3::ZERO, DVec3::new(0.1, 0.2, 1.0 + i as f64))
     });
-    assert!(WatertightPacket::new(|i| &same[i]).is_some());
+    assert!(WatertightPacket::new(Kernel::detect(), |i| &same[i]).is_some());
 }
 
 /// One ray against four triangles built around it: a triangle with a point of the ray well
@@ -182,7 +182,7 @@ fn the_group_filter_keeps_triangles_the_ray_crosses_and_refuses_the_others() {
         groups += 1;
         let active = 1 + (round as u32 % 15);
         for kept in [
-            ray.candidates(&tris, active),
+            ray.candidates(Kernel::detect(), &tris, active),
             ray.candidates_portable(&tris, active),
         ] {
             assert_eq!(kept, crossed & active, "round {round}");
@@ -225,7 +225,7 @@ fn no_triangle_the_single_ray_test_hits_is_refused() {
             .filter(|&k| active & (1 << k) != 0)
             .filter(|&k| ray.intersect(&tris[k], f64::INFINITY).is_some())
             .fold(0u32, |m, k| m | 1 << k);
-        let fast = ray.candidates(&tris, active);
+        let fast = ray.candidates(Kernel::detect(), &tris, active);
         assert_eq!(
             fast,
             ray.candidates_portable(&tris, active),

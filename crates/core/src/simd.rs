@@ -1,0 +1,37 @@
+//! The one choice of CPU kernel for every SIMD path of the core.
+
+/// Which implementation of the SIMD paths runs: the octree's node and leaf tests, the
+/// triangle pre-filters and the instance bounds test. Every kernel gives the same answers,
+/// bit for bit; the octree that starts a traversal chooses one ([`crate::accel::Octree::with_kernel`])
+/// and its rays carry it ([`crate::accel::PreparedRay::kernel`]) into every test below,
+/// instanced meshes' octrees included.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kernel {
+    /// AVX2 with FMA (x86-64, chosen at run time when the CPU has both).
+    Avx2,
+    /// Plain Rust over `[f32; 8]` (a multiply and an add per plane), which the compiler
+    /// vectorises for the target's baseline (SSE2, NEON).
+    Portable,
+}
+
+impl Kernel {
+    /// The fastest kernel this CPU runs.
+    pub fn detect() -> Kernel {
+        if Kernel::Avx2.available() {
+            Kernel::Avx2
+        } else {
+            Kernel::Portable
+        }
+    }
+
+    /// True when this CPU can run the kernel.
+    pub fn available(self) -> bool {
+        match self {
+            Kernel::Portable => true,
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx2 => is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"),
+            #[cfg(not(target_arch = "x86_64"))]
+            Kernel::Avx2 => false,
+        }
+    }
+}
