@@ -2,9 +2,10 @@
 
 /// Which implementation of the SIMD paths runs: the octree's node and leaf tests, the
 /// triangle pre-filters and the instance bounds test. Every kernel gives the same answers,
-/// bit for bit; the octree that starts a traversal chooses one ([`crate::accel::Octree::with_kernel`])
-/// and its rays carry it ([`crate::accel::PreparedRay::kernel`]) into every test below,
-/// instanced meshes' octrees included.
+/// bit for bit; the octree that starts a traversal chooses one
+/// ([`crate::accel::Octree::with_kernel`]) and its rays carry it
+/// ([`crate::accel::PreparedRay::kernel`]) into every test below, instanced meshes' octrees
+/// included.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kernel {
     /// AVX2 with FMA (x86-64, chosen at run time when the CPU has both).
