@@ -9,7 +9,7 @@ use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use raycast_core::quadric::{Quadric, QuadricSpec};
-use raycast_core::scene::Mesh;
+use raycast_core::scene::{Mesh, Positions};
 use raycast_io::import;
 use std::path::Path;
 
@@ -21,13 +21,12 @@ pub(crate) type MeshArrays<'py> = (String, Bound<'py, PyArray2<f64>>, Bound<'py,
 /// by column).
 pub(crate) type QuadricArgs = (String, [f64; 10], Option<[[f64; 3]; 2]>, [f64; 16]);
 
-/// A mesh given as arrays, checked (every index in range, every vertex finite), and the mesh
-/// made of them.
+/// A mesh given as arrays, checked (every index in range, every vertex finite). The mesh
+/// keeps the vertices exactly ([`Positions::exact`]) and the faces as given, so the arrays
+/// are read back from it for pickling.
 #[derive(Debug, Clone)]
 struct MeshPart {
     name: String,
-    vertices: Vec<[f64; 3]>,
-    faces: Vec<[u32; 3]>,
     mesh: Mesh,
 }
 
@@ -70,11 +69,14 @@ impl Objects {
         py: Python<'py>,
     ) -> PyResult<(Vec<MeshArrays<'py>>, Vec<QuadricArgs>)> {
         let meshes = self.meshes.iter().map(|m| {
-            let v: Vec<f64> = m.vertices.iter().flatten().copied().collect();
-            let f: Vec<i64> = m.faces.iter().flatten().map(|&i| i64::from(i)).collect();
+            let (positions, faces) = (m.mesh.positions(), m.mesh.triangles());
+            let v: Vec<f64> = (0..positions.len() as u32)
+                .flat_map(|i| positions.get(i).to_array())
+                .collect();
+            let f: Vec<i64> = faces.iter().flatten().map(|&i| i64::from(i)).collect();
             let shaped = |e: numpy::ndarray::ShapeError| PyValueError::new_err(e.to_string());
-            let v = Array2::from_shape_vec((m.vertices.len(), 3), v).map_err(shaped)?;
-            let f = Array2::from_shape_vec((m.faces.len(), 3), f).map_err(shaped)?;
+            let v = Array2::from_shape_vec((positions.len(), 3), v).map_err(shaped)?;
+            let f = Array2::from_shape_vec((faces.len(), 3), f).map_err(shaped)?;
             Ok((m.name.clone(), v.into_pyarray(py), f.into_pyarray(py)))
         });
         let quadrics = self.quadrics.iter().map(|q| q.args.clone()).collect();
@@ -116,15 +118,9 @@ fn mesh_part(
         };
         triangles.push([a, b, c]);
     }
-    let positions = vertices.iter().map(|&v| DVec3::from_array(v)).collect();
-    let mesh = Mesh::new(positions, triangles.clone())
-        .ok_or("a vertex index out of range or a vertex not finite")?;
-    Ok(MeshPart {
-        name,
-        vertices,
-        faces: triangles,
-        mesh,
-    })
+    let positions = vertices.into_iter().map(DVec3::from_array).collect();
+    let mesh = Mesh::from_parts(Positions::exact(positions), triangles);
+    Ok(MeshPart { name, mesh })
 }
 
 /// The quadric `args` describe, placed: its coefficients and clip box checked as a file's

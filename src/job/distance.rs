@@ -13,6 +13,7 @@
 use super::into_folder;
 use crate::accel::{Octree, OctreeParams};
 use crate::error::{Error, Result};
+use crate::import::npy::read_points;
 use crate::import::{self, LoadOptions};
 use crate::output::npy::{self, NpyData};
 use crate::output::{ownership, FileJob, Staging, DISTANCE_FILES as FILES};
@@ -90,7 +91,7 @@ pub fn run(job: &DistanceJob) -> Result<DistanceOutcome> {
 
 /// Loads, builds, measures and writes (in `out`, claimed already).
 fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
-    let points = crate::import::npy::read_points(&job.points)?;
+    let points = read_points(&job.points)?;
     let clock = Instant::now();
     let scene = import::load(&job.scene, &job.load)?;
     let load = clock.elapsed().as_secs_f64();

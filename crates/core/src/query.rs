@@ -9,10 +9,12 @@ mod distance;
 
 pub use distance::{signed, winding_number, NearestPoint, Side, SignRule, Signer};
 
-use crate::accel::{test_primitive, Hit, Octree, PrimitiveSet, PACKET};
+use crate::accel::{
+    prepare_ray_with, test_primitive, Hit, Octree, PreparedRay, PrimitiveSet, PACKET,
+};
 use crate::geometry::{Ray, RaySource};
 use crate::quadric::Quadric;
-use crate::scene::{Crossing, EdgeRule, Scene};
+use crate::scene::{Crossing, EdgeRule, Scene, SceneRay};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -57,12 +59,18 @@ impl<'a> Query<'a> {
         self.nearest_beyond(local, ray.dir, t_min, t_max)
     }
 
+    /// The ray `local + t · dir` (origin relative to the scene's anchor) prepared for the
+    /// primitive tests with the octree's kernel.
+    fn prepare(&self, local: DVec3, dir: DVec3) -> PreparedRay<SceneRay> {
+        prepare_ray_with(self.scene, self.octree.kernel(), local, dir)
+    }
+
     /// [`Query::nearest`] for a range that does not start at 0, the ray's origin relative to
     /// the scene's anchor: every crossing in the range, the nearest kept. Kept out of line so
     /// that the common range from 0 does not pay for its set-up.
     #[inline(never)]
     fn nearest_beyond(&self, local: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<Crossing> {
-        let prepared = crate::accel::prepare_ray_with(self.scene, self.octree.kernel(), local, dir);
+        let prepared = self.prepare(local, dir);
         let mut best: Option<Crossing> = None;
         let mut found = Vec::new();
         self.octree.traverse(local, dir, t_max, |refs, _, _| {
@@ -128,8 +136,7 @@ impl<'a> Query<'a> {
             return false;
         }
         let local = ray.origin - self.scene.anchor;
-        let prepared =
-            crate::accel::prepare_ray_with(self.scene, self.octree.kernel(), local, ray.dir);
+        let prepared = self.prepare(local, ray.dir);
         // Returned to the traversal once a crossing is found: no leaf is entered below it.
         let stop = f64::NEG_INFINITY;
         let mut hit = false;
@@ -174,8 +181,7 @@ impl<'a> Query<'a> {
             return found;
         }
         let local = ray.origin - self.scene.anchor;
-        let prepared =
-            crate::accel::prepare_ray_with(self.scene, self.octree.kernel(), local, ray.dir);
+        let prepared = self.prepare(local, ray.dir);
         self.octree.traverse(local, ray.dir, t_max, |refs, _, _| {
             for &prim in refs {
                 let range = (t_min, t_max);

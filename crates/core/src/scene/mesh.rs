@@ -217,6 +217,11 @@ impl Mesh {
         &self.positions
     }
 
+    /// The index triples, one per triangle.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
     /// Triangle `i`'s corners, in the mesh frame.
     #[inline(always)]
     pub fn triangle(&self, i: usize) -> [DVec3; 3] {
