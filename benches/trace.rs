@@ -12,20 +12,68 @@
 //! Peak memory is the process's VmHWM from /proc/self/status, reset (when the kernel allows it)
 //! before each backend, so it covers the scene, the rays, that backend and its buffers.
 
-use raycast::accel::{BvhKind, OctreeParams, PrimitiveSet};
+use raycast::accel::{Bvh, BvhKind, Octree, OctreeParams, PrimitiveSet};
 use raycast::geometry::Ray;
 use raycast::import::npy;
 use raycast::import::{self, LoadOptions};
-use raycast::render::{self, AccelKind, AccelStructure, Aov, Tracer};
+use raycast::render::{self, Aov};
 use raycast::scene::Scene;
+use raycast::trace::{self, BvhTracer, NearestHits, Tracer};
 use serde_json::{json, Value};
 use std::path::PathBuf;
+use std::str::FromStr;
 use std::time::Instant;
+
+/// A backend to measure: the octree or one of the obvhs hierarchies (the BVH oracle).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Backend {
+    Octree,
+    Bvh(BvhKind),
+}
+
+impl Backend {
+    const ALL: [Backend; 3] = [
+        Backend::Octree,
+        Backend::Bvh(BvhKind::Bvh2),
+        Backend::Bvh(BvhKind::Cwbvh),
+    ];
+
+    fn name(self) -> &'static str {
+        match self {
+            Backend::Octree => "octree",
+            Backend::Bvh(kind) => kind.name(),
+        }
+    }
+}
+
+impl FromStr for Backend {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let known = Backend::ALL.into_iter().find(|b| b.name() == s);
+        known.ok_or_else(|| format!("unknown backend '{s}' (choose octree, bvh, cwbvh)"))
+    }
+}
+
+/// A built backend.
+enum Built {
+    Octree(Octree),
+    Bvh(Bvh),
+}
+
+impl Built {
+    /// What the renderer traces through.
+    fn tracer<'a>(&'a self, scene: &'a Scene) -> Box<dyn NearestHits + 'a> {
+        match self {
+            Built::Octree(octree) => Box::new(Tracer::new(scene, octree)),
+            Built::Bvh(bvh) => Box::new(BvhTracer { scene, bvh }),
+        }
+    }
+}
 
 struct Args {
     scene: PathBuf,
     rays: Vec<(String, PathBuf)>,
-    backends: Vec<AccelKind>,
+    backends: Vec<Backend>,
     threads: Vec<usize>,
     runs: usize,
     build_runs: usize,
@@ -36,7 +84,7 @@ fn parse() -> Result<Args, String> {
     let mut args = Args {
         scene: PathBuf::new(),
         rays: Vec::new(),
-        backends: AccelKind::ALL.to_vec(),
+        backends: Backend::ALL.to_vec(),
         threads: vec![1],
         runs: 3,
         build_runs: 3,
@@ -115,14 +163,20 @@ fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
 
 /// The whole build, as a render does it: the instanced meshes' own octrees (dropped first, so
 /// that every timed build builds them again) and the top-level structure.
-fn build(scene: &mut Scene, kind: AccelKind) -> AccelStructure {
+fn build(scene: &mut Scene, kind: Backend) -> Built {
     scene.forget_instance_octrees();
-    AccelStructure::build(scene, kind, OctreeParams::default())
+    match kind {
+        Backend::Octree => Built::Octree(trace::build_octree(scene, OctreeParams::default())),
+        Backend::Bvh(kind) => {
+            scene.build_instances();
+            Built::Bvh(Bvh::build(scene, kind))
+        }
+    }
 }
 
-fn accel_stats(accel: &AccelStructure, prims: usize) -> Value {
+fn accel_stats(accel: &Built, prims: usize) -> Value {
     match accel {
-        AccelStructure::Octree(o) => {
+        Built::Octree(o) => {
             let s = o.stats();
             let bytes = o.bytes();
             json!({
@@ -133,7 +187,7 @@ fn accel_stats(accel: &AccelStructure, prims: usize) -> Value {
                 "refs_per_prim": s.references as f64 / prims.max(1) as f64,
             })
         }
-        AccelStructure::Bvh(b) => {
+        Built::Bvh(b) => {
             let s = b.stats();
             json!({
                 "bvh": s,
@@ -144,7 +198,7 @@ fn accel_stats(accel: &AccelStructure, prims: usize) -> Value {
     }
 }
 
-fn trace_once(tracer: &Tracer, rays: &Vec<Ray>, aovs: &[Aov]) -> render::Buffers {
+fn trace_once(tracer: &dyn NearestHits, rays: &Vec<Ray>, aovs: &[Aov]) -> render::Buffers {
     render::render(tracer, rays, aovs, |_| {})
 }
 
@@ -207,22 +261,20 @@ fn main() {
         let mut stats = accel_stats(&accel, prims);
         // What a trace reads besides the structure: the triangles and the instanced meshes.
         stats["geometry_bytes"] = json!(scene.trace_bytes());
-        let tracer = Tracer {
-            scene: &scene,
-            accel: accel.view(),
-        };
+        let boxed = accel.tracer(&scene);
+        let tracer = boxed.as_ref();
         let mut traces = Vec::new();
         for (name, rays) in &ray_sets {
             for (threads, pool) in &pools {
                 let mut hits = 0usize;
                 let mut times = Vec::new();
                 pool.install(|| {
-                    let warm = trace_once(&tracer, rays, &[Aov::Depth]);
+                    let warm = trace_once(tracer, rays, &[Aov::Depth]);
                     hits = warm
                         .floats(Aov::Depth)
                         .map_or(0, |d| d.iter().filter(|t| t.is_finite()).count());
                     for _ in 0..args.runs.max(1) {
-                        let (_, s) = timed(|| trace_once(&tracer, rays, &[Aov::Depth]));
+                        let (_, s) = timed(|| trace_once(tracer, rays, &[Aov::Depth]));
                         times.push(s);
                     }
                 });
@@ -248,12 +300,12 @@ fn main() {
                 let all = [Aov::Depth, Aov::Normal, Aov::Position, Aov::Id, Aov::Prim];
                 let mut figures = serde_json::Map::new();
                 for (label, aovs) in [("depth", &[Aov::Depth][..]), ("all", &all[..])] {
-                    pool.install(|| drop(trace_once(&tracer, rays, aovs)));
+                    pool.install(|| drop(trace_once(tracer, rays, aovs)));
                     let reset = reset_peak();
                     let base = status_mib("VmRSS:");
                     let mut times = Vec::new();
                     for _ in 0..args.runs.max(1) {
-                        let (b, s) = timed(|| pool.install(|| trace_once(&tracer, rays, aovs)));
+                        let (b, s) = timed(|| pool.install(|| trace_once(tracer, rays, aovs)));
                         times.push(s);
                         drop(b);
                     }
@@ -282,6 +334,7 @@ fn main() {
             "traces": traces,
             "aov": aov,
         }));
+        drop(boxed);
         drop(accel);
     }
     let quadrics = scene.quadrics().len();

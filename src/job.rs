@@ -7,7 +7,7 @@ use crate::import::{self, LoadOptions};
 use crate::output::request::{self};
 use crate::output::sidecar::Sidecar;
 use crate::output::{self, ownership, Format, PngOptions};
-use crate::render::{AccelKind, Aov};
+use crate::render::Aov;
 use glam::{DMat4, DVec3};
 use stages::run_checked;
 use std::path::{Path, PathBuf};
@@ -61,8 +61,6 @@ pub struct RenderJob {
     pub formats: Option<Vec<Format>>,
     /// Octree parameters.
     pub octree: OctreeParams,
-    /// The acceleration structure to build.
-    pub accel: AccelKind,
     /// A ray that cannot be traced (non-finite origin or direction, zero direction) is an
     /// error, not a miss with a warning.
     pub strict_rays: bool,
@@ -236,9 +234,6 @@ fn check_request(job: &RenderJob) -> Result<Vec<Format>> {
             ));
         }
         cryptomatte::side(spp)?;
-    }
-    if job.hits.is_some() && job.accel != AccelKind::Octree {
-        return Err(stages::hits_need_octree());
     }
     Ok(formats)
 }

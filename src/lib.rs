@@ -15,7 +15,7 @@
 #![warn(missing_docs)]
 
 pub use raycast_check as check;
-pub use raycast_core::{accel, bound, camera, error, geometry, quadric, query, render, scene};
+pub use raycast_core::{accel, bound, camera, error, geometry, quadric, render, scene, trace};
 pub use raycast_core::{Error, Result};
 pub use raycast_io::{import, info, output, sizes};
 

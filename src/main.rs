@@ -12,7 +12,7 @@ use raycast::job::sequence::{self, Times};
 use raycast::job::{self, CameraChoice, HitLimit, RenderJob};
 use raycast::output::png::DistancePng;
 use raycast::output::{Format, PngOptions};
-use raycast::render::{AccelKind, Aov};
+use raycast::render::Aov;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -244,10 +244,6 @@ struct RenderArgs {
     /// glTF scene by index or name.
     #[arg(long = "scene", value_name = "N|NAME")]
     scene_choice: Option<String>,
-    /// Acceleration structure: octree, bvh (obvhs BVH2) or cwbvh (obvhs CWBVH). The output
-    /// does not depend on it.
-    #[arg(long, default_value = "octree")]
-    accel: AccelKind,
     /// Worker threads (default: all cores). The output does not depend on it.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     threads: Option<u32>,
@@ -536,7 +532,6 @@ fn render(args: RenderArgs) -> raycast::Result<()> {
         out: args.out,
         formats: args.format,
         octree: OctreeParams::default(),
-        accel: args.accel,
         max_memory: args.max_memory,
         strict_rays: args.strict_rays,
         pngs: PngOptions {

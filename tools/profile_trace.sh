@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Where the trace instructions go (valgrind's callgrind; deterministic, unlike wall time on a
-# shared machine): for each scene and backend, instructions per ray of the whole trace, of
+# shared machine): for each scene, instructions per ray of the whole trace, of
 # the primitive tests, and of the octree's traversal (per-ray set-up excluded); then the
 # octree's per-ray counts (benches/octree_counts.rs). Coherent 512x512 camera rays, depth only, one thread.
 # reports/octree_profile.md quotes its output.
@@ -17,10 +17,10 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 rays=$((512 * 512))
 for scene in "${scenes[@]}"; do
-  for accel in octree bvh; do
-    valgrind --tool=callgrind --toggle-collect='raycast_core::render::Tracer::nearest*' \
+  for accel in octree; do
+    valgrind --tool=callgrind --toggle-collect='raycast_core::trace::Tracer::nearest*' \
       --callgrind-out-file="$work/cg.out" "$raycast" "$scene" --width 512 --height 512 \
-      --threads 1 --quiet --format npy --aov depth --accel "$accel" --out "$work/out" >/dev/null 2>&1
+      --threads 1 --quiet --format npy --aov depth --out "$work/out" >/dev/null 2>&1
     callgrind_annotate --inclusive=yes "$work/cg.out" > "$work/cg.txt" 2>/dev/null
     total=$(grep 'PROGRAM TOTALS' "$work/cg.txt" | awk '{gsub(",", "", $1); print $1}')
     # Inclusive counts of the first (outermost) entry of each function.

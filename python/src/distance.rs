@@ -10,7 +10,7 @@ use numpy::PyReadonlyArray2;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use raycast_core::query::{NearestPoint, SignRule, Signer};
+use raycast_core::trace::{NearestPoint, SignRule, Signer};
 
 /// The rows of `points`, after checking the shape and that every point is finite.
 fn rows<'a>(points: &'a PyReadonlyArray2<'_, f64>) -> PyResult<ArrayView2<'a, f64>> {
@@ -43,7 +43,7 @@ pub fn closest_points<'py>(
     nthreads: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
     let points = rows(&points)?;
-    let query = scene.query();
+    let query = scene.tracer();
     let found: Vec<Option<NearestPoint>> = threads::map(py, nthreads, points.nrows(), |i| {
         query.closest(point(&points, i))
     })?;
@@ -89,7 +89,7 @@ pub fn signed_distance<'py>(
     nthreads: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
     let points = rows(&points)?;
-    let query = scene.query();
+    let query = scene.tracer();
     let rule = match sign {
         "crossings" => SignRule::Crossings,
         "winding" => SignRule::Winding,

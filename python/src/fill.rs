@@ -8,7 +8,8 @@ use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use raycast_core::geometry::RaySource;
-use raycast_core::render::{self, Aov, Column, Rays, Tracer};
+use raycast_core::render::{self, Aov, Column, Rays};
+use raycast_core::trace::Tracer;
 
 /// The output called `name` (`distance` is the command line's `depth`, and `depth` is
 /// accepted too).

@@ -12,9 +12,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple};
 use raycast_core::accel::{Octree, OctreeParams};
 use raycast_core::geometry::RaySource;
-use raycast_core::query::Query;
-use raycast_core::render::{Aov, CameraView, Rays, Tracer};
+use raycast_core::render::{Aov, CameraView, Rays};
 use raycast_core::scene::Scene;
+use raycast_core::trace::{self, Tracer};
 use raycast_io::import::{self, LoadOptions};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -106,8 +106,7 @@ impl PyScene {
     ) -> PyResult<PyScene> {
         let built = py.detach(|| {
             let scene = opened.at(pose.time)?;
-            scene.build_instances();
-            let octree = Octree::build(&scene, OctreeParams::default());
+            let octree = trace::build_octree(&scene, OctreeParams::default());
             Ok((scene, octree))
         });
         let (scene, octree) = built.map_err(|e| crate::to_pyerr(py, e))?;
@@ -121,21 +120,13 @@ impl PyScene {
         })
     }
 
-    /// The scene and its octree, for queries.
-    pub(crate) fn query(&self) -> Query<'_> {
-        Query {
-            scene: &self.scene,
-            octree: &self.octree,
-        }
-    }
-
     /// The scene.
     pub(crate) fn scene(&self) -> &Scene {
         &self.scene
     }
 
-    /// The scene and its octree as the tracer of the command line's buffers.
-    fn tracer(&self) -> Tracer<'_> {
+    /// The scene and its octree, for every query.
+    pub(crate) fn tracer(&self) -> Tracer<'_> {
         Tracer::new(&self.scene, &self.octree)
     }
 
@@ -255,7 +246,7 @@ impl PyScene {
         nthreads: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
         let rays = self::rays(&rays)?;
-        let query = self.query();
+        let query = self.tracer();
         let hit = threads::map(py, nthreads, rays.len(), |i| {
             let (t0, t1) = rays.range(i);
             query.occluded(&rays.ray(i), t0, t1)
@@ -273,7 +264,7 @@ impl PyScene {
         nthreads: usize,
     ) -> PyResult<Bound<'py, PyTuple>> {
         let rays = self::rays(&rays)?;
-        let query = self.query();
+        let query = self.tracer();
         let lists = py.detach(|| {
             let trace = || query.hit_lists(&rays, |i| rays.range(i), usize::MAX);
             let lists = threads::run(nthreads, trace)?;
@@ -303,7 +294,7 @@ impl PyScene {
         if points.ncols() != 3 {
             return Err(PyValueError::new_err("points must be (N, 3)"));
         }
-        let query = self.query();
+        let query = self.tracer();
         let inside = threads::map(py, nthreads, points.nrows(), |i| {
             query.contains(DVec3::new(points[[i, 0]], points[[i, 1]], points[[i, 2]]))
         })?;

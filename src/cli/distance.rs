@@ -4,7 +4,7 @@
 use crate::{probe_usd, PathArgs, PoseArgs};
 use clap::{Args, ValueEnum};
 use raycast::job::distance::{self, DistanceJob};
-use raycast::query::SignRule;
+use raycast::trace::SignRule;
 use std::path::PathBuf;
 
 /// Arguments of `raycast distance`.
@@ -14,7 +14,7 @@ pub struct DistanceArgs {
     /// one that bounds no volume (anything but an ellipsoid its clip box leaves whole) has no
     /// sign, and the run is refused unless --sign none.
     scene: PathBuf,
-    /// Query points: an (N, 3) float32 or float64 .npy file.
+    /// Tracer points: an (N, 3) float32 or float64 .npy file.
     points: PathBuf,
     /// Output folder (default: <scene stem>.distance), holding distance.npy,
     /// signed_distance.npy (not with --sign none), point.npy, id.npy, prim.npy, normal.npy and

@@ -6,7 +6,8 @@
 use crate::error::{Error, Result};
 use crate::output::cryptomatte::{self, Layer};
 use crate::render::samples::PixelSamples;
-use crate::render::{self, Aov, CameraView, Rays, Tracer};
+use crate::render::{self, Aov, CameraView, Rays};
+use crate::trace::Tracer;
 
 /// Most samples traced at once.
 const BAND_SAMPLES: usize = 1 << 20;

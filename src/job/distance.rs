@@ -2,7 +2,7 @@
 //! points file, written as `.npy` files with a `raycast.json` sidecar, by the same rules as a
 //! render's folder (nothing half-written, nothing of another scene's run removed).
 //!
-//! The queries are [`Query::closest`] and [`Query::side_by_crossings`] or the winding number
+//! The queries are [`Tracer::closest`] and [`Tracer::side_by_crossings`] or the winding number
 //! (see [`crate::query`]'s distance module), the ones the Python package's `closest_points`
 //! and `signed_distance` call. Quadrics count (see [`crate::quadric::Quadric::closest`]);
 //! a run that writes signed distances in a scene whose sign is not defined (a quadric that
@@ -17,7 +17,7 @@ use crate::import::npy::read_points;
 use crate::import::{self, LoadOptions};
 use crate::output::npy::{self, NpyData};
 use crate::output::{ownership, FileJob, Staging, DISTANCE_FILES as FILES};
-use crate::query::{self, NearestPoint, Query, Side, SignRule, Signer};
+use crate::trace::{self, NearestPoint, Side, SignRule, Signer, Tracer};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -100,7 +100,7 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
     let octree = Octree::build(&scene, OctreeParams::default());
     let build = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
-    let query = Query {
+    let query = Tracer {
         scene: &scene,
         octree: &octree,
     };
@@ -152,7 +152,7 @@ fn write(staging: &mut Staging, measured: &[Measured]) -> Result<()> {
         .collect();
     let signed: Option<Vec<f64>> = measured
         .iter()
-        .map(|&(m, side)| side.map(|side| query::signed((m, side))))
+        .map(|&(m, side)| side.map(|side| trace::signed((m, side))))
         .collect();
     let vector = |f: fn(&NearestPoint) -> DVec3, miss: f64| -> Vec<f64> {
         measured

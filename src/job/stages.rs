@@ -15,10 +15,12 @@ use crate::output::png::DistancePng;
 use crate::output::request::{self, buffer_bytes, check_memory};
 use crate::output::sidecar::{self, CameraInfo, HitsInfo, Sidecar, Stats, Timings};
 use crate::output::{self, npz, ownership, Format, Layout, Staging};
-use crate::query::HitLists;
-use crate::render::{self, AccelKind, AccelStructure, Buffers, CameraView};
-use crate::render::{Rays, Tracer};
+
+use crate::accel::Octree;
+use crate::render::Rays;
+use crate::render::{self, Buffers, CameraView};
 use crate::scene::Scene;
+use crate::trace::{self, HitLists, Tracer};
 use std::io::Write;
 use std::path::Path;
 use std::sync::Mutex;
@@ -126,31 +128,30 @@ pub(super) fn check_memory_for(
         Layout::Rays(n) => format!("{n} rays"),
     };
     check_memory(
-        buffers.saturating_add(AccelStructure::estimated_bytes(scene)),
+        buffers.saturating_add(trace::estimated_build_bytes(scene)),
         job.max_memory,
         &format!(
-            "{what} of --aov {} and the {} over {} primitives",
+            "{what} of --aov {} and the octree over {} primitives",
             request::names(&job.aovs),
-            job.accel.name(),
             scene.accel_primitive_count()
         ),
     )
 }
 
-/// An acceleration structure built for a run.
+/// The octree built for a run.
 pub(super) struct Built {
-    /// The structure.
-    pub accel: AccelStructure,
+    /// The octree.
+    pub octree: Octree,
     /// Seconds taken to build it.
     pub seconds: f64,
 }
 
-/// Builds the job's acceleration structure over `scene`.
+/// Builds the job's octree over `scene`.
 pub(super) fn build(job: &RenderJob, scene: &Scene) -> Built {
     let started = Instant::now();
-    let accel = AccelStructure::build(scene, job.accel, job.octree);
+    let octree = trace::build_octree(scene, job.octree);
     Built {
-        accel,
+        octree,
         seconds: started.elapsed().as_secs_f64(),
     }
 }
@@ -165,10 +166,7 @@ pub(super) fn trace_and_write(
     progress: impl FnMut(Progress) + Send,
 ) -> Result<Sidecar> {
     let scene = &loaded.scene;
-    let tracer = Tracer {
-        scene,
-        accel: built.accel.view(),
-    };
+    let tracer = Tracer::new(scene, &built.octree);
     let (view, layout) = (&target.view, target.layout);
     let total = layout.rays();
     let started = Instant::now();
@@ -221,7 +219,7 @@ pub(super) fn trace_and_write(
         depth_png_range,
         timings,
     };
-    let sidecar = sidecar(job, scene, &built.accel, target, written);
+    let sidecar = sidecar(job, scene, &built.octree, target, written);
     let json = serde_json::to_string_pretty(&sidecar).map_err(|e| Error::msg(e.to_string()))?;
     staging.write("raycast.json", |out| {
         out.write_all(json.as_bytes())
@@ -244,7 +242,7 @@ struct Written<'a> {
 fn sidecar(
     job: &RenderJob,
     scene: &Scene,
-    accel: &AccelStructure,
+    octree: &Octree,
     target: &Target,
     written: Written,
 ) -> Sidecar {
@@ -294,19 +292,9 @@ fn sidecar(
             triangles: scene.triangle_count(),
             quadrics: scene.quadrics().len(),
             objects: scene.objects.len(),
-            accel: job.accel.name(),
-            octree: match accel {
-                AccelStructure::Octree(o) => Some(o.stats()),
-                AccelStructure::Bvh(_) => None,
-            },
-            octree_params: match accel {
-                AccelStructure::Octree(o) => Some(o.params()),
-                AccelStructure::Bvh(_) => None,
-            },
-            bvh: match accel {
-                AccelStructure::Octree(_) => None,
-                AccelStructure::Bvh(b) => Some(b.stats()),
-            },
+            accel: "octree",
+            octree: octree.stats(),
+            octree_params: octree.params(),
         },
         timings,
         stage: scene.stage.clone(),
@@ -338,34 +326,16 @@ fn trace_all(
     let buffers = render::trace(tracer, &rays, &job.aovs, progress)
         .map_err(|i| Error::msg(format!("ray {i} cannot be traced")))?;
     let hits = match job.hits {
-        Some(limit) => {
-            let query = tracer.query().ok_or_else(hits_need_octree)?;
-            Some(query.hit_lists(source, range, limit.count()))
-        }
+        Some(limit) => Some(tracer.hit_lists(source, range, limit.count())),
         None => None,
     };
     Ok((buffers, hits))
 }
 
-/// The error for `--hits` with a BVH.
-pub(super) fn hits_need_octree() -> Error {
-    Error::usage("--hits needs --accel octree (the crossing lists are searched in the octree)")
-}
-
 /// Reads a ray file. Untraceable rays are misses with one warning, or with `--strict-rays` an
-/// error naming the first. Per-ray ranges (an (N, 8) file) need the octree.
+/// error naming the first.
 fn read_rays(path: &Path, job: &RenderJob, warnings: &mut Vec<String>) -> Result<RayFile> {
     let file = crate::import::npy::read_rays(path)?;
-    if file.ranges.is_some() && job.accel != AccelKind::Octree {
-        return Err(Error::in_file(
-            path,
-            format!(
-                "per-ray tmin and tmax (an (N, 8) ray file) need --accel octree, not --accel {}",
-                job.accel
-            ),
-        )
-        .as_usage());
-    }
     if let Some(first) = file.untraceable.first() {
         if job.strict_rays {
             return Err(Error::in_file(path, format!("{first} (--strict-rays)")));

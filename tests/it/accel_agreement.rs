@@ -9,8 +9,8 @@ use glam::DVec3;
 use raycast::accel::{
     brute_force, prepare_ray, Bvh, BvhKind, Hit, Octree, OctreeParams, PrimitiveSet,
 };
-use raycast::render::{Accel, Tracer};
 use raycast::scene::{Scene, SceneBuilder};
+use raycast::trace::{BvhTracer, Tracer};
 
 /// Tallies of one scene's comparisons.
 #[derive(Default, Debug)]
@@ -167,7 +167,7 @@ fn quadrics_only_and_empty_scenes_agree() {
     assert!(check(&empty, &octree, &bvhs, DVec3::ZERO, DVec3::X, &mut tally).is_none());
 }
 
-/// The bvh backends through the renderer's [`Tracer`], as `--accel bvh|cwbvh` uses them.
+/// The bvh backends through the oracle [`BvhTracer`], as benches/trace.rs renders with them.
 #[test]
 fn tracer_over_a_fixture_agrees() {
     let scene = load("assets/suzanne.obj");
@@ -176,10 +176,13 @@ fn tracer_over_a_fixture_agrees() {
     let cwbvh = Bvh::build(&scene, BvhKind::Cwbvh);
     let reference = Tracer::new(&scene, &octree);
     let others = [
-        Tracer::new(&scene, &bvh2),
-        Tracer {
+        BvhTracer {
             scene: &scene,
-            accel: Accel::Bvh(&cwbvh),
+            bvh: &bvh2,
+        },
+        BvhTracer {
+            scene: &scene,
+            bvh: &cwbvh,
         },
     ];
     let bounds = scene.world_bounds();
@@ -189,10 +192,10 @@ fn tracer_over_a_fixture_agrees() {
         let eye = bounds.center() + rng.direction() * bounds.size().length() * 2.0;
         let target = bounds.center() + (rng.point(-0.5, 0.5) * bounds.size());
         let r = raycast::geometry::Ray::new(eye, target - eye);
-        let expected = reference.trace(&r);
+        let expected = reference.nearest(&r, 0.0, f64::INFINITY);
         hits += usize::from(expected.is_some());
         for tracer in &others {
-            assert_eq!(tracer.trace(&r), expected, "{r:?}");
+            assert_eq!(tracer.nearest(&r, 0.0, f64::INFINITY), expected, "{r:?}");
         }
     }
     assert!(hits > 1000, "{hits}");

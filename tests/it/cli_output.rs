@@ -500,7 +500,6 @@ fn progress_covers_tracing_and_writing() {
         out: Some(out.clone()),
         formats: None,
         octree: Default::default(),
-        accel: Default::default(),
         strict_rays: false,
         pngs: Default::default(),
         cryptomatte: None,

@@ -3,8 +3,9 @@
 use glam::DVec3;
 use raycast::accel::{Octree, OctreeParams};
 use raycast::geometry::Ray;
-use raycast::render::{render, Aov, Tracer};
+use raycast::render::{render, Aov};
 use raycast::scene::SceneBuilder;
+use raycast::trace::Tracer;
 
 /// The exact `a − b` as an unevaluated sum `hi + lo` (Knuth's two-sum).
 fn two_diff(a: f64, b: f64) -> (f64, f64) {

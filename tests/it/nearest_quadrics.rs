@@ -8,7 +8,7 @@ use common::*;
 use glam::DVec3;
 use raycast::accel::{Octree, OctreeParams};
 use raycast::geometry::closest::closest_on_triangle;
-use raycast::query::Query;
+use raycast::trace::Tracer;
 
 #[test]
 fn the_octree_search_is_the_brute_force_search() {
@@ -16,7 +16,7 @@ fn the_octree_search_is_the_brute_force_search() {
         let mut rng = Rng(0x9ea7_0017);
         let scene = random_scene(&mut rng, 300, 12, offset);
         let octree = Octree::build(&scene, OctreeParams::default());
-        let query = Query {
+        let query = Tracer {
             scene: &scene,
             octree: &octree,
         };

@@ -8,7 +8,8 @@ use common::*;
 use glam::DVec3;
 use raycast::accel::{brute_force, prepare_ray, Octree, OctreeParams};
 use raycast::camera::{Camera, Projection};
-use raycast::render::{self, Aov, CameraView, Tracer};
+use raycast::render::{self, Aov, CameraView};
+use raycast::trace::Tracer;
 use serde_json::Value;
 
 fn vec3(v: &Value) -> [f64; 3] {
@@ -66,7 +67,7 @@ fn render_view(file: &str, eye: DVec3, size: usize) -> render::Buffers {
     let octree = Octree::build(&scene, OctreeParams::default());
     let tracer = Tracer {
         scene: &scene,
-        accel: (&octree).into(),
+        octree: &octree,
     };
     let camera = Camera::look_at(
         eye,

@@ -10,7 +10,7 @@ use raycast::error::ErrorKind;
 use raycast::geometry::triangle::WatertightRay;
 use raycast::geometry::Ray;
 use raycast::import::{self, LoadOptions};
-use raycast::query::Query;
+use raycast::trace::Tracer;
 use std::path::Path;
 
 fn cube() -> raycast::scene::Scene {
@@ -83,7 +83,7 @@ fn barycentric_weights_rebuild_the_point() {
 fn crossings_of_the_cube_through_edges_corners_and_faces() {
     let scene = cube();
     let octree = Octree::build(&scene, OctreeParams::default());
-    let query = Query {
+    let query = Tracer {
         scene: &scene,
         octree: &octree,
     };
@@ -146,7 +146,7 @@ fn occluded_stops_at_any_crossing_in_range() {
     // Down through the cube [-1, 1]^3 from z = 5: crossings at t = 4 and t = 6.
     let scene = cube();
     let octree = Octree::build(&scene, OctreeParams::default());
-    let query = Query {
+    let query = Tracer {
         scene: &scene,
         octree: &octree,
     };
@@ -179,7 +179,7 @@ fn occluded_agrees_with_the_nearest_hit_on_random_scenes() {
     for offset in [DVec3::ZERO, DVec3::splat(1e5)] {
         let scene = common::random_scene(&mut rng, 300, 12, offset);
         let octree = Octree::build(&scene, OctreeParams::default());
-        let query = Query {
+        let query = Tracer {
             scene: &scene,
             octree: &octree,
         };

@@ -15,8 +15,9 @@ use crate::camera::Camera;
 use crate::import::npy;
 use crate::output::npy::{self as npy_out, NpyData};
 use crate::output::{png, Staging};
-use crate::render::{self, Aov, Buffers, CameraView, Tracer};
+use crate::render::{self, Aov, Buffers, CameraView};
 use crate::scene::Scene;
+use crate::trace::Tracer;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
@@ -55,10 +56,7 @@ const AOVS: [Aov; 4] = [Aov::Depth, Aov::Id, Aov::Error, Aov::Certain];
 pub fn check(scene: &Scene, key: &Path, options: &GoldenOptions, findings: &mut Findings) {
     let dir = options.dir.join(key);
     let octree = Octree::build(scene, OctreeParams::default());
-    let tracer = Tracer {
-        scene,
-        accel: (&octree).into(),
-    };
+    let tracer = Tracer::new(scene, &octree);
     let bounds = scene.world_bounds();
     let size = if bounds.is_empty() {
         1.0

@@ -29,7 +29,7 @@ pub mod usd;
 pub mod validator;
 
 // The lower layers' modules, for paths such as `crate::scene::Scene` in this crate.
-use raycast_core::{accel, bound, camera, error, render, scene, Error};
+use raycast_core::{accel, bound, camera, error, render, scene, trace, Error};
 use raycast_io::{import, info, output};
 
 pub use crate::import::paths::resolve_inside;

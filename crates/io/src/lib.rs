@@ -15,5 +15,5 @@ pub mod sizes;
 
 // The core's modules, for paths such as `crate::scene::Scene` in this crate.
 #[cfg(feature = "output")]
-use raycast_core::{accel, query, render};
+use raycast_core::{accel, render, trace};
 use raycast_core::{bound, camera, error, geometry, quadric, scene};

@@ -6,8 +6,9 @@ use raycast::accel::{Octree, OctreeParams, PreparedRay, PrimitiveSet};
 use raycast::geometry::Ray;
 use raycast::import::{self, LoadOptions};
 use raycast::quadric::{Quadric, QuadricSpec};
-use raycast::render::{self, Aov, Tracer};
+use raycast::render::{self, Aov};
 use raycast::scene::{Scene, SceneBuilder};
+use raycast::trace::Tracer;
 use std::path::{Path, PathBuf};
 
 /// Path of a file under `fixtures/`.
@@ -38,7 +39,7 @@ pub fn cast(scene: &Scene, rays: &[Ray]) -> Vec<Sample> {
     let octree = Octree::build(scene, OctreeParams::default());
     let tracer = Tracer {
         scene,
-        accel: (&octree).into(),
+        octree: &octree,
     };
     let aovs = [Aov::Depth, Aov::Normal, Aov::Position, Aov::Id, Aov::Prim];
     let b = render::render(&tracer, &rays.to_vec(), &aovs, |_| {});

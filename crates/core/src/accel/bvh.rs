@@ -2,7 +2,9 @@
 //! binary BVH2 or an eight-wide compressed CWBVH), over any [`PrimitiveSet`].
 //!
 //! It exists to measure the octree against a well-tuned BVH on the same primitives, the same
-//! rays and the same exact f64 primitive tests, and to cross-check the octree's answers.
+//! rays and the same exact f64 primitive tests, and to cross-check the octree's answers: a
+//! test and benchmark oracle behind the `bvh-oracle` feature, not part of the command line or
+//! the Python package (see [`crate::trace::BvhTracer`]).
 //!
 //! # Exactness with an f32 hierarchy
 //! obvhs stores and traverses boxes in f32; the primitive tests stay in f64 through
@@ -58,7 +60,7 @@ pub enum BvhKind {
 }
 
 impl BvhKind {
-    /// The name used on the command line.
+    /// The name the benchmarks use.
     pub fn name(self) -> &'static str {
         match self {
             BvhKind::Bvh2 => "bvh",
@@ -74,12 +76,14 @@ impl fmt::Display for BvhKind {
 }
 
 impl FromStr for BvhKind {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
         match s {
             "bvh" | "bvh2" => Ok(BvhKind::Bvh2),
             "cwbvh" => Ok(BvhKind::Cwbvh),
-            _ => Err(format!("unknown BVH kind '{s}' (choose bvh or cwbvh)")),
+            _ => Err(crate::Error::msg(format!(
+                "unknown BVH kind '{s}' (choose bvh or cwbvh)"
+            ))),
         }
     }
 }

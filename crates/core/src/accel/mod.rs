@@ -4,6 +4,7 @@
 //! overlap test against a cell and for a ray hit, by primitive index. The scene implements it
 //! over triangles and quadrics together.
 
+#[cfg(feature = "bvh-oracle")]
 pub mod bvh;
 pub mod octree;
 
@@ -11,6 +12,7 @@ use crate::geometry::Aabb;
 pub use crate::simd::Kernel;
 use glam::DVec3;
 
+#[cfg(feature = "bvh-oracle")]
 pub use bvh::{Bvh, BvhKind, BvhStats};
 pub use octree::{Octree, OctreeParams, OctreeStats, PACKET};
 

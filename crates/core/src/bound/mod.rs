@@ -36,8 +36,8 @@ pub mod triangle;
 
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
-use crate::query::Query;
 use crate::scene::{Crossing, Scene};
+use crate::trace::Tracer;
 use bounded::{gamma, up, Bounded};
 use glam::{DMat3, DVec3};
 use std::ops::{Add, Mul, Sub};
@@ -182,7 +182,7 @@ fn depth_bound(t: Bounded, dir: DVec3) -> Bounded {
 /// each candidate passed over by [`triangle::certainly_apart`]'s f64 filters (a depth range,
 /// the sheared triangle's box, the edge functions' signs) before any bounded recomputation.
 pub fn certain(
-    query: &Query,
+    query: &Tracer,
     ray: &Ray,
     hit: Option<(&Crossing, &HitBound)>,
     (t_min, t_max): (f64, f64),

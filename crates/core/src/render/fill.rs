@@ -5,12 +5,12 @@
 //! The command line's buffers and the Python package's `cast` and `render` are all made by
 //! [`trace`], so they share this loop.
 
-use super::{Aov, Tracer};
+use super::Aov;
 use crate::bound::HitBound;
 use crate::geometry::Ray;
 use crate::geometry::RaySource;
-use crate::query::traceable;
-use crate::scene::{Crossing, Located};
+use crate::scene::{Crossing, Located, Scene};
+use crate::trace::{traceable, NearestHits};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::cell::OnceCell;
@@ -140,7 +140,9 @@ fn fill<T: Copy>(
 
 /// Where the hits of one block of rays are turned into AOV values.
 struct Block<'a, S: ?Sized> {
-    tracer: &'a Tracer<'a>,
+    tracer: &'a dyn NearestHits,
+    /// The tracer's scene.
+    scene: &'a Scene,
     source: &'a S,
     /// The index of the block's first ray.
     start: usize,
@@ -164,7 +166,7 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
     #[inline(always)]
     fn locate(&self, j: usize, hit: &Crossing) -> Located<'_> {
         let ray = self.ray(j);
-        self.tracer.scene.locate_crossing(hit, ray.origin, ray.dir)
+        self.scene.locate_crossing(hit, ray.origin, ray.dir)
     }
 
     /// The bound of each hit of the block ([`crate::bound::hit_bound`]), made on first use
@@ -174,11 +176,7 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
             let each = hits.iter().enumerate();
             each.map(|(j, hit)| {
                 let hit = hit.as_ref()?;
-                Some(crate::bound::hit_bound(
-                    self.tracer.scene,
-                    &self.ray(j),
-                    hit,
-                ))
+                Some(crate::bound::hit_bound(self.scene, &self.ray(j), hit))
             })
             .collect()
         })
@@ -203,26 +201,24 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
             }),
             (Aov::Bary, Slot::Vector(out)) => fill(out, hits, [0.0; 3], |j, h| {
                 let ray = self.ray(j);
-                let weights = self.tracer.scene.barycentric(h, ray.origin, ray.dir);
+                let weights = self.scene.barycentric(h, ray.origin, ray.dir);
                 weights.unwrap_or([0.0; 3])
             }),
             (Aov::Uv, Slot::Pair(out)) => fill(out, hits, [inf; 2], |j, h| {
                 let ray = self.ray(j);
-                let uv = self.tracer.scene.uv(h, ray.origin, ray.dir);
+                let uv = self.scene.uv(h, ray.origin, ray.dir);
                 uv.unwrap_or([inf; 2])
             }),
             (Aov::ShadingNormal, Slot::Vector(out)) => fill(out, hits, [0.0; 3], |j, h| {
                 let ray = self.ray(j);
-                let normal = self.tracer.scene.shading_normal(h, ray.origin, ray.dir);
+                let normal = self.scene.shading_normal(h, ray.origin, ray.dir);
                 normal.map_or([0.0; 3], |n| n.to_array())
             }),
             (Aov::Material, Slot::Index(out)) => fill(out, hits, 0, |j, h| {
                 let ray = self.ray(j);
-                self.tracer.scene.material(h, ray.origin, ray.dir)
+                self.scene.material(h, ray.origin, ray.dir)
             }),
-            (Aov::Id, Slot::Index(out)) => {
-                fill(out, hits, 0, |_, h| self.tracer.scene.object(h.top).id)
-            }
+            (Aov::Id, Slot::Index(out)) => fill(out, hits, 0, |_, h| self.scene.object(h.top).id),
             (Aov::Prim, Slot::Index(out)) => {
                 fill(out, hits, u32::MAX, |j, h| self.locate(j, h).prim)
             }
@@ -236,7 +232,7 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
             }
             (Aov::Certain, Slot::Flag(out)) => {
                 let bounds = self.hit_bounds(hits);
-                let query = self.tracer.query();
+                let query = self.tracer.tracer();
                 for (j, (slot, hit)) in out.iter_mut().zip(hits).enumerate() {
                     let range = (self.range)(self.start + j);
                     let hit = hit.as_ref().zip(bounds[j].as_ref());
@@ -284,19 +280,19 @@ pub struct Rays<'a, S: ?Sized, R> {
     pub source: &'a S,
     /// Ray `i`'s parameter range `(t_min, t_max]`.
     pub range: R,
-    /// Whether a ray [`crate::query::traceable`] refuses (non-finite or zero, or a bad range)
+    /// Whether a ray [`crate::trace::traceable`] refuses (non-finite or zero, or a bad range)
     /// makes [`trace`] fail; otherwise it is a miss.
     pub refuse_untraceable: bool,
 }
 
-/// Finds the nearest hit of every ray in its range ([`Tracer::nearest`]) and computes `aovs`
+/// Finds the nearest hit of every ray in its range ([`NearestHits::nearest_all`]) and computes `aovs`
 /// from it, in one parallel pass over blocks of rays (no pause between blocks: the workers
 /// report progress themselves). `progress` is told how many rays are done, about every 64 Ki
 /// rays, with counts that only grow. Returns the buffers, or the first refused ray (with
 /// [`Rays::refuse_untraceable`]; blocks after a refused ray found so far are skipped);
 /// whether a ray without a hit is refused is checked with the ray at hand, not read again.
 pub fn trace<S, R>(
-    tracer: &Tracer,
+    tracer: &dyn NearestHits,
     rays: &Rays<S, R>,
     aovs: &[Aov],
     progress: impl FnMut(usize) + Send,
@@ -323,6 +319,7 @@ where
     let fill = |start: usize, len: usize, slots: &mut [Slot]| -> Option<usize> {
         let block = Block {
             tracer,
+            scene: tracer.scene(),
             source: rays.source,
             start,
             eye,
@@ -423,6 +420,7 @@ mod tests {
     use super::*;
     use crate::accel::{Octree, OctreeParams};
     use crate::scene::SceneBuilder;
+    use crate::trace::Tracer;
 
     /// 200 000 rays at a unit square, some of them untraceable, in a pool of `threads`.
     fn trace_with_bad_rays(threads: usize, bad: &[usize]) -> (Result<Buffers, usize>, Vec<usize>) {

@@ -2,7 +2,7 @@
 //! them (the zip container is the `zip` crate's). `--hits` writes its CSR lists as one.
 
 use super::npy::{self, NpyData};
-use crate::query::HitLists;
+use crate::trace::HitLists;
 use std::io::{Seek, Write};
 use zip::write::SimpleFileOptions;
 use zip::{CompressionMethod, ZipWriter};

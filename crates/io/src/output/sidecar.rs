@@ -1,6 +1,6 @@
 //! The JSON sidecar `raycast.json` that travels with every set of buffers.
 
-use crate::accel::{BvhStats, OctreeParams, OctreeStats};
+use crate::accel::{OctreeParams, OctreeStats};
 use crate::camera::{Camera, Projection};
 use crate::scene::{Object, PoseInfo, StageInfo};
 use serde::Serialize;
@@ -129,17 +129,13 @@ pub struct Stats {
     pub quadrics: usize,
     /// Objects.
     pub objects: usize,
-    /// The acceleration structure used: `octree`, `bvh` or `cwbvh`.
+    /// The acceleration structure used: always `octree` (the obvhs BVH is a test oracle;
+    /// the field stays for the readers of sidecars written when `--accel` could choose it).
     pub accel: &'static str,
-    /// Octree size figures (octree runs).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub octree: Option<OctreeStats>,
-    /// Octree build parameters (octree runs).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub octree_params: Option<OctreeParams>,
-    /// BVH size figures (`bvh` and `cwbvh` runs).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub bvh: Option<BvhStats>,
+    /// Octree size figures.
+    pub octree: OctreeStats,
+    /// Octree build parameters.
+    pub octree_params: OctreeParams,
 }
 
 /// Seconds spent per stage.

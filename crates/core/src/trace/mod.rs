@@ -1,25 +1,70 @@
-//! Ray queries beyond the nearest hit from `t > 0`: a parameter range `(t_min, t_max]`, every
-//! surface crossing along a ray, and point containment by crossing parity. They run on the
-//! octree of [`crate::render::Tracer`] and are what the Python package calls.
+//! The one tracer: a scene with its octree and every ray query over them, the nearest hit
+//! from `t > 0` (what the renderer fills its buffers from), a parameter range
+//! `(t_min, t_max]`, packets of coherent rays, every surface crossing along a ray, point
+//! containment by crossing parity and the distance queries ([`Tracer::closest`]). The command
+//! line, `raycast check`'s golden buffers and the Python package all trace through it.
 //!
-//! With `t_min = 0` the nearest hit is exactly [`crate::render::Tracer::trace`]'s (the same
-//! search), so buffers filled from it are bit-identical to the command line's rays mode.
+//! With `t_min = 0` the nearest hit of [`Tracer::nearest`] is exactly [`Tracer::trace`]'s (the
+//! same search), so buffers filled from either are bit-identical.
+//!
+//! With the `bvh-oracle` feature, [`BvhTracer`] finds the same nearest hits through an obvhs
+//! BVH, for the tests and benchmarks that check and measure the octree against it.
 
 mod distance;
+#[cfg(feature = "bvh-oracle")]
+mod oracle;
 
 pub use distance::{signed, winding_number, NearestPoint, Side, SignRule, Signer};
+#[cfg(feature = "bvh-oracle")]
+pub use oracle::BvhTracer;
 
-use crate::accel::{
-    prepare_ray_with, test_primitive, Hit, Octree, PreparedRay, PrimitiveSet, PACKET,
-};
+use crate::accel::{test_primitive, Hit, Octree, OctreeParams, PreparedRay, PrimitiveSet, PACKET};
 use crate::geometry::{Ray, RaySource};
 use crate::quadric::Quadric;
 use crate::scene::{Crossing, EdgeRule, Scene, SceneRay};
 use glam::DVec3;
 use rayon::prelude::*;
 
+/// Memory per primitive that building the octree takes, for the estimate a render checks
+/// against its memory limit: each primitive's box (48 bytes) and, measured as the growth of
+/// peak memory from loading to building on the shared assets, 25 to 74 bytes for the tree (4
+/// to 6 references per primitive). A scene of large crossing triangles may take up to 256
+/// references per primitive (about 1 KiB), the octree's bound.
+pub const ACCEL_BYTES_PER_PRIMITIVE: u64 = 128;
+
+/// Builds the octree over `scene` (with `params`), the octrees of its instanced meshes first
+/// ([`Scene::build_instances`]). Building them alongside with `rayon::join` runs the whole
+/// build on a pool thread, whose allocator keeps what it frees: six builds in a row
+/// (benches/trace.rs) then peaked at 34 instead of 24 MiB on the bunny.
+pub fn build_octree(scene: &Scene, params: OctreeParams) -> Octree {
+    scene.build_instances();
+    Octree::build(scene, params)
+}
+
+/// An estimate of the memory [`build_octree`] takes over `scene`: the top-level octree over
+/// its primitives and one per stored instanced mesh, at [`ACCEL_BYTES_PER_PRIMITIVE`] each.
+pub fn estimated_build_bytes(scene: &Scene) -> u64 {
+    (scene.accel_primitive_count() as u64).saturating_mul(ACCEL_BYTES_PER_PRIMITIVE)
+}
+
+/// What the renderer fills its buffers from ([`crate::render::trace`]): the nearest hits of
+/// many rays in their ranges. [`Tracer`] is the one implementation of the command line and
+/// the Python package; [`BvhTracer`] (feature `bvh-oracle`) the oracle of tests and benches.
+pub trait NearestHits: Sync {
+    /// The scene the hits are in.
+    fn scene(&self) -> &Scene;
+
+    /// The nearest crossing of each of `rays` in its range of `ranges` (see
+    /// [`Tracer::nearest`]).
+    fn nearest_all(&self, rays: &[Ray], ranges: &[(f64, f64)]) -> Vec<Option<Crossing>>;
+
+    /// The octree's tracer, for the queries beyond the nearest hit (the `certain` buffer);
+    /// `None` for an oracle without one.
+    fn tracer(&self) -> Option<Tracer<'_>>;
+}
+
 /// The crossings of many rays in CSR form: ray `i`'s are entries `splits[i]..splits[i + 1]`
-/// of `t`, `id` and `prim`, nearest first (as [`Query::crossings`] lists them).
+/// of `t`, `id` and `prim`, nearest first (as [`Tracer::crossings`] lists them).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct HitLists {
     /// N + 1 offsets, from 0 to the number of crossings.
@@ -32,16 +77,32 @@ pub struct HitLists {
     pub prim: Vec<u32>,
 }
 
-/// A scene with its octree, ready for queries.
+/// A scene with its octree, ready for every ray and point query.
 #[derive(Debug, Clone, Copy)]
-pub struct Query<'a> {
+pub struct Tracer<'a> {
     /// The scene.
     pub scene: &'a Scene,
     /// The octree built over it.
     pub octree: &'a Octree,
 }
 
-impl<'a> Query<'a> {
+impl<'a> Tracer<'a> {
+    /// A tracer of `scene` through `octree`, which must have been built over it.
+    pub fn new(scene: &'a Scene, octree: &'a Octree) -> Self {
+        Tracer { scene, octree }
+    }
+
+    /// The nearest hit of `ray` with `t > 0`, as a top-level [`Hit`]; `None` for a miss or
+    /// an untraceable ray (see [`Ray::is_valid`]).
+    pub fn trace(&self, ray: &Ray) -> Option<Hit> {
+        if !ray.is_valid() {
+            return None;
+        }
+        let local = ray.origin - self.scene.anchor;
+        self.octree
+            .intersect_ray(self.scene, local, ray.dir, f64::INFINITY)
+    }
+
     /// The nearest crossing with `t_min < t <= t_max` (and `t > 0`); `None` for a miss, an
     /// untraceable ray (see [`Ray::is_valid`]), a NaN or negative `t_min` or a NaN `t_max`.
     /// Ties go to the smaller primitive index, as in [`Hit::beats`].
@@ -62,10 +123,10 @@ impl<'a> Query<'a> {
     /// The ray `local + t · dir` (origin relative to the scene's anchor) prepared for the
     /// primitive tests with the octree's kernel.
     fn prepare(&self, local: DVec3, dir: DVec3) -> PreparedRay<SceneRay> {
-        prepare_ray_with(self.scene, self.octree.kernel(), local, dir)
+        crate::accel::prepare_ray_with(self.scene, self.octree.kernel(), local, dir)
     }
 
-    /// [`Query::nearest`] for a range that does not start at 0, the ray's origin relative to
+    /// [`Tracer::nearest`] for a range that does not start at 0, the ray's origin relative to
     /// the scene's anchor: every crossing in the range, the nearest kept. Kept out of line so
     /// that the common range from 0 does not pay for its set-up.
     #[inline(never)]
@@ -100,7 +161,7 @@ impl<'a> Query<'a> {
         best
     }
 
-    /// [`Query::nearest`] for [`PACKET`] rays traced together (see [`Octree::intersect_packet`]),
+    /// [`Tracer::nearest`] for [`PACKET`] rays traced together (see [`Octree::intersect_packet`]),
     /// the answers written into `found`: the same answers, or false, with `found` untouched,
     /// when they cannot go as one packet (a range not starting at 0, an untraceable ray,
     /// directions in different octants or with a zero component).
@@ -126,6 +187,34 @@ impl<'a> Query<'a> {
             }
         }
         packed
+    }
+
+    /// [`Tracer::nearest`] for every ray of `rays` with its range in `ranges`: runs of
+    /// [`PACKET`] rays that can go together are traced as packets (the same answers, fewer
+    /// node visits for coherent rays such as a camera's), the others one by one.
+    pub fn nearest_all(&self, rays: &[Ray], ranges: &[(f64, f64)]) -> Vec<Option<Crossing>> {
+        let one = |(ray, &(t_min, t_max)): (&Ray, &(f64, f64))| self.nearest(ray, t_min, t_max);
+        let mut hits = Vec::with_capacity(rays.len());
+        let (packets, rest) = rays.as_chunks::<PACKET>();
+        let (packet_ranges, rest_ranges) = ranges.as_chunks::<PACKET>();
+        // Directions' signs first: incoherent rays stop here, before any set-up.
+        let octant = |ray: &Ray| ray.dir.cmplt(DVec3::ZERO).bitmask();
+        for (packet, range) in packets.iter().zip(packet_ranges) {
+            let first = octant(&packet[0]);
+            let coherent = packet.iter().all(|ray| octant(ray) == first);
+            if coherent {
+                let start = hits.len();
+                hits.resize(start + PACKET, None);
+                let found = hits[start..].as_mut_array().expect("PACKET slots");
+                if self.nearest_packet(packet, range, found) {
+                    continue;
+                }
+                hits.truncate(start);
+            }
+            hits.extend(packet.iter().zip(range).map(one));
+        }
+        hits.extend(rest.iter().zip(rest_ranges).map(one));
+        hits
     }
 
     /// Whether the ray has any crossing with `t_min < t <= t_max` (and `t > 0`): exactly
@@ -171,7 +260,7 @@ impl<'a> Query<'a> {
     }
 
     /// Every surface crossing with `t_min < t <= t_max` (and `t > 0`), nearest first (ties by
-    /// primitive); none for the rays [`Query::nearest`] refuses. A ray through an edge or
+    /// primitive); none for the rays [`Tracer::nearest`] refuses. A ray through an edge or
     /// vertex shared by triangles of a consistently wound mesh crosses it once (see
     /// [`crate::geometry::triangle::WatertightRay::crossing`]); a ray tangent to a quadric
     /// touches it once.
@@ -205,7 +294,7 @@ impl<'a> Query<'a> {
         found
     }
 
-    /// The [`Query::crossings`] of every ray of `source` in its `range`, the nearest `limit`
+    /// The [`Tracer::crossings`] of every ray of `source` in its `range`, the nearest `limit`
     /// of each, resolved to object ids and primitives; in parallel.
     pub fn hit_lists<S, R>(&self, source: &S, range: R, limit: usize) -> HitLists
     where
@@ -244,8 +333,8 @@ impl<'a> Query<'a> {
     }
 
     /// Whether `point` lies inside the scene's closed surfaces. Triangles and open quadrics
-    /// count by [`Query::crossing_parity`]; a closed ellipsoid ([`Quadric::encloses`]) counts
-    /// by the sign of its polynomial at the point ([`Query::ellipsoid_parity`]), so that a ray
+    /// count by [`Tracer::crossing_parity`]; a closed ellipsoid ([`Quadric::encloses`]) counts
+    /// by the sign of its polynomial at the point ([`Tracer::ellipsoid_parity`]), so that a ray
     /// tangent to it cannot flip the count. A point on a surface may count either way.
     pub fn contains(&self, point: DVec3) -> bool {
         self.crossing_parity(point) ^ self.ellipsoid_parity(point).0
@@ -275,7 +364,7 @@ impl<'a> Query<'a> {
     }
 
     /// The parity of the crossings that `counts` keeps along three rays from `point`, by
-    /// majority (see [`Query::crossing_parity`]).
+    /// majority (see [`Tracer::crossing_parity`]).
     fn parity_vote(&self, point: DVec3, counts: impl Fn(&Crossing) -> bool) -> bool {
         if !point.is_finite() || self.scene.is_empty() {
             return false;
@@ -292,7 +381,21 @@ impl<'a> Query<'a> {
     }
 }
 
-/// Whether [`Query::nearest`] can trace `ray` in `(t_min, t_max]`: a traceable ray (see
+impl NearestHits for Tracer<'_> {
+    fn scene(&self) -> &Scene {
+        self.scene
+    }
+
+    fn nearest_all(&self, rays: &[Ray], ranges: &[(f64, f64)]) -> Vec<Option<Crossing>> {
+        Tracer::nearest_all(self, rays, ranges)
+    }
+
+    fn tracer(&self) -> Option<Tracer<'_>> {
+        Some(*self)
+    }
+}
+
+/// Whether [`Tracer::nearest`] can trace `ray` in `(t_min, t_max]`: a traceable ray (see
 /// [`Ray::is_valid`]) with `t_min >= 0` and `t_max` not NaN.
 #[inline]
 pub fn traceable(ray: &Ray, t_min: f64, t_max: f64) -> bool {
@@ -302,14 +405,14 @@ pub fn traceable(ray: &Ray, t_min: f64, t_max: f64) -> bool {
 /// True when every range of a packet starts at 0 and has a limit that is not NaN. The rays
 /// themselves need no check here: the packet set-up refuses a packet in which some ray has an
 /// origin or a direction that is not finite, or a zero direction component (see
-/// `Bundle::set`), and such a ray then goes through [`Query::nearest`], which refuses it.
+/// `Bundle::set`), and such a ray then goes through [`Tracer::nearest`], which refuses it.
 fn plain_packet(ranges: &[(f64, f64); PACKET]) -> bool {
     ranges.iter().fold(true, |plain, &(t_min, t_max)| {
         plain & (t_min == 0.0) & !t_max.is_nan()
     })
 }
 
-/// Directions of the parity rays of [`Query::contains`]: no axis, diagonal or simple ratio,
+/// Directions of the parity rays of [`Tracer::contains`]: no axis, diagonal or simple ratio,
 /// so that rays from points on a grid do not run along the faces or edges of axis-aligned or
 /// regularly tessellated models.
 const PARITY_DIRECTIONS: [[f64; 3]; 3] = [
@@ -336,10 +439,7 @@ mod tests {
         builder.add_mesh("t".into(), "test".into(), vec![triangle]);
         let scene = builder.finish("one triangle".into());
         let octree = Octree::build(&scene, crate::accel::OctreeParams::default());
-        let query = Query {
-            scene: &scene,
-            octree: &octree,
-        };
+        let tracer = Tracer::new(&scene, &octree);
         let odd = [
             0.0,
             -0.0,
@@ -370,10 +470,10 @@ mod tests {
                 ranges[5] = (t_min, t_max);
                 let plain = t_min == 0.0 && traceable(&ray, t_min, t_max);
                 let mut found = [None; PACKET];
-                if query.nearest_packet(&rays, &ranges, &mut found) {
+                if tracer.nearest_packet(&rays, &ranges, &mut found) {
                     assert!(plain, "{ray:?} {t_min} {t_max} went as a packet");
                     for ((ray, &(t_min, t_max)), found) in rays.iter().zip(&ranges).zip(found) {
-                        assert_eq!(found, query.nearest(ray, t_min, t_max), "{ray:?}");
+                        assert_eq!(found, tracer.nearest(ray, t_min, t_max), "{ray:?}");
                     }
                     packed += 1;
                 } else {

@@ -1,7 +1,7 @@
 //! Distance queries: the nearest surface point, and which side of the surface a point is on.
 //!
 //! # The nearest point
-//! [`Query::closest`] searches the octree best first ([`Scene::nearest_point`]) and measures
+//! [`Tracer::closest`] searches the octree best first ([`Scene::nearest_point`]) and measures
 //! each candidate triangle exactly in f64 (see [`crate::geometry::closest`] for the error: a
 //! small multiple of ε times the triangle's size and the query's distance from it) and each
 //! candidate quadric with [`Quadric::closest`] (the Lagrange condition in the quadric's
@@ -9,7 +9,7 @@
 //! quadric's anchor plus its size).
 //!
 //! # The side, by crossings
-//! [`Query::side_by_crossings`] counts the crossings of rays from the point with the
+//! [`Tracer::side_by_crossings`] counts the crossings of rays from the point with the
 //! watertight ownership rule of [`crate::geometry::triangle::WatertightRay::crossing`]: the
 //! edge functions of a shared edge are exact negatives in both triangles, so a ray through an
 //! edge or a vertex of a closed, consistently wound mesh crosses it exactly once, and a ray
@@ -19,7 +19,7 @@
 //! `32 ε R` (`R` bounding the distance from the point to any vertex, plus the point's own
 //! magnitude for the instance frames' rounding; a generous multiple of the test's forward
 //! error, which is a few ε times the vertices' distances from the origin along the ray). So a
-//! point farther than [`Query::surface_margin`] from every surface gets a certain side, and
+//! point farther than [`Tracer::surface_margin`] from every surface gets a certain side, and
 //! a nearer one is reported as on the surface (sign 0). Certain only for closed meshes (every
 //! edge shared by two triangles in opposite directions, as `raycast info` reports per
 //! object); for open ones the parity is a guess.
@@ -40,7 +40,7 @@
 //! point. Triangles only: a scene with quadrics is refused (a quadric's solid angle is not
 //! summed).
 
-use super::Query;
+use super::Tracer;
 use crate::geometry::Aabb;
 #[cfg(doc)]
 use crate::quadric::Quadric;
@@ -80,7 +80,7 @@ pub enum Side {
     Inside,
     /// Outside.
     Outside,
-    /// Within [`Query::surface_margin`] of a surface: no side is certain.
+    /// Within [`Tracer::surface_margin`] of a surface: no side is certain.
     OnSurface,
 }
 
@@ -95,7 +95,7 @@ impl Side {
     }
 }
 
-impl Query<'_> {
+impl Tracer<'_> {
     /// The surface point nearest to `point`, on a triangle or a quadric; `None` for a point
     /// that is not finite or an empty scene.
     pub fn closest(&self, point: DVec3) -> Option<NearestPoint> {
@@ -113,7 +113,7 @@ impl Query<'_> {
         })
     }
 
-    /// The distance below which [`Query::side_by_crossings`] cannot be sure of the side of
+    /// The distance below which [`Tracer::side_by_crossings`] cannot be sure of the side of
     /// `point`, for a scene whose world bounds are `bounds` (see the module docs).
     pub fn surface_margin(point: DVec3, bounds: &Aabb) -> f64 {
         let far = bounds
@@ -129,7 +129,7 @@ impl Query<'_> {
     /// sides of the closed quadrics; `bounds` are the scene's world bounds. Meaningful when
     /// every quadric [`Quadric::encloses`] a volume ([`Signer::new`] checks).
     pub fn side_by_crossings(&self, point: DVec3, distance: f64, bounds: &Aabb) -> Side {
-        if distance <= Query::surface_margin(point, bounds) || distance.is_nan() {
+        if distance <= Tracer::surface_margin(point, bounds) || distance.is_nan() {
             return Side::OnSurface;
         }
         let (ellipsoids, on_ellipsoid) = self.ellipsoid_parity(point);
@@ -165,7 +165,7 @@ impl SignRule {
 
 /// Signed distances of many points in one scene: what [`Signer::measure`] needs, made once.
 pub struct Signer<'a> {
-    query: Query<'a>,
+    query: Tracer<'a>,
     rule: SignRule,
     bounds: Aabb,
     /// Every triangle of the scene in world coordinates, for [`SignRule::Winding`].
@@ -176,7 +176,7 @@ impl<'a> Signer<'a> {
     /// Prepares signed distances in `query`'s scene by `rule`. Errors: a quadric that does
     /// not bound a volume (see the module docs), or any quadric for [`SignRule::Winding`],
     /// one line naming the object.
-    pub fn new(query: Query<'a>, rule: SignRule) -> Result<Signer<'a>, String> {
+    pub fn new(query: Tracer<'a>, rule: SignRule) -> Result<Signer<'a>, String> {
         let scene = query.scene;
         let refused = scene
             .quadrics()
@@ -316,10 +316,7 @@ mod tests {
     #[test]
     fn distances_to_a_cube_by_hand() {
         let (scene, octree) = scene_of(cube());
-        let query = Query {
-            scene: &scene,
-            octree: &octree,
-        };
+        let query = Tracer::new(&scene, &octree);
         let bounds = scene.world_bounds();
         // Centre, a point beyond a corner, one on a face, one above an edge.
         let cases = [
