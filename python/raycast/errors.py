@@ -6,7 +6,13 @@ catch what they can act on instead of matching message text.
 
 
 class RaycastError(Exception):
-    """Base class of every error raycast raises about a scene or a request."""
+    """Base class of every error raycast raises about a scene or a request.
+
+    ``code`` is the problem's stable code, the same names ``raycast check`` reports: the
+    reader's own where it gives one (a glTF-Validator code such as ``ACCESSOR_TOO_LONG``,
+    ``USD_INVALID_PATH``), else ``FAILED``, ``USAGE`` or ``NOT_FOUND`` by the class."""
+
+    code: str = "FAILED"
 
 
 class SceneError(RaycastError):

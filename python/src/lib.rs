@@ -31,7 +31,11 @@ pub(crate) fn to_pyerr(py: Python<'_>, error: raycast_core::Error) -> PyErr {
         .import("raycast.errors")
         .and_then(|m| m.getattr(class))
         .and_then(|c| Ok(c.cast_into::<PyType>()?))
-        .and_then(|c| c.call1((message.clone(),)));
+        .and_then(|c| c.call1((message.clone(),)))
+        .and_then(|instance| {
+            instance.setattr("code", error.code().name())?;
+            Ok(instance)
+        });
     match raised {
         Ok(instance) => PyErr::from_value(instance),
         Err(e) => e,

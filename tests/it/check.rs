@@ -34,7 +34,10 @@ fn timed(asset: &Asset) -> AssetReport {
         report.seconds
     );
     assert!(
-        !report.findings.iter().any(|f| f.code == "INTERNAL_PANIC"),
+        !report
+            .findings
+            .iter()
+            .any(|f| f.code.name() == "INTERNAL_PANIC"),
         "{}: {:?}",
         report.path,
         report.findings
@@ -47,7 +50,7 @@ fn codes(report: &AssetReport, severities: &[Severity]) -> BTreeSet<String> {
         .findings
         .iter()
         .filter(|f| severities.contains(&f.severity))
-        .map(|f| f.code.clone())
+        .map(|f| f.code.name().to_string())
         .collect()
 }
 
@@ -261,7 +264,7 @@ fn specific_codes_on_bad_fixtures() {
     for (file, code) in expect {
         let report = timed(&Asset::file(fixture(file)));
         assert!(
-            report.findings.iter().any(|f| f.code == code),
+            report.findings.iter().any(|f| f.code.name() == code),
             "{file}: expected {code}, got {:?}",
             report.findings
         );
@@ -453,7 +456,10 @@ fn geometric_checks() {
     );
     // A finely divided cube missing one small quad is meant closed: the hole is reported.
     let holed = run("holed.obj", fine_cube_obj(8, true));
-    let hole = holed.findings.iter().find(|f| f.code == "MESH_HOLES");
+    let hole = holed
+        .findings
+        .iter()
+        .find(|f| f.code.name() == "MESH_HOLES");
     assert!(
         hole.is_some_and(|f| f.message.contains("4 boundary edges")),
         "{:?}",
@@ -477,7 +483,7 @@ fn geometric_checks() {
         report
             .findings
             .iter()
-            .any(|f| f.code == "SCENE_SIZE_OUT_OF_RANGE")
+            .any(|f| f.code.name() == "SCENE_SIZE_OUT_OF_RANGE")
     };
     assert!(out_of_range(with(100.0, 1000.0)));
     // The unit cube's diagonal is √3 (its f64: 1.7320508075688772). A range ending one ulp
@@ -491,7 +497,7 @@ fn geometric_checks() {
     let at: Vec<_> = bad
         .findings
         .iter()
-        .map(|f| (f.code.as_str(), f.location.as_str()))
+        .map(|f| (f.code.name(), f.location.as_str()))
         .collect();
     assert!(at.contains(&("NON_FINITE_POSITION", "line 3")), "{at:?}");
     assert!(at.contains(&("INDEX_OOB", "line 4")), "{at:?}");
@@ -525,7 +531,7 @@ fn external_files_stay_inside_the_asset() {
             report
                 .findings
                 .iter()
-                .any(|f| f.code == "PATH_OUTSIDE_ASSET"),
+                .any(|f| f.code.name() == "PATH_OUTSIDE_ASSET"),
             "{:?}",
             report.findings
         );
@@ -540,7 +546,7 @@ fn external_files_stay_inside_the_asset() {
             !allowed
                 .findings
                 .iter()
-                .any(|f| f.code == "PATH_OUTSIDE_ASSET"),
+                .any(|f| f.code.name() == "PATH_OUTSIDE_ASSET"),
             "{:?}",
             allowed.findings
         );
@@ -552,9 +558,12 @@ fn external_files_stay_inside_the_asset() {
     assert!(!report
         .findings
         .iter()
-        .any(|f| f.code == "PATH_OUTSIDE_ASSET"));
+        .any(|f| f.code.name() == "PATH_OUTSIDE_ASSET"));
     let report = check_asset(&Asset::file(remote), &CheckOptions::default());
-    assert!(report.findings.iter().any(|f| f.code == "NON_RELATIVE_URI"));
+    assert!(report
+        .findings
+        .iter()
+        .any(|f| f.code.name() == "NON_RELATIVE_URI"));
     // Limits: a buffer larger than --max-memory is refused before it is read.
     let small = check_asset(
         &Asset::file(inside.clone()),
@@ -567,7 +576,7 @@ fn external_files_stay_inside_the_asset() {
     assert!(small
         .findings
         .iter()
-        .any(|f| f.code == "ASSET_TOO_LARGE" || f.code == "FILE_TOO_LARGE"));
+        .any(|f| f.code.name() == "ASSET_TOO_LARGE" || f.code.name() == "FILE_TOO_LARGE"));
 }
 
 fn raycast(args: &[&str]) -> Output {

@@ -23,7 +23,7 @@ fn codes(report: &AssetReport, severity: Severity) -> BTreeSet<&str> {
         .findings
         .iter()
         .filter(|f| f.severity == severity)
-        .map(|f| f.code.as_str())
+        .map(|f| f.code.name())
         .collect()
 }
 
@@ -153,7 +153,10 @@ fn a_flat_mesh_has_no_inverted_normals() {
     );
     let report = report("flat_projective_cube.usda");
     assert!(
-        !report.findings.iter().any(|f| f.code == "INVERTED_NORMALS"),
+        !report
+            .findings
+            .iter()
+            .any(|f| f.code.name() == "INVERTED_NORMALS"),
         "{:?}",
         report.findings
     );

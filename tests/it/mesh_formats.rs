@@ -206,7 +206,7 @@ fn broken_files_fail_with_one_line_naming_the_file_and_their_check_code() {
         assert!(line.starts_with(&path.display().to_string()), "{line}");
         assert!(line.contains(words) && !line.contains('\n'), "{line}");
         let report = check_asset(&Asset::file(path), &CheckOptions::default());
-        let codes: Vec<&str> = report.findings.iter().map(|f| f.code.as_str()).collect();
+        let codes: Vec<&str> = report.findings.iter().map(|f| f.code.name()).collect();
         assert_eq!(codes, [code], "{relative}");
     }
 }
@@ -221,7 +221,7 @@ fn a_ply_named_obj_is_named_for_what_it_is() {
     let e = import::load(&path, &LoadOptions::default()).unwrap_err();
     assert!(e.message.contains("a PLY mesh (ply)"), "{e}");
     let report = check_asset(&Asset::file(path), &CheckOptions::default());
-    assert_eq!(report.findings[0].code, "FILE_TYPE_MISMATCH");
+    assert_eq!(report.findings[0].code.name(), "FILE_TYPE_MISMATCH");
 }
 
 #[test]

@@ -199,6 +199,26 @@ def test_load_errors_are_typed(tmp_path):
         raycast.load(CUBE, scene="nope")
 
 
+def test_errors_carry_their_code(tmp_path):
+    """Every exception has the stable code `raycast check` would report: the reader's own
+    (the glTF-Validator's INVALID_JSON for a document that is not JSON, STL_TRUNCATED for an
+    ASCII STL without its 'endsolid' line) or the class's."""
+    with pytest.raises(raycast.SceneNotFoundError) as raised:
+        raycast.load(tmp_path / "missing.glb")
+    assert raised.value.code == "NOT_FOUND"
+    broken = tmp_path / "broken.gltf"
+    broken.write_text("{ not json")
+    with pytest.raises(raycast.SceneError) as raised:
+        raycast.load(broken)
+    assert raised.value.code == "INVALID_JSON"
+    with pytest.raises(raycast.UsageError) as raised:
+        raycast.load_bytes(b"#usda 1.0\n", "x.usda")
+    assert raised.value.code == "USAGE"
+    with pytest.raises(raycast.SceneError) as raised:
+        raycast.load_bytes(b"solid x", "x.stl")
+    assert raised.value.code == "STL_TRUNCATED"
+
+
 def test_load_bytes_matches_load(cube):
     glb = (ROOT / "fixtures" / "gltf" / "cube.glb").read_bytes()
     from_bytes = raycast.load_bytes(glb, "cube.glb")

@@ -10,6 +10,7 @@
 use super::{CheckOptions, Findings, SceneStats};
 use crate::scene::topology::topology;
 use crate::scene::{ObjectKind, Scene};
+use crate::Code;
 use glam::DVec3;
 use raycast_core::geometry::triangle::WatertightRay;
 
@@ -139,7 +140,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
     // An OBJ without faces still has its file's object: count primitives, not objects.
     if stats.triangles == 0 && stats.quadrics == 0 {
         f.warn(
-            "EMPTY_SCENE",
+            Code::EmptyScene,
             "",
             "the scene holds no triangles or quadrics",
         );
@@ -147,7 +148,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
     }
     if !size.is_finite() {
         f.error(
-            "NON_FINITE_POSITION",
+            Code::NonFinitePosition,
             "",
             "the scene's bounds are not finite",
         );
@@ -164,7 +165,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
                 ""
             };
             f.error(
-                "SCENE_SIZE_OUT_OF_RANGE",
+                Code::SceneSizeOutOfRange,
                 "",
                 format!("the scene's bounding-box diagonal is {size:.6} units, expected {min}..{max}{hint}"),
             );
@@ -185,7 +186,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
         let topo = topology(&triangles);
         if topo.degenerate > 0 {
             f.warn(
-                "DEGENERATE_TRIANGLES",
+                Code::DegenerateTriangles,
                 at.clone(),
                 format!(
                     "{} of {} triangles of '{}' have zero area",
@@ -197,7 +198,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
         }
         if topo.non_manifold > 0 {
             f.info(
-                "MESH_NON_MANIFOLD",
+                Code::MeshNonManifold,
                 at.clone(),
                 format!(
                     "{} edges of '{}' are shared by more than two triangles",
@@ -210,7 +211,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
             let (odd, rays) = odd_crossings(&triangles, HOLE_RAYS);
             if odd > 0 {
                 f.warn(
-                    "MESH_HOLES",
+                    Code::MeshHoles,
                     at.clone(),
                     format!(
                         "'{}' is closed, yet {odd} of {rays} rays cross it an odd number of times",
@@ -221,7 +222,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
             let (volume, zero_below) = signed_volume_bound(&triangles);
             if volume < -zero_below {
                 f.warn(
-                    "INVERTED_NORMALS",
+                    Code::InvertedNormals,
                     at.clone(),
                     format!(
                         "'{}' is closed but its normals point inward (signed volume {volume:.6e})",
@@ -237,7 +238,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
                 String::new()
             };
             f.warn(
-                "MESH_HOLES",
+                Code::MeshHoles,
                 at.clone(),
                 format!(
                     "'{}' looks meant to be closed but has {} boundary edges of {}{escaped}",
@@ -246,7 +247,7 @@ pub fn check(scene: &Scene, options: &CheckOptions, f: &mut Findings) -> SceneSt
             );
         } else if topo.misoriented > 0 && topo.boundary == 0 {
             f.warn(
-                "MESH_INCONSISTENT_WINDING",
+                Code::MeshInconsistentWinding,
                 at.clone(),
                 format!(
                     "{} edges of '{}' join triangles wound the opposite way",

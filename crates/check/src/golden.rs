@@ -18,6 +18,7 @@ use crate::output::{png, Staging};
 use crate::render::{self, Aov, Buffers, CameraView};
 use crate::scene::Scene;
 use crate::trace::Tracer;
+use crate::Code;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
 
@@ -77,7 +78,7 @@ pub fn check(scene: &Scene, key: &Path, options: &GoldenOptions, findings: &mut 
     }
     if options.update {
         findings.info(
-            "GOLDEN_UPDATED",
+            Code::GoldenUpdated,
             "",
             format!("golden buffers written to {}", dir.display()),
         );
@@ -130,10 +131,10 @@ pub fn differs(current: Pixel, golden: Pixel, tolerance: f64) -> bool {
     }
 }
 
-type Failure = (&'static str, String);
+type Failure = (Code, String);
 
 fn store(dir: &Path, index: usize, buffers: &Buffers) -> Result<(), Failure> {
-    let fail = |e: crate::Error| ("IO_ERROR", format!("cannot write golden buffers: {e}"));
+    let fail = |e: crate::Error| (Code::IoError, format!("cannot write golden buffers: {e}"));
     let mut staging = Staging::new(dir).map_err(fail)?;
     let shape = [SIZE, SIZE];
     let files = [
@@ -155,7 +156,7 @@ fn compare(dir: &Path, index: usize, buffers: &Buffers, size: f64) -> Result<(),
     let read = |name: String| {
         npy::read(&dir.join(&name)).map_err(|e| {
             (
-                "GOLDEN_MISSING",
+                Code::GoldenMissing,
                 format!("no usable golden buffer ({e}); run with --update-golden"),
             )
         })
@@ -164,7 +165,7 @@ fn compare(dir: &Path, index: usize, buffers: &Buffers, size: f64) -> Result<(),
     let (_, golden_id) = read(format!("view{index}.id.npy"))?;
     if golden_depth.len() != SIZE * SIZE || golden_id.len() != SIZE * SIZE {
         return Err((
-            "GOLDEN_MISSING",
+            Code::GoldenMissing,
             "golden buffers have the wrong size; run with --update-golden".into(),
         ));
     }
@@ -177,7 +178,7 @@ fn compare(dir: &Path, index: usize, buffers: &Buffers, size: f64) -> Result<(),
             let (_, values) = read(format!("view{index}.{aov}.npy"))?;
             if values.len() != SIZE * SIZE {
                 return Err((
-                    "GOLDEN_MISSING",
+                    Code::GoldenMissing,
                     format!("golden {aov} buffer has the wrong size; run with --update-golden"),
                 ));
             }
@@ -211,7 +212,7 @@ fn compare(dir: &Path, index: usize, buffers: &Buffers, size: f64) -> Result<(),
     let diff_path = dir.join(format!("view{index}.diff.png"));
     let written = write_difference(&diff_path, depth(buffers), &differs);
     Err((
-        "GOLDEN_MISMATCH",
+        Code::GoldenMismatch,
         format!(
             "{count} of {} pixels differ from the golden depth/id buffers ({}){}",
             SIZE * SIZE,

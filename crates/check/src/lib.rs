@@ -39,41 +39,11 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// How bad a finding is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Severity {
-    /// The asset is broken: it will not load, or loads wrong.
-    Error,
-    /// Probably a mistake; the asset still loads.
-    Warning,
-    /// Worth knowing.
-    Info,
-}
+pub use raycast_core::diagnostic::{Code, Diagnostic, Severity};
 
-impl Severity {
-    /// Lower-case name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Severity::Error => "error",
-            Severity::Warning => "warning",
-            Severity::Info => "info",
-        }
-    }
-}
-
-/// One problem found in an asset.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Finding {
-    /// Stable code, e.g. `ACCESSOR_INDEX_OOB`.
-    pub code: String,
-    /// Error, warning or info.
-    pub severity: Severity,
-    /// JSON pointer (glTF), prim path (USD), `line N` (OBJ), or empty for the whole file.
-    pub location: String,
-    /// One line for a person.
-    pub message: String,
-}
+/// One problem found in an asset: core's one [`Diagnostic`] type, with the code, severity,
+/// location and message every report shows.
+pub type Finding = Diagnostic;
 
 /// Most findings of one code kept per asset; the rest are counted in one `TRUNCATED` info.
 pub const MAX_PER_CODE: usize = 50;
@@ -82,7 +52,7 @@ pub const MAX_PER_CODE: usize = 50;
 #[derive(Debug, Default)]
 pub struct Findings {
     list: Vec<Finding>,
-    per_code: HashMap<String, usize>,
+    per_code: HashMap<Code, usize>,
 }
 
 impl Findings {
@@ -90,12 +60,12 @@ impl Findings {
     pub fn push(
         &mut self,
         severity: Severity,
-        code: &str,
+        code: Code,
         location: impl Into<String>,
         message: impl Into<String>,
     ) {
         let location = location.into();
-        let seen = self.per_code.entry(code.to_string()).or_insert(0);
+        let seen = self.per_code.entry(code).or_insert(0);
         *seen += 1;
         if *seen > MAX_PER_CODE {
             return;
@@ -108,26 +78,22 @@ impl Findings {
             *seen -= 1;
             return;
         }
-        self.list.push(Finding {
-            code: code.to_string(),
-            severity,
-            location,
-            message: message.into(),
-        });
+        self.list
+            .push(Finding::new(code, severity, location, message.into()));
     }
 
     /// Records an error.
-    pub fn error(&mut self, code: &str, location: impl Into<String>, message: impl Into<String>) {
+    pub fn error(&mut self, code: Code, location: impl Into<String>, message: impl Into<String>) {
         self.push(Severity::Error, code, location, message);
     }
 
     /// Records a warning.
-    pub fn warn(&mut self, code: &str, location: impl Into<String>, message: impl Into<String>) {
+    pub fn warn(&mut self, code: Code, location: impl Into<String>, message: impl Into<String>) {
         self.push(Severity::Warning, code, location, message);
     }
 
     /// Records an info.
-    pub fn info(&mut self, code: &str, location: impl Into<String>, message: impl Into<String>) {
+    pub fn info(&mut self, code: Code, location: impl Into<String>, message: impl Into<String>) {
         self.push(Severity::Info, code, location, message);
     }
 
@@ -138,20 +104,17 @@ impl Findings {
 
     /// The findings, with a `TRUNCATED` info per code that had too many.
     pub fn finish(mut self) -> Vec<Finding> {
-        let mut over: Vec<(String, usize)> = self
+        let mut over: Vec<(&'static str, usize)> = self
             .per_code
             .iter()
             .filter(|(_, &n)| n > MAX_PER_CODE)
-            .map(|(c, &n)| (c.clone(), n - MAX_PER_CODE))
+            .map(|(c, &n)| (c.name(), n - MAX_PER_CODE))
             .collect();
         over.sort();
         for (code, more) in over {
-            self.list.push(Finding {
-                code: "TRUNCATED".into(),
-                severity: Severity::Info,
-                location: String::new(),
-                message: format!("{more} more {code} findings not listed"),
-            });
+            let message = format!("{more} more {code} findings not listed");
+            let truncated = Finding::new(Code::Truncated, Severity::Info, "", message);
+            self.list.push(truncated);
         }
         self.list
     }
@@ -499,7 +462,7 @@ pub fn check_asset(asset: &Asset, options: &CheckOptions) -> AssetReport {
         Err(panic) => {
             let what = crate::error::panic_message(&*panic);
             findings.error(
-                "INTERNAL_PANIC",
+                Code::InternalPanic,
                 "",
                 format!("raycast failed on this asset (a bug; please report it): {what}"),
             );
@@ -519,17 +482,17 @@ fn check_into(
     let meta = match std::fs::metadata(path) {
         Ok(meta) => meta,
         Err(e) => {
-            findings.error("IO_ERROR", "", format!("cannot read: {e}"));
+            findings.error(Code::IoError, "", format!("cannot read: {e}"));
             return None;
         }
     };
     if !meta.is_file() {
-        findings.error("IO_ERROR", "", "not a regular file");
+        findings.error(Code::IoError, "", "not a regular file");
         return None;
     }
     if meta.len() > options.max_bytes {
         findings.error(
-            "FILE_TOO_LARGE",
+            Code::FileTooLarge,
             "",
             format!(
                 "{} bytes is more than the limit of {} (--max-memory): not read",
@@ -541,7 +504,7 @@ fn check_into(
     }
     let Some(format) = format_of(path) else {
         findings.error(
-            "UNSUPPORTED_FILE_TYPE",
+            Code::UnsupportedFileType,
             "",
             format!("not a {} file", import::FILE_TYPES),
         );
@@ -550,7 +513,7 @@ fn check_into(
     // The same words as a render's for content that is another format than the name says.
     let extension = crate::import::extension_of(path);
     if let Err(e) = crate::import::sniff::check_content(path, &extension) {
-        findings.error("FILE_TYPE_MISMATCH", "", e.message);
+        findings.error(Code::FileTypeMismatch, "", e.message);
         return None;
     }
     let scene = match format {
@@ -559,7 +522,7 @@ fn check_into(
             let bytes = match std::fs::read(path) {
                 Ok(bytes) => bytes,
                 Err(e) => {
-                    findings.error("IO_ERROR", "", format!("cannot read: {e}"));
+                    findings.error(Code::IoError, "", format!("cannot read: {e}"));
                     return None;
                 }
             };
@@ -590,7 +553,7 @@ fn check_into(
                 Severity::Error
             };
             let code = match format {
-                "gltf" | "glb" | "obj" => "LOAD_FAILED",
+                "gltf" | "glb" | "obj" => Code::LoadFailed,
                 _ => usd::load_failure_code(&e.message),
             };
             findings.push(
@@ -627,13 +590,13 @@ fn importer_warning(format: &str, warning: &str, findings: &mut Findings) {
         }
         if warning.contains(crate::import::usd::UNKNOWN_VALUE_TYPE) {
             // usd-core opens such a layer too, and leaves the values unread.
-            findings.warn("USD_UNKNOWN_VALUE_TYPE", "", warning.to_string());
+            findings.warn(Code::UsdUnknownValueType, "", warning.to_string());
             return;
         }
         if let Some((location, _)) = warning.split_once(": cannot be read: ") {
             // A value the file holds but the reader cannot decode (a corrupt crate field):
             // the file is broken there, though the render skips the prim and goes on.
-            findings.error("USD_UNREADABLE_VALUE", location, warning.to_string());
+            findings.error(Code::UsdUnreadableValue, location, warning.to_string());
             return;
         }
     }
@@ -642,7 +605,7 @@ fn importer_warning(format: &str, warning: &str, findings: &mut Findings) {
         .map(|(head, _)| head)
         .filter(|head| head.starts_with('/'))
         .unwrap_or("");
-    findings.info("IMPORTER_NOTE", location, warning.to_string());
+    findings.info(Code::ImporterNote, location, warning.to_string());
 }
 
 /// Parses `MIN..MAX` (either side may be empty for no bound).
@@ -683,11 +646,11 @@ mod tests {
     fn findings_are_capped() {
         let mut f = Findings::default();
         for i in 0..(MAX_PER_CODE + 10) {
-            f.error("X", format!("/{i}"), "bad");
+            f.error(Code::IndexOob, format!("/{i}"), "bad");
         }
-        f.error("X", "/0", "bad");
+        f.error(Code::IndexOob, "/0", "bad");
         let list = f.finish();
         assert_eq!(list.len(), MAX_PER_CODE + 1);
-        assert_eq!(list.last().map(|f| f.code.as_str()), Some("TRUNCATED"));
+        assert_eq!(list.last().map(|f| f.code), Some(Code::Truncated));
     }
 }

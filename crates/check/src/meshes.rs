@@ -6,6 +6,7 @@
 use super::Findings;
 use crate::import::{ply, stl};
 use crate::scene::Scene;
+use crate::Code;
 use std::path::Path;
 
 /// Reads the PLY (`format` "ply") or STL ("stl") file `path`; the scene, or `None` with the
@@ -14,7 +15,7 @@ pub fn check(path: &Path, format: &str, findings: &mut Findings) -> Option<Scene
     let bytes = match std::fs::read(path) {
         Ok(bytes) => bytes,
         Err(e) => {
-            findings.error("IO_ERROR", "", format!("cannot read: {e}"));
+            findings.error(Code::IoError, "", format!("cannot read: {e}"));
             return None;
         }
     };

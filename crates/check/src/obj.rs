@@ -3,6 +3,7 @@
 //! loads the file.
 
 use super::{resolve_inside, CheckOptions, Findings};
+use crate::Code;
 use std::path::Path;
 
 /// Checks an OBJ file held in `bytes`; returns whether the importer may run.
@@ -17,7 +18,7 @@ pub fn check(
         Ok(text) => text,
         Err(line) => {
             f.error(
-                "OBJ_NOT_TEXT",
+                Code::ObjNotText,
                 format!("line {line}"),
                 "the file is not UTF-8 text",
             );
@@ -25,7 +26,7 @@ pub fn check(
         }
     };
     if let Err(why) = crate::import::obj::check_statements(text) {
-        f.error("OBJ_NO_STATEMENT", "", why);
+        f.error(Code::ObjNoStatement, "", why);
         return false;
     }
     let base = path.parent().unwrap_or(Path::new("."));
@@ -46,7 +47,7 @@ pub fn check(
             "v" => {
                 vertices += 1;
                 if args.len() < 3 {
-                    f.error("OBJ_PARSE_ERROR", at, "a vertex needs x y z");
+                    f.error(Code::ObjParseError, at, "a vertex needs x y z");
                     continue;
                 }
                 match args
@@ -55,9 +56,9 @@ pub fn check(
                     .map(|a| a.parse::<f64>())
                     .collect::<Result<Vec<f64>, _>>()
                 {
-                    Err(_) => f.error("OBJ_PARSE_ERROR", at, format!("bad vertex '{line}'")),
+                    Err(_) => f.error(Code::ObjParseError, at, format!("bad vertex '{line}'")),
                     Ok(v) if v.iter().any(|x| !x.is_finite()) => {
-                        f.error("NON_FINITE_POSITION", at, "the vertex is NaN or infinite")
+                        f.error(Code::NonFinitePosition, at, "the vertex is NaN or infinite")
                     }
                     Ok(_) => {}
                 }
@@ -66,7 +67,7 @@ pub fn check(
                 faces += 1;
                 if args.len() < 3 {
                     f.warn(
-                        "DEGENERATE_FACE",
+                        Code::DegenerateFace,
                         at.clone(),
                         format!("a face with {} vertices", args.len()),
                     );
@@ -76,7 +77,7 @@ pub fn check(
                     match first.parse::<i64>() {
                         Err(_) => {
                             f.error(
-                                "OBJ_PARSE_ERROR",
+                                Code::ObjParseError,
                                 at.clone(),
                                 format!("bad face index '{corner}'"),
                             );
@@ -86,7 +87,7 @@ pub fn check(
                             let resolved = if i < 0 { vertices as i64 + i } else { i - 1 };
                             if i == 0 || resolved < 0 || resolved >= vertices as i64 {
                                 f.error(
-                                    "INDEX_OOB",
+                                    Code::IndexOob,
                                     at.clone(),
                                     format!(
                                         "face index {i} with {vertices} vertices defined so far"
@@ -101,9 +102,9 @@ pub fn check(
             "mtllib" => {
                 for name in &args {
                     match resolve_inside(base, root, name, options.allow_outside) {
-                        Err(why) => f.error("PATH_OUTSIDE_ASSET", at.clone(), why),
+                        Err(why) => f.error(Code::PathOutsideAsset, at.clone(), why),
                         Ok(p) if !p.is_file() => f.warn(
-                            "MISSING_REFERENCE",
+                            Code::MissingReference,
                             at.clone(),
                             format!("material library '{name}' cannot be found (materials are not read)"),
                         ),
@@ -116,7 +117,7 @@ pub fn check(
     }
     if faces == 0 && vertices == 0 && !text.trim().is_empty() && !f.has_errors() {
         f.warn(
-            "OBJ_NO_DATA",
+            Code::ObjNoData,
             "",
             "no vertex or face lines: is this an OBJ file?",
         );

@@ -232,7 +232,7 @@ pub fn github(reports: &[AssetReport], see: &str) -> String {
                 out,
                 "::{kind} file={}{line},title={}::{}{}",
                 gh_property(&r.path),
-                gh_property(&f.code),
+                gh_property(f.code.name()),
                 gh_data(&f.message),
                 gh_data(&at)
             );
@@ -275,7 +275,7 @@ mod tests {
             seconds: 0.0,
             scene: None,
             findings: vec![Finding {
-                code: "INDEX_OOB".into(),
+                code: crate::Code::IndexOob,
                 severity: Severity::Error,
                 location: "line 7".into(),
                 message: "50% <bad>\nnext".into(),

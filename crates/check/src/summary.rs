@@ -87,9 +87,9 @@ fn code_table(out: &mut String, reports: &[AssetReport]) {
     for r in reports {
         let mut seen = std::collections::BTreeSet::new();
         for f in &r.findings {
-            let entry = codes.entry((f.severity, &f.code)).or_default();
+            let entry = codes.entry((f.severity, f.code.name())).or_default();
             entry.0 += 1;
-            if seen.insert((f.severity, &f.code)) {
+            if seen.insert((f.severity, f.code.name())) {
                 entry.1 += 1;
             }
         }

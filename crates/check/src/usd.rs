@@ -7,6 +7,7 @@ use crate::error::Result;
 use crate::import::usd::child::{last_words, run_child, stopped_how};
 use crate::import::{self, LoadOptions};
 use crate::scene::Scene;
+use crate::Code;
 use std::path::Path;
 
 /// Checks that can refuse a file before the USD reader sees it: `.usdz` packages must store
@@ -22,14 +23,14 @@ pub fn precheck(path: &Path, _options: &CheckOptions, f: &mut Findings) -> bool 
     let bytes = match std::fs::read(path) {
         Ok(bytes) => bytes,
         Err(e) => {
-            f.error("IO_ERROR", "", format!("cannot read: {e}"));
+            f.error(Code::IoError, "", format!("cannot read: {e}"));
             return false;
         }
     };
     match usdz_problem(&bytes) {
         None => true,
         Some(problem) => {
-            f.error("USDZ_INVALID_PACKAGE", "", problem);
+            f.error(Code::UsdzInvalidPackage, "", problem);
             false
         }
     }
@@ -105,7 +106,7 @@ pub fn load(path: &Path, root: &Path, options: &CheckOptions, f: &mut Findings) 
     }
     for asset in refused {
         f.error(
-            "PATH_OUTSIDE_ASSET",
+            Code::PathOutsideAsset,
             "",
             format!("'{asset}' resolves outside the asset's folder: not read (--allow-outside reads it)"),
         );
@@ -117,11 +118,11 @@ pub fn load(path: &Path, root: &Path, options: &CheckOptions, f: &mut Findings) 
 /// an `SdfPath` (an ill-formed `<...>` literal, an `xformOpOrder` entry that is no attribute
 /// name; such paths once sent the reader's ancestor walks round without end), else
 /// `LOAD_FAILED`.
-pub fn load_failure_code(message: &str) -> &'static str {
+pub fn load_failure_code(message: &str) -> Code {
     if message.contains("ill-formed path <") || message.contains("is not an attribute name") {
-        "USD_INVALID_PATH"
+        Code::UsdInvalidPath
     } else {
-        "LOAD_FAILED"
+        Code::LoadFailed
     }
 }
 
@@ -136,13 +137,13 @@ pub fn composition_finding(message: &str, f: &mut Findings) {
         .map(|(_, rest)| format!("/{}", rest.split([' ', ':']).next().unwrap_or("")))
         .unwrap_or_default();
     if message.contains(import::usd::UNREAD_LAYER) || message.contains(import::usd::UNREAD_NOTE) {
-        f.info("USD_UNSUPPORTED_LAYER", location, message.to_string());
+        f.info(Code::UsdUnsupportedLayer, location, message.to_string());
     } else if message.contains("cycle") {
-        f.error("USD_COMPOSITION_CYCLE", location, message.to_string());
+        f.error(Code::UsdCompositionCycle, location, message.to_string());
     } else if message.starts_with("unresolved") {
-        f.error("MISSING_REFERENCE", location, message.to_string());
+        f.error(Code::MissingReference, location, message.to_string());
     } else {
-        f.warn("USD_COMPOSITION_ERROR", location, message.to_string());
+        f.warn(Code::UsdCompositionError, location, message.to_string());
     }
 }
 
@@ -190,7 +191,7 @@ pub fn check_isolated(
         Ok(run) => run,
         Err(e) => {
             f.error(
-                "IO_ERROR",
+                Code::IoError,
                 "",
                 format!("cannot start the USD check process: {e}"),
             );
@@ -210,7 +211,7 @@ pub fn check_isolated(
             for finding in findings {
                 f.push(
                     finding.severity,
-                    &finding.code,
+                    finding.code,
                     finding.location,
                     finding.message,
                 );
@@ -223,7 +224,7 @@ pub fn check_isolated(
             let last = last_words(&stderr);
             let how = stopped_how(status, options.usd_timeout);
             f.error(
-                "USD_READER_CRASHED",
+                Code::UsdReaderCrashed,
                 "",
                 if last.is_empty() {
                     format!("the USD reader {how} on this file")

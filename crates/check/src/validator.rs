@@ -5,6 +5,7 @@
 //! `truncated`.
 
 use super::{AssetReport, Severity};
+use crate::Code;
 use serde::Serialize;
 
 /// One validator-format report.
@@ -82,7 +83,7 @@ pub fn report(report: &AssetReport) -> ValidatorReport<'_> {
                 .findings
                 .iter()
                 .map(|f| Message {
-                    code: &f.code,
+                    code: f.code.name(),
                     message: &f.message,
                     severity: match f.severity {
                         Severity::Error => 0,
@@ -92,7 +93,8 @@ pub fn report(report: &AssetReport) -> ValidatorReport<'_> {
                     pointer: &f.location,
                 })
                 .collect(),
-            truncated: report.omitted > 0 || report.findings.iter().any(|f| f.code == "TRUNCATED"),
+            truncated: report.omitted > 0
+                || report.findings.iter().any(|f| f.code == Code::Truncated),
         },
     }
 }

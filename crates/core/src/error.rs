@@ -1,5 +1,6 @@
 //! The crate's error type: every failure names the file it concerns and what is wrong.
 
+use crate::diagnostic::{Code, Diagnostic};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -13,6 +14,9 @@ pub struct Error {
     /// Whether the request itself is invalid (the command line exits 2) or the run failed
     /// (exit 1).
     pub kind: ErrorKind,
+    /// The diagnostic code of the problem, when the reader that failed gave one (a glTF
+    /// validator code, `USD_INVALID_PATH`, ...); [`Error::code`] reads it.
+    pub code: Option<Code>,
 }
 
 /// What kind of failure an [`Error`] is, for callers that act on it: the command line's exit
@@ -39,6 +43,7 @@ impl Error {
             path: Some(path.as_ref().to_path_buf()),
             message: message.into(),
             kind: ErrorKind::Failure,
+            code: None,
         }
     }
 
@@ -48,6 +53,7 @@ impl Error {
             path: None,
             message: message.into(),
             kind: ErrorKind::Failure,
+            code: None,
         }
     }
 
@@ -57,6 +63,29 @@ impl Error {
             kind: ErrorKind::Usage,
             ..Error::msg(message)
         }
+    }
+
+    /// The error a fail-fast reader stops with: `diagnostic`, about `path`, with its code.
+    pub fn from_diagnostic(path: impl AsRef<Path>, diagnostic: &Diagnostic) -> Self {
+        Error::in_file(path, diagnostic.to_string()).with_code(diagnostic.code)
+    }
+
+    /// This error with the diagnostic code `code`.
+    pub fn with_code(self, code: Code) -> Self {
+        Error {
+            code: Some(code),
+            ..self
+        }
+    }
+
+    /// The error's code: the one its reader gave, else `FAILED`, `USAGE` or `NOT_FOUND` by
+    /// its [`ErrorKind`] (what the Python package's exceptions carry as `.code`).
+    pub fn code(&self) -> Code {
+        self.code.unwrap_or(match self.kind {
+            ErrorKind::Failure => Code::Failed,
+            ErrorKind::Usage => Code::Usage,
+            ErrorKind::NotFound => Code::NotFound,
+        })
     }
 
     /// This error marked as a usage error.

@@ -4,6 +4,7 @@ use super::Walker;
 use crate::import::gltf::accessor::span_fits;
 use crate::import::gltf::accessor::Layout;
 use crate::import::gltf::document::{index_of, numbers};
+use crate::Code;
 use serde_json::Value;
 
 impl Walker<'_, '_> {
@@ -13,7 +14,7 @@ impl Walker<'_, '_> {
             let at = format!("/accessors/{i}");
             if acc.get("count").and_then(Value::as_u64) == Some(0) {
                 self.f.error(
-                    "VALUE_NOT_IN_RANGE",
+                    Code::ValueNotInRange,
                     format!("{at}/count"),
                     "must be at least 1",
                 );
@@ -22,7 +23,7 @@ impl Walker<'_, '_> {
             let offset = index_of(acc, "byteOffset").unwrap_or(0);
             if view.is_none() && acc.get("byteOffset").is_some() {
                 self.f.error(
-                    "UNSATISFIED_DEPENDENCY",
+                    Code::UnsatisfiedDependency,
                     format!("{at}/byteOffset"),
                     "byteOffset without bufferView",
                 );
@@ -32,7 +33,7 @@ impl Walker<'_, '_> {
             };
             if layout.normalized && matches!(layout.component, 5125 | 5126) {
                 self.f.error(
-                    "ACCESSOR_NORMALIZED_INVALID",
+                    Code::AccessorNormalizedInvalid,
                     format!("{at}/normalized"),
                     "only 8- and 16-bit integer accessors can be normalized",
                 );
@@ -40,7 +41,7 @@ impl Walker<'_, '_> {
             if let Some(view_index) = view {
                 if !offset.is_multiple_of(layout.size) {
                     self.f.error(
-                        "ACCESSOR_OFFSET_ALIGNMENT",
+                        Code::AccessorOffsetAlignment,
                         format!("{at}/byteOffset"),
                         format!("offset {offset} is not a multiple of {}", layout.size),
                     );
@@ -50,7 +51,7 @@ impl Walker<'_, '_> {
                     let view_offset = index_of(v, "byteOffset").unwrap_or(0);
                     if !(view_offset + offset).is_multiple_of(layout.size) {
                         self.f.error(
-                            "ACCESSOR_TOTAL_OFFSET_ALIGNMENT",
+                            Code::AccessorTotalOffsetAlignment,
                             at.clone(),
                             format!(
                                 "total offset {} is not a multiple of {}",
@@ -61,7 +62,7 @@ impl Walker<'_, '_> {
                     }
                     if layout.rows.is_some() && !offset.is_multiple_of(4) {
                         self.f.error(
-                            "ACCESSOR_MATRIX_ALIGNMENT",
+                            Code::AccessorMatrixAlignment,
                             format!("{at}/byteOffset"),
                             "matrix accessors must start on a 4-byte boundary",
                         );
@@ -69,7 +70,7 @@ impl Walker<'_, '_> {
                     let stride = index_of(v, "byteStride");
                     if let Some(stride) = stride.filter(|&s| s < layout.element) {
                         self.f.error(
-                            "ACCESSOR_SMALL_BYTESTRIDE",
+                            Code::AccessorSmallBytestride,
                             at.clone(),
                             format!(
                                 "byteStride {stride} is smaller than an element ({} bytes)",
@@ -89,7 +90,7 @@ impl Walker<'_, '_> {
                             layout.last,
                         ) {
                             self.f.error(
-                                "ACCESSOR_TOO_LONG",
+                                Code::AccessorTooLong,
                                 at.clone(),
                                 format!("{} elements from offset {offset} do not fit buffer view {view_index} ({view_length} bytes)", layout.count),
                             );
@@ -101,7 +102,7 @@ impl Walker<'_, '_> {
                 let n = index_of(sparse, "count").unwrap_or(0);
                 if n == 0 || n > layout.count {
                     self.f.error(
-                        "ACCESSOR_SPARSE_COUNT_OUT_OF_RANGE",
+                        Code::AccessorSparseCountOutOfRange,
                         format!("{at}/sparse/count"),
                         format!("sparse count {n} is not in 1..={}", layout.count),
                     );
@@ -112,7 +113,7 @@ impl Walker<'_, '_> {
                     .and_then(Value::as_u64);
                 if ic.is_some_and(|c| !matches!(c, 5121 | 5123 | 5125)) {
                     self.f.error(
-                        "VALUE_NOT_IN_LIST",
+                        Code::ValueNotInList,
                         format!("{at}/sparse/indices/componentType"),
                         "sparse indices must be unsigned integers",
                     );
@@ -131,14 +132,14 @@ impl Walker<'_, '_> {
         let at = format!("/accessors/{index}/sparse");
         if let Some(k) = (1..targets.len()).find(|&k| targets[k] <= targets[k - 1]) {
             self.f.error(
-                "ACCESSOR_SPARSE_INDICES_NON_INCREASING",
+                Code::AccessorSparseIndicesNonIncreasing,
                 at.clone(),
                 format!("sparse index {k} ({}) does not increase", targets[k]),
             );
         }
         if let Some(bad) = targets.iter().find(|&&t| t >= count) {
             self.f.error(
-                "ACCESSOR_SPARSE_INDEX_OOB",
+                Code::AccessorSparseIndexOob,
                 at,
                 format!("sparse index {bad} >= count {count}"),
             );
@@ -153,7 +154,7 @@ impl Walker<'_, '_> {
         for (key, bound) in [("min", &min), ("max", &max)] {
             if bound.as_ref().is_some_and(|b| b.len() != layout.comps) {
                 self.f.error(
-                    "ACCESSOR_MIN_MAX_COUNT",
+                    Code::AccessorMinMaxCount,
                     format!("{at}/{key}"),
                     format!("{key} must have {} entries", layout.comps),
                 );
@@ -169,7 +170,7 @@ impl Walker<'_, '_> {
         if layout.component == 5126 {
             if let Some(bad) = values.iter().position(|v| !v.is_finite()) {
                 self.f.error(
-                    "ACCESSOR_INVALID_FLOAT",
+                    Code::AccessorInvalidFloat,
                     at.to_string(),
                     format!("element {} holds NaN or infinity", bad / layout.comps),
                 );
@@ -197,7 +198,7 @@ impl Walker<'_, '_> {
                 let declared = as_stored(min[c]);
                 if actual_min[c] < declared {
                     self.f.error(
-                        "ACCESSOR_ELEMENT_OUT_OF_MIN_BOUND",
+                        Code::AccessorElementOutOfMinBound,
                         format!("{at}/min/{c}"),
                         format!(
                             "a value {} is below the declared min {}",
@@ -207,7 +208,7 @@ impl Walker<'_, '_> {
                 }
                 if actual_min[c] != declared {
                     self.f.error(
-                        "ACCESSOR_MIN_MISMATCH",
+                        Code::AccessorMinMismatch,
                         format!("{at}/min/{c}"),
                         format!(
                             "declared min {} but the data's is {}",
@@ -222,7 +223,7 @@ impl Walker<'_, '_> {
                 let declared = as_stored(max[c]);
                 if actual_max[c] > declared {
                     self.f.error(
-                        "ACCESSOR_ELEMENT_OUT_OF_MAX_BOUND",
+                        Code::AccessorElementOutOfMaxBound,
                         format!("{at}/max/{c}"),
                         format!(
                             "a value {} is above the declared max {}",
@@ -232,7 +233,7 @@ impl Walker<'_, '_> {
                 }
                 if actual_max[c] != declared {
                     self.f.error(
-                        "ACCESSOR_MAX_MISMATCH",
+                        Code::AccessorMaxMismatch,
                         format!("{at}/max/{c}"),
                         format!(
                             "declared max {} but the data's is {}",

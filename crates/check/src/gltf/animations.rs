@@ -2,6 +2,7 @@
 
 use super::Walker;
 use crate::import::gltf::document::{array, index_of};
+use crate::Code;
 use serde_json::Value;
 use std::collections::HashSet;
 
@@ -18,7 +19,7 @@ impl Walker<'_, '_> {
                 let node = target.and_then(|t| index_of(t, "node"));
                 if let Some(bad) = index_of(channel, "sampler").filter(|&k| k >= samplers.len()) {
                     self.f.error(
-                        "UNRESOLVED_REFERENCE",
+                        Code::UnresolvedReference,
                         format!("{at}/sampler"),
                         format!("sampler {bad} does not exist"),
                     );
@@ -27,7 +28,7 @@ impl Walker<'_, '_> {
                 if let (Some(node), Some(path)) = (node, path) {
                     if !targets.insert((node, path.to_string())) {
                         self.f.error(
-                            "ANIMATION_DUPLICATE_TARGETS",
+                            Code::AnimationDuplicateTargets,
                             format!("{at}/target"),
                             "two channels animate the same property",
                         );
@@ -35,7 +36,7 @@ impl Walker<'_, '_> {
                     if let Some(n) = nodes.get(node) {
                         if n.get("matrix").is_some() && path != "weights" {
                             self.f.error(
-                                "ANIMATION_CHANNEL_TARGET_NODE_MATRIX",
+                                Code::AnimationChannelTargetNodeMatrix,
                                 format!("{at}/target/node"),
                                 "an animated node cannot have a matrix",
                             );
@@ -50,7 +51,7 @@ impl Walker<'_, '_> {
                                 });
                             if !morphs {
                                 self.f.error(
-                                    "ANIMATION_CHANNEL_TARGET_NODE_WEIGHTS_NO_MORPHS",
+                                    Code::AnimationChannelTargetNodeWeightsNoMorphs,
                                     format!("{at}/target/node"),
                                     "weights animated on a node without morph targets",
                                 );
@@ -76,7 +77,7 @@ impl Walker<'_, '_> {
                         .is_some_and(|v| v.get("byteStride").is_some())
                     {
                         self.f.error(
-                            "ANIMATION_SAMPLER_ACCESSOR_WITH_BYTESTRIDE",
+                            Code::AnimationSamplerAccessorWithBytestride,
                             sat.clone(),
                             "animation accessors cannot use a byteStride",
                         );
@@ -86,7 +87,7 @@ impl Walker<'_, '_> {
                 if let (Some(i), Some(l)) = (input, in_layout) {
                     if l.comps != 1 || l.component != 5126 {
                         self.f.error(
-                            "ANIMATION_SAMPLER_INPUT_ACCESSOR_INVALID_FORMAT",
+                            Code::AnimationSamplerInputAccessorInvalidFormat,
                             format!("{sat}/input"),
                             "input must be SCALAR float",
                         );
@@ -94,14 +95,14 @@ impl Walker<'_, '_> {
                         let acc = &self.list("accessors")[i];
                         if acc.get("min").is_none() || acc.get("max").is_none() {
                             self.f.error(
-                                "ANIMATION_SAMPLER_INPUT_ACCESSOR_WITHOUT_BOUNDS",
+                                Code::AnimationSamplerInputAccessorWithoutBounds,
                                 format!("{sat}/input"),
                                 "input needs min and max",
                             );
                         }
                         if cubic && l.count < 2 {
                             self.f.error(
-                                "ANIMATION_SAMPLER_INPUT_ACCESSOR_TOO_FEW_ELEMENTS",
+                                Code::AnimationSamplerInputAccessorTooFewElements,
                                 format!("{sat}/input"),
                                 "CUBICSPLINE needs two keyframes",
                             );
@@ -109,14 +110,14 @@ impl Walker<'_, '_> {
                         if let Some(times) = self.values(i) {
                             if times.iter().any(|t| *t < 0.0) {
                                 self.f.error(
-                                    "ACCESSOR_ANIMATION_INPUT_NEGATIVE",
+                                    Code::AccessorAnimationInputNegative,
                                     format!("/accessors/{i}"),
                                     "negative key time",
                                 );
                             }
                             if times.windows(2).any(|w| w[1] <= w[0]) {
                                 self.f.error(
-                                    "ACCESSOR_ANIMATION_INPUT_NON_INCREASING",
+                                    Code::AccessorAnimationInputNonIncreasing,
                                     format!("/accessors/{i}"),
                                     "key times do not increase",
                                 );
@@ -142,7 +143,7 @@ impl Walker<'_, '_> {
                     };
                     if !ok {
                         self.f.error(
-                            "ANIMATION_SAMPLER_OUTPUT_ACCESSOR_INVALID_FORMAT",
+                            Code::AnimationSamplerOutputAccessorInvalidFormat,
                             format!("{sat}/output"),
                             format!("invalid output format for {path}"),
                         );
@@ -160,7 +161,7 @@ impl Walker<'_, '_> {
                         };
                         if l.count != inl.count * per * morphs {
                             self.f.error(
-                                "ANIMATION_SAMPLER_OUTPUT_ACCESSOR_INVALID_COUNT",
+                                Code::AnimationSamplerOutputAccessorInvalidCount,
                                 format!("{sat}/output"),
                                 format!("{} outputs for {} inputs", l.count, inl.count),
                             );
@@ -179,7 +180,7 @@ impl Walker<'_, '_> {
                             });
                             if bad {
                                 self.f.error(
-                                    "ACCESSOR_ANIMATION_SAMPLER_OUTPUT_NON_NORMALIZED_QUATERNION",
+                                    Code::AccessorAnimationSamplerOutputNonNormalizedQuaternion,
                                     format!("/accessors/{o}"),
                                     "rotation keys are not unit quaternions",
                                 );

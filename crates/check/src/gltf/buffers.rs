@@ -5,6 +5,7 @@
 use super::{readable, Walker};
 use crate::import::gltf::buffers::{resolve, Resource};
 use crate::import::gltf::document::index_of;
+use crate::Code;
 use serde_json::Value;
 use std::io::Read;
 
@@ -17,7 +18,7 @@ impl Walker<'_, '_> {
             let declared = buffer.get("byteLength").and_then(Value::as_u64);
             if declared == Some(0) {
                 self.f.error(
-                    "VALUE_NOT_IN_RANGE",
+                    Code::ValueNotInRange,
                     format!("{at}/byteLength"),
                     "must be at least 1",
                 );
@@ -26,7 +27,7 @@ impl Walker<'_, '_> {
             if let (true, Some(bin), Some(declared)) = (uses_bin, self.doc.bin_chunk(), declared) {
                 if bin.len() as u64 > declared + 3 {
                     self.f.warn(
-                        "BUFFER_GLB_CHUNK_TOO_BIG",
+                        Code::BufferGlbChunkTooBig,
                         at,
                         format!(
                             "the BIN chunk has {} bytes for a {declared}-byte buffer",
@@ -48,7 +49,7 @@ impl Walker<'_, '_> {
             let length = view.get("byteLength").and_then(whole);
             if length == Some(0.0) {
                 self.f.error(
-                    "VALUE_NOT_IN_RANGE",
+                    Code::ValueNotInRange,
                     format!("{at}/byteLength"),
                     "must be at least 1",
                 );
@@ -63,7 +64,7 @@ impl Walker<'_, '_> {
                 {
                     if offset + length > declared {
                         self.f.error(
-                            "BUFFER_VIEW_TOO_LONG",
+                            Code::BufferViewTooLong,
                             format!("{at}/byteLength"),
                             format!(
                                 "bytes {}..{} do not fit buffer {buffer} of {} bytes",
@@ -79,27 +80,27 @@ impl Walker<'_, '_> {
                 let sat = format!("{at}/byteStride");
                 if !(4..=252).contains(&stride) {
                     self.f.error(
-                        "VALUE_NOT_IN_RANGE",
+                        Code::ValueNotInRange,
                         sat.clone(),
                         format!("byteStride {stride} is not in 4..252"),
                     );
                 } else if stride % 4 != 0 {
                     self.f.error(
-                        "VALUE_MULTIPLE_OF",
+                        Code::ValueMultipleOf,
                         sat.clone(),
                         format!("byteStride {stride} is not a multiple of 4"),
                     );
                 }
                 if length.is_some_and(|l| stride as f64 > l) {
                     self.f.error(
-                        "BUFFER_VIEW_TOO_BIG_BYTE_STRIDE",
+                        Code::BufferViewTooBigByteStride,
                         sat.clone(),
                         "byteStride is larger than the view",
                     );
                 }
                 if view.get("target").and_then(Value::as_u64) == Some(34963) {
                     self.f.error(
-                        "BUFFER_VIEW_INVALID_BYTE_STRIDE",
+                        Code::BufferViewInvalidByteStride,
                         sat,
                         "an index buffer view cannot have a byteStride",
                     );
@@ -122,7 +123,7 @@ impl Walker<'_, '_> {
             };
             if image.get("mimeType").is_none() {
                 self.f.error(
-                    "UNSATISFIED_DEPENDENCY",
+                    Code::UnsatisfiedDependency,
                     format!("{at}/mimeType"),
                     "an image in a buffer view needs a mimeType",
                 );
@@ -133,7 +134,7 @@ impl Walker<'_, '_> {
                 .is_some_and(|v| v.get("byteStride").is_some())
             {
                 self.f.error(
-                    "IMAGE_BUFFER_VIEW_WITH_BYTESTRIDE",
+                    Code::ImageBufferViewWithBytestride,
                     format!("{at}/bufferView"),
                     "an image's buffer view has a byteStride",
                 );
@@ -158,7 +159,7 @@ impl Walker<'_, '_> {
                     "image/png" | "image/jpeg" | "image/webp" | "image/ktx2"
                 ) {
                     self.f.error(
-                        "IMAGE_MIME_TYPE_INVALID",
+                        Code::ImageMimeTypeInvalid,
                         at,
                         format!("image data: URI has media type '{mime}'"),
                     );
@@ -172,7 +173,7 @@ impl Walker<'_, '_> {
                 if read.is_err() || !path.is_file() {
                     // Images are never read by raycast: a missing one is a warning.
                     self.f.warn(
-                        "IO_ERROR",
+                        Code::IoError,
                         at,
                         format!("image file '{decoded}' cannot be found"),
                     );
@@ -189,13 +190,13 @@ impl Walker<'_, '_> {
         if data.starts_with(PNG) {
             if data.len() < 33 && data.len() < 64 {
                 self.f.error(
-                    "IMAGE_UNEXPECTED_EOS",
+                    Code::ImageUnexpectedEos,
                     at.to_string(),
                     "the PNG data ends early",
                 );
             } else if &data[12..16] != b"IHDR" {
                 self.f.error(
-                    "IMAGE_DATA_INVALID",
+                    Code::ImageDataInvalid,
                     at.to_string(),
                     "the PNG data has no IHDR chunk",
                 );
@@ -203,18 +204,21 @@ impl Walker<'_, '_> {
         } else if data.starts_with(&[0xFF, 0xD8]) {
             if data.len() < 4 {
                 self.f.error(
-                    "IMAGE_UNEXPECTED_EOS",
+                    Code::ImageUnexpectedEos,
                     at.to_string(),
                     "the JPEG data ends early",
                 );
             }
         } else if data.len() >= 4 && &data[..4] == b"RIFF" || data.starts_with(b"\xABKTX") {
         } else if data.len() >= 8 && data[..8].starts_with(&PNG[..4]) {
-            self.f
-                .error("IMAGE_DATA_INVALID", at.to_string(), "broken PNG signature");
+            self.f.error(
+                Code::ImageDataInvalid,
+                at.to_string(),
+                "broken PNG signature",
+            );
         } else {
             self.f.warn(
-                "IMAGE_UNRECOGNIZED_FORMAT",
+                Code::ImageUnrecognizedFormat,
                 at.to_string(),
                 "not PNG, JPEG, WebP or KTX2 data",
             );

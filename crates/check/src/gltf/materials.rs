@@ -7,6 +7,7 @@
 //! it cannot read such a document at all.
 
 use super::{readable, Walker};
+use crate::Code;
 use serde_json::{Map, Value};
 
 /// A number a texture info holds beside its index: (key, least, greatest value).
@@ -65,13 +66,13 @@ impl<'a> Walker<'a, '_> {
         let at = format!("{at}/material");
         if material.get("normalTexture").is_some() {
             self.f.warn(
-                "MESH_PRIMITIVE_GENERATED_TANGENT_SPACE",
+                Code::MeshPrimitiveGeneratedTangentSpace,
                 at,
                 "the material needs a tangent space the primitive does not give (NORMAL and TANGENT): a viewer generates it",
             );
         } else {
             self.f.error(
-                "MESH_PRIMITIVE_NO_TANGENT_SPACE",
+                Code::MeshPrimitiveNoTangentSpace,
                 at,
                 "the material needs a tangent space the primitive does not give (NORMAL and TANGENT), and has no normalTexture to generate it",
             );
@@ -109,7 +110,7 @@ impl<'a> Walker<'a, '_> {
         let at = format!("{at}/{key}");
         match info.get("index") {
             None => self.f.error(
-                "UNDEFINED_PROPERTY",
+                Code::UndefinedProperty,
                 format!("{at}/index"),
                 "property 'index' must be defined",
             ),
@@ -132,7 +133,7 @@ impl<'a> Walker<'a, '_> {
         match value.as_f64() {
             None => self.type_mismatch(&at, "a number"),
             Some(x) if x < min || x > max => self.f.error(
-                "VALUE_NOT_IN_RANGE",
+                Code::ValueNotInRange,
                 at,
                 format!("{} is not in [{min}, {max}]", readable(x)),
             ),
@@ -151,7 +152,7 @@ impl<'a> Walker<'a, '_> {
         };
         if items.len() != len {
             return self.f.error(
-                "ARRAY_LENGTH_NOT_IN_LIST",
+                Code::ArrayLengthNotInList,
                 at,
                 format!("{} numbers, not {len}", items.len()),
             );
@@ -159,12 +160,12 @@ impl<'a> Walker<'a, '_> {
         for (i, item) in items.iter().enumerate() {
             match item.as_f64() {
                 None => self.f.error(
-                    "ARRAY_TYPE_MISMATCH",
+                    Code::ArrayTypeMismatch,
                     format!("{at}/{i}"),
                     "expected a number",
                 ),
                 Some(x) if !(0.0..=1.0).contains(&x) => self.f.error(
-                    "VALUE_NOT_IN_RANGE",
+                    Code::ValueNotInRange,
                     format!("{at}/{i}"),
                     format!("{} is not in [0, 1]", readable(x)),
                 ),
@@ -175,7 +176,7 @@ impl<'a> Walker<'a, '_> {
 
     fn type_mismatch(&mut self, at: &str, expected: &str) {
         self.f.error(
-            "TYPE_MISMATCH",
+            Code::TypeMismatch,
             at.to_string(),
             format!("expected {expected}"),
         );

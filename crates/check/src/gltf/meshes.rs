@@ -4,6 +4,7 @@
 use super::Walker;
 use crate::import::gltf::accessor::Layout;
 use crate::import::gltf::document::{array, as_index, escape, index_of};
+use crate::Code;
 use serde_json::Value;
 use std::collections::{HashMap, HashSet};
 
@@ -52,7 +53,7 @@ impl Walker<'_, '_> {
                         && !name.starts_with('_')
                     {
                         self.f.error(
-                            "MESH_PRIMITIVE_INVALID_ATTRIBUTE",
+                            Code::MeshPrimitiveInvalidAttribute,
                             aat.clone(),
                             format!("'{name}' is not a valid attribute semantic"),
                         );
@@ -65,7 +66,7 @@ impl Walker<'_, '_> {
                     };
                     if count.is_some_and(|c| c != layout.count) {
                         self.f.error(
-                            "MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT",
+                            Code::MeshPrimitiveUnequalAccessorCount,
                             aat.clone(),
                             "attribute accessors have different counts",
                         );
@@ -73,7 +74,7 @@ impl Walker<'_, '_> {
                     count.get_or_insert(layout.count);
                     if layout.component == 5125 {
                         self.f.error(
-                            "MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_UNSIGNED_INT",
+                            Code::MeshPrimitiveAttributesAccessorUnsignedInt,
                             aat.clone(),
                             "vertex attributes cannot be UNSIGNED_INT",
                         );
@@ -87,7 +88,7 @@ impl Walker<'_, '_> {
                     };
                     if !format_ok {
                         self.f.error(
-                            "MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT",
+                            Code::MeshPrimitiveAttributesAccessorInvalidFormat,
                             aat.clone(),
                             format!("invalid accessor format for {name}"),
                         );
@@ -97,7 +98,7 @@ impl Walker<'_, '_> {
                         && (acc_json.get("min").is_none() || acc_json.get("max").is_none())
                     {
                         self.f.error(
-                            "MESH_PRIMITIVE_POSITION_ACCESSOR_WITHOUT_BOUNDS",
+                            Code::MeshPrimitivePositionAccessorWithoutBounds,
                             aat.clone(),
                             "POSITION accessors must have min and max",
                         );
@@ -109,7 +110,7 @@ impl Walker<'_, '_> {
                                 + index_of(acc_json, "byteOffset").unwrap_or(0);
                             if !total.is_multiple_of(4) {
                                 self.f.error(
-                                    "MESH_PRIMITIVE_ACCESSOR_UNALIGNED",
+                                    Code::MeshPrimitiveAccessorUnaligned,
                                     aat.clone(),
                                     "vertex attribute data must start on a 4-byte boundary",
                                 );
@@ -133,7 +134,7 @@ impl Walker<'_, '_> {
                     ns.sort_unstable();
                     if ns.iter().enumerate().any(|(i, &n)| i != n) {
                         self.f.error(
-                            "MESH_PRIMITIVE_INDEXED_SEMANTIC_CONTINUITY",
+                            Code::MeshPrimitiveIndexedSemanticContinuity,
                             format!("{at}/attributes"),
                             format!("{base}_n sets are not numbered 0, 1, 2, ..."),
                         );
@@ -150,21 +151,21 @@ impl Walker<'_, '_> {
                     .count();
                 if joints != weights {
                     self.f.error(
-                        "MESH_PRIMITIVE_JOINTS_WEIGHTS_MISMATCH",
+                        Code::MeshPrimitiveJointsWeightsMismatch,
                         format!("{at}/attributes"),
                         "JOINTS_n and WEIGHTS_n come in pairs",
                     );
                 }
                 if !has("POSITION") {
                     self.f.warn(
-                        "MESH_PRIMITIVE_NO_POSITION",
+                        Code::MeshPrimitiveNoPosition,
                         format!("{at}/attributes"),
                         "no POSITION: nothing is drawn",
                     );
                 }
                 if has("TANGENT") && !has("NORMAL") {
                     self.f.warn(
-                        "MESH_PRIMITIVE_TANGENT_WITHOUT_NORMAL",
+                        Code::MeshPrimitiveTangentWithoutNormal,
                         format!("{at}/attributes"),
                         "TANGENT without NORMAL",
                     );
@@ -176,7 +177,7 @@ impl Walker<'_, '_> {
                     let needed = max_tex_coord(material);
                     if needed.is_some_and(|n| n >= texcoords) {
                         self.f.error(
-                            "MESH_PRIMITIVE_TOO_FEW_TEXCOORDS",
+                            Code::MeshPrimitiveTooFewTexcoords,
                             at.clone(),
                             "the material reads a TEXCOORD set the primitive does not have",
                         );
@@ -198,7 +199,7 @@ impl Walker<'_, '_> {
                 let targets = array(prim, "targets");
                 if targets_count.is_some_and(|t| t != targets.len()) {
                     self.f.error(
-                        "MESH_PRIMITIVES_UNEQUAL_TARGETS_COUNT",
+                        Code::MeshPrimitivesUnequalTargetsCount,
                         format!("{at}/targets"),
                         "primitives of a mesh have different numbers of morph targets",
                     );
@@ -212,7 +213,7 @@ impl Walker<'_, '_> {
                         let tat = format!("{at}/targets/{t}/{}", escape(name));
                         if !attributes.contains_key(name) {
                             self.f.error(
-                                "MESH_PRIMITIVE_MORPH_TARGET_NO_BASE_ACCESSOR",
+                                Code::MeshPrimitiveMorphTargetNoBaseAccessor,
                                 tat.clone(),
                                 format!("morph target {name} has no base attribute"),
                             );
@@ -223,7 +224,7 @@ impl Walker<'_, '_> {
                         if let Some(layout) = self.layout(acc) {
                             if count.is_some_and(|c| c != layout.count) {
                                 self.f.error(
-                                    "MESH_PRIMITIVE_MORPH_TARGET_INVALID_ATTRIBUTE_COUNT",
+                                    Code::MeshPrimitiveMorphTargetInvalidAttributeCount,
                                     tat.clone(),
                                     "morph target accessor count differs from the base",
                                 );
@@ -234,7 +235,7 @@ impl Walker<'_, '_> {
                             && (acc_json.get("min").is_none() || acc_json.get("max").is_none())
                         {
                             self.f.error(
-                                "MESH_PRIMITIVE_POSITION_ACCESSOR_WITHOUT_BOUNDS",
+                                Code::MeshPrimitivePositionAccessorWithoutBounds,
                                 tat.clone(),
                                 "morph POSITION accessors must have min and max",
                             );
@@ -247,7 +248,7 @@ impl Walker<'_, '_> {
             {
                 if weights.len() != targets {
                     self.f.error(
-                        "MESH_INVALID_WEIGHTS_COUNT",
+                        Code::MeshInvalidWeightsCount,
                         format!("/meshes/{m}/weights"),
                         format!("{} weights for {targets} morph targets", weights.len()),
                     );
@@ -261,7 +262,7 @@ impl Walker<'_, '_> {
             };
             if users > 1 && v.get("byteStride").is_none() {
                 self.f.error(
-                    "MESH_PRIMITIVE_ACCESSOR_WITHOUT_BYTESTRIDE",
+                    Code::MeshPrimitiveAccessorWithoutBytestride,
                     format!("/bufferViews/{view}"),
                     format!("a buffer view shared by {users} vertex accessors needs a byteStride"),
                 );
@@ -293,12 +294,12 @@ impl Walker<'_, '_> {
                 let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
                 if (len - 1.0).abs() > super::UNIT_VECTOR_TOLERANCE {
                     Some((
-                        "ACCESSOR_VECTOR3_NON_UNIT",
+                        Code::AccessorVector3NonUnit,
                         format!("element {e} has length {len}"),
                     ))
                 } else if name == "TANGENT" && comps == 4 && v[3] != 1.0 && v[3] != -1.0 {
                     Some((
-                        "ACCESSOR_INVALID_SIGN",
+                        Code::AccessorInvalidSign,
                         format!("element {e} has w = {}", v[3]),
                     ))
                 } else {
@@ -307,13 +308,13 @@ impl Walker<'_, '_> {
             } else if check("COLOR") {
                 v.iter().any(|c| !(0.0..=1.0).contains(c)).then(|| {
                     (
-                        "ACCESSOR_NON_CLAMPED",
+                        Code::AccessorNonClamped,
                         format!("element {e} is outside [0, 1]"),
                     )
                 })
             } else if v.iter().any(|w| *w < 0.0) {
                 Some((
-                    "ACCESSOR_WEIGHTS_NEGATIVE",
+                    Code::AccessorWeightsNegative,
                     format!("element {e} has a negative weight"),
                 ))
             } else {
@@ -367,7 +368,7 @@ impl Walker<'_, '_> {
         });
         if let Some(e) = bad {
             self.f.error(
-                "ACCESSOR_WEIGHTS_NON_NORMALIZED",
+                Code::AccessorWeightsNonNormalized,
                 format!("{at}/attributes/WEIGHTS_0"),
                 format!(
                     "skin weights of vertex {e} do not add up to 1 over {} WEIGHTS_n sets",
@@ -388,7 +389,7 @@ impl Walker<'_, '_> {
         };
         if bad {
             self.f.warn(
-                "MESH_PRIMITIVE_INCOMPATIBLE_MODE",
+                Code::MeshPrimitiveIncompatibleMode,
                 at.to_string(),
                 format!("{count} vertices do not make whole primitives of mode {mode}"),
             );
@@ -401,7 +402,7 @@ impl Walker<'_, '_> {
         };
         if layout.comps != 1 || !matches!(layout.component, 5121 | 5123 | 5125) {
             self.f.error(
-                "MESH_PRIMITIVE_INDICES_ACCESSOR_INVALID_FORMAT",
+                Code::MeshPrimitiveIndicesAccessorInvalidFormat,
                 at.to_string(),
                 "indices must be SCALAR unsigned integers",
             );
@@ -410,7 +411,7 @@ impl Walker<'_, '_> {
         if let Some(view) = self.view_of(indices) {
             if view.get("byteStride").is_some() {
                 self.f.error(
-                    "MESH_PRIMITIVE_INDICES_ACCESSOR_WITH_BYTESTRIDE",
+                    Code::MeshPrimitiveIndicesAccessorWithBytestride,
                     at.to_string(),
                     "the indices' buffer view has a byteStride",
                 );
@@ -441,14 +442,14 @@ impl Walker<'_, '_> {
         }
         if restarts > 0 {
             self.f.error(
-                "ACCESSOR_INDEX_PRIMITIVE_RESTART",
+                Code::AccessorIndexPrimitiveRestart,
                 format!("/accessors/{indices}"),
                 format!("{restarts} indices hold the primitive restart value {restart}"),
             );
         }
         if let (Some(first), Some(n)) = (first_oob, vertices) {
             self.f.error(
-                "ACCESSOR_INDEX_OOB",
+                Code::AccessorIndexOob,
                 format!("/accessors/{indices}"),
                 format!("{oob} indices out of range (first: {first}; {n} vertices)"),
             );

@@ -27,6 +27,7 @@ use crate::import::gltf::decode::DECODE_ERRORS;
 use crate::import::gltf::document::index_of;
 use crate::import::gltf::{self as layer, scene, Diagnostic, Document, Sink};
 use crate::scene::Scene;
+use crate::Code;
 use serde_json::{Map, Value};
 use std::collections::HashMap;
 use std::path::Path;
@@ -57,13 +58,8 @@ struct Collect<'f> {
 
 impl Sink for Collect<'_> {
     fn push(&mut self, d: Diagnostic) {
-        let severity = match d.severity {
-            layer::Severity::Error => Severity::Error,
-            layer::Severity::Warning => Severity::Warning,
-            layer::Severity::Info => Severity::Info,
-        };
-        self.too_large |= d.code == "ASSET_TOO_LARGE";
-        self.f.push(severity, d.code, d.pointer, d.message);
+        self.too_large |= d.code == Code::AssetTooLarge;
+        self.f.push(d.severity, d.code, d.location, d.message);
     }
 }
 
@@ -84,7 +80,7 @@ pub fn check(
     let bytes = match layer::document::read_file(path, is_glb, &mut sink) {
         Ok(bytes) => bytes?,
         Err(e) => {
-            sink.f.error("IO_ERROR", "", format!("cannot read: {e}"));
+            sink.f.error(Code::IoError, "", format!("cannot read: {e}"));
             return None;
         }
     };
@@ -125,7 +121,7 @@ pub fn check(
             f.push(
                 Severity::Error,
                 e.code,
-                e.pointer.clone(),
+                e.location.clone(),
                 e.message.clone(),
             );
         }
@@ -183,7 +179,7 @@ impl<'a> Walker<'a, '_> {
         let estimate = triangles.saturating_mul(BYTES_PER_TRIANGLE);
         if estimate > self.options.max_bytes {
             self.f.error(
-                "ASSET_TOO_LARGE",
+                Code::AssetTooLarge,
                 "",
                 format!(
                     "the scene expands to about {triangles} triangles (~{} MiB), more than the limit of {} MiB (--max-memory): not loaded",

@@ -6,6 +6,7 @@ use super::{Walker, MAX_NODE_DEPTH};
 use crate::import::gltf::document::{array, as_index, index_of, numbers};
 use crate::import::gltf::node::local_transform;
 use crate::import::gltf::QUADRIC_EXTENSION;
+use crate::Code;
 use glam::DMat4;
 use serde_json::Value;
 use std::collections::HashSet;
@@ -31,7 +32,7 @@ impl Walker<'_, '_> {
                 if let Some(p) = parent[c] {
                     if p != i {
                         self.f.error(
-                            "NODE_PARENT_OVERRIDE",
+                            Code::NodeParentOverride,
                             format!("/nodes/{i}/children/{k}"),
                             format!("node {c} is already a child of node {p}"),
                         );
@@ -58,7 +59,7 @@ impl Walker<'_, '_> {
                             stack.push((c, 0));
                         }
                         1 => self.f.error(
-                            "NODE_LOOP",
+                            Code::NodeLoop,
                             format!("/nodes/{node}/children"),
                             format!("node {c} is its own ancestor"),
                         ),
@@ -98,12 +99,12 @@ impl Walker<'_, '_> {
             if node.get("skin").is_some() {
                 match mesh {
                     None => self.f.error(
-                        "UNSATISFIED_DEPENDENCY",
+                        Code::UnsatisfiedDependency,
                         format!("{at}/skin"),
                         "skin without mesh",
                     ),
                     Some(m) if m < meshes.len() && !mesh_skinned(m) => self.f.error(
-                        "NODE_SKIN_WITH_NON_SKINNED_MESH",
+                        Code::NodeSkinWithNonSkinnedMesh,
                         at.clone(),
                         "the node has a skin but its mesh has no JOINTS_0/WEIGHTS_0",
                     ),
@@ -111,7 +112,7 @@ impl Walker<'_, '_> {
                 }
             } else if mesh.is_some_and(|m| m < meshes.len() && mesh_skinned(m)) {
                 self.f.warn(
-                    "NODE_SKINNED_MESH_WITHOUT_SKIN",
+                    Code::NodeSkinnedMeshWithoutSkin,
                     at.clone(),
                     "a skinned mesh on a node without a skin",
                 );
@@ -119,13 +120,13 @@ impl Walker<'_, '_> {
             if let Some(weights) = node.get("weights").and_then(Value::as_array) {
                 match mesh {
                     None => self.f.error(
-                        "UNSATISFIED_DEPENDENCY",
+                        Code::UnsatisfiedDependency,
                         format!("{at}/weights"),
                         "weights without mesh",
                     ),
                     Some(m) if m < meshes.len() && weights.len() != mesh_targets(m) => {
                         self.f.error(
-                            "NODE_WEIGHTS_INVALID",
+                            Code::NodeWeightsInvalid,
                             format!("{at}/weights"),
                             format!(
                                 "{} weights for {} morph targets",
@@ -145,7 +146,7 @@ impl Walker<'_, '_> {
                     .and_then(|s| s.validate().map(|()| s));
                 if let Err(e) = spec {
                     self.f.error(
-                        "QUADRIC_INVALID",
+                        Code::QuadricInvalid,
                         format!("{at}/extensions/{QUADRIC_EXTENSION}"),
                         format!("{QUADRIC_EXTENSION}: {e}"),
                     );
@@ -163,7 +164,7 @@ impl Walker<'_, '_> {
                 {
                     if parent[node].is_some() {
                         self.f.error(
-                            "SCENE_NON_ROOT_NODE",
+                            Code::SceneNonRootNode,
                             format!("/scenes/{s}/nodes/{k}"),
                             format!("node {node} has a parent"),
                         );
@@ -210,7 +211,7 @@ impl Walker<'_, '_> {
             visits += 1;
             if visits > 10_000_000 {
                 self.f.error(
-                    "ASSET_TOO_LARGE",
+                    Code::AssetTooLarge,
                     "/nodes",
                     "the node hierarchy expands to more than 10 million instances",
                 );
@@ -221,7 +222,7 @@ impl Walker<'_, '_> {
                 if !reported_depth {
                     reported_depth = true;
                     self.f.error(
-                        "NODE_HIERARCHY_TOO_DEEP",
+                        Code::NodeHierarchyTooDeep,
                         format!("/nodes/{node}"),
                         format!("the hierarchy is deeper than {MAX_NODE_DEPTH} levels (or loops)"),
                     );
@@ -232,7 +233,7 @@ impl Walker<'_, '_> {
             let world = parent_world * locals[node];
             if !world.is_finite() && reported_world.insert(node) {
                 self.f.error(
-                    "NODE_TRANSFORM_NOT_FINITE",
+                    Code::NodeTransformNotFinite,
                     format!("/nodes/{node}"),
                     "the world transform overflows to infinity or NaN",
                 );
@@ -261,7 +262,7 @@ impl Walker<'_, '_> {
         if node.get("matrix").is_some() {
             if has_trs {
                 self.f.error(
-                    "NODE_MATRIX_TRS",
+                    Code::NodeMatrixTrs,
                     at.to_string(),
                     "a node has both matrix and translation/rotation/scale",
                 );
@@ -277,7 +278,7 @@ impl Walker<'_, '_> {
                 .max(f64::MIN_POSITIVE);
             if local.row(3) != glam::DVec4::W || off.iter().any(|o| o.abs() > 1e-5 * scale2) {
                 self.f.error(
-                    "NODE_MATRIX_NON_TRS",
+                    Code::NodeMatrixNonTrs,
                     format!("{at}/matrix"),
                     "the matrix is not a translation-rotation-scale",
                 );
@@ -286,7 +287,7 @@ impl Walker<'_, '_> {
             let length = q.iter().map(|c| c * c).sum::<f64>().sqrt();
             if (length - 1.0).abs() > super::UNIT_QUATERNION_TOLERANCE {
                 self.f.error(
-                    "ROTATION_NON_UNIT",
+                    Code::RotationNonUnit,
                     format!("{at}/rotation"),
                     format!("the rotation quaternion has length {length}"),
                 );
@@ -295,7 +296,7 @@ impl Walker<'_, '_> {
         let det = local.determinant();
         if local.is_finite() && (det == 0.0 || !det.is_finite()) {
             self.f.warn(
-                "NODE_TRANSFORM_NOT_INVERTIBLE",
+                Code::NodeTransformNotInvertible,
                 at.to_string(),
                 "the node's transform is singular (a zero scale?): its subtree collapses",
             );
@@ -311,7 +312,7 @@ impl Walker<'_, '_> {
             let o = camera.get("orthographic");
             if p.is_some() && o.is_some() {
                 self.f.error(
-                    "ONE_OF_MISMATCH",
+                    Code::OneOfMismatch,
                     at.clone(),
                     "both perspective and orthographic",
                 );
@@ -320,28 +321,31 @@ impl Walker<'_, '_> {
             match kind {
                 Some("perspective") => {
                     if p.is_none() {
-                        self.f
-                            .error("UNDEFINED_PROPERTY", format!("{at}/perspective"), "missing");
+                        self.f.error(
+                            Code::UndefinedProperty,
+                            format!("{at}/perspective"),
+                            "missing",
+                        );
                     }
                     let znear = num(p, "znear");
                     let zfar = num(p, "zfar");
                     let yfov = num(p, "yfov");
                     if znear.is_some_and(|z| !(z > 0.0 && z.is_finite())) {
                         self.f.error(
-                            "VALUE_NOT_IN_RANGE",
+                            Code::ValueNotInRange,
                             format!("{at}/perspective/znear"),
                             "znear must be positive and finite",
                         );
                     }
                     if yfov.is_some_and(|y| !(y > 0.0 && y.is_finite())) {
                         self.f.error(
-                            "VALUE_NOT_IN_RANGE",
+                            Code::ValueNotInRange,
                             format!("{at}/perspective/yfov"),
                             "yfov must be positive",
                         );
                     } else if yfov.is_some_and(|y| y >= std::f64::consts::PI) {
                         self.f.warn(
-                            "CAMERA_YFOV_GEQUAL_PI",
+                            Code::CameraYfovGequalPi,
                             format!("{at}/perspective/yfov"),
                             "yfov is at least pi",
                         );
@@ -349,7 +353,7 @@ impl Walker<'_, '_> {
                     if let (Some(n), Some(f)) = (znear, zfar) {
                         if f <= n {
                             self.f.error(
-                                "CAMERA_ZFAR_LEQUAL_ZNEAR",
+                                Code::CameraZfarLequalZnear,
                                 format!("{at}/perspective/zfar"),
                                 "zfar is not beyond znear",
                             );
@@ -359,7 +363,7 @@ impl Walker<'_, '_> {
                 Some("orthographic") => {
                     if o.is_none() {
                         self.f.error(
-                            "UNDEFINED_PROPERTY",
+                            Code::UndefinedProperty,
                             format!("{at}/orthographic"),
                             "missing",
                         );
@@ -367,14 +371,14 @@ impl Walker<'_, '_> {
                     let (x, y) = (num(o, "xmag"), num(o, "ymag"));
                     if x == Some(0.0) || y == Some(0.0) {
                         self.f.error(
-                            "CAMERA_XMAG_YMAG_ZERO",
+                            Code::CameraXmagYmagZero,
                             format!("{at}/orthographic"),
                             "xmag or ymag is zero",
                         );
                     }
                     if x.is_some_and(|v| v < 0.0) || y.is_some_and(|v| v < 0.0) {
                         self.f.warn(
-                            "CAMERA_XMAG_YMAG_NEGATIVE",
+                            Code::CameraXmagYmagNegative,
                             format!("{at}/orthographic"),
                             "xmag or ymag is negative",
                         );
@@ -382,7 +386,7 @@ impl Walker<'_, '_> {
                     if let (Some(n), Some(f)) = (num(o, "znear"), num(o, "zfar")) {
                         if f <= n {
                             self.f.error(
-                                "CAMERA_ZFAR_LEQUAL_ZNEAR",
+                                Code::CameraZfarLequalZnear,
                                 format!("{at}/orthographic/zfar"),
                                 "zfar is not beyond znear",
                             );

@@ -6,6 +6,7 @@
 use super::{readable, Walker};
 use crate::import::gltf::can_honour_required;
 use crate::import::gltf::document::{array, as_index, escape};
+use crate::Code;
 use serde_json::{Map, Value};
 use std::collections::HashSet;
 
@@ -76,8 +77,11 @@ impl Walker<'_, '_> {
                     .and_then(Value::as_object)
                     .is_some_and(Map::is_empty)
                 {
-                    self.f
-                        .error("EMPTY_ENTITY", format!("{at}/attributes"), "no attributes");
+                    self.f.error(
+                        Code::EmptyEntity,
+                        format!("{at}/attributes"),
+                        "no attributes",
+                    );
                 }
             }
         }
@@ -115,7 +119,7 @@ impl Walker<'_, '_> {
             let has_view = image.get("bufferView").is_some();
             if has_uri == has_view {
                 self.f.error(
-                    "ONE_OF_MISMATCH",
+                    Code::OneOfMismatch,
                     format!("/images/{i}"),
                     "an image needs exactly one of uri and bufferView",
                 );
@@ -130,7 +134,7 @@ impl Walker<'_, '_> {
         for prop in props {
             if !obj.contains_key(*prop) {
                 self.f.error(
-                    "UNDEFINED_PROPERTY",
+                    Code::UndefinedProperty,
                     format!("{at}/{prop}"),
                     format!("property '{prop}' must be defined"),
                 );
@@ -149,13 +153,13 @@ impl Walker<'_, '_> {
         if let Some(x) = item.as_f64() {
             if x.fract() != 0.0 || !x.is_finite() {
                 self.f.error(
-                    "TYPE_MISMATCH",
+                    Code::TypeMismatch,
                     at,
                     format!("{} is not an integer", readable(x)),
                 );
             } else if x < 0.0 && index {
                 self.f.error(
-                    "INVALID_INDEX",
+                    Code::InvalidIndex,
                     at,
                     format!(
                         "{} is not a valid index: it must be a non-negative integer",
@@ -164,13 +168,13 @@ impl Walker<'_, '_> {
                 );
             } else if x < 0.0 {
                 self.f.error(
-                    "VALUE_NOT_IN_RANGE",
+                    Code::ValueNotInRange,
                     at,
                     format!("{} is not a valid non-negative integer", readable(x)),
                 );
             } else if index {
                 self.f.error(
-                    "UNRESOLVED_REFERENCE",
+                    Code::UnresolvedReference,
                     at,
                     format!("refers to {}, which does not exist", readable(x)),
                 );
@@ -179,7 +183,7 @@ impl Walker<'_, '_> {
             && !at.contains("/extensions/")
         {
             self.f
-                .error("TYPE_MISMATCH", at, format!("{item} is not an integer"));
+                .error(Code::TypeMismatch, at, format!("{item} is not an integer"));
         }
     }
 
@@ -187,7 +191,7 @@ impl Walker<'_, '_> {
     fn string(&mut self, item: &Value, at: &str) {
         if !item.is_string() && !at.contains("/extensions/") {
             self.f
-                .error("TYPE_MISMATCH", at, format!("{item} is not a string"));
+                .error(Code::TypeMismatch, at, format!("{item} is not a string"));
         }
     }
 
@@ -197,7 +201,7 @@ impl Walker<'_, '_> {
         match v {
             Value::Array(items) => {
                 if items.is_empty() {
-                    self.f.error("EMPTY_ENTITY", at, "an empty array");
+                    self.f.error(Code::EmptyEntity, at, "an empty array");
                 }
                 for (i, item) in items.iter().enumerate() {
                     self.tree(item, &format!("{at}/{i}"), declared);
@@ -227,21 +231,21 @@ impl Walker<'_, '_> {
                 continue;
             }
             let Some(extensions) = item.as_object() else {
-                self.f.error("TYPE_MISMATCH", here, "expected an object");
+                self.f.error(Code::TypeMismatch, here, "expected an object");
                 continue;
             };
             for (name, ext) in extensions {
                 let ext_at = format!("{here}/{}", escape(name));
                 if !declared.contains(name.as_str()) {
                     self.f.error(
-                        "UNDECLARED_EXTENSION",
+                        Code::UndeclaredExtension,
                         ext_at.clone(),
                         format!("extension '{name}' is not in extensionsUsed"),
                     );
                 }
                 if !ext.is_object() {
                     self.f.error(
-                        "TYPE_MISMATCH",
+                        Code::TypeMismatch,
                         ext_at.clone(),
                         "an extension must be an object",
                     );
@@ -266,7 +270,7 @@ impl Walker<'_, '_> {
             for (i, name) in list.iter().enumerate() {
                 if !seen.insert(name) {
                     self.f.error(
-                        "DUPLICATE_ELEMENTS",
+                        Code::DuplicateElements,
                         format!("/{key}/{i}"),
                         format!("'{name}' is listed twice"),
                     );
@@ -280,7 +284,7 @@ impl Walker<'_, '_> {
                 });
                 if key == "extensionsUsed" && !valid {
                     self.f.warn(
-                        "INVALID_EXTENSION_NAME_FORMAT",
+                        Code::InvalidExtensionNameFormat,
                         format!("/{key}/{i}"),
                         format!("'{name}' is not PREFIX_name"),
                     );
@@ -289,7 +293,7 @@ impl Walker<'_, '_> {
         }
         if !required.is_empty() && self.root.get("extensionsUsed").is_none() {
             self.f.error(
-                "UNSATISFIED_DEPENDENCY",
+                Code::UnsatisfiedDependency,
                 "/extensionsRequired",
                 "extensionsRequired without extensionsUsed",
             );
@@ -298,14 +302,14 @@ impl Walker<'_, '_> {
             let at = format!("/extensionsRequired/{i}");
             if !used.contains(name) {
                 self.f.error(
-                    "UNUSED_EXTENSION_REQUIRED",
+                    Code::UnusedExtensionRequired,
                     at.clone(),
                     format!("'{name}' is required but not in extensionsUsed"),
                 );
             }
             if !can_honour_required(name) {
                 self.f.error(
-                    "UNSUPPORTED_EXTENSION",
+                    Code::UnsupportedExtension,
                     at,
                     format!("the file requires '{name}', which raycast cannot decode"),
                 );

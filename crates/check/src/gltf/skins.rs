@@ -2,6 +2,7 @@
 
 use super::{Walker, MAX_NODE_DEPTH};
 use crate::import::gltf::document::{array, index_of};
+use crate::Code;
 use std::collections::HashSet;
 
 impl Walker<'_, '_> {
@@ -60,14 +61,14 @@ impl Walker<'_, '_> {
                 if let Some(l) = self.layout(ibm) {
                     if l.comps != 16 || l.component != 5126 {
                         self.f.error(
-                            "SKIN_IBM_INVALID_FORMAT",
+                            Code::SkinIbmInvalidFormat,
                             format!("{at}/inverseBindMatrices"),
                             "inverse bind matrices must be MAT4 float",
                         );
                     } else {
                         if l.count < joints.len() {
                             self.f.error(
-                                "INVALID_IBM_ACCESSOR_COUNT",
+                                Code::InvalidIbmAccessorCount,
                                 format!("{at}/inverseBindMatrices"),
                                 "fewer inverse bind matrices than joints",
                             );
@@ -77,7 +78,7 @@ impl Walker<'_, '_> {
                                 .any(|m| m[3] != 0.0 || m[7] != 0.0 || m[11] != 0.0 || m[15] != 1.0)
                             {
                                 self.f.error(
-                                    "ACCESSOR_INVALID_IBM",
+                                    Code::AccessorInvalidIbm,
                                     format!("/accessors/{ibm}"),
                                     "an inverse bind matrix is not affine",
                                 );
@@ -90,7 +91,7 @@ impl Walker<'_, '_> {
                     .is_some_and(|v| v.get("byteStride").is_some())
                 {
                     self.f.error(
-                        "SKIN_IBM_ACCESSOR_WITH_BYTESTRIDE",
+                        Code::SkinIbmAccessorWithBytestride,
                         format!("{at}/inverseBindMatrices"),
                         "inverse bind matrices cannot use a byteStride",
                     );
@@ -103,7 +104,7 @@ impl Walker<'_, '_> {
                     .any(|a| chains.iter().all(|c| c.contains(a)));
                 if !common {
                     self.f.error(
-                        "SKIN_NO_COMMON_ROOT",
+                        Code::SkinNoCommonRoot,
                         format!("{at}/joints"),
                         "the joints have no common root",
                     );
@@ -115,7 +116,7 @@ impl Walker<'_, '_> {
                 && joints.len() > 1
             {
                 self.f.error(
-                    "SKIN_NO_COMMON_ROOT",
+                    Code::SkinNoCommonRoot,
                     format!("{at}/joints"),
                     "a joint does not exist",
                 );
@@ -123,7 +124,7 @@ impl Walker<'_, '_> {
             if let Some(skeleton) = index_of(skin, "skeleton").filter(|&k| k < n) {
                 if !joints.iter().all(|&j| ancestors(j).contains(&skeleton)) {
                     self.f.error(
-                        "SKIN_SKELETON_INVALID",
+                        Code::SkinSkeletonInvalid,
                         format!("{at}/skeleton"),
                         "the skeleton is not a common root of the joints",
                     );
@@ -134,7 +135,7 @@ impl Walker<'_, '_> {
                 && joints.iter().all(|j| !in_scene.contains(j))
             {
                 self.f.error(
-                    "NODE_SKIN_NO_SCENE",
+                    Code::NodeSkinNoScene,
                     format!("{at}/joints"),
                     "no joint is in a scene",
                 );

@@ -10,6 +10,7 @@
 
 use super::Walker;
 use crate::import::gltf::document::{array, as_index, escape, index_of};
+use crate::Code;
 use serde_json::Value;
 use std::fmt;
 
@@ -130,7 +131,7 @@ impl Walker<'_, '_> {
         match *slot {
             None => *slot = Some(usage),
             Some(first) if first != usage => self.f.error(
-                "BUFFER_VIEW_TARGET_OVERRIDE",
+                Code::BufferViewTargetOverride,
                 at,
                 format!(
                     "buffer view {} is used for {usage}, after being used for {first}",

@@ -17,6 +17,7 @@
 use crate::error::{Error, Result};
 use crate::scene::{Mesh, Positions, Scene};
 use glam::Vec3;
+use raycast_core::diagnostic::Code;
 use std::borrow::Cow;
 use std::fmt;
 use std::io::Cursor;
@@ -71,12 +72,12 @@ pub enum StlError {
 
 impl StlError {
     /// The `raycast check` code of this error (docs/check.md).
-    pub fn code(&self) -> &'static str {
+    pub fn code(&self) -> Code {
         match self {
-            StlError::NotStl { .. } => "STL_NOT_STL",
-            StlError::Truncated { .. } | StlError::Unterminated { .. } => "STL_TRUNCATED",
-            StlError::Stray { .. } | StlError::Parse { .. } => "STL_PARSE_ERROR",
-            StlError::NonFinite { .. } => "NON_FINITE_POSITION",
+            StlError::NotStl { .. } => Code::StlNotStl,
+            StlError::Truncated { .. } | StlError::Unterminated { .. } => Code::StlTruncated,
+            StlError::Stray { .. } | StlError::Parse { .. } => Code::StlParseError,
+            StlError::NonFinite { .. } => Code::NonFinitePosition,
         }
     }
 }
@@ -143,7 +144,7 @@ pub fn load(path: &Path) -> Result<Scene> {
 
 /// Loads STL `bytes`; `path` names them in messages and names unnamed solids.
 pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
-    let mesh = read(bytes).map_err(|e| Error::in_file(path, e.to_string()))?;
+    let mesh = read(bytes).map_err(|e| Error::in_file(path, e.to_string()).with_code(e.code()))?;
     Ok(scene(mesh, path))
 }
 

@@ -5,7 +5,7 @@
 //! Every byte goes through [`Document::view_bytes`], which also serves the views a decoder
 //! produced (EXT_meshopt_compression), so compressed and plain data are read the same way.
 
-use super::diagnostics::Diagnostic;
+use super::diagnostics::{Code, Diagnostic};
 use super::document::{index_of, Document};
 use serde_json::Value;
 use std::sync::atomic::Ordering;
@@ -22,7 +22,7 @@ pub const UNBACKED_BYTES_PER_VALUE: u64 = 24;
 
 /// Code of a read that needs a buffer whose data is not available (no `uri`, or a network
 /// URI): the file is valid, the data is elsewhere.
-pub const NO_DATA: &str = "BUFFER_NO_DATA";
+pub const NO_DATA: Code = Code::BufferNoData;
 
 /// Component byte size of a glTF `componentType`.
 pub fn component_size(kind: u64) -> Option<usize> {
@@ -181,10 +181,10 @@ impl Document {
         }
         let at = format!("/bufferViews/{view}");
         let json = self.item("bufferViews", view).ok_or_else(|| {
-            Diagnostic::error("UNRESOLVED_REFERENCE", &at, "buffer view does not exist")
+            Diagnostic::error(Code::UnresolvedReference, &at, "buffer view does not exist")
         })?;
         let buffer = index_of(json, "buffer").ok_or_else(|| {
-            Diagnostic::error("UNDEFINED_PROPERTY", format!("{at}/buffer"), "no buffer")
+            Diagnostic::error(Code::UndefinedProperty, format!("{at}/buffer"), "no buffer")
         })?;
         let bytes = self.buffer(buffer).ok_or_else(|| {
             Diagnostic::error(
@@ -195,7 +195,7 @@ impl Document {
         })?;
         let too_long = |what: String| {
             Diagnostic::error(
-                "BUFFER_VIEW_TOO_LONG",
+                Code::BufferViewTooLong,
                 format!("{at}/byteLength"),
                 format!("{what} do not fit buffer {buffer} ({} bytes)", bytes.len()),
             )
@@ -204,7 +204,7 @@ impl Document {
             (_, Some(length)) => length,
             (None, None) => {
                 return Err(Diagnostic::error(
-                    "UNDEFINED_PROPERTY",
+                    Code::UndefinedProperty,
                     format!("{at}/byteLength"),
                     "no byteLength",
                 ))
@@ -215,7 +215,7 @@ impl Document {
             }
             (Some(v), None) => {
                 return Err(Diagnostic::error(
-                    "TYPE_MISMATCH",
+                    Code::TypeMismatch,
                     format!("{at}/byteLength"),
                     format!("{v} is not a length in bytes"),
                 ))
@@ -248,7 +248,7 @@ impl Document {
         let left = self.unbacked_left();
         if need > left {
             return Err(Diagnostic::error(
-                "ASSET_TOO_LARGE",
+                Code::AssetTooLarge,
                 format!("/accessors/{index}/count"),
                 format!(
                     "accessor {index} has no buffer view: its {count} elements (zeros) would take about {}, more than the memory limit leaves (raise it with --max-memory)",
@@ -265,14 +265,14 @@ impl Document {
     pub fn layout(&self, index: usize) -> Result<Layout, Diagnostic> {
         let acc = self.item("accessors", index).ok_or_else(|| {
             Diagnostic::error(
-                "UNRESOLVED_REFERENCE",
+                Code::UnresolvedReference,
                 format!("/accessors/{index}"),
                 "accessor does not exist",
             )
         })?;
         Layout::of(acc).ok_or_else(|| {
             Diagnostic::error(
-                "ACCESSOR_INVALID",
+                Code::AccessorInvalid,
                 format!("/accessors/{index}"),
                 "componentType, type or count is missing or invalid",
             )
@@ -289,7 +289,7 @@ impl Document {
         if layout.count == 0 {
             let at = format!("{at}/count");
             return Err(Diagnostic::error(
-                "VALUE_NOT_IN_RANGE",
+                Code::ValueNotInRange,
                 at,
                 "must be at least 1",
             ));
@@ -300,7 +300,7 @@ impl Document {
             .filter(|&t| t <= MAX_VALUES)
         else {
             return Err(Diagnostic::error(
-                "ASSET_TOO_LARGE",
+                Code::AssetTooLarge,
                 format!("{at}/count"),
                 format!(
                     "count {} is more than raycast decodes ({MAX_VALUES} values)",
@@ -330,7 +330,7 @@ impl Document {
                 layout.last,
             ) {
                 return Err(Diagnostic::error(
-                    "ACCESSOR_TOO_LONG",
+                    Code::AccessorTooLong,
                     at,
                     format!(
                         "{} elements from offset {offset} run past the end of buffer view {view} ({} bytes)",
@@ -357,7 +357,8 @@ impl Document {
     pub fn sparse_indices(&self, index: usize) -> Result<Vec<usize>, Diagnostic> {
         let acc = &self.list("accessors")[index];
         let at = format!("/accessors/{index}/sparse");
-        let bad = |what: &str| Diagnostic::error("ACCESSOR_SPARSE_INVALID", &at, what.to_string());
+        let bad =
+            |what: &str| Diagnostic::error(Code::AccessorSparseInvalid, &at, what.to_string());
         let sparse = acc.get("sparse").ok_or_else(|| bad("no sparse part"))?;
         let count = index_of(sparse, "count")
             .filter(|&n| n > 0)
@@ -380,7 +381,11 @@ impl Document {
     /// tightly packed elements.
     fn sparse_part(&self, part: &Value, layout: &Layout, at: &str) -> Result<&[u8], Diagnostic> {
         let view = index_of(part, "bufferView").ok_or_else(|| {
-            Diagnostic::error("UNDEFINED_PROPERTY", at, "a sparse part without bufferView")
+            Diagnostic::error(
+                Code::UndefinedProperty,
+                at,
+                "a sparse part without bufferView",
+            )
         })?;
         let bytes = self.view_bytes(view)?;
         let offset = index_of(part, "byteOffset").unwrap_or(0);
@@ -394,7 +399,7 @@ impl Document {
             layout.element,
         ) {
             return Err(Diagnostic::error(
-                "ACCESSOR_TOO_LONG",
+                Code::AccessorTooLong,
                 at,
                 "the sparse data does not fit its buffer view",
             ));
@@ -413,7 +418,7 @@ impl Document {
         let targets = self.sparse_indices(index)?;
         if targets.len() > layout.count {
             return Err(Diagnostic::error(
-                "ACCESSOR_SPARSE_COUNT_OUT_OF_RANGE",
+                Code::AccessorSparseCountOutOfRange,
                 format!("{at}/count"),
                 format!(
                     "sparse count {} is more than count {}",
@@ -426,7 +431,7 @@ impl Document {
             .get("values")
             .ok_or_else(|| {
                 Diagnostic::error(
-                    "UNDEFINED_PROPERTY",
+                    Code::UndefinedProperty,
                     format!("{at}/values"),
                     "no sparse values",
                 )
@@ -439,7 +444,7 @@ impl Document {
         for (k, &target) in targets.iter().enumerate() {
             if target >= layout.count {
                 return Err(Diagnostic::error(
-                    "ACCESSOR_SPARSE_INDEX_OOB",
+                    Code::AccessorSparseIndexOob,
                     &at,
                     format!("sparse index {target} >= count {}", layout.count),
                 ));

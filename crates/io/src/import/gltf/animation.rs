@@ -6,7 +6,7 @@
 //! Where two chosen animations animate the same property of a node, the first one sets it.
 //! KHR_animation_pointer is not read.
 
-use super::diagnostics::Diagnostic;
+use super::diagnostics::{Code, Diagnostic, Within};
 use super::document::{array, index_of, Document};
 use glam::{DQuat, DVec3};
 use serde_json::Value;
@@ -136,7 +136,7 @@ impl Document {
                     .and_then(|s| array(animation, "samplers").get(s))
                     .ok_or_else(|| {
                         Diagnostic::error(
-                            "UNRESOLVED_REFERENCE",
+                            Code::UnresolvedReference,
                             format!("{at}/sampler"),
                             "sampler does not exist",
                         )
@@ -193,7 +193,7 @@ impl Document {
         time: f64,
         at: &str,
     ) -> Result<Vec<f64>, Diagnostic> {
-        let bad = |what: String| Diagnostic::error("ANIMATION_SAMPLER_INVALID", at, what);
+        let bad = |what: String| Diagnostic::error(Code::AnimationSamplerInvalid, at, what);
         let interpolation = match sampler.get("interpolation").and_then(Value::as_str) {
             None | Some("LINEAR") => Interpolation::Linear,
             Some("STEP") => Interpolation::Step,

@@ -2,7 +2,7 @@
 //! size checked against the limit before decoding), and external files under the path rule
 //! ([`crate::import::paths`]). Network URIs are never fetched.
 
-use super::diagnostics::{Diagnostic, Severity, Sink};
+use super::diagnostics::{Code, Diagnostic, Severity, Sink};
 use super::document::{index_of, BufferData, Document};
 use crate::import::paths::resolve_inside;
 use serde_json::Value;
@@ -57,7 +57,7 @@ pub fn resolve(
             && scheme.as_bytes()[0].is_ascii_alphabetic()
         {
             sink.warn(
-                "NON_RELATIVE_URI",
+                Code::NonRelativeUri,
                 at,
                 format!("'{uri}' is not a relative path: never fetched (raycast reads no network)"),
             );
@@ -65,12 +65,12 @@ pub fn resolve(
         }
     }
     if uri.is_empty() || uri.starts_with(':') || uri.contains(['\\', '\0']) {
-        sink.error("INVALID_URI", at, format!("'{uri}' is not a valid URI"));
+        sink.error(Code::InvalidUri, at, format!("'{uri}' is not a valid URI"));
         return None;
     }
     let Ok(decoded) = urlencoding::decode(uri) else {
         sink.error(
-            "INVALID_URI",
+            Code::InvalidUri,
             at,
             format!("'{uri}' has bad percent-encoding"),
         );
@@ -84,7 +84,7 @@ pub fn resolve(
     ) {
         Ok(path) => Some(Resource::File(path, decoded.into_owned())),
         Err(why) => {
-            sink.error("PATH_OUTSIDE_ASSET", at, why);
+            sink.error(Code::PathOutsideAsset, at, why);
             None
         }
     }
@@ -93,7 +93,7 @@ pub fn resolve(
 /// Decodes the part of a `data:` URI after `data:`.
 fn data_uri(rest: &str, at: &str, max_bytes: u64, sink: &mut dyn Sink) -> Option<Resource> {
     let Some((header, payload)) = rest.split_once(',') else {
-        sink.error("INVALID_URI", at, "a data: URI without a comma");
+        sink.error(Code::InvalidUri, at, "a data: URI without a comma");
         return None;
     };
     let (mime, is_base64) = match header.strip_suffix(";base64") {
@@ -102,7 +102,7 @@ fn data_uri(rest: &str, at: &str, max_bytes: u64, sink: &mut dyn Sink) -> Option
     };
     if mime.contains(';') && !mime.contains('=') {
         sink.error(
-            "INVALID_URI",
+            Code::InvalidUri,
             at,
             format!("malformed data: URI header '{header}'"),
         );
@@ -116,7 +116,7 @@ fn data_uri(rest: &str, at: &str, max_bytes: u64, sink: &mut dyn Sink) -> Option
     };
     if decoded_len as u64 > max_bytes {
         sink.error(
-            "ASSET_TOO_LARGE",
+            Code::AssetTooLarge,
             at,
             "the data: URI decodes to more than the --max-memory limit: not decoded",
         );
@@ -128,7 +128,7 @@ fn data_uri(rest: &str, at: &str, max_bytes: u64, sink: &mut dyn Sink) -> Option
         match base64_decode(&text) {
             Some(bytes) => bytes,
             None => {
-                sink.error("INVALID_URI", at, "the data: URI is not valid base64");
+                sink.error(Code::InvalidUri, at, "the data: URI is not valid base64");
                 return None;
             }
         }
@@ -198,7 +198,7 @@ impl Document {
             total = total.saturating_add(declared);
             if total > resources.max_bytes {
                 sink.error(
-                    "ASSET_TOO_LARGE",
+                    Code::AssetTooLarge,
                     format!("{at}/byteLength"),
                     format!(
                         "buffers add up to more than the limit of {} bytes (--max-memory): not read",
@@ -216,7 +216,7 @@ impl Document {
                 } as u64;
                 if actual < declared {
                     sink.error(
-                        "BUFFER_BYTE_LENGTH_MISMATCH",
+                        Code::BufferByteLengthMismatch,
                         format!("{at}/byteLength"),
                         format!("byteLength {declared} but the data has {actual} bytes"),
                     );
@@ -240,7 +240,7 @@ impl Document {
             if self.is_glb && i == 0 {
                 if self.bin.is_none() {
                     sink.error(
-                        "BUFFER_MISSING_GLB_DATA",
+                        Code::BufferMissingGlbData,
                         at,
                         "the buffer has no uri and the GLB has no BIN chunk",
                     );
@@ -248,19 +248,19 @@ impl Document {
                 return self.bin.clone().map(BufferData::Bin);
             }
             sink.info(
-                "BUFFER_NO_DATA",
+                Code::BufferNoData,
                 at,
                 "the buffer has no uri: its data is not available",
             );
             return None;
         };
         let Some(uri) = uri.as_str() else {
-            sink.error("TYPE_MISMATCH", format!("{at}/uri"), "expected a string");
+            sink.error(Code::TypeMismatch, format!("{at}/uri"), "expected a string");
             return None;
         };
         if self.is_glb && uri.starts_with("data:") {
             sink.warn(
-                "DATA_URI_GLB",
+                Code::DataUriGlb,
                 format!("{at}/uri"),
                 "a data: URI inside a GLB",
             );
@@ -273,14 +273,14 @@ impl Document {
                     "application/octet-stream" | "application/gltf-buffer"
                 ) {
                     sink.error(
-                        "BUFFER_DATA_URI_MIME_TYPE_INVALID",
+                        Code::BufferDataUriMimeTypeInvalid,
                         format!("{at}/uri"),
                         format!("buffer data: URI has media type '{mime}'"),
                     );
                 }
                 if bytes.len() as u64 > declared {
                     sink.error(
-                        "BUFFER_BYTE_LENGTH_MISMATCH",
+                        Code::BufferByteLengthMismatch,
                         format!("{at}/byteLength"),
                         format!(
                             "byteLength {declared} but the data has {} bytes",
@@ -323,7 +323,7 @@ fn read_file(
         Ok(meta) if meta.is_file() => meta.len(),
         _ => {
             sink.error(
-                "IO_ERROR",
+                Code::IoError,
                 at,
                 format!("the buffer refers to '{decoded}', which does not exist"),
             );
@@ -333,7 +333,7 @@ fn read_file(
     let max = resources.max_bytes;
     if len > max || len > declared.saturating_add(1 << 20) && len > max / 2 {
         sink.error(
-            "ASSET_TOO_LARGE",
+            Code::AssetTooLarge,
             at,
             format!("buffer file '{decoded}' has {len} bytes: not read"),
         );
@@ -343,7 +343,7 @@ fn read_file(
         Ok(bytes) => Some(BufferData::Owned(bytes)),
         Err(e) => {
             sink.error(
-                "IO_ERROR",
+                Code::IoError,
                 at,
                 format!("cannot read buffer file '{decoded}': {e}"),
             );

@@ -14,7 +14,7 @@
 //! [`super::instancing`]. [`summary`] tells `info` and the sidecar what was decoded.
 
 use super::accessor::NO_DATA;
-use super::diagnostics::{Diagnostic, Sink};
+use super::diagnostics::{Code, Diagnostic, Sink};
 use super::document::{extension, index_of, Document};
 use super::geometry::{Geometry, TriangleMode, DRACO};
 use super::{draco, instancing, meshopt};
@@ -24,7 +24,11 @@ use serde_json::Value;
 
 /// The codes of the diagnostics the decoders give (Draco, meshopt, GPU instancing data that
 /// cannot be decoded).
-pub const DECODE_ERRORS: [&str; 3] = ["DRACO_INVALID", "MESHOPT_INVALID", "INSTANCING_INVALID"];
+pub const DECODE_ERRORS: [Code; 3] = [
+    Code::DracoInvalid,
+    Code::MeshoptInvalid,
+    Code::InstancingInvalid,
+];
 
 /// Names of the meshopt buffer view extension.
 pub const MESHOPT: [&str; 2] = meshopt::EXTENSIONS;
@@ -41,7 +45,7 @@ pub fn meshopt_view(
 ) -> Result<Option<Vec<u8>>, Diagnostic> {
     let name = meshopt_name(doc, view);
     let at = format!("/bufferViews/{view}/extensions/{name}");
-    let invalid = |e: String| Diagnostic::error("MESHOPT_INVALID", &at, e);
+    let invalid = |e: String| Diagnostic::error(Code::MeshoptInvalid, &at, e);
     let spec = meshopt::MeshoptView::parse(ext).map_err(invalid)?;
     let buffer = doc.buffer(spec.buffer).ok_or_else(|| {
         Diagnostic::error(
@@ -117,14 +121,14 @@ fn decode_draco(
     at: &str,
 ) -> Result<Geometry, Diagnostic> {
     let at_ext = format!("{at}/extensions/{DRACO}");
-    let invalid = |e: String| Diagnostic::error("DRACO_INVALID", &at_ext, e);
+    let invalid = |e: String| Diagnostic::error(Code::DracoInvalid, &at_ext, e);
     let view = draco::buffer_view(ext).map_err(invalid)?;
     let bytes = doc.view_bytes(view)?;
     let decoded = draco::decode(bytes, ext).map_err(invalid)?;
     let position = json
         .get("attributes")
         .and_then(|a| index_of(a, "POSITION"))
-        .ok_or_else(|| Diagnostic::error("UNDEFINED_PROPERTY", at, "no POSITION attribute"))?;
+        .ok_or_else(|| Diagnostic::error(Code::UndefinedProperty, at, "no POSITION attribute"))?;
     let layout = doc.layout(position)?;
     if layout.count != decoded.positions.len() {
         return Err(invalid(format!(
@@ -154,7 +158,7 @@ pub fn draco_attribute(
     let json = doc.item("meshes", mesh)?.get("primitives")?.get(prim)?;
     let ext = extension(json, DRACO).filter(|_| reads_draco(doc, json))?;
     let at_ext = format!("/meshes/{mesh}/primitives/{prim}/extensions/{DRACO}");
-    let invalid = |e: String| Diagnostic::error("DRACO_INVALID", &at_ext, e);
+    let invalid = |e: String| Diagnostic::error(Code::DracoInvalid, &at_ext, e);
     let read = || -> Result<Option<Vec<f64>>, Diagnostic> {
         let view = draco::buffer_view(ext).map_err(invalid)?;
         let bytes = doc.view_bytes(view)?;
@@ -171,7 +175,7 @@ pub fn gpu_instances(
     ext: &Value,
 ) -> Result<Option<Vec<BoundedMat4>>, Diagnostic> {
     let at = format!("/nodes/{node}/extensions/{GPU_INSTANCING}");
-    let invalid = |e: String| Diagnostic::error("INSTANCING_INVALID", &at, e);
+    let invalid = |e: String| Diagnostic::error(Code::InstancingInvalid, &at, e);
     let accessors = instancing::accessors(ext).map_err(invalid)?;
     let read = |accessor: Option<usize>,
                 comps: usize,

@@ -1,72 +1,27 @@
 //! How the document layer reports problems: one [`Diagnostic`] per problem (a stable code,
-//! a severity, a JSON pointer and a line for a person), pushed into a [`Sink`].
+//! a severity, a JSON pointer as its location and a line for a person; core's one diagnostic
+//! type), pushed into a [`Sink`].
 //!
 //! The importer reads through a [`FailFast`] sink (the first error ends the load); `raycast
 //! check` reads through a sink that keeps everything. Both see the same codes, so they agree
 //! on what loads without comparing message strings. Codes are the Khronos glTF-Validator's
 //! where the meaning is the same.
 
-use std::fmt;
+pub use raycast_core::diagnostic::{Code, Diagnostic, Severity};
 
-/// How bad a diagnostic is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Severity {
-    /// The document cannot be read as written (the importer stops).
-    Error,
-    /// Probably a mistake; reading goes on.
-    Warning,
-    /// Worth knowing.
-    Info,
+/// A diagnostic reached from somewhere: a primitive, a node.
+pub trait Within {
+    /// The same diagnostic, its message suffixed with where it was reached from (a
+    /// primitive, a node), so that a fail-fast error names both; once only.
+    fn within(self, at: &str) -> Diagnostic;
 }
 
-/// One problem found while reading a document.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Diagnostic {
-    /// Stable code, e.g. `ACCESSOR_TOO_LONG`.
-    pub code: &'static str,
-    /// Error, warning or info.
-    pub severity: Severity,
-    /// JSON pointer of the offending property (empty for the whole file).
-    pub pointer: String,
-    /// One line for a person.
-    pub message: String,
-}
-
-impl Diagnostic {
-    /// An error diagnostic.
-    pub fn error(
-        code: &'static str,
-        pointer: impl Into<String>,
-        message: impl Into<String>,
-    ) -> Self {
-        Diagnostic {
-            code,
-            severity: Severity::Error,
-            pointer: pointer.into(),
-            message: message.into(),
-        }
-    }
-}
-
-impl Diagnostic {
-    /// The same diagnostic, its message prefixed with where it was reached from (a
-    /// primitive, a node), so that a fail-fast error names both.
-    pub fn within(mut self, at: &str) -> Diagnostic {
-        if !self.pointer.starts_with(at) && !self.message.contains("(read for ") {
+impl Within for Diagnostic {
+    fn within(mut self, at: &str) -> Diagnostic {
+        if !self.location.starts_with(at) && !self.message.contains("(read for ") {
             self.message = format!("{} (read for {at})", self.message);
         }
         self
-    }
-}
-
-impl fmt::Display for Diagnostic {
-    /// `pointer: message`, or the message alone for the whole file.
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.pointer.is_empty() {
-            f.write_str(&self.message)
-        } else {
-            write!(f, "{}: {}", self.pointer, self.message)
-        }
     }
 }
 
@@ -83,39 +38,18 @@ pub trait Sink {
 
 impl dyn Sink + '_ {
     /// Records an error.
-    pub fn error(
-        &mut self,
-        code: &'static str,
-        pointer: impl Into<String>,
-        message: impl Into<String>,
-    ) {
+    pub fn error(&mut self, code: Code, pointer: impl Into<String>, message: impl Into<String>) {
         self.push(Diagnostic::error(code, pointer, message));
     }
 
     /// Records a warning.
-    pub fn warn(
-        &mut self,
-        code: &'static str,
-        pointer: impl Into<String>,
-        message: impl Into<String>,
-    ) {
-        self.push(Diagnostic {
-            severity: Severity::Warning,
-            ..Diagnostic::error(code, pointer, message)
-        });
+    pub fn warn(&mut self, code: Code, pointer: impl Into<String>, message: impl Into<String>) {
+        self.push(Diagnostic::warning(code, pointer, message));
     }
 
     /// Records an info.
-    pub fn info(
-        &mut self,
-        code: &'static str,
-        pointer: impl Into<String>,
-        message: impl Into<String>,
-    ) {
-        self.push(Diagnostic {
-            severity: Severity::Info,
-            ..Diagnostic::error(code, pointer, message)
-        });
+    pub fn info(&mut self, code: Code, pointer: impl Into<String>, message: impl Into<String>) {
+        self.push(Diagnostic::new(code, Severity::Info, pointer, message));
     }
 }
 
@@ -139,7 +73,7 @@ pub struct FailFast {
 /// read a GLB chunk whose length is not a multiple of 4, as older trimesh exporters wrote
 /// them, by taking the next chunk right after its bytes): the importer reads on with a
 /// warning, `raycast check` keeps the error.
-pub const READ_WITH_WARNING: &[&str] = &["GLB_CHUNK_LENGTH_UNALIGNED"];
+pub const READ_WITH_WARNING: &[Code] = &[Code::GlbChunkLengthUnaligned];
 
 impl Sink for FailFast {
     fn push(&mut self, mut diagnostic: Diagnostic) {

@@ -7,7 +7,7 @@
 //! cameras, scenes). Textures, images, samplers, materials, animations and skins are never
 //! interpreted here: only `raycast check` looks at them.
 
-use super::diagnostics::{Severity, Sink};
+use super::diagnostics::{Code, Severity, Sink};
 use serde_json::{Map, Value};
 use std::collections::HashMap;
 use std::io::Read;
@@ -63,16 +63,16 @@ impl Document {
             Ok(value) => value,
             Err(e) => {
                 let code = if e.to_string().contains("number out of range") {
-                    "VALUE_NOT_IN_RANGE"
+                    Code::ValueNotInRange
                 } else {
-                    "INVALID_JSON"
+                    Code::InvalidJson
                 };
                 sink.error(code, "", format!("not valid glTF JSON: {e}"));
                 return None;
             }
         };
         let Value::Object(json) = value else {
-            sink.error("TYPE_MISMATCH", "", "the JSON root is not an object");
+            sink.error(Code::TypeMismatch, "", "the JSON root is not an object");
             return None;
         };
         Some(Document {
@@ -205,7 +205,7 @@ const HEAD_BYTES: usize = 64 * 1024;
 fn json_start(head: &[u8], sink: &mut dyn Sink) {
     if let Err(e) = serde_json::from_slice::<serde::de::IgnoredAny>(head) {
         if e.classify() == serde_json::error::Category::Syntax {
-            sink.error("INVALID_JSON", "", format!("not valid glTF JSON: {e}"));
+            sink.error(Code::InvalidJson, "", format!("not valid glTF JSON: {e}"));
         }
     }
 }
@@ -221,7 +221,7 @@ fn glb_header(bytes: &[u8], file_length: usize, sink: &mut dyn Sink) -> Option<u
     };
     if !bytes.starts_with(b"glTF") && bytes.len() >= 4 {
         sink.error(
-            "GLB_INVALID_MAGIC",
+            Code::GlbInvalidMagic,
             "",
             "the file does not start with 'glTF'",
         );
@@ -229,7 +229,7 @@ fn glb_header(bytes: &[u8], file_length: usize, sink: &mut dyn Sink) -> Option<u
     }
     if bytes.len() < 12 {
         sink.error(
-            "GLB_UNEXPECTED_END_OF_HEADER",
+            Code::GlbUnexpectedEndOfHeader,
             "",
             format!("{} bytes: too short for a GLB header", bytes.len()),
         );
@@ -238,7 +238,7 @@ fn glb_header(bytes: &[u8], file_length: usize, sink: &mut dyn Sink) -> Option<u
     let version = u32_at(4)?;
     if version != 2 {
         sink.error(
-            "GLB_INVALID_VERSION",
+            Code::GlbInvalidVersion,
             "",
             format!("GLB version {version}, expected 2"),
         );
@@ -247,14 +247,14 @@ fn glb_header(bytes: &[u8], file_length: usize, sink: &mut dyn Sink) -> Option<u
     let declared = u32_at(8)? as usize;
     if declared < 20 {
         sink.error(
-            "GLB_LENGTH_TOO_SMALL",
+            Code::GlbLengthTooSmall,
             "",
             format!("the GLB header declares {declared} bytes: no room for a chunk"),
         );
     }
     if declared > file_length || declared < 20 && declared != file_length {
         sink.error(
-            "GLB_LENGTH_MISMATCH",
+            Code::GlbLengthMismatch,
             "",
             format!("the GLB header declares {declared} bytes but the file has {file_length}"),
         );
@@ -278,7 +278,7 @@ fn glb_chunks(bytes: &[u8], sink: &mut dyn Sink) -> Option<(Range<usize>, Option
     while at < end {
         let Some((length, kind)) = u32_at(at).zip(u32_at(at + 4)).filter(|_| at + 8 <= end) else {
             sink.error(
-                "GLB_UNEXPECTED_END_OF_CHUNK_HEADER",
+                Code::GlbUnexpectedEndOfChunkHeader,
                 "",
                 format!("chunk header at byte {at} is cut short"),
             );
@@ -289,7 +289,7 @@ fn glb_chunks(bytes: &[u8], sink: &mut dyn Sink) -> Option<(Range<usize>, Option
         let data_start = at + 8;
         if !length.is_multiple_of(4) {
             sink.error(
-                "GLB_CHUNK_LENGTH_UNALIGNED",
+                Code::GlbChunkLengthUnaligned,
                 "",
                 format!(
                     "chunk {} length {length} is not a multiple of 4",
@@ -300,7 +300,7 @@ fn glb_chunks(bytes: &[u8], sink: &mut dyn Sink) -> Option<(Range<usize>, Option
         let data_end = data_start.saturating_add(length);
         if data_end > declared {
             sink.error(
-                "GLB_CHUNK_TOO_BIG",
+                Code::GlbChunkTooBig,
                 "",
                 format!(
                     "chunk {} ({length} bytes) runs past the declared length",
@@ -310,7 +310,7 @@ fn glb_chunks(bytes: &[u8], sink: &mut dyn Sink) -> Option<(Range<usize>, Option
         }
         if data_end > bytes.len() {
             sink.error(
-                "GLB_UNEXPECTED_END_OF_CHUNK_DATA",
+                Code::GlbUnexpectedEndOfChunkData,
                 "",
                 format!(
                     "chunk {} ({length} bytes) runs past the end of the file",
@@ -325,7 +325,7 @@ fn glb_chunks(bytes: &[u8], sink: &mut dyn Sink) -> Option<(Range<usize>, Option
     }
     if !broken && bytes.len() > declared && declared >= 20 {
         sink.warn(
-            "GLB_EXTRA_DATA",
+            Code::GlbExtraData,
             "",
             format!(
                 "{} bytes after the declared end: ignored",
@@ -337,7 +337,7 @@ fn glb_chunks(bytes: &[u8], sink: &mut dyn Sink) -> Option<(Range<usize>, Option
         Some(json) if !json.is_empty() => Some((json, chunks.bin)),
         Some(_) => None,
         None => {
-            sink.error("GLB_UNEXPECTED_FIRST_CHUNK", "", "no JSON chunk");
+            sink.error(Code::GlbUnexpectedFirstChunk, "", "no JSON chunk");
             None
         }
     }
@@ -359,45 +359,45 @@ impl Chunks {
         let empty = data.is_empty();
         match kind {
             JSON_CHUNK if index != 0 => sink.error(
-                "GLB_DUPLICATE_CHUNK",
+                Code::GlbDuplicateChunk,
                 "",
                 format!("chunk {index} is a second JSON chunk"),
             ),
             JSON_CHUNK => {
                 if empty {
-                    sink.error("GLB_EMPTY_CHUNK", "", "the JSON chunk is empty");
+                    sink.error(Code::GlbEmptyChunk, "", "the JSON chunk is empty");
                 }
                 self.json = Some(data);
             }
             BIN_CHUNK if index == 0 => sink.error(
-                "GLB_UNEXPECTED_FIRST_CHUNK",
+                Code::GlbUnexpectedFirstChunk,
                 "",
                 "the first chunk is BIN, not JSON",
             ),
             BIN_CHUNK if self.bin.is_some() => {
-                sink.error("GLB_DUPLICATE_CHUNK", "", "a second BIN chunk")
+                sink.error(Code::GlbDuplicateChunk, "", "a second BIN chunk")
             }
             BIN_CHUNK if index != 1 => sink.error(
-                "GLB_UNEXPECTED_BIN_CHUNK",
+                Code::GlbUnexpectedBinChunk,
                 "",
                 format!("the BIN chunk is chunk {index}, not the second"),
             ),
             BIN_CHUNK => {
                 if empty {
-                    sink.error("GLB_EMPTY_CHUNK", "", "the BIN chunk is empty");
+                    sink.error(Code::GlbEmptyChunk, "", "the BIN chunk is empty");
                 }
                 self.bin = Some(data);
             }
             other => {
                 if index == 0 {
                     sink.error(
-                        "GLB_UNEXPECTED_FIRST_CHUNK",
+                        Code::GlbUnexpectedFirstChunk,
                         "",
                         format!("the first chunk has type 0x{other:08x}, not JSON"),
                     );
                 }
                 sink.warn(
-                    "GLB_UNKNOWN_CHUNK_TYPE",
+                    Code::GlbUnknownChunkType,
                     "",
                     format!("chunk {index} has unknown type 0x{other:08x}: ignored"),
                 );

@@ -1,7 +1,7 @@
 //! The geometry of one mesh primitive, however it was stored (plain accessors, Draco,
 //! meshopt): positions, indices and the triangle mode that assembles them into triangles.
 
-use super::diagnostics::Diagnostic;
+use super::diagnostics::{Code, Diagnostic};
 use glam::DVec3;
 
 /// Name of the Draco mesh compression extension.
@@ -57,7 +57,7 @@ impl Geometry {
     ) -> Result<Geometry, Diagnostic> {
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
             return Err(Diagnostic::error(
-                "ACCESSOR_INVALID_FLOAT",
+                Code::AccessorInvalidFloat,
                 at,
                 format!("POSITION {i} is not finite"),
             ));
@@ -66,7 +66,7 @@ impl Geometry {
         let indices = indices.unwrap_or_else(|| (0..n as u32).collect());
         if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
             return Err(Diagnostic::error(
-                "ACCESSOR_INDEX_OOB",
+                Code::AccessorIndexOob,
                 format!("{at}/indices"),
                 format!("index {bad} out of range ({n} vertices)"),
             ));

@@ -8,7 +8,7 @@
 //! diagnostics. Rules about values (empty arrays, enums, accessor bounds) stay with `check`:
 //! the geometry the importer reads is checked where it is read.
 
-use super::diagnostics::Sink;
+use super::diagnostics::{Code, Sink};
 use super::document::{array, escape, index_of, Document};
 use serde_json::Value;
 
@@ -30,7 +30,7 @@ fn animation_targets(doc: &Document, sink: &mut dyn Sink) {
             let node = channel.get("target").and_then(|t| index_of(t, "node"));
             if let Some(bad) = node.filter(|&k| k >= nodes) {
                 sink.error(
-                    "UNRESOLVED_REFERENCE",
+                    Code::UnresolvedReference,
                     format!("/animations/{a}/channels/{c}/target/node"),
                     format!("refers to node {bad}, which does not exist"),
                 );
@@ -44,20 +44,20 @@ pub fn asset(doc: &Document, sink: &mut dyn Sink) {
     let asset = match doc.root().get("asset") {
         None => {
             return sink.error(
-                "UNDEFINED_PROPERTY",
+                Code::UndefinedProperty,
                 "/asset",
                 "the asset property is missing",
             )
         }
         Some(asset) if !asset.is_object() => {
-            return sink.error("TYPE_MISMATCH", "/asset", "expected an object")
+            return sink.error(Code::TypeMismatch, "/asset", "expected an object")
         }
         Some(asset) => asset,
     };
     let version = match asset.get("version") {
         None => {
             sink.error(
-                "UNDEFINED_PROPERTY",
+                Code::UndefinedProperty,
                 "/asset/version",
                 "property 'version' must be defined",
             );
@@ -65,7 +65,7 @@ pub fn asset(doc: &Document, sink: &mut dyn Sink) {
         }
         Some(v) => parse_version(v).or_else(|| {
             sink.error(
-                "PATTERN_MISMATCH",
+                Code::PatternMismatch,
                 "/asset/version",
                 format!("{v} is not a version: it must look like \"MAJOR.MINOR\""),
             );
@@ -75,13 +75,13 @@ pub fn asset(doc: &Document, sink: &mut dyn Sink) {
     if let Some((major, minor)) = version {
         if major != 2 {
             sink.error(
-                "UNKNOWN_ASSET_MAJOR_VERSION",
+                Code::UnknownAssetMajorVersion,
                 "/asset/version",
                 format!("glTF {major}.{minor} is not glTF 2"),
             );
         } else if minor > 0 {
             sink.warn(
-                "UNKNOWN_ASSET_MINOR_VERSION",
+                Code::UnknownAssetMinorVersion,
                 "/asset/version",
                 format!("glTF 2.{minor} is newer than 2.0"),
             );
@@ -89,12 +89,12 @@ pub fn asset(doc: &Document, sink: &mut dyn Sink) {
     }
     match (asset.get("minVersion").map(parse_version), version) {
         (Some(None), _) => sink.error(
-            "PATTERN_MISMATCH",
+            Code::PatternMismatch,
             "/asset/minVersion",
             "minVersion must look like MAJOR.MINOR",
         ),
         (Some(Some(min)), Some(version)) if min > version => sink.error(
-            "ASSET_MIN_VERSION_GREATER_THAN_VERSION",
+            Code::AssetMinVersionGreaterThanVersion,
             "/asset/minVersion",
             "minVersion is greater than version",
         ),
@@ -126,7 +126,7 @@ pub fn references(doc: &Document, sink: &mut dyn Sink) {
             Some(index) => format!("refers to {index}, which does not exist"),
             None => "refers to an object that does not exist".to_string(),
         };
-        sink.error("UNRESOLVED_REFERENCE", pointer, message);
+        sink.error(Code::UnresolvedReference, pointer, message);
     };
     let dangling = dangling_positions(&root);
     if !dangling.is_empty() {
@@ -143,8 +143,8 @@ pub fn references(doc: &Document, sink: &mut dyn Sink) {
         let pointer = json_pointer(&path);
         match error {
             VError::IndexOutOfBounds => unresolved(sink, pointer),
-            VError::Invalid => sink.warn("VALUE_NOT_IN_LIST", pointer, "invalid value"),
-            VError::Oversize => sink.error("VALUE_NOT_IN_RANGE", pointer, "value too large"),
+            VError::Invalid => sink.warn(Code::ValueNotInList, pointer, "invalid value"),
+            VError::Oversize => sink.error(Code::ValueNotInRange, pointer, "value too large"),
             // The crate asks for properties the specification leaves optional; `check`
             // checks the required ones itself.
             VError::Missing | VError::Unsupported => {}

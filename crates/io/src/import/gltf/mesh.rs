@@ -3,7 +3,7 @@
 //! KHR_draco_mesh_compression is offered to [`super::decode::draco_primitive`] first.
 
 use super::decode;
-use super::diagnostics::Diagnostic;
+use super::diagnostics::{Code, Diagnostic, Within};
 use super::document::{extension, index_of, Document};
 use super::geometry::{Geometry, TriangleMode, DRACO};
 use glam::DVec3;
@@ -27,7 +27,7 @@ impl Document {
             .and_then(|m| m.get("primitives"))
             .and_then(|p| p.get(prim))
             .ok_or_else(|| {
-                Diagnostic::error("UNRESOLVED_REFERENCE", &at, "primitive does not exist")
+                Diagnostic::error(Code::UnresolvedReference, &at, "primitive does not exist")
             })?;
         Ok((json, at))
     }
@@ -82,7 +82,7 @@ impl Document {
         let layout = self.layout(accessor)?;
         if layout.comps != 3 || layout.rows.is_some() || layout.component == 5125 {
             return Err(Diagnostic::error(
-                "MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT",
+                Code::MeshPrimitiveAttributesAccessorInvalidFormat,
                 at,
                 "POSITION must be VEC3 of floats or 8/16-bit integers",
             ));
@@ -105,7 +105,7 @@ impl Document {
         let layout = self.layout(accessor)?;
         if layout.comps != 1 || !matches!(layout.component, 5121 | 5123 | 5125) {
             return Err(Diagnostic::error(
-                "MESH_PRIMITIVE_INDICES_ACCESSOR_INVALID_FORMAT",
+                Code::MeshPrimitiveIndicesAccessorInvalidFormat,
                 format!("/accessors/{accessor}"),
                 "indices must be SCALAR unsigned integers",
             ));

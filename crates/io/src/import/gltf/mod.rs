@@ -38,7 +38,7 @@ pub mod scene;
 pub mod shading;
 pub mod structure;
 
-pub use diagnostics::{Diagnostic, ErrorsOnly, FailFast, Severity, Sink};
+pub use diagnostics::{Code, Diagnostic, ErrorsOnly, FailFast, Severity, Sink};
 pub use document::Document;
 
 use super::paths::folder_of;
@@ -92,7 +92,7 @@ pub fn check_required_extensions(doc: &Document, sink: &mut dyn Sink) {
     for (i, name) in doc.extension_names("extensionsRequired").enumerate() {
         if !can_honour_required(name) {
             sink.error(
-                "UNSUPPORTED_EXTENSION",
+                Code::UnsupportedExtension,
                 format!("/extensionsRequired/{i}"),
                 format!("requires extension {name} which raycast cannot decode"),
             );
@@ -106,10 +106,10 @@ pub fn prepare_file(path: &Path, options: &LoadOptions) -> Result<Prepared> {
     let mut sink = FailFast::default();
     match document::read_file(path, is_glb_path(path), &mut sink) {
         Ok(Some(bytes)) => prepare(bytes, path, options),
-        Ok(None) => Err(Error::in_file(
-            path,
-            sink.error.map_or_else(String::new, |d| d.to_string()),
-        )),
+        Ok(None) => Err(match sink.error {
+            Some(d) => Error::from_diagnostic(path, &d),
+            None => Error::in_file(path, String::new()),
+        }),
         Err(e) => Err(super::read_error(path, e)),
     }
 }
@@ -141,7 +141,7 @@ pub struct Prepared {
 /// `path` in messages, which says by its extension whether they are a GLB and is where
 /// external files resolve.
 pub fn prepare(bytes: Vec<u8>, path: &Path, options: &LoadOptions) -> Result<Prepared> {
-    let fail = |d: Diagnostic| Error::in_file(path, d.to_string());
+    let fail = |d: Diagnostic| Error::from_diagnostic(path, &d);
     let mut sink = FailFast::default();
     let parsed = Document::parse(bytes, is_glb_path(path), &mut sink);
     let mut doc = match (parsed, sink.error.take()) {
@@ -213,7 +213,7 @@ impl Prepared {
             self.doc.limit_unbacked(*budget);
             scene::build_at(&self.doc, self.choice.as_deref(), &timing, &self.path)
         };
-        let mut scene = built.map_err(|d| Error::in_file(&self.path, d.to_string()))?;
+        let mut scene = built.map_err(|d| Error::from_diagnostic(&self.path, &d))?;
         // What the layer noticed while reading (a network URI, extra bytes after a GLB) comes
         // before what the scene walk noticed.
         scene.warnings.splice(0..0, self.notes.iter().cloned());

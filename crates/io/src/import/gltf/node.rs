@@ -3,7 +3,7 @@
 //! camera projections.
 
 use super::animation::Animated;
-use super::diagnostics::{Diagnostic, Sink};
+use super::diagnostics::{Code, Diagnostic, Sink};
 use super::document::{array, as_index, index_of, Document};
 use crate::bound::transform::BoundedMat4;
 use crate::camera::Projection;
@@ -110,7 +110,7 @@ impl Document {
     /// Camera `index`'s projection.
     pub fn camera(&self, index: usize) -> Result<CameraSpec, Diagnostic> {
         let at = format!("/cameras/{index}");
-        let bad = |what: &str| Diagnostic::error("CAMERA_INVALID", &at, what.to_string());
+        let bad = |what: &str| Diagnostic::error(Code::CameraInvalid, &at, what.to_string());
         let camera = self
             .item("cameras", index)
             .ok_or_else(|| bad("camera does not exist"))?;
@@ -195,7 +195,7 @@ pub fn bounded_transform(
             Some(list) if list.iter().all(|x| x.is_finite()) => Some(list),
             _ => {
                 sink.error(
-                    "VALUE_NOT_IN_RANGE",
+                    Code::ValueNotInRange,
                     format!("{at}/{key}"),
                     format!("expected {len} finite numbers"),
                 );
@@ -228,7 +228,7 @@ pub fn bounded_transform(
                 q
             } else {
                 sink.error(
-                    "ROTATION_NON_UNIT",
+                    Code::RotationNonUnit,
                     format!("{at}/rotation"),
                     "zero quaternion",
                 );

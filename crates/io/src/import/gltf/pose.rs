@@ -16,7 +16,7 @@
 
 use super::animation::NodeValues;
 use super::decode;
-use super::diagnostics::{Diagnostic, FailFast};
+use super::diagnostics::{Code, Diagnostic, FailFast, Within};
 use super::document::{array, as_index, index_of, numbers, Document};
 use super::geometry::Geometry;
 use super::node::animated_transform;
@@ -126,7 +126,7 @@ impl Document {
             .position(|g| g.is_some_and(|g| !g.is_finite()))
         {
             return Err(Diagnostic::error(
-                "NODE_TRANSFORM_NOT_FINITE",
+                Code::NodeTransformNotFinite,
                 format!("/nodes/{i}"),
                 "world transform is not finite",
             ));
@@ -141,9 +141,9 @@ impl Document {
         globals: &[Option<DMat4>],
     ) -> Result<Vec<DMat4>, Diagnostic> {
         let at = format!("/skins/{skin}");
-        let json = self
-            .item("skins", skin)
-            .ok_or_else(|| Diagnostic::error("UNRESOLVED_REFERENCE", &at, "skin does not exist"))?;
+        let json = self.item("skins", skin).ok_or_else(|| {
+            Diagnostic::error(Code::UnresolvedReference, &at, "skin does not exist")
+        })?;
         let joints = array(json, "joints");
         let inverse_binds = match index_of(json, "inverseBindMatrices") {
             None => vec![DMat4::IDENTITY; joints.len()],
@@ -151,7 +151,7 @@ impl Document {
                 let (layout, values) = self.accessor_values(accessor).map_err(|e| e.within(&at))?;
                 if layout.rows != Some(4) || layout.count < joints.len() {
                     return Err(Diagnostic::error(
-                        "SKIN_IBM_INVALID_FORMAT",
+                        Code::SkinIbmInvalidFormat,
                         format!("{at}/inverseBindMatrices"),
                         format!(
                             "must be a MAT4 accessor with one matrix per joint ({})",
@@ -177,7 +177,7 @@ impl Document {
                     .and_then(|n| globals.get(n).copied().flatten())
                     .ok_or_else(|| {
                         Diagnostic::error(
-                            "UNRESOLVED_REFERENCE",
+                            Code::UnresolvedReference,
                             format!("{at}/joints/{k}"),
                             "joint is not a node with a transform",
                         )
@@ -209,7 +209,7 @@ impl Document {
                 let deltas = self.positions(accessor).map_err(|e| e.within(&tat))?;
                 if deltas.len() != n {
                     return Err(Diagnostic::error(
-                        "MESH_PRIMITIVE_MORPH_TARGET_INVALID_ATTRIBUTE_COUNT",
+                        Code::MeshPrimitiveMorphTargetInvalidAttributeCount,
                         tat,
                         format!("{} deltas for {n} vertices", deltas.len()),
                     ));
@@ -232,7 +232,7 @@ impl Document {
                         }
                         let joint = joints.get(id as usize).ok_or_else(|| {
                             Diagnostic::error(
-                                "ACCESSOR_JOINTS_INDEX_OOB",
+                                Code::AccessorJointsIndexOob,
                                 format!("{at}/attributes/JOINTS_{set}"),
                                 format!(
                                     "vertex {v} uses joint {id}, the skin has {}",
@@ -259,7 +259,7 @@ impl Document {
         }
         if let Some(i) = geometry.positions.iter().position(|p| !p.is_finite()) {
             return Err(Diagnostic::error(
-                "ACCESSOR_INVALID_FLOAT",
+                Code::AccessorInvalidFloat,
                 at,
                 format!("posed vertex {i} is not finite"),
             ));
@@ -307,7 +307,7 @@ impl Document {
             .and_then(|a| index_of(a, &wname))
             .ok_or_else(|| {
                 Diagnostic::error(
-                    "MESH_PRIMITIVE_JOINTS_WEIGHTS_MISMATCH",
+                    Code::MeshPrimitiveJointsWeightsMismatch,
                     format!("{at}/{jname}"),
                     format!("{jname} without {wname}"),
                 )
@@ -325,7 +325,7 @@ impl Document {
             };
             if layout.comps != 4 || layout.rows.is_some() || stored.len() != 4 * n {
                 return Err(Diagnostic::error(
-                    "MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT",
+                    Code::MeshPrimitiveUnequalAccessorCount,
                     pointer,
                     format!("must be VEC4 with one element per vertex ({n})"),
                 ));
@@ -341,7 +341,7 @@ impl Document {
             .position(|j| j.iter().any(|&i| i < 0.0 || i.fract() != 0.0))
         {
             return Err(Diagnostic::error(
-                "MESH_PRIMITIVE_JOINTS_INVALID",
+                Code::MeshPrimitiveJointsInvalid,
                 format!("{at}/{jname}"),
                 format!("vertex {v}: joint indices must be unsigned integers"),
             ));

@@ -6,7 +6,7 @@ use super::accessor::NO_DATA;
 use super::animation::NodeValues;
 use super::buffers::Need;
 use super::decode::{self, GPU_INSTANCING, MESHOPT};
-use super::diagnostics::{Diagnostic, FailFast};
+use super::diagnostics::{Code, Diagnostic, FailFast, Within};
 use super::document::{array, as_index, extension, index_of, Document};
 use super::geometry::DRACO;
 use super::node::{bounded_transform, Node};
@@ -52,7 +52,7 @@ pub fn build_at(
         None => Vec::new(),
         Some(_) => doc
             .chosen_animations(timing.animation.as_deref())
-            .map_err(|e| Diagnostic::error("UNRESOLVED_REFERENCE", "/animations", e))?,
+            .map_err(|e| Diagnostic::error(Code::UnresolvedReference, "/animations", e))?,
     };
     let animated = match timing.time {
         Some(time) => doc.animate(&chosen, time)?,
@@ -85,7 +85,7 @@ pub fn build_at(
     );
     let roots = match doc
         .scene_roots(choice)
-        .map_err(|e| Diagnostic::error("UNRESOLVED_REFERENCE", "/scenes", e))?
+        .map_err(|e| Diagnostic::error(Code::UnresolvedReference, "/scenes", e))?
     {
         Some(roots) => roots,
         None => {
@@ -131,7 +131,7 @@ fn add_mesh_object(
         .any(|p| !p.is_finite() || p.abs().max_element() > limit)
     {
         return Err(Diagnostic::error(
-            "NODE_TRANSFORM_NOT_FINITE",
+            Code::NodeTransformNotFinite,
             pointer,
             format!(
                 "('{name}'): placed coordinates exceed the range raycast accepts (±{limit:.1e})"
@@ -275,18 +275,18 @@ impl Walk<'_> {
         while let Some((index, parent, depth)) = stack.pop() {
             let at = format!("/nodes/{index}");
             if depth > node_count {
-                return Err(Diagnostic::error("NODE_LOOP", at, "node cycle"));
+                return Err(Diagnostic::error(Code::NodeLoop, at, "node cycle"));
             }
             visits += 1;
             if visits > MAX_NODE_VISITS {
                 return Err(Diagnostic::error(
-                    "ASSET_TOO_LARGE",
+                    Code::AssetTooLarge,
                     "/nodes",
                     format!("the node hierarchy expands to more than {MAX_NODE_VISITS} instances"),
                 ));
             }
             let node = self.doc.node(index).ok_or_else(|| {
-                Diagnostic::error("UNRESOLVED_REFERENCE", &at, "node does not exist")
+                Diagnostic::error(Code::UnresolvedReference, &at, "node does not exist")
             })?;
             let mut sink = FailFast::default();
             let animated = self.animated.get(&index);
@@ -297,7 +297,7 @@ impl Walk<'_> {
             }
             if !world.value.is_finite() {
                 return Err(Diagnostic::error(
-                    "NODE_TRANSFORM_NOT_FINITE",
+                    Code::NodeTransformNotFinite,
                     at,
                     "world transform is not finite",
                 ));
@@ -371,7 +371,7 @@ impl Walk<'_> {
                 .map(|quadric| quadric.with_composition(placed))
                 .map_err(|e| {
                     Diagnostic::error(
-                        "QUADRIC_INVALID",
+                        Code::QuadricInvalid,
                         format!("{at}/extensions/{QUADRIC_EXTENSION}"),
                         format!("('{name}'): {e}"),
                     )
@@ -398,7 +398,7 @@ impl Walk<'_> {
         }
         if self.doc.item("meshes", mesh).is_none() {
             return Err(Diagnostic::error(
-                "UNRESOLVED_REFERENCE",
+                Code::UnresolvedReference,
                 format!("/meshes/{mesh}"),
                 "mesh does not exist",
             ));

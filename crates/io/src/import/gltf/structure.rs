@@ -4,7 +4,7 @@
 //! without its matrix), so it is a TYPE_MISMATCH error, as the Khronos glTF-Validator's, and
 //! the importer refuses the file (integrity rules, [`super::integrity`]).
 
-use super::diagnostics::Sink;
+use super::diagnostics::{Code, Sink};
 use super::document::{escape, Document};
 use serde_json::Value;
 
@@ -95,7 +95,7 @@ pub fn check(doc: &Document, sink: &mut dyn Sink) {
         };
         let at = format!("/{collection}");
         if !value.is_array() {
-            sink.error("TYPE_MISMATCH", at, Kind::Array.expected());
+            sink.error(Code::TypeMismatch, at, Kind::Array.expected());
             continue;
         }
         walk(value, &["*"], &at, Kind::Object, sink);
@@ -109,7 +109,7 @@ pub fn check(doc: &Document, sink: &mut dyn Sink) {
 fn walk(value: &Value, pattern: &[&str], at: &str, kind: Kind, sink: &mut dyn Sink) {
     let Some((&step, rest)) = pattern.split_first() else {
         if !kind.holds(value) {
-            sink.error("TYPE_MISMATCH", at, kind.expected());
+            sink.error(Code::TypeMismatch, at, kind.expected());
         }
         return;
     };

@@ -25,6 +25,7 @@ use crate::scene::{Attributes, Mesh, Positions, Scene};
 use body::{Body, Fault, Layout, RecordEnd};
 use glam::DVec3;
 use header::{Element, Format, Header, Kind, Scalar};
+use raycast_core::diagnostic::Code;
 use std::fmt;
 use std::path::Path;
 
@@ -88,13 +89,13 @@ pub enum PlyError {
 
 impl PlyError {
     /// The `raycast check` code of this error (docs/check.md).
-    pub fn code(&self) -> &'static str {
+    pub fn code(&self) -> Code {
         match self {
-            PlyError::Header { .. } => "PLY_HEADER_ERROR",
-            PlyError::Oversized { .. } | PlyError::Truncated { .. } => "PLY_TRUNCATED",
-            PlyError::Value { .. } => "PLY_PARSE_ERROR",
-            PlyError::IndexOutOfRange { .. } => "INDEX_OOB",
-            PlyError::NonFinite { .. } => "NON_FINITE_POSITION",
+            PlyError::Header { .. } => Code::PlyHeaderError,
+            PlyError::Oversized { .. } | PlyError::Truncated { .. } => Code::PlyTruncated,
+            PlyError::Value { .. } => Code::PlyParseError,
+            PlyError::IndexOutOfRange { .. } => Code::IndexOob,
+            PlyError::NonFinite { .. } => Code::NonFinitePosition,
         }
     }
 }
@@ -182,7 +183,7 @@ pub fn load(path: &Path) -> Result<Scene> {
 
 /// Loads PLY `bytes`; `path` names them in messages and names the scene object.
 pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
-    let mesh = read(bytes).map_err(|e| Error::in_file(path, e.to_string()))?;
+    let mesh = read(bytes).map_err(|e| Error::in_file(path, e.to_string()).with_code(e.code()))?;
     Ok(scene(mesh, path))
 }
 

@@ -65,7 +65,7 @@ fn a_header_that_claims_more_than_the_file_holds_is_refused_before_reading() {
     let mut bytes = header("binary_little_endian", 1_000_000_000, 1, "int");
     bytes.extend_from_slice(&[0; 1024]);
     let e = read(&bytes).unwrap_err();
-    assert_eq!(e.code(), "PLY_TRUNCATED");
+    assert_eq!(e.code(), Code::PlyTruncated);
     assert_eq!(
         e.to_string(),
         "truncated: the header declares 1000000000 'vertex' records, at least 13000000000 \
@@ -86,7 +86,7 @@ fn indices_out_of_range_and_bad_values_are_named() {
     let mut bytes = header("ascii", 3, 1, "int");
     bytes.extend_from_slice(b"0 0 0 1\n1 0 0 1\n0 1 0 1\n3 0 1 3 0\n");
     let e = read(&bytes).unwrap_err();
-    assert_eq!(e.code(), "INDEX_OOB");
+    assert_eq!(e.code(), Code::IndexOob);
     assert_eq!(
         e.to_string(),
         "face 0 refers to vertex 3, but the file has 3 vertices (numbered from 0)"
@@ -94,7 +94,7 @@ fn indices_out_of_range_and_bad_values_are_named() {
     let mut bytes = header("ascii", 3, 1, "int");
     bytes.extend_from_slice(b"0 0 0 1\n1 zero 0 1\n0 1 0 1\n3 0 1 2 0\n");
     let e = read(&bytes).unwrap_err();
-    assert_eq!(e.code(), "PLY_PARSE_ERROR");
+    assert_eq!(e.code(), Code::PlyParseError);
     assert_eq!(e.to_string(), "'vertex' record 1: 'zero' is not a float");
     let mut bytes = header("ascii", 3, 1, "int");
     bytes.extend_from_slice(b"0 0 0 1\nnan 0 0 1\n0 1 0 1\n3 0 1 2 0\n");

@@ -37,7 +37,7 @@ fn a_binary_file_that_begins_with_solid_is_binary() {
 fn a_truncated_binary_file_and_trailing_bytes() {
     let mut bytes = binary(b"", &[TRI], 3);
     let e = read(&bytes).unwrap_err();
-    assert_eq!(e.code(), "STL_TRUNCATED");
+    assert_eq!(e.code(), Code::StlTruncated);
     assert_eq!(
         e.to_string(),
         "truncated: the binary header counts 3 triangles, 234 bytes, but the file has 134"
@@ -50,8 +50,8 @@ fn a_truncated_binary_file_and_trailing_bytes() {
         ["3 bytes after the last of the header's 1 triangles ignored"]
     );
     let nan = binary(b"", &[[[f32::NAN, 0.0, 0.0], TRI[1], TRI[2]]], 1);
-    assert_eq!(read(&nan).unwrap_err().code(), "NON_FINITE_POSITION");
-    assert_eq!(read(b"tiny").unwrap_err().code(), "STL_NOT_STL");
+    assert_eq!(read(&nan).unwrap_err().code(), Code::NonFinitePosition);
+    assert_eq!(read(b"tiny").unwrap_err().code(), Code::StlNotStl);
 }
 
 #[test]
@@ -86,7 +86,7 @@ fn broken_ascii_files_name_the_solid() {
         FACET.replace("1 0 0", "1 x 0")
     );
     let e = read(bad.as_bytes()).unwrap_err();
-    assert_eq!(e.code(), "STL_PARSE_ERROR");
+    assert_eq!(e.code(), Code::StlParseError);
     assert!(e.to_string().starts_with("the solid of line 3: "), "{e}");
     let stray = format!("solid a\n{FACET}endsolid\nfacet\n");
     assert_eq!(
