@@ -18,7 +18,7 @@ trap 'rm -rf "$work"' EXIT
 rays=$((512 * 512))
 for scene in "${scenes[@]}"; do
   for accel in octree; do
-    valgrind --tool=callgrind --toggle-collect='raycast_core::trace::Tracer::nearest*' \
+    valgrind --tool=callgrind --toggle-collect='*Tracer as raycast_core::trace::NearestHits>::nearest_all' \
       --callgrind-out-file="$work/cg.out" "$raycast" "$scene" --width 512 --height 512 \
       --threads 1 --quiet --format npy --aov depth --out "$work/out" >/dev/null 2>&1
     callgrind_annotate --inclusive=yes "$work/cg.out" > "$work/cg.txt" 2>/dev/null
