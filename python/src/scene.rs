@@ -77,7 +77,8 @@ impl PyScene {
             .variants
             .iter()
             .map(|(set, name)| {
-                import::usd::parse_choice(&format!("{set}={name}")).map_err(PyValueError::new_err)
+                import::usd::parse_choice(&format!("{set}={name}"))
+                    .map_err(|e| PyValueError::new_err(e.to_string()))
             })
             .collect::<PyResult<Vec<_>>>()?;
         let options = LoadOptions {

@@ -107,7 +107,7 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
     let measured: Vec<Measured> = match job.sign {
         Some(rule) => {
             let signer =
-                Signer::new(query, rule).map_err(|e| Error::in_file(&job.scene, e).as_usage())?;
+                Signer::new(query, rule).map_err(|e| e.with_path(&job.scene).as_usage())?;
             let measure = |&p: &DVec3| {
                 let (nearest, side) = signer.measure(p);
                 (nearest, Some(side))

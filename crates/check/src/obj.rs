@@ -25,7 +25,7 @@ pub fn check(
         }
     };
     if let Err(why) = crate::import::obj::check_statements(text) {
-        f.error("OBJ_NO_STATEMENT", "", why);
+        f.error("OBJ_NO_STATEMENT", "", why.to_string());
         return false;
     }
     let base = path.parent().unwrap_or(Path::new("."));
@@ -101,7 +101,7 @@ pub fn check(
             "mtllib" => {
                 for name in &args {
                     match resolve_inside(base, root, name, options.allow_outside) {
-                        Err(why) => f.error("PATH_OUTSIDE_ASSET", at.clone(), why),
+                        Err(why) => f.error("PATH_OUTSIDE_ASSET", at.clone(), why.to_string()),
                         Ok(p) if !p.is_file() => f.warn(
                             "MISSING_REFERENCE",
                             at.clone(),

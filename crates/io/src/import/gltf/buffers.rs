@@ -84,7 +84,7 @@ pub fn resolve(
     ) {
         Ok(path) => Some(Resource::File(path, decoded.into_owned())),
         Err(why) => {
-            sink.error("PATH_OUTSIDE_ASSET", at, why);
+            sink.error("PATH_OUTSIDE_ASSET", at, why.to_string());
             None
         }
     }
