@@ -130,7 +130,8 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
     write(&mut staging, &measured)?;
     let sidecar = sidecar(job, &scene, points.len(), uncertain, seconds);
     staging.write(ownership::SIDECAR, |w| {
-        serde_json::to_writer_pretty(&mut *w, &sidecar).map_err(|e| format!("cannot write: {e}"))
+        serde_json::to_writer_pretty(&mut *w, &sidecar)
+            .map_err(|e| Error::msg(format!("cannot write: {e}")))
     })?;
     staging.commit()?;
     Ok(DistanceOutcome {
