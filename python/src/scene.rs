@@ -488,7 +488,7 @@ fn parse_outputs(names: &[String], camera: bool) -> PyResult<Vec<(String, Aov)>>
         .iter()
         .map(|n| crate::fill::parse(n, camera).map(|o| (n.clone(), o)))
         .collect::<Result<_, _>>()
-        .map_err(PyValueError::new_err)
+        .map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
 /// Consecutive pixels of a camera image (whole rows), as a ray source of their own.
