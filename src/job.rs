@@ -97,15 +97,15 @@ impl HitLimit {
 }
 
 impl std::str::FromStr for HitLimit {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
         match s.trim() {
             "all" => Ok(HitLimit::All),
             n => match n.parse::<usize>() {
                 Ok(n) if n > 0 => Ok(HitLimit::Nearest(n)),
-                _ => Err(format!(
+                _ => Err(Error::usage(format!(
                     "'{s}' is not a number of hits per ray: give all or a count of at least 1"
-                )),
+                ))),
             },
         }
     }

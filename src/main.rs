@@ -477,7 +477,6 @@ fn probe_usd(path: &Path, timeout: f64, child_args: &[std::ffi::OsString]) -> ra
         return Ok(());
     };
     raycast::import::usd::child::probe(&exe, path, child_args, Duration::from_secs_f64(timeout))
-        .map_err(raycast::Error::msg)
 }
 
 /// Writes `text` to standard output; a closed pipe (`raycast info x | head`) is not an error.

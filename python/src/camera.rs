@@ -122,8 +122,9 @@ pub fn pinhole(
     check_size(width, height)?;
     let k_rows = [0, 1, 2].map(|r| [0, 1, 2].map(|c| k[[r, c]]));
     let m_rows = [0, 1, 2, 3].map(|r| [0, 1, 2, 3].map(|c| m[[r, c]]));
-    let pinhole = Pinhole::new(k_rows, width, height).map_err(PyValueError::new_err)?;
-    let to_world = camera_to_world(m_rows).map_err(PyValueError::new_err)?;
+    let pinhole =
+        Pinhole::new(k_rows, width, height).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let to_world = camera_to_world(m_rows).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let to_world = CameraAxes::OpenCv.to_opengl(to_world);
     let camera = Camera::pinhole(
         pinhole,

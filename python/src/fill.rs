@@ -10,10 +10,11 @@ use pyo3::types::PyDict;
 use raycast_core::geometry::RaySource;
 use raycast_core::render::{self, Aov, Column, Rays};
 use raycast_core::trace::Tracer;
+use raycast_core::Error;
 
 /// The output called `name` (`distance` is the command line's `depth`, and `depth` is
 /// accepted too).
-pub fn parse(name: &str, camera: bool) -> Result<Aov, String> {
+pub fn parse(name: &str, camera: bool) -> Result<Aov, Error> {
     Ok(match name {
         "t" => Aov::T,
         "distance" | "depth" => Aov::Depth,
@@ -28,12 +29,16 @@ pub fn parse(name: &str, camera: bool) -> Result<Aov, String> {
         "uv" => Aov::Uv,
         "shading_normal" => Aov::ShadingNormal,
         "material" => Aov::Material,
-        "z" => return Err("the z output needs a camera: use render(), not cast()".into()),
+        "z" => {
+            return Err(Error::msg(
+                "the z output needs a camera: use render(), not cast()",
+            ))
+        }
         _ => {
-            return Err(format!(
+            return Err(Error::msg(format!(
             "unknown output '{name}' (choose from t, distance, {}normal, position, id, prim, bary, error, certain, uv, shading_normal, material)",
             if camera { "z, " } else { "" }
-        ))
+        )))
         }
     })
 }

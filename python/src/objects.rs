@@ -10,6 +10,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use raycast_core::quadric::{Quadric, QuadricSpec};
 use raycast_core::scene::{Mesh, Positions};
+use raycast_core::Error;
 use raycast_io::import;
 use std::path::Path;
 
@@ -90,31 +91,34 @@ fn mesh_part(
     name: String,
     vertices: &PyReadonlyArray2<'_, f64>,
     faces: &PyReadonlyArray2<'_, i64>,
-) -> Result<MeshPart, String> {
+) -> Result<MeshPart, Error> {
     let (v, f) = (vertices.as_array(), faces.as_array());
     if v.ncols() != 3 || f.ncols() != 3 {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "vertices must be (N, 3) and faces (M, 3), got {:?} and {:?}",
             v.shape(),
             f.shape()
-        ));
+        )));
     }
     let vertices: Vec<[f64; 3]> = v.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
     if let Some(i) = vertices
         .iter()
         .position(|p| p.iter().any(|c| !c.is_finite()))
     {
-        return Err(format!("vertex {i} is not finite: {:?}", vertices[i]));
+        return Err(Error::msg(format!(
+            "vertex {i} is not finite: {:?}",
+            vertices[i]
+        )));
     }
     let n = vertices.len() as i64;
     let index = |i: i64| u32::try_from(i).ok().filter(|_| i < n);
     let mut triangles = Vec::with_capacity(f.nrows());
     for (k, r) in f.rows().into_iter().enumerate() {
         let (Some(a), Some(b), Some(c)) = (index(r[0]), index(r[1]), index(r[2])) else {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "face {k} is {:?}: its vertex indices must lie in 0..{n}",
                 [r[0], r[1], r[2]]
-            ));
+            )));
         };
         triangles.push([a, b, c]);
     }
@@ -125,7 +129,7 @@ fn mesh_part(
 
 /// The quadric `args` describe, placed: its coefficients and clip box checked as a file's
 /// `RAYCAST_quadric` (see [`QuadricSpec::from_coefficients`]) and its matrix as a node's.
-fn quadric_part(args: QuadricArgs) -> Result<QuadricPart, String> {
+fn quadric_part(args: QuadricArgs) -> Result<QuadricPart, Error> {
     let (_, coefficients, bounds, matrix) = &args;
     let bounds = bounds.map(|[min, max]| [DVec3::from_array(min), DVec3::from_array(max)]);
     let spec = QuadricSpec::from_coefficients(*coefficients, bounds)?;
@@ -142,7 +146,8 @@ pub fn load_arrays(
     vertices: PyReadonlyArray2<'_, f64>,
     faces: PyReadonlyArray2<'_, i64>,
 ) -> PyResult<PyScene> {
-    let mesh = mesh_part("mesh".to_string(), &vertices, &faces).map_err(PyValueError::new_err)?;
+    let mesh = mesh_part("mesh".to_string(), &vertices, &faces)
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let objects = Objects {
         meshes: vec![mesh],
         quadrics: Vec::new(),
@@ -162,19 +167,19 @@ pub fn load_objects(
     let meshes = meshes
         .into_iter()
         .map(|(name, v, f)| {
-            let wrong = |e: String| format!("mesh '{name}': {e}");
+            let wrong = |e: Error| e.context(format!("mesh '{name}'"));
             mesh_part(name.clone(), &v, &f).map_err(wrong)
         })
         .collect::<Result<Vec<_>, _>>()
-        .map_err(PyValueError::new_err)?;
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let quadrics = quadrics
         .into_iter()
         .map(|args| {
-            let wrong = format!("quadric '{}': ", args.0);
-            quadric_part(args).map_err(|e| wrong + &e)
+            let wrong = format!("quadric '{}'", args.0);
+            quadric_part(args).map_err(|e| e.context(wrong))
         })
         .collect::<Result<Vec<_>, _>>()
-        .map_err(PyValueError::new_err)?;
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let objects = Objects { meshes, quadrics };
     PyScene::build(py, Source::Arrays(objects), None, Pose::default())
 }

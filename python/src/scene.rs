@@ -77,7 +77,8 @@ impl PyScene {
             .variants
             .iter()
             .map(|(set, name)| {
-                import::usd::parse_choice(&format!("{set}={name}")).map_err(PyValueError::new_err)
+                import::usd::parse_choice(&format!("{set}={name}"))
+                    .map_err(|e| PyValueError::new_err(e.to_string()))
             })
             .collect::<PyResult<Vec<_>>>()?;
         let options = LoadOptions {
@@ -478,7 +479,7 @@ fn parse_outputs(names: &[String], camera: bool) -> PyResult<Vec<(String, Aov)>>
         .iter()
         .map(|n| crate::fill::parse(n, camera).map(|o| (n.clone(), o)))
         .collect::<Result<_, _>>()
-        .map_err(PyValueError::new_err)
+        .map_err(|e| PyValueError::new_err(e.to_string()))
 }
 
 /// Consecutive pixels of a camera image (whole rows), as a ray source of their own.

@@ -4,6 +4,7 @@
 use clap::Args;
 use glam::DMat4;
 use raycast::camera::{camera_to_world, CameraAxes};
+use raycast::{Error, Result};
 use std::path::PathBuf;
 
 /// Pinhole camera options of a render.
@@ -38,35 +39,42 @@ impl PinholeArgs {
 }
 
 /// Comma-separated finite numbers.
-fn numbers(text: &str) -> Result<Vec<f64>, String> {
+fn numbers(text: &str) -> Result<Vec<f64>> {
     text.split(',')
         .map(|p| match p.trim().parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(format!("'{}' is not a finite number", p.trim())),
+            _ => Err(Error::usage(format!(
+                "'{}' is not a finite number",
+                p.trim()
+            ))),
         })
         .collect()
 }
 
 /// `--K`: FX,FY,CX,CY, or the nine numbers of K row-major.
-fn parse_k(text: &str) -> Result<[[f64; 3]; 3], String> {
+fn parse_k(text: &str) -> Result<[[f64; 3]; 3]> {
     match numbers(text)?[..] {
         [fx, fy, cx, cy] => Ok([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]]),
         [a, b, c, d, e, f, g, h, i] => Ok([[a, b, c], [d, e, f], [g, h, i]]),
-        _ => Err("expected FX,FY,CX,CY or the nine numbers of K, row-major".into()),
+        _ => Err(Error::usage(
+            "expected FX,FY,CX,CY or the nine numbers of K, row-major",
+        )),
     }
 }
 
 /// `--cam-to-world`: 16 numbers row-major, a finite invertible affine matrix.
-fn parse_matrix(text: &str) -> Result<[[f64; 4]; 4], String> {
+fn parse_matrix(text: &str) -> Result<[[f64; 4]; 4]> {
     let values = numbers(text)?;
     let Ok(values) = <[f64; 16]>::try_from(values) else {
-        return Err("expected the 16 numbers of a 4x4 matrix, row-major".into());
+        return Err(Error::usage(
+            "expected the 16 numbers of a 4x4 matrix, row-major",
+        ));
     };
     let mut rows = [[0.0; 4]; 4];
     for (i, v) in values.into_iter().enumerate() {
         rows[i / 4][i % 4] = v;
     }
-    camera_to_world(rows)?;
+    camera_to_world(rows).map_err(Error::as_usage)?;
     Ok(rows)
 }
 

@@ -7,6 +7,7 @@ use raycast::check::golden::GoldenOptions;
 use raycast::check::run::RunOptions;
 use raycast::check::{parse_range, CheckOptions};
 use raycast::sizes::parse_size;
+use raycast::Error;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -118,12 +119,12 @@ pub struct CheckArgs {
 
 impl CheckArgs {
     /// The run these arguments ask for.
-    fn options(&self) -> Result<RunOptions, String> {
+    fn options(&self) -> raycast::Result<RunOptions> {
         let usd_timeout = std::time::Duration::try_from_secs_f64(self.timeout).map_err(|_| {
-            format!(
+            Error::usage(format!(
                 "--timeout {}: expected a positive number of seconds",
                 self.timeout
-            )
+            ))
         })?;
         let check = CheckOptions {
             allow_outside: self.allow_outside,
@@ -146,15 +147,18 @@ impl CheckArgs {
         let shard = self
             .shard
             .as_deref()
-            .map(|text| text.parse().map_err(|e| format!("--shard {e}")))
+            .map(|text| {
+                text.parse::<raycast::check::select::Shard>()
+                    .map_err(|e| Error::usage(format!("--shard {e}")))
+            })
             .transpose()?;
         let max_findings = self
             .max_findings
             .as_deref()
             .map(|text| {
-                text.trim()
-                    .parse::<usize>()
-                    .map_err(|_| format!("--max-findings '{text}': expected a whole number"))
+                text.trim().parse::<usize>().map_err(|_| {
+                    Error::usage(format!("--max-findings '{text}': expected a whole number"))
+                })
             })
             .transpose()?;
         Ok(RunOptions {
@@ -188,7 +192,7 @@ pub fn run(args: &CheckArgs) -> ExitCode {
         let bar = Bar::new(args.quiet);
         let passed = raycast::check::run::run(&options, &|done, total| bar.update(done, total));
         bar.finish();
-        passed.map_err(|e| e.to_string())
+        passed
     });
     match result {
         Ok(true) => ExitCode::SUCCESS,

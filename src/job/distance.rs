@@ -107,7 +107,7 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
     let measured: Vec<Measured> = match job.sign {
         Some(rule) => {
             let signer =
-                Signer::new(query, rule).map_err(|e| Error::in_file(&job.scene, e).as_usage())?;
+                Signer::new(query, rule).map_err(|e| e.with_path(&job.scene).as_usage())?;
             let measure = |&p: &DVec3| {
                 let (nearest, side) = signer.measure(p);
                 (nearest, Some(side))
@@ -130,7 +130,8 @@ fn measure_and_write(job: &DistanceJob, out: &Path) -> Result<DistanceOutcome> {
     write(&mut staging, &measured)?;
     let sidecar = sidecar(job, &scene, points.len(), uncertain, seconds);
     staging.write(ownership::SIDECAR, |w| {
-        serde_json::to_writer_pretty(&mut *w, &sidecar).map_err(|e| format!("cannot write: {e}"))
+        serde_json::to_writer_pretty(&mut *w, &sidecar)
+            .map_err(|e| Error::msg(format!("cannot write: {e}")))
     })?;
     staging.commit()?;
     Ok(DistanceOutcome {

@@ -33,30 +33,30 @@ pub struct Times {
 }
 
 impl std::str::FromStr for Times {
-    type Err = String;
+    type Err = Error;
 
     /// Reads `START:STOP:STEP`; what is wrong, in a few words, otherwise.
-    fn from_str(text: &str) -> std::result::Result<Times, String> {
+    fn from_str(text: &str) -> Result<Times> {
         let parts: Vec<&str> = text.split(':').collect();
         let [start, stop, step] = parts[..] else {
-            return Err("expected START:STOP:STEP (three numbers)".into());
+            return Err(Error::usage("expected START:STOP:STEP (three numbers)"));
         };
         let number = |p: &str| match p.trim().parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(format!("'{p}' is not a finite number")),
+            _ => Err(Error::usage(format!("'{p}' is not a finite number"))),
         };
         let (start, stop, step) = (number(start)?, number(stop)?, number(step)?);
         if step <= 0.0 {
-            return Err("STEP must be positive".into());
+            return Err(Error::usage("STEP must be positive"));
         }
         if stop < start {
-            return Err("STOP is before START".into());
+            return Err(Error::usage("STOP is before START"));
         }
         let steps = (stop - start) / step;
         // Finite, or infinite when STOP - START overflows: never NaN (STEP is positive).
         let steps = (steps + steps.max(1.0) * 1e-9).floor();
         if steps >= MAX_TIMES as f64 {
-            return Err(format!("more than {MAX_TIMES} times"));
+            return Err(Error::usage(format!("more than {MAX_TIMES} times")));
         }
         Ok(Times {
             start,
@@ -235,7 +235,7 @@ mod tests {
             ("0:inf:1", "'inf' is not a finite number"),
         ] {
             let error = text.parse::<Times>().unwrap_err();
-            assert!(error.contains(said), "{text}: {error}");
+            assert!(error.message.contains(said), "{text}: {error}");
         }
     }
 }

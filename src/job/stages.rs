@@ -223,7 +223,7 @@ pub(super) fn trace_and_write(
     let json = serde_json::to_string_pretty(&sidecar).map_err(|e| Error::msg(e.to_string()))?;
     staging.write("raycast.json", |out| {
         out.write_all(json.as_bytes())
-            .map_err(|e| format!("cannot write: {e}"))
+            .map_err(|e| Error::msg(format!("cannot write: {e}")))
     })?;
     staging.commit()?;
     Ok(sidecar)

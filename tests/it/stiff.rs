@@ -25,7 +25,7 @@ fn numbers<const N: usize>(v: &Value) -> [f64; N] {
     std::array::from_fn(|i| v[i].as_f64().unwrap())
 }
 
-fn spec(case: &Value) -> Result<QuadricSpec, String> {
+fn spec(case: &Value) -> raycast::Result<QuadricSpec> {
     let bounds = case["bounds"]
         .as_array()
         .map(|b| [vec3(&b[0]), vec3(&b[1])]);

@@ -26,7 +26,7 @@ pub fn check(
         }
     };
     if let Err(why) = crate::import::obj::check_statements(text) {
-        f.error(Code::ObjNoStatement, "", why);
+        f.error(Code::ObjNoStatement, "", why.to_string());
         return false;
     }
     let base = path.parent().unwrap_or(Path::new("."));
@@ -102,7 +102,7 @@ pub fn check(
             "mtllib" => {
                 for name in &args {
                     match resolve_inside(base, root, name, options.allow_outside) {
-                        Err(why) => f.error(Code::PathOutsideAsset, at.clone(), why),
+                        Err(why) => f.error(Code::PathOutsideAsset, at.clone(), why.to_string()),
                         Ok(p) if !p.is_file() => f.warn(
                             Code::MissingReference,
                             at.clone(),

@@ -262,7 +262,7 @@ impl Files {
         staging
             .write(&name, |out| {
                 out.write_all(bytes)
-                    .map_err(|e| format!("cannot write: {e}"))
+                    .map_err(|e| Error::msg(format!("cannot write: {e}")))
             })
             .map_err(Error::as_usage)
     }

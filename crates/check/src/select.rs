@@ -16,10 +16,10 @@ pub struct Shard {
 }
 
 impl FromStr for Shard {
-    type Err = String;
+    type Err = Error;
 
-    fn from_str(text: &str) -> std::result::Result<Shard, String> {
-        let bad = || format!("'{text}': expected K/N with 1 <= K <= N, e.g. 2/7");
+    fn from_str(text: &str) -> Result<Shard> {
+        let bad = || Error::usage(format!("'{text}': expected K/N with 1 <= K <= N, e.g. 2/7"));
         let (k, n) = text.split_once('/').ok_or_else(bad)?;
         let index: usize = k.trim().parse().map_err(|_| bad())?;
         let count: usize = n.trim().parse().map_err(|_| bad())?;

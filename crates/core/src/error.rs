@@ -98,6 +98,13 @@ impl Error {
         Error { kind, ..self }
     }
 
+    /// This error with its message prefixed: `"{prefix}: {message}"` (the file it names, if
+    /// any, is kept and still printed first).
+    pub fn context(mut self, prefix: impl fmt::Display) -> Self {
+        self.message = format!("{prefix}: {}", self.message);
+        self
+    }
+
     /// Attaches `path` unless the error already names a file.
     pub fn with_path(mut self, path: impl AsRef<Path>) -> Self {
         if self.path.is_none() {

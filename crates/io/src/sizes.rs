@@ -1,8 +1,10 @@
 //! Sizes in bytes: parsing `--max-memory`'s `2G`, writing `1.5 GiB` for people, and the
 //! default memory limit that the importers and the render share.
 
+use crate::error::{Error, Result};
+
 /// Parses a size such as `512M`, `2G`, `100000` (bytes; K, M, G, T are powers of 1024).
-pub fn parse_size(text: &str) -> Result<u64, String> {
+pub fn parse_size(text: &str) -> Result<u64> {
     let t = text.trim();
     let (digits, unit) = match t.char_indices().find(|(_, c)| c.is_ascii_alphabetic()) {
         Some((i, _)) => (&t[..i], t[i..].to_ascii_uppercase()),
@@ -14,14 +16,18 @@ pub fn parse_size(text: &str) -> Result<u64, String> {
         "M" => 1 << 20,
         "G" => 1 << 30,
         "T" => 1 << 40,
-        _ => return Err(format!("'{text}': unknown unit (use K, M, G or T)")),
+        _ => {
+            return Err(Error::msg(format!(
+                "'{text}': unknown unit (use K, M, G or T)"
+            )))
+        }
     };
     let n: f64 = digits
         .trim()
         .parse()
-        .map_err(|_| format!("'{text}' is not a size"))?;
+        .map_err(|_| Error::msg(format!("'{text}' is not a size")))?;
     if !(n.is_finite() && n > 0.0) {
-        return Err(format!("'{text}' must be a positive size"));
+        return Err(Error::msg(format!("'{text}' must be a positive size")));
     }
     Ok((n * scale as f64).min(u64::MAX as f64) as u64)
 }

@@ -1,6 +1,7 @@
 //! Pinhole cameras in the computer-vision convention: an intrinsic matrix K for an image of a
 //! fixed size, and camera-to-world matrices written in OpenGL's or OpenCV's axes.
 
+use crate::error::{Error, Result};
 use glam::{DMat3, DMat4, DVec3};
 use serde::Serialize;
 
@@ -24,20 +25,19 @@ pub struct Pinhole {
 impl Pinhole {
     /// The intrinsics `k` (row-major) of a `width`×`height` image; what is wrong with `k`, in
     /// a few words, when it is not finite and invertible with a last row of 0, 0, 1.
-    pub fn new(
-        k: [[f64; 3]; 3],
-        width: usize,
-        height: usize,
-    ) -> std::result::Result<Pinhole, String> {
+    pub fn new(k: [[f64; 3]; 3], width: usize, height: usize) -> Result<Pinhole> {
         if k.iter().flatten().any(|v| !v.is_finite()) {
-            return Err("K has a value that is not a finite number".into());
+            return Err(Error::msg("K has a value that is not a finite number"));
         }
         if k[2] != [0.0, 0.0, 1.0] {
-            return Err(format!("K's last row must be 0, 0, 1, not {:?}", k[2]));
+            return Err(Error::msg(format!(
+                "K's last row must be 0, 0, 1, not {:?}",
+                k[2]
+            )));
         }
         let k_inverse = DMat3::from_cols_array_2d(&k).transpose().inverse();
         if !k_inverse.is_finite() {
-            return Err("K is not invertible (a focal length is zero)".into());
+            return Err(Error::msg("K is not invertible (a focal length is zero)"));
         }
         Ok(Pinhole {
             k,
@@ -48,11 +48,7 @@ impl Pinhole {
     }
 
     /// The pinhole of focal lengths `fx`, `fy` and principal point (`cx`, `cy`), no skew.
-    pub fn from_focal(
-        [fx, fy, cx, cy]: [f64; 4],
-        width: usize,
-        height: usize,
-    ) -> std::result::Result<Pinhole, String> {
+    pub fn from_focal([fx, fy, cx, cy]: [f64; 4], width: usize, height: usize) -> Result<Pinhole> {
         Pinhole::new(
             [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]],
             width,
@@ -95,14 +91,14 @@ impl CameraAxes {
 }
 
 impl std::str::FromStr for CameraAxes {
-    type Err = String;
-    fn from_str(text: &str) -> std::result::Result<CameraAxes, String> {
+    type Err = Error;
+    fn from_str(text: &str) -> Result<CameraAxes> {
         match text.trim().to_ascii_lowercase().as_str() {
             "opengl" => Ok(CameraAxes::OpenGl),
             "opencv" => Ok(CameraAxes::OpenCv),
-            _ => Err(format!(
+            _ => Err(Error::msg(format!(
                 "'{text}' is not a camera axis convention: give opengl or opencv"
-            )),
+            ))),
         }
     }
 }
@@ -110,19 +106,21 @@ impl std::str::FromStr for CameraAxes {
 /// A camera-to-world matrix (row-major, as written in files and on the command line) as
 /// glam's matrix; what is wrong with it, in a few words, when it is not a finite invertible
 /// affine matrix (last row 0, 0, 0, 1).
-pub fn camera_to_world(rows: [[f64; 4]; 4]) -> std::result::Result<DMat4, String> {
+pub fn camera_to_world(rows: [[f64; 4]; 4]) -> Result<DMat4> {
     if rows.iter().flatten().any(|v| !v.is_finite()) {
-        return Err("the camera-to-world matrix has a value that is not a finite number".into());
+        return Err(Error::msg(
+            "the camera-to-world matrix has a value that is not a finite number",
+        ));
     }
     if rows[3] != [0.0, 0.0, 0.0, 1.0] {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "the camera-to-world matrix's last row must be 0, 0, 0, 1, not {:?}",
             rows[3]
-        ));
+        )));
     }
     let matrix = DMat4::from_cols_array_2d(&rows).transpose();
     if matrix.determinant() == 0.0 {
-        return Err("the camera-to-world matrix is not invertible".into());
+        return Err(Error::msg("the camera-to-world matrix is not invertible"));
     }
     Ok(matrix)
 }

@@ -48,16 +48,15 @@ pub fn read(path: &Path, size: Option<(usize, usize)>) -> Result<Vec<View>> {
     let views = match (top.get("frames"), top.get("views")) {
         (Some(frames), None) => each(frames, "frames", |f| frame(top, f, size)),
         (None, Some(views)) => {
-            let axes = axes(top).map_err(|e| Error::in_file(path, e))?;
+            let axes = axes(top).map_err(|e| e.with_path(path))?;
             each(views, "views", |v| plain(top, v, axes, size))
         }
-        _ => Err(
+        _ => Err(Error::msg(
             "expected a 'frames' array (nerfstudio transforms.json) or a 'views' array \
-                  (K and cam_to_world), not both"
-                .to_string(),
-        ),
+                  (K and cam_to_world), not both",
+        )),
     };
-    let views = views.map_err(|e| Error::in_file(path, e))?;
+    let views = views.map_err(|e| e.with_path(path))?;
     if views.is_empty() {
         return Err(Error::in_file(path, "the views file lists no views"));
     }
@@ -69,21 +68,21 @@ pub fn read(path: &Path, size: Option<(usize, usize)>) -> Result<Vec<View>> {
 fn each(
     list: &Value,
     key: &str,
-    one: impl Fn(&Map<String, Value>) -> std::result::Result<View, String>,
-) -> std::result::Result<Vec<View>, String> {
+    one: impl Fn(&Map<String, Value>) -> Result<View>,
+) -> Result<Vec<View>> {
     let list = list
         .as_array()
-        .ok_or_else(|| format!("'{key}' is not an array"))?;
+        .ok_or_else(|| Error::msg(format!("'{key}' is not an array")))?;
     if list.len() > MAX_VIEWS {
-        return Err(format!("more than {MAX_VIEWS} views"));
+        return Err(Error::msg(format!("more than {MAX_VIEWS} views")));
     }
     list.iter()
         .enumerate()
         .map(|(i, entry)| {
             let entry = entry
                 .as_object()
-                .ok_or_else(|| format!("{key}[{i}] is not an object"))?;
-            one(entry).map_err(|e| format!("{key}[{i}]{}: {e}", label(entry)))
+                .ok_or_else(|| Error::msg(format!("{key}[{i}] is not an object")))?;
+            one(entry).map_err(|e| e.context(format!("{key}[{i}]{}", label(entry))))
         })
         .collect()
 }
@@ -101,12 +100,12 @@ fn frame(
     top: &Map<String, Value>,
     frame: &Map<String, Value>,
     size: Option<(usize, usize)>,
-) -> std::result::Result<View, String> {
+) -> Result<View> {
     let get = |key: &str| frame.get(key).or_else(|| top.get(key));
     let number = |key: &str| get(key).map(|v| finite(v, key)).transpose();
     refuse_distortion(get)?;
     let (width, height) = image_size(get, size)?;
-    let focal = |fl: &str, angle: &str, side: usize| -> std::result::Result<Option<f64>, String> {
+    let focal = |fl: &str, angle: &str, side: usize| -> Result<Option<f64>> {
         Ok(match (number(fl)?, number(angle)?) {
             (Some(f), _) => Some(f),
             (None, Some(a)) => Some(side as f64 / (2.0 * (a / 2.0).tan())),
@@ -117,12 +116,14 @@ fn frame(
     let fy = focal("fl_y", "camera_angle_y", height)?;
     let fx = fx
         .or(fy)
-        .ok_or("no focal length (fl_x or camera_angle_x)")?;
+        .ok_or_else(|| Error::msg("no focal length (fl_x or camera_angle_x)"))?;
     let fy = fy.unwrap_or(fx);
     let cx = number("cx")?.unwrap_or(width as f64 / 2.0);
     let cy = number("cy")?.unwrap_or(height as f64 / 2.0);
     let pinhole = Pinhole::from_focal([fx, fy, cx, cy], width, height)?;
-    let matrix = frame.get("transform_matrix").ok_or("no transform_matrix")?;
+    let matrix = frame
+        .get("transform_matrix")
+        .ok_or_else(|| Error::msg("no transform_matrix"))?;
     let to_world = camera_to_world(rows::<4>(matrix, "transform_matrix")?)?;
     let name = match frame.get("file_path") {
         Some(Value::String(p)) => Path::new(p)
@@ -138,25 +139,23 @@ fn frame(
 }
 
 /// Refuses a frame with lens distortion or a camera model that is not a pinhole.
-fn refuse_distortion<'a>(
-    get: impl Fn(&str) -> Option<&'a Value>,
-) -> std::result::Result<(), String> {
+fn refuse_distortion<'a>(get: impl Fn(&str) -> Option<&'a Value>) -> Result<()> {
     if let Some(model) = get("camera_model") {
         let model = model.as_str().unwrap_or_default();
         if !matches!(model, "OPENCV" | "PINHOLE" | "SIMPLE_PINHOLE") {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "camera_model {model:?} is not a pinhole; raycast traces pinhole cameras only"
-            ));
+            )));
         }
     }
     for key in ["k1", "k2", "k3", "k4", "p1", "p2"] {
         if let Some(v) = get(key) {
             let v = finite(v, key)?;
             if v != 0.0 {
-                return Err(format!(
+                return Err(Error::msg(format!(
                     "lens distortion {key} = {v} is not supported (raycast traces an ideal \
                      pinhole camera; undistort the images' intrinsics or set it to 0)"
-                ));
+                )));
             }
         }
     }
@@ -167,11 +166,13 @@ fn refuse_distortion<'a>(
 fn image_size<'a>(
     get: impl Fn(&str) -> Option<&'a Value>,
     size: Option<(usize, usize)>,
-) -> std::result::Result<(usize, usize), String> {
+) -> Result<(usize, usize)> {
     match (get("w"), get("h"), size) {
         (Some(w), Some(h), _) => Ok((side(w, "w")?, side(h, "h")?)),
         (None, None, Some(size)) => Ok(size),
-        _ => Err("no image size (w and h): give --width and --height".into()),
+        _ => Err(Error::msg(
+            "no image size (w and h): give --width and --height",
+        )),
     }
 }
 
@@ -181,16 +182,18 @@ fn plain(
     view: &Map<String, Value>,
     axes: CameraAxes,
     size: Option<(usize, usize)>,
-) -> std::result::Result<View, String> {
+) -> Result<View> {
     let get = |key: &str| view.get(key).or_else(|| top.get(key));
     let (width, height) = match (get("width"), get("height"), size) {
         (Some(w), Some(h), _) => (side(w, "width")?, side(h, "height")?),
         (None, None, Some(size)) => size,
-        _ => return Err("no image size (width and height)".into()),
+        _ => return Err(Error::msg("no image size (width and height)")),
     };
-    let k = get("K").ok_or("no K")?;
+    let k = get("K").ok_or_else(|| Error::msg("no K"))?;
     let pinhole = Pinhole::new(rows::<3>(k, "K")?, width, height)?;
-    let matrix = view.get("cam_to_world").ok_or("no cam_to_world")?;
+    let matrix = view
+        .get("cam_to_world")
+        .ok_or_else(|| Error::msg("no cam_to_world"))?;
     let to_world = camera_to_world(rows::<4>(matrix, "cam_to_world")?)?;
     let name = match view.get("name") {
         Some(Value::String(s)) => Some(s.clone()),
@@ -204,21 +207,22 @@ fn plain(
 }
 
 /// The plain list's `axes`.
-fn axes(top: &Map<String, Value>) -> std::result::Result<CameraAxes, String> {
+fn axes(top: &Map<String, Value>) -> Result<CameraAxes> {
     match top.get("axes") {
         Some(Value::String(s)) => s.parse(),
-        Some(_) => Err("'axes' must be the text \"opencv\" or \"opengl\"".into()),
-        None => Err(
+        Some(_) => Err(Error::msg(
+            "'axes' must be the text \"opencv\" or \"opengl\"",
+        )),
+        None => Err(Error::msg(
             "no 'axes': say whether cam_to_world is in \"opencv\" axes (+Y down, \
-                     looking down +Z) or \"opengl\" axes (+Y up, looking down -Z)"
-                .into(),
-        ),
+                     looking down +Z) or \"opengl\" axes (+Y up, looking down -Z)",
+        )),
     }
 }
 
 /// An N×N matrix written as N rows of N numbers.
-fn rows<const N: usize>(value: &Value, key: &str) -> std::result::Result<[[f64; N]; N], String> {
-    let wrong = || format!("{key} must be {N} rows of {N} numbers");
+fn rows<const N: usize>(value: &Value, key: &str) -> Result<[[f64; N]; N]> {
+    let wrong = || Error::msg(format!("{key} must be {N} rows of {N} numbers"));
     let rows = value
         .as_array()
         .filter(|r| r.len() == N)
@@ -234,15 +238,17 @@ fn rows<const N: usize>(value: &Value, key: &str) -> std::result::Result<[[f64; 
 }
 
 /// A finite number.
-fn finite(value: &Value, key: &str) -> std::result::Result<f64, String> {
+fn finite(value: &Value, key: &str) -> Result<f64> {
     match value.as_f64() {
         Some(v) if v.is_finite() => Ok(v),
-        _ => Err(format!("{key} must be a finite number, not {value}")),
+        _ => Err(Error::msg(format!(
+            "{key} must be a finite number, not {value}"
+        ))),
     }
 }
 
 /// An image side: a whole number of pixels, 1 to [`super::MAX_SIDE`].
-fn side(value: &Value, key: &str) -> std::result::Result<usize, String> {
+fn side(value: &Value, key: &str) -> Result<usize> {
     let max = super::MAX_SIDE;
     let whole = value.as_u64().or_else(|| {
         value
@@ -252,8 +258,8 @@ fn side(value: &Value, key: &str) -> std::result::Result<usize, String> {
     });
     match whole {
         Some(n) if (1..=max as u64).contains(&n) => Ok(n as usize),
-        _ => Err(format!(
+        _ => Err(Error::msg(format!(
             "{key} must be an image side of 1 to {max} pixels, not {value}"
-        )),
+        ))),
     }
 }

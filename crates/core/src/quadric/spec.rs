@@ -1,6 +1,7 @@
 //! Quadric coefficients as written in a scene file (the glTF extension `RAYCAST_quadric` is
 //! read by raycast-io, `import::gltf::quadric_extension`).
 
+use crate::error::{Error, Result};
 use glam::{DMat3, DVec3};
 
 use super::eigen::is_definite;
@@ -26,7 +27,7 @@ impl QuadricSpec {
     /// From ten coefficients `A..J` of `Ax² + By² + Cz² + Dxy + Exz + Fyz + Gx + Hy + Iz + J`.
     /// The cross terms enter `Q` halved: `Q = [[A, D/2, E/2], [D/2, B, F/2], [E/2, F/2, C]]`,
     /// `P = [G, H, I]`, `R = J`. Errors as [`QuadricSpec::validate`].
-    pub fn from_coefficients(c: [f64; 10], bounds: Option<[DVec3; 2]>) -> Result<Self, String> {
+    pub fn from_coefficients(c: [f64; 10], bounds: Option<[DVec3; 2]>) -> Result<Self> {
         check_finite("coefficients", &c)?;
         let [a, b, cc, d, e, f, g, h, i, j] = c;
         let q = DMat3::from_cols_array(&[
@@ -57,7 +58,7 @@ impl QuadricSpec {
         p: [f64; 3],
         r: f64,
         bounds: Option<[DVec3; 2]>,
-    ) -> Result<Self, String> {
+    ) -> Result<Self> {
         check_finite("Q", &q)?;
         check_finite("P", &p)?;
         check_finite("R", &[r])?;
@@ -65,7 +66,7 @@ impl QuadricSpec {
         let asymmetry = (rows - rows.transpose()).abs().to_cols_array();
         let largest = rows.abs().to_cols_array().into_iter().fold(0.0, f64::max);
         if asymmetry.into_iter().fold(0.0, f64::max) > SYMMETRY_TOLERANCE * largest {
-            return Err("Q is not symmetric".to_string());
+            return Err(Error::msg("Q is not symmetric"));
         }
         let q = (rows + rows.transpose()) * 0.5;
         let spec = Self {
@@ -81,25 +82,27 @@ impl QuadricSpec {
     /// Checks the invariants every constructor guarantees: finite numbers, symmetric `Q`,
     /// `Q` and `P` not both zero, `min <= max` in the clip box, and a clip box for every
     /// surface that is not bounded by itself (bounded iff `Q` is definite).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<()> {
         check_finite("Q", &self.q.to_cols_array())?;
         check_finite("P", &self.p.to_array())?;
         check_finite("R", &[self.r])?;
         if self.q != self.q.transpose() {
-            return Err("Q is not symmetric".into());
+            return Err(Error::msg("Q is not symmetric"));
         }
         if self.q == DMat3::ZERO && self.p == DVec3::ZERO {
-            return Err("Q and P are all zero: not a surface".into());
+            return Err(Error::msg("Q and P are all zero: not a surface"));
         }
         match self.bounds {
             Some([min, max]) => {
                 check_finite("bounds", &[min.to_array(), max.to_array()].concat())?;
                 if min.cmpgt(max).any() {
-                    return Err("bounds.min exceeds bounds.max".into());
+                    return Err(Error::msg("bounds.min exceeds bounds.max"));
                 }
             }
             None if !is_definite(self.q) => {
-                return Err("unbounded surface (Q not definite) needs `bounds`".into());
+                return Err(Error::msg(
+                    "unbounded surface (Q not definite) needs `bounds`",
+                ));
             }
             None => {}
         }
@@ -108,10 +111,10 @@ impl QuadricSpec {
 }
 
 /// Rejects NaN and infinities: `Err` names `what`.
-pub fn check_finite(what: &str, values: &[f64]) -> Result<(), String> {
+pub fn check_finite(what: &str, values: &[f64]) -> Result<()> {
     if values.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {
-        Err(format!("`{what}` contains a non-finite number"))
+        Err(Error::msg(format!("`{what}` contains a non-finite number")))
     }
 }

@@ -1,5 +1,6 @@
 //! A quadric placed in world space: intersection, normals, bounds and classification.
 
+use crate::error::{Error, Result};
 use crate::geometry::{Aabb, ReachBox};
 use glam::{DMat3, DMat4, DVec3, DVec4};
 
@@ -78,7 +79,7 @@ impl Quadric {
     /// Places `spec` in world space with the object→world affine matrix `world`.
     /// Errors: an invalid spec (see [`QuadricSpec::validate`], which includes an unbounded
     /// surface without bounds), a non-finite, non-affine or singular `world`.
-    pub fn new(spec: &QuadricSpec, world: DMat4) -> Result<Quadric, String> {
+    pub fn new(spec: &QuadricSpec, world: DMat4) -> Result<Quadric> {
         spec.validate()?;
         let linear = affine_linear_part(world)?;
         let to_local = linear.inverse();
@@ -286,12 +287,14 @@ impl Quadric {
 }
 
 /// The upper-left 3×3 of an affine matrix, after checking it is finite, affine and invertible.
-fn affine_linear_part(world: DMat4) -> Result<DMat3, String> {
+fn affine_linear_part(world: DMat4) -> Result<DMat3> {
     if !world.is_finite() {
-        return Err("world matrix has a non-finite entry".into());
+        return Err(Error::msg("world matrix has a non-finite entry"));
     }
     if world.row(3) != DVec4::W {
-        return Err("world matrix is not affine (last row is not 0 0 0 1)".into());
+        return Err(Error::msg(
+            "world matrix is not affine (last row is not 0 0 0 1)",
+        ));
     }
     let linear = DMat3::from_mat4(world);
     let longest = [linear.x_axis, linear.y_axis, linear.z_axis]
@@ -299,7 +302,7 @@ fn affine_linear_part(world: DMat4) -> Result<DMat3, String> {
         .into_iter()
         .fold(0.0, f64::max);
     if linear.determinant().abs() <= SINGULAR_DETERMINANT * longest.powi(3) {
-        return Err("world matrix is singular".into());
+        return Err(Error::msg("world matrix is singular"));
     }
     Ok(linear)
 }

@@ -485,18 +485,24 @@ fn placement_errors() {
     let singular = DMat4::from_scale(DVec3::new(1.0, 0.0, 1.0));
     assert!(Quadric::new(&spec, singular)
         .unwrap_err()
+        .message
         .contains("singular"));
     let nearly = DMat4::from_scale(DVec3::new(1.0, 1e-20, 1.0));
     assert!(Quadric::new(&spec, nearly)
         .unwrap_err()
+        .message
         .contains("singular"));
     let mut nan = DMat4::IDENTITY;
     nan.w_axis.x = f64::NAN;
-    assert!(Quadric::new(&spec, nan).unwrap_err().contains("non-finite"));
+    assert!(Quadric::new(&spec, nan)
+        .unwrap_err()
+        .message
+        .contains("non-finite"));
     let mut projective = DMat4::IDENTITY;
     projective.x_axis.w = 0.5;
     assert!(Quadric::new(&spec, projective)
         .unwrap_err()
+        .message
         .contains("affine"));
     let mut unbounded = coefficients(
         [1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
@@ -505,6 +511,7 @@ fn placement_errors() {
     unbounded.bounds = None;
     assert!(Quadric::new(&unbounded, DMat4::IDENTITY)
         .unwrap_err()
+        .message
         .contains("bounds"));
 }
 

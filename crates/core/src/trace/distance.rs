@@ -41,6 +41,7 @@
 //! summed).
 
 use super::Tracer;
+use crate::error::{Error, Result};
 use crate::geometry::Aabb;
 #[cfg(doc)]
 use crate::quadric::Quadric;
@@ -176,7 +177,7 @@ impl<'a> Signer<'a> {
     /// Prepares signed distances in `query`'s scene by `rule`. Errors: a quadric that does
     /// not bound a volume (see the module docs), or any quadric for [`SignRule::Winding`],
     /// one line naming the object.
-    pub fn new(query: Tracer<'a>, rule: SignRule) -> Result<Signer<'a>, String> {
+    pub fn new(query: Tracer<'a>, rule: SignRule) -> Result<Signer<'a>> {
         let scene = query.scene;
         let refused = scene
             .quadrics()
@@ -194,7 +195,7 @@ impl<'a> Signer<'a> {
                 object.id,
                 quadric.kind().name()
             );
-            return Err(match rule {
+            return Err(Error::msg(match rule {
                 SignRule::Crossings => format!(
                     "{what} clipped open by its box: it has no inside, so no signed distance \
                      (only an ellipsoid that its clip box does not cut is closed); its \
@@ -205,7 +206,7 @@ impl<'a> Signer<'a> {
                     "sign=winding sums the solid angles of triangles and has no rule for \
                      quadrics, and {what}; use sign=crossings (closed ellipsoids)"
                 ),
-            });
+            }));
         }
         let triangles = match rule {
             SignRule::Winding => scene

@@ -43,7 +43,7 @@ impl std::fmt::Display for Untraceable {
 pub fn read_rays(path: &Path) -> Result<RayFile> {
     let bytes =
         std::fs::read(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
-    parse_rays(&bytes).map_err(|m| Error::in_file(path, m))
+    parse_rays(&bytes).map_err(|e| e.with_path(path))
 }
 
 /// Why `ray` cannot be traced, if it cannot.
@@ -69,13 +69,13 @@ fn untraceable(index: usize, ray: &Ray) -> Option<Untraceable> {
 pub fn read(path: &Path) -> Result<(Vec<usize>, Vec<f64>)> {
     let bytes =
         std::fs::read(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
-    parse_array(&bytes).map_err(|m| Error::in_file(path, m))
+    parse_array(&bytes).map_err(|e| e.with_path(path))
 }
 
-fn parse_array(bytes: &[u8]) -> std::result::Result<(Vec<usize>, Vec<f64>), String> {
+fn parse_array(bytes: &[u8]) -> Result<(Vec<usize>, Vec<f64>)> {
     let header = parse_header(bytes)?;
     if header.fortran && header.shape.len() > 1 {
-        return Err("Fortran-ordered arrays are not supported here".into());
+        return Err(Error::msg("Fortran-ordered arrays are not supported here"));
     }
     let data = &bytes[header.data_offset..];
     let count: usize = header.shape.iter().product();
@@ -90,16 +90,16 @@ fn parse_array(bytes: &[u8]) -> std::result::Result<(Vec<usize>, Vec<f64>), Stri
             .collect(),
         "|u1" => data.iter().map(|&b| f64::from(b)).collect(),
         other => {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "expected float64, uint32 or uint8 data, found '{other}'"
-            ))
+            )))
         }
     };
     if values.len() != count {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "data holds {} values, shape needs {count}",
             values.len()
-        ));
+        )));
     }
     Ok((header.shape, values))
 }
@@ -116,34 +116,35 @@ struct Table<'a> {
 impl<'a> Table<'a> {
     /// The (N, C) float table of `bytes`, `C` one of `columns`; `shapes` says which shapes
     /// are expected, for the error.
-    fn parse(
-        bytes: &'a [u8],
-        columns: &[usize],
-        shapes: &str,
-    ) -> std::result::Result<Table<'a>, String> {
+    fn parse(bytes: &'a [u8], columns: &[usize], shapes: &str) -> Result<Table<'a>> {
         let header = parse_header(bytes)?;
         let (rows, width_columns) = match header.shape[..] {
             [rows, c] if columns.contains(&c) => (rows, c),
-            _ => return Err(format!("expected shape {shapes}, found {:?}", header.shape)),
+            _ => {
+                return Err(Error::msg(format!(
+                    "expected shape {shapes}, found {:?}",
+                    header.shape
+                )))
+            }
         };
         let width = match header.descr.as_str() {
             "<f4" => 4,
             "<f8" => 8,
             other => {
-                return Err(format!(
+                return Err(Error::msg(format!(
                     "expected float32 or float64 little-endian data, found '{other}'"
-                ))
+                )))
             }
         };
         let data = &bytes[header.data_offset..];
         let needed = rows
             .checked_mul(width_columns * width)
-            .ok_or("array too large")?;
+            .ok_or_else(|| Error::msg("array too large"))?;
         if data.len() != needed {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "data holds {} bytes, shape needs {needed}",
                 data.len()
-            ));
+            )));
         }
         Ok(Table {
             data,
@@ -173,21 +174,24 @@ impl<'a> Table<'a> {
 pub fn read_points(path: &Path) -> Result<Vec<DVec3>> {
     let bytes =
         std::fs::read(path).map_err(|e| Error::in_file(path, format!("cannot read: {e}")))?;
-    parse_points(&bytes).map_err(|m| Error::in_file(path, m))
+    parse_points(&bytes).map_err(|e| e.with_path(path))
 }
 
-fn parse_points(bytes: &[u8]) -> std::result::Result<Vec<DVec3>, String> {
+fn parse_points(bytes: &[u8]) -> Result<Vec<DVec3>> {
     let table = Table::parse(bytes, &[3], "(N, 3) (x, y, z)")?;
     let points: Vec<DVec3> = (0..table.rows)
         .map(|r| DVec3::new(table.at(r, 0), table.at(r, 1), table.at(r, 2)))
         .collect();
     match points.iter().position(|p| !p.is_finite()) {
-        Some(i) => Err(format!("point {i} is not finite: {}", points[i])),
+        Some(i) => Err(Error::msg(format!(
+            "point {i} is not finite: {}",
+            points[i]
+        ))),
         None => Ok(points),
     }
 }
 
-fn parse_rays(bytes: &[u8]) -> std::result::Result<RayFile, String> {
+fn parse_rays(bytes: &[u8]) -> Result<RayFile> {
     let table = Table::parse(
         bytes,
         &[6, 8],
@@ -221,15 +225,17 @@ fn parse_rays(bytes: &[u8]) -> std::result::Result<RayFile, String> {
 }
 
 /// Ray `index`'s range `(tmin, tmax]`, or why it is not one.
-fn check_range(index: usize, tmin: f64, tmax: f64) -> std::result::Result<(f64, f64), String> {
+fn check_range(index: usize, tmin: f64, tmax: f64) -> Result<(f64, f64)> {
     if tmin.is_nan() || tmin < 0.0 {
-        Err(format!("ray {index}: tmin {tmin} is not a number >= 0"))
+        Err(Error::msg(format!(
+            "ray {index}: tmin {tmin} is not a number >= 0"
+        )))
     } else if tmax.is_nan() {
-        Err(format!("ray {index}: tmax is NaN"))
+        Err(Error::msg(format!("ray {index}: tmax is NaN")))
     } else if tmin > tmax {
-        Err(format!(
+        Err(Error::msg(format!(
             "ray {index}: tmin {tmin} is greater than tmax {tmax}"
-        ))
+        )))
     } else {
         Ok((tmin, tmax))
     }
@@ -243,9 +249,9 @@ struct Header {
     data_offset: usize,
 }
 
-fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> {
+fn parse_header(bytes: &[u8]) -> Result<Header> {
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
-        return Err("not a .npy file".into());
+        return Err(Error::msg("not a .npy file"));
     }
     let (len, start): (usize, usize) = match bytes[6] {
         1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
@@ -253,30 +259,30 @@ fn parse_header(bytes: &[u8]) -> std::result::Result<Header, String> {
             u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
             12,
         ),
-        v => return Err(format!("unsupported .npy version {v}")),
+        v => return Err(Error::msg(format!("unsupported .npy version {v}"))),
     };
     let end = start
         .checked_add(len)
         .filter(|&e| e <= bytes.len())
-        .ok_or("truncated .npy header")?;
-    let text =
-        std::str::from_utf8(&bytes[start..end]).map_err(|_| "the .npy header is not text")?;
+        .ok_or_else(|| Error::msg("truncated .npy header"))?;
+    let text = std::str::from_utf8(&bytes[start..end])
+        .map_err(|_| Error::msg("the .npy header is not text"))?;
     let fortran = dict_value(text, "fortran_order").is_some_and(|v| v.starts_with("True"));
     let descr = dict_value(text, "descr")
         .and_then(|v| v.split('\'').nth(1))
-        .ok_or("the .npy header has no 'descr'")?
+        .ok_or_else(|| Error::msg("the .npy header has no 'descr'"))?
         .to_string();
     let shape_text = dict_value(text, "shape")
         .and_then(|v| v.strip_prefix('('))
         .and_then(|v| v.split(')').next())
-        .ok_or("the .npy header has no 'shape'")?;
+        .ok_or_else(|| Error::msg("the .npy header has no 'shape'"))?;
     let shape = shape_text
         .split(',')
         .map(str::trim)
         .filter(|s| !s.is_empty())
         .map(|s| {
             s.parse::<usize>()
-                .map_err(|_| format!("bad shape entry '{s}'"))
+                .map_err(|_| Error::msg(format!("bad shape entry '{s}'")))
         })
         .collect::<std::result::Result<Vec<_>, _>>()?;
     Ok(Header {
@@ -413,7 +419,10 @@ mod tests {
         for (tmin, tmax, message) in cases {
             let row = [0.0f64, 0.0, 5.0, 0.0, 0.0, -1.0, tmin, tmax];
             let f8: Vec<u8> = row.iter().flat_map(|v| v.to_le_bytes()).collect();
-            assert_eq!(parse_rays(&npy("<f8", "(1, 8)", &f8)).unwrap_err(), message);
+            assert_eq!(
+                parse_rays(&npy("<f8", "(1, 8)", &f8)).unwrap_err().message,
+                message
+            );
         }
     }
 
@@ -422,16 +431,20 @@ mod tests {
         let f8: Vec<u8> = [0.0f64; 6].iter().flat_map(|v| v.to_le_bytes()).collect();
         assert!(parse_rays(&npy("<f8", "(2, 3)", &f8))
             .unwrap_err()
+            .message
             .contains("shape"));
         let seven: Vec<u8> = [0.0f64; 7].iter().flat_map(|v| v.to_le_bytes()).collect();
         assert!(parse_rays(&npy("<f8", "(1, 7)", &seven))
             .unwrap_err()
+            .message
             .contains("expected shape (N, 6) (origin, direction) or (N, 8)"));
         assert!(parse_rays(&npy("<i4", "(1, 6)", &f8))
             .unwrap_err()
+            .message
             .contains("float"));
         assert!(parse_rays(&npy("<f8", "(2, 6)", &f8))
             .unwrap_err()
+            .message
             .contains("bytes"));
         assert!(parse_rays(b"garbage").is_err());
     }

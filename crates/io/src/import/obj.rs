@@ -83,7 +83,7 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
             format!("line {line}: not UTF-8 text: this is no OBJ file (binary data?)"),
         )
     })?;
-    check_statements(text).map_err(|e| Error::in_file(path, e))?;
+    check_statements(text).map_err(|e| e.with_path(path))?;
     let normal = super::obj_text::normalise(text);
     let options = tobj::LoadOptions {
         triangulate: true,
@@ -109,8 +109,10 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
     let mut triangles = 0;
     for (index, (model, materials)) in models.iter().zip(materials).enumerate() {
         triangles += model.mesh.indices.len() / 3;
-        let mesh = model_mesh(&model.mesh)
-            .map_err(|e| Error::in_file(path, format!("object '{}': {e}", model.name)))?;
+        let mesh = model_mesh(&model.mesh).map_err(|e| {
+            e.context(format!("object '{}'", model.name))
+                .with_path(path)
+        })?;
         let mesh = mesh.with_attributes(model_attributes(&model.mesh, materials));
         let name = if model.name.is_empty() {
             format!("object{index}")
@@ -142,7 +144,7 @@ pub fn text(bytes: &[u8]) -> std::result::Result<&str, usize> {
 /// The rule is deliberately loose: a file with statements of its own among OBJ ones loads
 /// (tobj skips them, as the format allows), while text with nothing of OBJ in it (another
 /// format, random bytes) is refused instead of rendering an empty scene.
-pub fn check_statements(text: &str) -> std::result::Result<(), String> {
+pub fn check_statements(text: &str) -> Result<()> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut foreign = None;
     for (n, line) in text.lines().enumerate() {
@@ -156,10 +158,10 @@ pub fn check_statements(text: &str) -> std::result::Result<(), String> {
         foreign.get_or_insert((n + 1, content));
     }
     match foreign {
-        Some((line, content)) => Err(format!(
+        Some((line, content)) => Err(Error::msg(format!(
             "line {line}: '{}' is not an OBJ statement, and no line of the file is one",
             quoted(content)
-        )),
+        ))),
         None => Ok(()),
     }
 }
@@ -234,32 +236,32 @@ fn model_attributes(mesh: &tobj::Mesh, materials: Vec<u32>) -> Attributes {
 }
 
 /// The indexed mesh of one OBJ model, with every index and coordinate checked.
-fn model_mesh(mesh: &tobj::Mesh) -> std::result::Result<Mesh, String> {
+fn model_mesh(mesh: &tobj::Mesh) -> Result<Mesh> {
     let positions: Vec<DVec3> = mesh
         .positions
         .chunks_exact(3)
         .map(|p| DVec3::new(p[0], p[1], p[2]))
         .collect();
     if let Some(bad) = positions.iter().position(|p| !p.is_finite()) {
-        return Err(format!("vertex {} is not finite", bad + 1));
+        return Err(Error::msg(format!("vertex {} is not finite", bad + 1)));
     }
     if let Some(&bad) = mesh
         .indices
         .iter()
         .find(|&&i| i as usize >= positions.len())
     {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "face refers to vertex {} of {}",
             bad + 1,
             positions.len()
-        ));
+        )));
     }
     let triangles = mesh
         .indices
         .chunks_exact(3)
         .map(|f| [f[0], f[1], f[2]])
         .collect();
-    Mesh::new(positions, triangles).ok_or_else(|| "invalid mesh".to_string())
+    Mesh::new(positions, triangles).ok_or_else(|| Error::msg("invalid mesh"))
 }
 
 #[cfg(test)]
@@ -271,11 +273,12 @@ mod tests {
         let garbage =
             "# made by hand\n\naGVsbG8gd29ybGQsIHRoaXMgaXMgbm90IGFuIE9CSg==\nc29tZSBtb3Jl\n";
         assert_eq!(
-            check_statements(garbage).unwrap_err(),
+            check_statements(garbage).unwrap_err().message,
             "line 3: 'aGVsbG8gd29ybGQsIHRoaXMg…' is not an OBJ statement, and no line of the file is one"
         );
         assert!(check_statements("\t\x01 tab\n")
             .unwrap_err()
+            .message
             .contains(r"'\u{1} tab'"));
     }
 

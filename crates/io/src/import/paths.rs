@@ -3,6 +3,7 @@
 //! must stay inside a root folder tree — by default the asset's own folder, widened with
 //! `--root DIR`, lifted with `--allow-outside`.
 
+use crate::error::{Error, Result};
 use std::path::{Component, Path, PathBuf};
 
 /// Where external files may come from.
@@ -19,21 +20,16 @@ pub struct Confinement {
 /// inside the folder tree `root`. Absolute paths, `..` escapes and symbolic links leading out
 /// of the tree are refused unless `allow_outside`; nothing is read here. The refusal names
 /// the URI.
-pub fn resolve_inside(
-    base: &Path,
-    root: &Path,
-    uri: &str,
-    allow_outside: bool,
-) -> Result<PathBuf, String> {
+pub fn resolve_inside(base: &Path, root: &Path, uri: &str, allow_outside: bool) -> Result<PathBuf> {
     let relative = Path::new(uri);
     let windows_drive = uri.len() >= 2 && uri.as_bytes()[1] == b':';
     if relative.is_absolute() || uri.starts_with('\\') || windows_drive {
         if allow_outside {
             return Ok(relative.to_path_buf());
         }
-        return Err(format!(
+        return Err(Error::msg(format!(
             "'{uri}' is an absolute path: not read (--allow-outside reads it)"
-        ));
+        )));
     }
     let full = base.join(relative);
     if allow_outside {
@@ -58,18 +54,18 @@ pub fn resolve_inside(
     match (lexical(&full), lexical(root)) {
         (Some(f), Some(r)) if f.starts_with(&r) => {}
         _ => {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "'{uri}' leads out of the folder {}: not read (--root DIR widens it, --allow-outside lifts it)",
                 root.display()
-            ))
+            )))
         }
     }
     if let (Ok(real), Ok(root_real)) = (full.canonicalize(), root.canonicalize()) {
         if !real.starts_with(&root_real) {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "'{uri}' leads out of the folder {} through a symbolic link: not read",
                 root.display()
-            ));
+            )));
         }
     }
     Ok(full)
@@ -102,6 +98,6 @@ mod tests {
         assert!(resolve_inside(base, root, "../obj/x.obj", false).is_ok());
         assert!(resolve_inside(base, root, "../../Cargo.toml", false).is_err());
         let refused = resolve_inside(base, base, "../../elsewhere/x.bin", false);
-        assert!(refused.is_err_and(|e| e.contains("../../elsewhere/x.bin")));
+        assert!(refused.is_err_and(|e| e.message.contains("../../elsewhere/x.bin")));
     }
 }

@@ -8,6 +8,7 @@
 //! Du's degree-5 fit of Google's Turbo (Apache-2.0, the "polynomial approximation" published
 //! with Turbo). Both are previews: the exact distances are in the EXR and NPY files.
 
+use crate::error::Error;
 use image::RgbImage;
 use std::fmt;
 use std::str::FromStr;
@@ -56,18 +57,18 @@ impl fmt::Display for Colormap {
 }
 
 impl FromStr for Colormap {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self, Error> {
         let s = if s == "gray" { "grey" } else { s };
         Colormap::ALL
             .into_iter()
             .find(|m| m.name() == s)
             .ok_or_else(|| {
                 let names: Vec<&str> = Colormap::ALL.iter().map(|m| m.name()).collect();
-                format!(
+                Error::msg(format!(
                     "unknown colour map '{s}' (choose from {})",
                     names.join(", ")
-                )
+                ))
             })
     }
 }

@@ -16,6 +16,7 @@
 //!   eight hex digits), KEY being the first seven hex digits of the layer name's hash.
 
 use super::exr::{self, ExrChannel};
+use crate::error::Result;
 use std::io::{Seek, Write};
 
 /// The layer of object mattes.
@@ -120,7 +121,7 @@ pub fn write(
     width: usize,
     height: usize,
     layers: &[Layer],
-) -> Result<(), String> {
+) -> Result<()> {
     let mut channels = Vec::with_capacity(4 * LEVELS * layers.len());
     let mut notes = Vec::new();
     for layer in layers {

@@ -1,6 +1,7 @@
 //! OpenEXR files through the `exr` crate: float channels for distances and vectors, UINT
 //! channels for ids, and the buffer conventions written into the header.
 
+use crate::error::{Error, Result};
 use exr::prelude::*;
 use std::io::{Seek, Write};
 
@@ -19,7 +20,7 @@ pub fn write(
     height: usize,
     channels: Vec<ExrChannel>,
     notes: &[(String, String)],
-) -> std::result::Result<(), String> {
+) -> Result<()> {
     let list: Vec<AnyChannel<FlatSamples>> = channels
         .into_iter()
         .map(|c| match c {
@@ -43,5 +44,5 @@ pub fn write(
     Image::from_layer(layer)
         .write()
         .to_buffered(out)
-        .map_err(|e| format!("cannot write EXR: {e}"))
+        .map_err(|e| Error::msg(format!("cannot write EXR: {e}")))
 }

@@ -124,16 +124,16 @@ pub enum Format {
 }
 
 impl FromStr for Format {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
         match s {
             "exr" => Ok(Format::Exr),
             "png" => Ok(Format::Png),
             "npy" => Ok(Format::Npy),
             "ply" => Ok(Format::Ply),
-            _ => Err(format!(
+            _ => Err(Error::msg(format!(
                 "unknown format '{s}' (choose from exr, png, npy, ply)"
-            )),
+            ))),
         }
     }
 }
@@ -163,8 +163,7 @@ impl Layout {
 }
 
 /// Encodes one file into its open temporary file; the error is a one-line message.
-type Encoder<'a> =
-    Box<dyn FnOnce(&mut BufWriter<File>) -> std::result::Result<(), String> + Send + 'a>;
+type Encoder<'a> = Box<dyn FnOnce(&mut BufWriter<File>) -> Result<()> + Send + 'a>;
 
 /// One file for [`Staging::write_all`]: its final name and how to encode it.
 pub struct FileJob<'a> {
@@ -176,7 +175,7 @@ impl<'a> FileJob<'a> {
     /// A file named `name` whose content `body` writes.
     pub fn new(
         name: impl Into<String>,
-        body: impl FnOnce(&mut BufWriter<File>) -> std::result::Result<(), String> + Send + 'a,
+        body: impl FnOnce(&mut BufWriter<File>) -> Result<()> + Send + 'a,
     ) -> FileJob<'a> {
         FileJob {
             name: name.into(),
@@ -233,7 +232,7 @@ impl Staging {
     pub fn write(
         &mut self,
         name: &str,
-        body: impl FnOnce(&mut BufWriter<File>) -> std::result::Result<(), String> + Send,
+        body: impl FnOnce(&mut BufWriter<File>) -> Result<()> + Send,
     ) -> Result<()> {
         self.write_all(vec![FileJob::new(name, body)], |_| {})
     }
@@ -256,8 +255,11 @@ impl Staging {
             .try_for_each(|(job, (file, target))| {
                 let mut out = BufWriter::new(file);
                 (job.body)(&mut out)
-                    .and_then(|()| out.flush().map_err(|e| format!("cannot write: {e}")))
-                    .map_err(|message| Error::in_file(&target, message))?;
+                    .and_then(|()| {
+                        out.flush()
+                            .map_err(|e| Error::msg(format!("cannot write: {e}")))
+                    })
+                    .map_err(|e| e.with_path(&target))?;
                 written(complete.fetch_add(1, Ordering::Relaxed) + 1);
                 Ok(())
             })

@@ -1,6 +1,7 @@
 //! NumPy `.npy` files (format version 1.0): writing buffers. Reading is
 //! [`crate::import::npy`]'s.
 
+use crate::error::{Error, Result};
 use std::io::Write;
 
 /// The element data of an array to write.
@@ -29,11 +30,7 @@ impl NpyData<'_> {
 }
 
 /// Writes a C-order array of the given shape to `out`.
-pub fn write(
-    out: &mut impl Write,
-    shape: &[usize],
-    data: NpyData,
-) -> std::result::Result<(), String> {
+pub fn write(out: &mut impl Write, shape: &[usize], data: NpyData) -> Result<()> {
     let descr = match data {
         NpyData::F64(_) => "<f8",
         NpyData::U32(_) => "<u4",
@@ -52,7 +49,7 @@ pub fn write(
     header.push('\n');
     let mut write_all = |bytes: &[u8]| {
         out.write_all(bytes)
-            .map_err(|e| format!("cannot write: {e}"))
+            .map_err(|e| Error::msg(format!("cannot write: {e}")))
     };
     write_all(b"\x93NUMPY\x01\x00")?;
     write_all(&(header.len() as u16).to_le_bytes())?;

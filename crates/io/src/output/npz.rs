@@ -2,6 +2,7 @@
 //! them (the zip container is the `zip` crate's). `--hits` writes its CSR lists as one.
 
 use super::npy::{self, NpyData};
+use crate::error::{Error, Result};
 use crate::trace::HitLists;
 use std::io::{Seek, Write};
 use zip::write::SimpleFileOptions;
@@ -11,11 +12,8 @@ use zip::{CompressionMethod, ZipWriter};
 pub const HITS_FILE: &str = "hits.npz";
 
 /// Writes the named 1-D arrays as `<name>.npy` members of an `.npz` archive.
-pub fn write(
-    out: &mut (impl Write + Seek),
-    arrays: &[(&str, NpyData)],
-) -> std::result::Result<(), String> {
-    let failed = |e: zip::result::ZipError| format!("cannot write: {e}");
+pub fn write(out: &mut (impl Write + Seek), arrays: &[(&str, NpyData)]) -> Result<()> {
+    let failed = |e: zip::result::ZipError| Error::msg(format!("cannot write: {e}"));
     let mut zip = ZipWriter::new(out);
     for (name, data) in arrays {
         let options = SimpleFileOptions::default()
@@ -42,10 +40,7 @@ fn len(data: &NpyData) -> usize {
 
 /// Writes hit lists as `ray_splits` (uint64, N + 1), `t` (float64), `id` and `prim` (uint32),
 /// the arrays of the Python package's `list_intersections`.
-pub fn write_hits(
-    out: &mut (impl Write + Seek),
-    hits: &HitLists,
-) -> std::result::Result<(), String> {
+pub fn write_hits(out: &mut (impl Write + Seek), hits: &HitLists) -> Result<()> {
     write(
         out,
         &[

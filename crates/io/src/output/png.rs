@@ -3,6 +3,7 @@
 //! integers in a chosen unit, as the RGB-D datasets store depth.
 
 use super::palette::label_colour;
+use crate::error::{Error, Result};
 use glam::DVec3;
 use image::{DynamicImage, GrayImage, ImageBuffer, ImageFormat, Luma, RgbImage};
 use std::io::{Seek, Write};
@@ -115,11 +116,11 @@ fn image_from<T>(values: &[T], width: usize, colour: impl Fn(&T) -> [u8; 3]) -> 
 }
 
 /// Writes an image as PNG to `out`.
-pub fn write(out: &mut (impl Write + Seek), image: impl Into<DynamicImage>) -> Result<(), String> {
+pub fn write(out: &mut (impl Write + Seek), image: impl Into<DynamicImage>) -> Result<()> {
     image
         .into()
         .write_to(out, ImageFormat::Png)
-        .map_err(|e| format!("cannot write PNG: {e}"))
+        .map_err(|e| Error::msg(format!("cannot write PNG: {e}")))
 }
 
 #[cfg(test)]

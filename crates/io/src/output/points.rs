@@ -4,6 +4,7 @@
 //! `double nx, ny, nz` (`normal`), `uint id`, `uint prim`, and always `uint ray` (the pixel's
 //! row-major index, or the ray's index in the ray file). Misses are left out.
 
+use crate::error::{Error, Result};
 use crate::render::{Aov, Buffers};
 use std::io::Write;
 
@@ -11,17 +12,17 @@ use std::io::Write;
 pub const FILE: &str = "position.ply";
 
 /// Writes the hits of `buffers` (which hold `position`) as a PLY point cloud to `out`.
-pub fn write(out: &mut impl Write, buffers: &Buffers) -> Result<(), String> {
+pub fn write(out: &mut impl Write, buffers: &Buffers) -> Result<()> {
     let positions = buffers
         .vectors(Aov::Position)
-        .ok_or("a point cloud needs the position AOV")?;
+        .ok_or_else(|| Error::msg("a point cloud needs the position AOV"))?;
     let normals = buffers.vectors(Aov::Normal);
     let ids = buffers.labels(Aov::Id);
     let prims = buffers.labels(Aov::Prim);
     let hits: Vec<usize> = (0..positions.len())
         .filter(|&i| positions[i].iter().all(|v| v.is_finite()))
         .collect();
-    let io = |e: std::io::Error| format!("cannot write: {e}");
+    let io = |e: std::io::Error| Error::msg(format!("cannot write: {e}"));
     out.write_all(
         header(
             hits.len(),

@@ -8,6 +8,7 @@
 
 use super::diagnostics::{Code, Diagnostic, Within};
 use super::document::{array, index_of, Document};
+use crate::error::Error;
 use glam::{DQuat, DVec3};
 use serde_json::Value;
 use std::collections::HashMap;
@@ -49,7 +50,7 @@ enum Interpolation {
 
 impl Document {
     /// The indices of the animations `choice` names (an index or a name; `None`: all).
-    pub fn chosen_animations(&self, choice: Option<&str>) -> Result<Vec<usize>, String> {
+    pub fn chosen_animations(&self, choice: Option<&str>) -> Result<Vec<usize>, Error> {
         let animations = self.list("animations");
         let Some(choice) = choice else {
             return Ok((0..animations.len()).collect());
@@ -69,7 +70,7 @@ impl Document {
                         None => i.to_string(),
                     })
                     .collect();
-                Err(format!(
+                Err(Error::msg(format!(
                     "no animation '{choice}' (the file has {}: {})",
                     animations.len(),
                     if names.is_empty() {
@@ -77,7 +78,7 @@ impl Document {
                     } else {
                         names.join(", ")
                     }
-                ))
+                )))
             }
         }
     }

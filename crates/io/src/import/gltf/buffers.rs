@@ -84,7 +84,7 @@ pub fn resolve(
     ) {
         Ok(path) => Some(Resource::File(path, decoded.into_owned())),
         Err(why) => {
-            sink.error(Code::PathOutsideAsset, at, why);
+            sink.error(Code::PathOutsideAsset, at, why.to_string());
             None
         }
     }

@@ -46,7 +46,7 @@ pub fn meshopt_view(
     let name = meshopt_name(doc, view);
     let at = format!("/bufferViews/{view}/extensions/{name}");
     let invalid = |e: String| Diagnostic::error(Code::MeshoptInvalid, &at, e);
-    let spec = meshopt::MeshoptView::parse(ext).map_err(invalid)?;
+    let spec = meshopt::MeshoptView::parse(ext).map_err(|e| invalid(e.to_string()))?;
     let buffer = doc.buffer(spec.buffer).ok_or_else(|| {
         Diagnostic::error(
             NO_DATA,
@@ -64,7 +64,7 @@ pub fn meshopt_view(
                 spec.buffer
             ))
         })?;
-    let bytes = meshopt::decode(encoded, &spec).map_err(invalid)?;
+    let bytes = meshopt::decode(encoded, &spec).map_err(|e| invalid(e.to_string()))?;
     let length = doc
         .item("bufferViews", view)
         .and_then(|v| index_of(v, "byteLength"))
@@ -122,9 +122,9 @@ fn decode_draco(
 ) -> Result<Geometry, Diagnostic> {
     let at_ext = format!("{at}/extensions/{DRACO}");
     let invalid = |e: String| Diagnostic::error(Code::DracoInvalid, &at_ext, e);
-    let view = draco::buffer_view(ext).map_err(invalid)?;
+    let view = draco::buffer_view(ext).map_err(|e| invalid(e.to_string()))?;
     let bytes = doc.view_bytes(view)?;
-    let decoded = draco::decode(bytes, ext).map_err(invalid)?;
+    let decoded = draco::decode(bytes, ext).map_err(|e| invalid(e.to_string()))?;
     let position = json
         .get("attributes")
         .and_then(|a| index_of(a, "POSITION"))
@@ -160,9 +160,9 @@ pub fn draco_attribute(
     let at_ext = format!("/meshes/{mesh}/primitives/{prim}/extensions/{DRACO}");
     let invalid = |e: String| Diagnostic::error(Code::DracoInvalid, &at_ext, e);
     let read = || -> Result<Option<Vec<f64>>, Diagnostic> {
-        let view = draco::buffer_view(ext).map_err(invalid)?;
+        let view = draco::buffer_view(ext).map_err(|e| invalid(e.to_string()))?;
         let bytes = doc.view_bytes(view)?;
-        draco::decode_attribute(bytes, ext, name, comps).map_err(invalid)
+        draco::decode_attribute(bytes, ext, name, comps).map_err(|e| invalid(e.to_string()))
     };
     read().transpose()
 }
@@ -176,7 +176,7 @@ pub fn gpu_instances(
 ) -> Result<Option<Vec<BoundedMat4>>, Diagnostic> {
     let at = format!("/nodes/{node}/extensions/{GPU_INSTANCING}");
     let invalid = |e: String| Diagnostic::error(Code::InstancingInvalid, &at, e);
-    let accessors = instancing::accessors(ext).map_err(invalid)?;
+    let accessors = instancing::accessors(ext).map_err(|e| invalid(e.to_string()))?;
     let read = |accessor: Option<usize>,
                 comps: usize,
                 what: &str|
@@ -203,7 +203,9 @@ pub fn gpu_instances(
             .map(|rows| rows.into_iter().map(|r| [r[0], r[1], r[2], r[3]]).collect()),
         scale: read(accessors.scale, 3, "SCALE")?.map(vec3),
     };
-    instancing::matrices(&values).map(Some).map_err(invalid)
+    instancing::matrices(&values)
+        .map(Some)
+        .map_err(|e| invalid(e.to_string()))
 }
 
 /// One line per decoding extension the document uses, for `info` and the sidecar: meshopt

@@ -5,6 +5,7 @@
 //! list. The stream's own ceilings ([`draco_core::DecodeLimits`]) are tightened to what one
 //! glTF primitive may hold, so a hostile header cannot make us allocate gigabytes.
 
+use crate::error::{Error, Result};
 use draco_core::{DecodeLimits, DecoderBuffer, Mesh, MeshDecoder};
 use serde_json::Value;
 
@@ -39,32 +40,42 @@ pub struct DracoPrimitive {
 
 /// The buffer view index that `extension` (the primitive's `KHR_draco_mesh_compression`
 /// object) names.
-pub fn buffer_view(extension: &Value) -> Result<usize, String> {
+pub fn buffer_view(extension: &Value) -> Result<usize> {
     extension
         .get("bufferView")
         .and_then(Value::as_u64)
         .map(|v| v as usize)
-        .ok_or_else(|| format!("{EXTENSION}: bufferView is missing or not an index"))
+        .ok_or_else(|| {
+            Error::msg(format!(
+                "{EXTENSION}: bufferView is missing or not an index"
+            ))
+        })
 }
 
 /// Decodes the Draco stream `bytes` of a primitive whose extension object is `extension`.
-pub fn decode(bytes: &[u8], extension: &Value) -> Result<DracoPrimitive, String> {
+pub fn decode(bytes: &[u8], extension: &Value) -> Result<DracoPrimitive> {
     let position_id = extension
         .get("attributes")
         .and_then(|a| a.get("POSITION"))
         .and_then(Value::as_u64)
         .and_then(|id| u32::try_from(id).ok())
-        .ok_or_else(|| format!("{EXTENSION}: attributes.POSITION is missing or not an id"))?;
+        .ok_or_else(|| {
+            Error::msg(format!(
+                "{EXTENSION}: attributes.POSITION is missing or not an id"
+            ))
+        })?;
     let method = method(bytes)?;
     let mesh = decode_mesh(bytes)?;
     let attribute = mesh.attribute_by_unique_id(position_id).ok_or_else(|| {
-        format!("{EXTENSION}: the Draco stream has no attribute {position_id} for POSITION")
+        Error::msg(format!(
+            "{EXTENSION}: the Draco stream has no attribute {position_id} for POSITION"
+        ))
     })?;
     if attribute.num_components() != 3 {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "{EXTENSION}: POSITION attribute has {} components, not 3",
             attribute.num_components()
-        ));
+        )));
     }
     let points = mesh.num_points();
     let positions = attribute
@@ -74,9 +85,9 @@ pub fn decode(bytes: &[u8], extension: &Value) -> Result<DracoPrimitive, String>
         .collect();
     let indices: Vec<u32> = mesh.faces().as_flattened().iter().map(|p| p.0).collect();
     if let Some(bad) = indices.iter().find(|&&i| i as usize >= points) {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "{EXTENSION}: face index {bad} out of range ({points} points)"
-        ));
+        )));
     }
     Ok(DracoPrimitive {
         positions,
@@ -86,7 +97,7 @@ pub fn decode(bytes: &[u8], extension: &Value) -> Result<DracoPrimitive, String>
 }
 
 /// Decodes a Draco mesh stream under the limits of one glTF primitive.
-fn decode_mesh(bytes: &[u8]) -> Result<Mesh, String> {
+fn decode_mesh(bytes: &[u8]) -> Result<Mesh> {
     let limits = DecodeLimits::default()
         .with_max_points(MAX_ELEMENTS)
         .with_max_faces(MAX_ELEMENTS)
@@ -95,7 +106,7 @@ fn decode_mesh(bytes: &[u8]) -> Result<Mesh, String> {
     let mut mesh = Mesh::new();
     MeshDecoder::new()
         .decode(&mut buffer, &mut mesh)
-        .map_err(|e| format!("{EXTENSION}: cannot decode the Draco stream: {e}"))?;
+        .map_err(|e| Error::msg(format!("{EXTENSION}: cannot decode the Draco stream: {e}")))?;
     Ok(mesh)
 }
 
@@ -107,24 +118,26 @@ pub fn decode_attribute(
     extension: &Value,
     name: &str,
     comps: usize,
-) -> Result<Option<Vec<f64>>, String> {
+) -> Result<Option<Vec<f64>>> {
     let Some(id) = extension.get("attributes").and_then(|a| a.get(name)) else {
         return Ok(None);
     };
     let id = id
         .as_u64()
         .and_then(|id| u32::try_from(id).ok())
-        .ok_or_else(|| format!("{EXTENSION}: attributes.{name} is not an id"))?;
+        .ok_or_else(|| Error::msg(format!("{EXTENSION}: attributes.{name} is not an id")))?;
     method(bytes)?;
     let mesh = decode_mesh(bytes)?;
-    let attribute = mesh
-        .attribute_by_unique_id(id)
-        .ok_or_else(|| format!("{EXTENSION}: the Draco stream has no attribute {id} for {name}"))?;
+    let attribute = mesh.attribute_by_unique_id(id).ok_or_else(|| {
+        Error::msg(format!(
+            "{EXTENSION}: the Draco stream has no attribute {id} for {name}"
+        ))
+    })?;
     if attribute.num_components() as usize != comps {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "{EXTENSION}: {name} attribute has {} components, not {comps}",
             attribute.num_components()
-        ));
+        )));
     }
     let values = attribute.read_f32s(mesh.num_points(), comps);
     Ok(Some(values.into_iter().map(f64::from).collect()))
@@ -132,19 +145,21 @@ pub fn decode_attribute(
 
 /// Reads the connectivity method from the stream header ("DRACO", major, minor, geometry
 /// type, method), refusing streams that are not triangle meshes.
-pub fn method(bytes: &[u8]) -> Result<Method, String> {
+pub fn method(bytes: &[u8]) -> Result<Method> {
     match bytes {
         [b'D', b'R', b'A', b'C', b'O', _, _, 1, method, ..] => match method {
             0 => Ok(Method::Sequential),
             1 => Ok(Method::Edgebreaker),
-            other => Err(format!("{EXTENSION}: unknown Draco mesh method {other}")),
+            other => Err(Error::msg(format!(
+                "{EXTENSION}: unknown Draco mesh method {other}"
+            ))),
         },
-        [b'D', b'R', b'A', b'C', b'O', _, _, kind, ..] => Err(format!(
+        [b'D', b'R', b'A', b'C', b'O', _, _, kind, ..] => Err(Error::msg(format!(
             "{EXTENSION}: the Draco stream is not a triangle mesh (geometry type {kind})"
-        )),
-        _ => Err(format!(
+        ))),
+        _ => Err(Error::msg(format!(
             "{EXTENSION}: the buffer view is not a Draco stream"
-        )),
+        ))),
     }
 }
 
@@ -156,19 +171,21 @@ mod tests {
     #[test]
     fn refuses_what_is_not_a_draco_mesh() {
         let extension = json!({"bufferView": 0, "attributes": {"POSITION": 0}});
-        let err = decode(b"not draco at all", &extension).unwrap_err();
+        let err = decode(b"not draco at all", &extension).unwrap_err().message;
         assert!(err.contains("not a Draco stream"), "{err}");
         let point_cloud = b"DRACO\x02\x02\x00\x00\x00";
-        let err = decode(point_cloud, &extension).unwrap_err();
+        let err = decode(point_cloud, &extension).unwrap_err().message;
         assert!(err.contains("not a triangle mesh"), "{err}");
         let truncated = b"DRACO\x02\x02\x01\x01\x00";
-        let err = decode(truncated, &extension).unwrap_err();
+        let err = decode(truncated, &extension).unwrap_err().message;
         assert!(err.contains("cannot decode"), "{err}");
     }
 
     #[test]
     fn needs_a_position_id_and_a_buffer_view() {
-        let err = decode(b"DRACO\x02\x02\x01\x00", &json!({"attributes": {}})).unwrap_err();
+        let err = decode(b"DRACO\x02\x02\x01\x00", &json!({"attributes": {}}))
+            .unwrap_err()
+            .message;
         assert!(err.contains("attributes.POSITION"), "{err}");
         assert!(buffer_view(&json!({"attributes": {}})).is_err());
         assert_eq!(buffer_view(&json!({"bufferView": 3})), Ok(3));

@@ -3,6 +3,7 @@
 //! instance T x R x S.
 
 use crate::bound::transform::BoundedMat4;
+use crate::error::{Error, Result};
 use glam::{DQuat, DVec3};
 use serde_json::Value;
 
@@ -35,19 +36,23 @@ pub struct InstanceValues {
 }
 
 /// Reads the accessor indices from the node's extension object.
-pub fn accessors(extension: &Value) -> Result<InstanceAccessors, String> {
+pub fn accessors(extension: &Value) -> Result<InstanceAccessors> {
     let attributes = extension
         .get("attributes")
         .and_then(Value::as_object)
-        .ok_or_else(|| format!("{EXTENSION}: attributes is missing"))?;
-    let index = |key: &str| -> Result<Option<usize>, String> {
+        .ok_or_else(|| Error::msg(format!("{EXTENSION}: attributes is missing")))?;
+    let index = |key: &str| -> Result<Option<usize>> {
         match attributes.get(key) {
             None => Ok(None),
             Some(v) => v
                 .as_u64()
                 .and_then(|v| usize::try_from(v).ok())
                 .map(Some)
-                .ok_or_else(|| format!("{EXTENSION}: attributes.{key} is not an accessor index")),
+                .ok_or_else(|| {
+                    Error::msg(format!(
+                        "{EXTENSION}: attributes.{key} is not an accessor index"
+                    ))
+                }),
         }
     };
     let found = InstanceAccessors {
@@ -61,16 +66,16 @@ pub fn accessors(extension: &Value) -> Result<InstanceAccessors, String> {
         .or(found.scale)
         .is_none()
     {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "{EXTENSION}: none of TRANSLATION, ROTATION, SCALE is given"
-        ));
+        )));
     }
     Ok(found)
 }
 
 /// The instance matrices (in the node's space), one per row, each with the bound of its
 /// multiplication ([`BoundedMat4::trs`]); all given attributes must have the same count.
-pub fn matrices(values: &InstanceValues) -> Result<Vec<BoundedMat4>, String> {
+pub fn matrices(values: &InstanceValues) -> Result<Vec<BoundedMat4>> {
     let counts = [
         values.translation.as_ref().map(Vec::len),
         values.rotation.as_ref().map(Vec::len),
@@ -79,16 +84,16 @@ pub fn matrices(values: &InstanceValues) -> Result<Vec<BoundedMat4>, String> {
     let mut given = counts.iter().flatten();
     let count = *given
         .next()
-        .ok_or_else(|| format!("{EXTENSION}: no instance attribute"))?;
+        .ok_or_else(|| Error::msg(format!("{EXTENSION}: no instance attribute")))?;
     if given.any(|&c| c != count) {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "{EXTENSION}: attribute counts differ (TRANSLATION, ROTATION, SCALE: {counts:?})"
-        ));
+        )));
     }
     if count > MAX_INSTANCES {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "{EXTENSION}: {count} instances (at most {MAX_INSTANCES})"
-        ));
+        )));
     }
     (0..count)
         .map(|i| {
@@ -96,25 +101,30 @@ pub fn matrices(values: &InstanceValues) -> Result<Vec<BoundedMat4>, String> {
             let s = values.scale.as_ref().map_or(DVec3::ONE, |v| v[i]);
             let r = match &values.rotation {
                 None => DQuat::IDENTITY,
-                Some(r) => rotation(r[i]).map_err(|e| format!("{EXTENSION}: instance {i}: {e}"))?,
+                Some(r) => {
+                    rotation(r[i]).map_err(|e| e.context(format!("{EXTENSION}: instance {i}")))?
+                }
             };
             let m = BoundedMat4::trs(t, r, s);
             if m.value.is_finite() {
                 Ok(m)
             } else {
-                Err(format!(
+                Err(Error::msg(format!(
                     "{EXTENSION}: instance {i} has a non-finite transform"
-                ))
+                )))
             }
         })
         .collect()
 }
 
 /// A quaternion from stored (x, y, z, w), to be normalized as node rotations are.
-fn rotation([x, y, z, w]: [f64; 4]) -> Result<DQuat, String> {
+fn rotation([x, y, z, w]: [f64; 4]) -> Result<DQuat> {
     let q = DQuat::from_xyzw(x, y, z, w);
     if !q.is_finite() || q.length_squared() == 0.0 {
-        return Err(format!("rotation {:?} is not a rotation", [x, y, z, w]));
+        return Err(Error::msg(format!(
+            "rotation {:?} is not a rotation",
+            [x, y, z, w]
+        )));
     }
     Ok(q)
 }

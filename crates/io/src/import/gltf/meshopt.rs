@@ -5,6 +5,7 @@
 //! it gets back the buffer view's plain bytes (`count * byteStride`), to be read through the
 //! usual accessors.
 
+use crate::error::{Error, Result};
 use serde_json::Value;
 
 /// The two names of the extension (same layout; the KHR one allows newer codec versions,
@@ -61,13 +62,15 @@ pub struct MeshoptView {
 
 impl MeshoptView {
     /// Reads the extension object of a buffer view.
-    pub fn parse(extension: &Value) -> Result<MeshoptView, String> {
-        let index = |key: &str| -> Result<usize, String> {
+    pub fn parse(extension: &Value) -> Result<MeshoptView> {
+        let index = |key: &str| -> Result<usize> {
             extension
                 .get(key)
                 .and_then(Value::as_u64)
                 .and_then(|v| usize::try_from(v).ok())
-                .ok_or_else(|| format!("{key} is missing or not a non-negative integer"))
+                .ok_or_else(|| {
+                    Error::msg(format!("{key} is missing or not a non-negative integer"))
+                })
         };
         let byte_offset = match extension.get("byteOffset") {
             None => 0,
@@ -77,7 +80,7 @@ impl MeshoptView {
             Some("ATTRIBUTES") => Mode::Attributes,
             Some("TRIANGLES") => Mode::Triangles,
             Some("INDICES") => Mode::Indices,
-            other => return Err(format!("unknown mode {other:?}")),
+            other => return Err(Error::msg(format!("unknown mode {other:?}"))),
         };
         let filter = match extension.get("filter").and_then(Value::as_str) {
             None | Some("NONE") => Filter::None,
@@ -85,7 +88,7 @@ impl MeshoptView {
             Some("QUATERNION") => Filter::Quaternion,
             Some("EXPONENTIAL") => Filter::Exponential,
             Some("COLOR") => Filter::Color,
-            Some(other) => return Err(format!("unknown filter '{other}'")),
+            Some(other) => return Err(Error::msg(format!("unknown filter '{other}'"))),
         };
         let view = MeshoptView {
             buffer: index("buffer")?,
@@ -101,17 +104,17 @@ impl MeshoptView {
     }
 
     /// Refuses combinations the codec does not define, and oversized views.
-    fn check(&self) -> Result<(), String> {
+    fn check(&self) -> Result<()> {
         let stride = self.byte_stride;
         let stride_ok = match self.mode {
             Mode::Attributes => stride.is_multiple_of(4) && (4..=256).contains(&stride),
             Mode::Triangles | Mode::Indices => stride == 2 || stride == 4,
         };
         if !stride_ok {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "byteStride {stride} is not allowed in mode {:?}",
                 self.mode
-            ));
+            )));
         }
         let filter_ok = match (self.mode, self.filter) {
             (_, Filter::None) | (Mode::Attributes, Filter::Exponential) => true,
@@ -120,34 +123,34 @@ impl MeshoptView {
             _ => false,
         };
         if !filter_ok {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "filter {:?} does not apply to mode {:?} with byteStride {stride}",
                 self.filter, self.mode
-            ));
+            )));
         }
         if self.mode == Mode::Triangles && !self.count.is_multiple_of(3) {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "TRIANGLES count {} is not a multiple of 3",
                 self.count
-            ));
+            )));
         }
         match self.count.checked_mul(stride) {
             Some(n) if n <= MAX_DECODED_BYTES => Ok(()),
-            _ => Err(format!(
+            _ => Err(Error::msg(format!(
                 "decodes to more than {MAX_DECODED_BYTES} bytes ({} x {stride})",
                 self.count
-            )),
+            ))),
         }
     }
 }
 
 /// Decodes the compressed bytes `encoded` of a view described by `view` into its plain bytes.
-pub fn decode(encoded: &[u8], view: &MeshoptView) -> Result<Vec<u8>, String> {
+pub fn decode(encoded: &[u8], view: &MeshoptView) -> Result<Vec<u8>> {
     let fail = |e: meshopt::Error| {
-        format!(
+        Error::msg(format!(
             "cannot decode {:?} data: the compressed bytes are malformed ({e})",
             view.mode
-        )
+        ))
     };
     let mut bytes = match (view.mode, view.byte_stride) {
         (Mode::Attributes, stride) => decode_attributes(encoded, view.count, stride)?,
@@ -169,7 +172,7 @@ pub fn decode(encoded: &[u8], view: &MeshoptView) -> Result<Vec<u8>, String> {
 }
 
 /// Decodes a vertex stream of `count` elements of `stride` bytes (a multiple of 4 up to 256).
-fn decode_attributes(encoded: &[u8], count: usize, stride: usize) -> Result<Vec<u8>, String> {
+fn decode_attributes(encoded: &[u8], count: usize, stride: usize) -> Result<Vec<u8>> {
     /// One element: `S` bytes (arrays over 32 have no `Default`).
     #[derive(Clone, Copy)]
     #[repr(transparent)]
@@ -179,18 +182,22 @@ fn decode_attributes(encoded: &[u8], count: usize, stride: usize) -> Result<Vec<
             Element([0; S])
         }
     }
-    fn run<const S: usize>(encoded: &[u8], count: usize) -> Result<Vec<u8>, String> {
+    fn run<const S: usize>(encoded: &[u8], count: usize) -> Result<Vec<u8>> {
         meshopt::decode_vertex_buffer::<Element<S>>(encoded, count)
             .map(|v| v.iter().flat_map(|e| e.0).collect())
             .map_err(|e| {
-                format!("cannot decode Attributes data: the compressed bytes are malformed ({e})")
+                Error::msg(format!(
+                    "cannot decode Attributes data: the compressed bytes are malformed ({e})"
+                ))
             })
     }
     macro_rules! by_stride {
         ($($s:literal)*) => {
             match stride {
                 $($s => run::<$s>(encoded, count),)*
-                other => Err(format!("byteStride {other} is not allowed in mode Attributes")),
+                other => Err(Error::msg(format!(
+                    "byteStride {other} is not allowed in mode Attributes"
+                ))),
             }
         };
     }

@@ -7,6 +7,7 @@ use super::diagnostics::{Code, Diagnostic, Sink};
 use super::document::{array, as_index, index_of, Document};
 use crate::bound::transform::BoundedMat4;
 use crate::camera::Projection;
+use crate::error::Error;
 use glam::{DMat4, DQuat, DVec3};
 use serde_json::Value;
 
@@ -67,7 +68,7 @@ impl Document {
 
     /// The root nodes of a scene: chosen by index or name, else the default scene, else the
     /// first; `Ok(None)` when the file defines no scene.
-    pub fn scene_roots(&self, choice: Option<&str>) -> Result<Option<Vec<usize>>, String> {
+    pub fn scene_roots(&self, choice: Option<&str>) -> Result<Option<Vec<usize>>, Error> {
         let scenes = self.list("scenes");
         let scene = match choice {
             Some(choice) => Some(
@@ -80,7 +81,10 @@ impl Document {
                     })
                     .map(|(_, s)| s)
                     .ok_or_else(|| {
-                        format!("no scene '{choice}' (the file has {})", scenes.len())
+                        Error::msg(format!(
+                            "no scene '{choice}' (the file has {})",
+                            scenes.len()
+                        ))
                     })?,
             ),
             None => self

@@ -1,6 +1,7 @@
 //! The `RAYCAST_quadric` node extension (docs/RAYCAST_quadric.md): its JSON object as a
 //! [`QuadricSpec`].
 
+use crate::error::{Error, Result};
 use crate::quadric::spec::check_finite;
 use crate::quadric::QuadricSpec;
 use glam::DVec3;
@@ -9,17 +10,19 @@ use serde_json::{Map, Value};
 /// Parses the `RAYCAST_quadric` extension object: either `coefficients` (ten numbers) or
 /// `Q` (nine), `P` (three) and `R`, plus optional `bounds: {min: [3], max: [3]}`.
 /// Unknown keys are ignored. The error message does not name the node.
-pub fn quadric_spec(v: &Value) -> Result<QuadricSpec, String> {
+pub fn quadric_spec(v: &Value) -> Result<QuadricSpec> {
     let object = v
         .as_object()
-        .ok_or("RAYCAST_quadric must be a JSON object")?;
+        .ok_or_else(|| Error::msg("RAYCAST_quadric must be a JSON object"))?;
     let bounds = object.get("bounds").map(parse_bounds).transpose()?;
     let matrix_form = ["Q", "P", "R"].iter().any(|k| object.contains_key(*k));
     match (object.get("coefficients"), matrix_form) {
-        (Some(_), true) => Err("give either `coefficients` or `Q`/`P`/`R`, not both".into()),
+        (Some(_), true) => Err(Error::msg(
+            "give either `coefficients` or `Q`/`P`/`R`, not both",
+        )),
         (Some(c), false) => QuadricSpec::from_coefficients(numbers(c, "coefficients")?, bounds),
         (None, true) => parse_matrix_form(object, bounds),
-        (None, false) => Err("missing `coefficients` (or `Q`, `P` and `R`)".into()),
+        (None, false) => Err(Error::msg("missing `coefficients` (or `Q`, `P` and `R`)")),
     }
 }
 
@@ -27,8 +30,12 @@ pub fn quadric_spec(v: &Value) -> Result<QuadricSpec, String> {
 fn parse_matrix_form(
     object: &Map<String, Value>,
     bounds: Option<[DVec3; 2]>,
-) -> Result<QuadricSpec, String> {
-    let field = |key: &str| object.get(key).ok_or(format!("missing `{key}`"));
+) -> Result<QuadricSpec> {
+    let field = |key: &str| {
+        object
+            .get(key)
+            .ok_or_else(|| Error::msg(format!("missing `{key}`")))
+    };
     let q = numbers::<9>(field("Q")?, "Q")?;
     let p = numbers::<3>(field("P")?, "P")?;
     let r = number(field("R")?, "R")?;
@@ -36,27 +43,29 @@ fn parse_matrix_form(
 }
 
 /// Parses `{"min": [x, y, z], "max": [x, y, z]}`.
-fn parse_bounds(v: &Value) -> Result<[DVec3; 2], String> {
+fn parse_bounds(v: &Value) -> Result<[DVec3; 2]> {
     let object = v
         .as_object()
-        .ok_or("`bounds` must be an object with `min` and `max`")?;
-    let corner = |key: &str| -> Result<DVec3, String> {
-        let value = object.get(key).ok_or(format!("missing `bounds.{key}`"))?;
+        .ok_or_else(|| Error::msg("`bounds` must be an object with `min` and `max`"))?;
+    let corner = |key: &str| -> Result<DVec3> {
+        let value = object
+            .get(key)
+            .ok_or_else(|| Error::msg(format!("missing `bounds.{key}`")))?;
         Ok(DVec3::from_array(numbers(value, &format!("bounds.{key}"))?))
     };
     Ok([corner("min")?, corner("max")?])
 }
 
 /// A JSON array of exactly `N` finite numbers.
-fn numbers<const N: usize>(v: &Value, what: &str) -> Result<[f64; N], String> {
+fn numbers<const N: usize>(v: &Value, what: &str) -> Result<[f64; N]> {
     let items = v
         .as_array()
-        .ok_or(format!("`{what}` must be an array of {N} numbers"))?;
+        .ok_or_else(|| Error::msg(format!("`{what}` must be an array of {N} numbers")))?;
     if items.len() != N {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "`{what}` has {} numbers, expected {N}",
             items.len()
-        ));
+        )));
     }
     let mut out = [0.0; N];
     for (slot, item) in out.iter_mut().zip(items) {
@@ -66,10 +75,10 @@ fn numbers<const N: usize>(v: &Value, what: &str) -> Result<[f64; N], String> {
 }
 
 /// A finite JSON number.
-fn number(v: &Value, what: &str) -> Result<f64, String> {
+fn number(v: &Value, what: &str) -> Result<f64> {
     let x = v
         .as_f64()
-        .ok_or(format!("`{what}` must contain only numbers"))?;
+        .ok_or_else(|| Error::msg(format!("`{what}` must contain only numbers")))?;
     check_finite(what, &[x])?;
     Ok(x)
 }
@@ -81,7 +90,7 @@ mod tests {
 
     /// The error message for an extension object, which must fail.
     fn extension_error(v: serde_json::Value) -> String {
-        quadric_spec(&v).unwrap_err()
+        quadric_spec(&v).unwrap_err().message
     }
 
     #[test]
@@ -150,13 +159,13 @@ mod tests {
             [f64::NAN, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
             None,
         );
-        assert!(nan.unwrap_err().contains("non-finite"));
+        assert!(nan.unwrap_err().message.contains("non-finite"));
         let inf = QuadricSpec::from_matrices(
             [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
             [0.0; 3],
             f64::INFINITY,
             None,
         );
-        assert!(inf.unwrap_err().contains("non-finite"));
+        assert!(inf.unwrap_err().message.contains("non-finite"));
     }
 }

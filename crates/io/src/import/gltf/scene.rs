@@ -52,7 +52,9 @@ pub fn build_at(
         None => Vec::new(),
         Some(_) => doc
             .chosen_animations(timing.animation.as_deref())
-            .map_err(|e| Diagnostic::error(Code::UnresolvedReference, "/animations", e))?,
+            .map_err(|e| {
+                Diagnostic::error(Code::UnresolvedReference, "/animations", e.to_string())
+            })?,
     };
     let animated = match timing.time {
         Some(time) => doc.animate(&chosen, time)?,
@@ -85,7 +87,7 @@ pub fn build_at(
     );
     let roots = match doc
         .scene_roots(choice)
-        .map_err(|e| Diagnostic::error(Code::UnresolvedReference, "/scenes", e))?
+        .map_err(|e| Diagnostic::error(Code::UnresolvedReference, "/scenes", e.to_string()))?
     {
         Some(roots) => roots,
         None => {

@@ -6,6 +6,7 @@
 use super::decode;
 use super::document::{index_of, Document};
 use super::geometry::Geometry;
+use crate::error::{Error, Result};
 use crate::scene::attributes::{runs, Attributes};
 use glam::DVec3;
 
@@ -60,22 +61,33 @@ impl Document {
         name: &str,
         comps: usize,
         n: usize,
-    ) -> Result<Vec<f64>, String> {
-        let layout = self.layout(accessor).map_err(|e| e.to_string())?;
+    ) -> Result<Vec<f64>> {
+        let layout = self
+            .layout(accessor)
+            .map_err(|e| Error::msg(e.to_string()))?;
         if layout.comps != comps || layout.rows.is_some() {
-            return Err(format!("must have {comps} components per vertex"));
+            return Err(Error::msg(format!(
+                "must have {comps} components per vertex"
+            )));
         }
         let stored = match decode::draco_attribute(self, mesh, prim, name, comps) {
-            Some(values) => values.map_err(|e| e.to_string())?,
-            None => self.accessor_values(accessor).map_err(|e| e.to_string())?.1,
+            Some(values) => values.map_err(|e| Error::msg(e.to_string()))?,
+            None => {
+                self.accessor_values(accessor)
+                    .map_err(|e| Error::msg(e.to_string()))?
+                    .1
+            }
         };
         if stored.len() != comps * n {
-            return Err(format!("{} values for {n} vertices", stored.len() / comps));
+            return Err(Error::msg(format!(
+                "{} values for {n} vertices",
+                stored.len() / comps
+            )));
         }
         let values: Vec<f64> = stored.into_iter().map(|v| layout.dequantize(v)).collect();
         match values.iter().all(|v| v.is_finite()) {
             true => Ok(values),
-            false => Err("holds a value that is not finite".into()),
+            false => Err(Error::msg("holds a value that is not finite")),
         }
     }
 }

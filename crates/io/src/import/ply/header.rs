@@ -4,6 +4,7 @@
 //! body starts on the byte after that line.
 
 use super::PlyError;
+use crate::error::Error;
 
 /// How the body is encoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -173,7 +174,9 @@ pub fn parse(bytes: &[u8]) -> Result<Header, PlyError> {
             ["end_header"] => break,
             ["comment", ..] | ["obj_info", ..] | [] => {}
             ["format", encoding, version] if format.is_none() => {
-                format = Some(parse_format(encoding, version).map_err(|w| error(number, w))?);
+                format = Some(
+                    parse_format(encoding, version).map_err(|w| error(number, w.to_string()))?,
+                );
             }
             ["element", name, count] => {
                 let count = count.parse().map_err(|_| {
@@ -190,7 +193,8 @@ pub fn parse(bytes: &[u8]) -> Result<Header, PlyError> {
                 });
             }
             ["property", ..] => {
-                let property = parse_property(&words[1..]).map_err(|w| error(number, w))?;
+                let property =
+                    parse_property(&words[1..]).map_err(|w| error(number, w.to_string()))?;
                 let element = elements
                     .last_mut()
                     .ok_or_else(|| error(number, "a property before any element".to_string()))?;
@@ -227,33 +231,36 @@ pub fn warnings(header: &Header) -> Vec<String> {
     )]
 }
 
-fn parse_format(encoding: &str, version: &str) -> Result<Format, String> {
+fn parse_format(encoding: &str, version: &str) -> Result<Format, Error> {
     if version != "1.0" {
-        return Err(format!("format version '{version}' is not 1.0"));
+        return Err(Error::msg(format!("format version '{version}' is not 1.0")));
     }
     match encoding {
         "ascii" => Ok(Format::Ascii),
         "binary_little_endian" => Ok(Format::BinaryLittleEndian),
         "binary_big_endian" => Ok(Format::BinaryBigEndian),
-        _ => Err(format!("unknown format '{encoding}'")),
+        _ => Err(Error::msg(format!("unknown format '{encoding}'"))),
     }
 }
 
 /// A `property` line's words after `property`: `TYPE NAME` or `list COUNT ITEM NAME`.
-fn parse_property(words: &[&str]) -> Result<Property, String> {
-    let scalar =
-        |name: &str| Scalar::parse(name).ok_or_else(|| format!("unknown property type '{name}'"));
+fn parse_property(words: &[&str]) -> Result<Property, Error> {
+    let scalar = |name: &str| {
+        Scalar::parse(name).ok_or_else(|| Error::msg(format!("unknown property type '{name}'")))
+    };
     let (kind, name) = match words {
         ["list", count, item, name] => {
             let count = scalar(count)?;
             if !count.is_integer() {
-                return Err(format!("the count of list '{name}' is not an integer type"));
+                return Err(Error::msg(format!(
+                    "the count of list '{name}' is not an integer type"
+                )));
             }
             let item = scalar(item)?;
             (Kind::List { count, item }, name)
         }
         [ty, name] => (Kind::Scalar(scalar(ty)?), name),
-        _ => return Err("a property line needs a type and a name".into()),
+        _ => return Err(Error::msg("a property line needs a type and a name")),
     };
     Ok(Property {
         name: name.to_string(),

@@ -5,17 +5,13 @@
 use super::value;
 use super::Loader;
 use crate::camera::{Camera, Projection};
+use crate::error::Result;
 use glam::DMat4;
 use openusd::usd::Prim;
 
 impl Loader {
     /// A UsdGeomCamera as a camera named by its prim path.
-    pub(super) fn camera(
-        &mut self,
-        prim: &Prim,
-        name: &str,
-        world: DMat4,
-    ) -> std::result::Result<(), String> {
+    pub(super) fn camera(&mut self, prim: &Prim, name: &str, world: DMat4) -> Result<()> {
         let Some(to_world) = Camera::orthonormalised(world) else {
             self.warnings.push(format!(
                 "{}: camera has a degenerate transform: skipped",

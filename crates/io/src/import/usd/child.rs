@@ -2,6 +2,7 @@
 //! failure), panics or hangs on a file ends the run with a one-line error: [`probe`] for a
 //! render and `raycast info`, [`run_child`] and the words of a dead child for `raycast check`.
 
+use crate::error::{Error, Result};
 use std::path::Path;
 
 /// Runs `command` with null stdin and piped output, killing it after `timeout`; returns its
@@ -105,26 +106,27 @@ pub fn probe(
     path: &Path,
     args: &[std::ffi::OsString],
     timeout: std::time::Duration,
-) -> std::result::Result<(), String> {
+) -> Result<()> {
     let mut command = std::process::Command::new(exe);
     command
         .arg("info")
         .arg(path)
         .args(args)
         .env(PROBE_CHILD, "1");
-    let (status, _, stderr) =
-        run_child(command, timeout).map_err(|e| format!("cannot start the USD reader: {e}"))?;
+    let (status, _, stderr) = run_child(command, timeout)
+        .map_err(|e| Error::msg(format!("cannot start the USD reader: {e}")))?;
     match status.and_then(|s| s.code()) {
         Some(0) => Ok(()),
-        Some(1) => Err(stderr
-            .lines()
-            .find_map(|l| l.strip_prefix("raycast: error: "))
-            .unwrap_or_else(|| last_words(&stderr))
-            .to_string()),
+        Some(1) => Err(Error::msg(
+            stderr
+                .lines()
+                .find_map(|l| l.strip_prefix("raycast: error: "))
+                .unwrap_or_else(|| last_words(&stderr)),
+        )),
         _ => {
             let last = last_words(&stderr);
             let how = stopped_how(status, timeout);
-            Err(format!(
+            Err(Error::msg(format!(
                 "{}: the USD reader {how} on this file{}",
                 path.display(),
                 if last.is_empty() {
@@ -132,7 +134,7 @@ pub fn probe(
                 } else {
                     format!(": {last}")
                 }
-            ))
+            )))
         }
     }
 }

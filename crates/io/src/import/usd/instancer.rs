@@ -8,6 +8,7 @@
 use super::motion::Motion;
 use super::value::{self, At};
 use super::{err, Instance, Loader, MAX_INSTANCER_DEPTH};
+use crate::error::{Error, Result};
 use glam::{DMat4, DQuat, DVec3};
 use openusd::usd::Prim;
 use std::collections::HashSet;
@@ -33,9 +34,9 @@ impl Arrays {
         at: At,
         per_second: f64,
         notes: &mut Vec<String>,
-    ) -> Result<Result<Arrays, String>, String> {
+    ) -> Result<Result<Arrays>> {
         let Some(indices) = value::ints(prim, "protoIndices", at)? else {
-            return Ok(Err("has no protoIndices".into()));
+            return Ok(Err(Error::msg("has no protoIndices")));
         };
         let n = indices.len();
         let motion = match at.time() {
@@ -50,13 +51,13 @@ impl Arrays {
             None => Ok(at),
         };
         let Some(positions) = value::vec3s(prim, "positions", at_of("positions")?)? else {
-            return Ok(Err("has no positions".into()));
+            return Ok(Err(Error::msg("has no positions")));
         };
         if positions.len() != n {
-            return Ok(Err(format!(
+            return Ok(Err(Error::msg(format!(
                 "has {} positions for {n} protoIndices",
                 positions.len()
-            )));
+            ))));
         }
         let orientations = match value::quats(prim, "orientations", at_of("orientations")?)? {
             Some(q) => Some(q),
@@ -68,12 +69,17 @@ impl Arrays {
             ("scales", scales.as_ref().map(Vec::len)),
         ] {
             if let Some(len) = len.filter(|&len| len != n) {
-                return Ok(Err(format!("has {len} {what} for {n} protoIndices")));
+                return Ok(Err(Error::msg(format!(
+                    "has {len} {what} for {n} protoIndices"
+                ))));
             }
         }
         let ids = value::ints(prim, "ids", at)?;
         if let Some(ids) = ids.as_ref().filter(|ids| ids.len() != n) {
-            return Ok(Err(format!("has {} ids for {n} protoIndices", ids.len())));
+            return Ok(Err(Error::msg(format!(
+                "has {} ids for {n} protoIndices",
+                ids.len()
+            ))));
         }
         // usd-core's ComputeMaskAtTime: neither invisible nor deactivated ids are drawn
         let hidden: HashSet<i64> = value::ints(prim, "invisibleIds", at)?
@@ -103,12 +109,12 @@ impl Loader {
         world: DMat4,
         outer: &mut Option<Instance>,
         depth: usize,
-    ) -> std::result::Result<(), String> {
+    ) -> Result<()> {
         let path = prim.path().to_string();
         if depth >= MAX_INSTANCER_DEPTH {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "{path}: point instancers nest deeper than {MAX_INSTANCER_DEPTH} (a prototype instancing itself?)"
-            ));
+            )));
         }
         let targets = prim
             .relationship("prototypes")

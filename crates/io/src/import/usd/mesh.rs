@@ -1,6 +1,7 @@
 //! UsdGeomMesh: polygons triangulated as fans in the prim's local space.
 
 use super::value::{self, At};
+use crate::error::{Error, Result};
 use crate::scene::Mesh;
 use openusd::usd::Prim;
 
@@ -28,14 +29,14 @@ pub enum MeshRead {
 /// `subdivisionScheme`. Malformed data (a value of the wrong type, an index out of range,
 /// counts that do not add up to the index count) skips the mesh with a warning, as
 /// usd-core's imaging does; the error only reports a failure to read the stage.
-pub fn read(prim: &Prim, at: At) -> Result<MeshRead, String> {
+pub fn read(prim: &Prim, at: At) -> Result<MeshRead> {
     match read_checked(prim, at) {
         Ok(read) => Ok(read),
         Err(message) => Ok(MeshRead::Skip(format!("{message}: mesh skipped"))),
     }
 }
 
-fn read_checked(prim: &Prim, at: At) -> Result<MeshRead, String> {
+fn read_checked(prim: &Prim, at: At) -> Result<MeshRead> {
     let path = prim.path();
     let points = value::vec3s(prim, "points", at)?;
     let counts = value::ints(prim, "faceVertexCounts", at)?;
@@ -89,9 +90,9 @@ fn read_checked(prim: &Prim, at: At) -> Result<MeshRead, String> {
         None | Some("rightHanded") => false,
         Some("leftHanded") => true,
         Some(other) => {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "{path}.orientation: '{other}' is neither rightHanded nor leftHanded"
-            ));
+            )));
         }
     };
     // USD's fallback subdivisionScheme is catmullClark: a mesh is a subdivision surface

@@ -205,12 +205,12 @@ fn load_stage(
     options: &LoadOptions,
     confine: Option<confine::Confined>,
 ) -> Result<Scene> {
-    let fail = |message: String| Error::in_file(path, message);
+    let fail = |e: Error| e.with_path(path);
     let stage = match confine {
         None => Stage::open(text),
         Some(confine) => Stage::builder().resolver(confine).open(text),
     }
-    .map_err(|e| fail(format!("cannot open the USD stage: {e:#}")))?;
+    .map_err(|e| Error::in_file(path, format!("cannot open the USD stage: {e:#}")))?;
     let mut loader = Loader {
         at: value::At::new(options.time),
         variants: variants::Variants::new(options.variants.clone()),
@@ -400,8 +400,8 @@ fn is_xformable(type_name: &str) -> bool {
     )
 }
 
-pub(super) fn err(prim: &Prim, e: impl std::fmt::Display) -> String {
-    format!("{}: {e:#}", prim.path())
+pub(super) fn err(prim: &Prim, e: impl std::fmt::Display) -> Error {
+    Error::msg(format!("{}: {e:#}", prim.path()))
 }
 
 impl Loader {
@@ -414,7 +414,7 @@ impl Loader {
 
     /// The prims to walk, with their parents' world transforms: every root prim, or the
     /// prim named by `--scene`.
-    fn roots(&mut self, choice: Option<&str>) -> std::result::Result<Vec<(Prim, DMat4)>, String> {
+    fn roots(&mut self, choice: Option<&str>) -> Result<Vec<(Prim, DMat4)>> {
         if let Some(name) = self.stage.default_prim() {
             let path = format!("/{}", name.as_str());
             let exists = sdf::Path::new(&path)
@@ -433,30 +433,30 @@ impl Loader {
                 let names = self
                     .stage
                     .root_prims()
-                    .map_err(|e| format!("cannot list the root prims: {e:#}"))?;
+                    .map_err(|e| Error::msg(format!("cannot list the root prims: {e:#}")))?;
                 let mut roots = Vec::new();
                 for name in names {
-                    let path = sdf::Path::new(&format!("/{}", name.as_str()))
-                        .map_err(|e| format!("bad root prim name '{}': {e}", name.as_str()))?;
+                    let path = sdf::Path::new(&format!("/{}", name.as_str())).map_err(|e| {
+                        Error::msg(format!("bad root prim name '{}': {e}", name.as_str()))
+                    })?;
                     roots.push((self.stage.prim(path), DMat4::IDENTITY));
                 }
                 Ok(roots)
             }
             Some(choice) => {
                 let path = if choice == "default" {
-                    let name = self
-                        .stage
-                        .default_prim()
-                        .ok_or("--scene default: the stage has no defaultPrim")?;
+                    let name = self.stage.default_prim().ok_or_else(|| {
+                        Error::msg("--scene default: the stage has no defaultPrim")
+                    })?;
                     format!("/{}", name.as_str())
                 } else {
                     choice.to_string()
                 };
                 let sdf_path = sdf::Path::new(&path)
-                    .map_err(|e| format!("--scene '{path}' is not a prim path: {e}"))?;
+                    .map_err(|e| Error::msg(format!("--scene '{path}' is not a prim path: {e}")))?;
                 let prim = self.stage.prim(sdf_path);
                 if !prim.is_valid().map_err(|e| err(&prim, e))? || !path.starts_with('/') {
-                    return Err(format!("no prim '{path}' in the stage"));
+                    return Err(Error::msg(format!("no prim '{path}' in the stage")));
                 }
                 // The chosen prim keeps its ancestors' transforms.
                 let world = self.parent_world_of(&prim)?;
@@ -467,7 +467,7 @@ impl Loader {
 
     /// World transform of the parent of any prim: its ancestors' transforms composed from
     /// the root.
-    fn parent_world_of(&mut self, prim: &Prim) -> std::result::Result<DMat4, String> {
+    fn parent_world_of(&mut self, prim: &Prim) -> Result<DMat4> {
         let mut world = DMat4::IDENTITY;
         let mut ancestors: Vec<Prim> = Vec::new();
         let mut p = prim.path().parent();
@@ -485,13 +485,13 @@ impl Loader {
     }
 
     /// World transform of any prim (a skeleton, wherever it is in namespace).
-    fn world_of_prim(&mut self, prim: &Prim) -> std::result::Result<DMat4, String> {
+    fn world_of_prim(&mut self, prim: &Prim) -> Result<DMat4> {
         let parent = self.parent_world_of(prim)?;
         self.world_of(prim, parent)
     }
 
     /// World transform of `prim` given its parent's.
-    fn world_of(&mut self, prim: &Prim, parent: DMat4) -> std::result::Result<DMat4, String> {
+    fn world_of(&mut self, prim: &Prim, parent: DMat4) -> Result<DMat4> {
         let type_name = prim.type_name().map_err(|e| err(prim, e))?;
         let type_name = type_name.as_deref().unwrap_or("");
         if !is_xformable(type_name) {
@@ -506,7 +506,10 @@ impl Loader {
         if world.is_finite() {
             Ok(world)
         } else {
-            Err(format!("{}: world transform is not finite", prim.path()))
+            Err(Error::msg(format!(
+                "{}: world transform is not finite",
+                prim.path()
+            )))
         }
     }
 
@@ -533,12 +536,12 @@ impl Loader {
         skel: Option<Rc<skel::Binding>>,
         instance: &mut Option<Instance>,
         depth: usize,
-    ) -> std::result::Result<(), String> {
+    ) -> Result<()> {
         self.visits += 1;
         if self.visits > MAX_PRIM_VISITS {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "the stage expands to more than {MAX_PRIM_VISITS} prims (counting instances)"
-            ));
+            )));
         }
         let path = prim.path().to_string();
         let is_instance_root = instance.as_ref().is_some_and(|i| i.root == path);
@@ -626,7 +629,7 @@ impl Loader {
         world: DMat4,
         skinned: Option<Vec<DVec3>>,
         instance: &mut Option<Instance>,
-    ) -> std::result::Result<(), String> {
+    ) -> Result<()> {
         let name = Self::object_name(prim, instance);
         let source = prim.path().to_string();
         let mut target = Target {
@@ -668,13 +671,13 @@ impl Loader {
             }
         } else if shapes::is_shape(type_name) {
             match shapes::parts(prim, type_name, self.at)? {
-                Err(reason) => self.warnings.push(reason),
+                Err(reason) => self.warnings.push(reason.to_string()),
                 Ok(parts) => {
                     for part in parts {
                         match part {
                             Part::Quadric { spec, frame, .. } => {
                                 let quadric = Quadric::new(&spec, world * frame)
-                                    .map_err(|e| format!("{source} ({type_name}): {e}"))?;
+                                    .map_err(|e| e.context(format!("{source} ({type_name})")))?;
                                 let id = target.id(&mut self.builder);
                                 let material = self.bound_material(prim);
                                 self.builder.place_bound_quadric(id, quadric, material);
@@ -696,7 +699,7 @@ impl Loader {
         if quadric::has_quadric(prim)? {
             let quadric = quadric::read(prim, self.at)
                 .and_then(|spec| Quadric::new(&spec, world))
-                .map_err(|e| format!("{source}: raycast:quadric: {e}"))?;
+                .map_err(|e| e.context(format!("{source}: raycast:quadric")))?;
             let id = target.id(&mut self.builder);
             self.builder.place_quadric(id, quadric);
         }
@@ -709,7 +712,7 @@ impl Loader {
     }
 
     /// A mesh's local triangles, read once per prototype.
-    fn mesh(&mut self, prim: &Prim) -> std::result::Result<Option<CachedMesh>, String> {
+    fn mesh(&mut self, prim: &Prim) -> Result<Option<CachedMesh>> {
         let key = match prim.prim_in_prototype() {
             Ok(Some(proto)) => proto.path().to_string(),
             _ => prim.path().to_string(),

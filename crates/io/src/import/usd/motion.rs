@@ -17,6 +17,7 @@
 //! and the motion extrapolates, as usd-core's does.
 
 use super::value::{self, At};
+use crate::error::{Error, Result};
 use glam::{DMat4, DQuat, DVec3};
 use openusd::usd::{Prim, TimeCode};
 
@@ -35,15 +36,15 @@ struct Bracket {
 
 /// The bracket of `prim.name` at `time` (usd-core's `_GetAttrForTransforms`); `None` when the
 /// attribute has no time samples.
-fn bracket(prim: &Prim, name: &str, time: f64) -> Result<Option<Bracket>, String> {
+fn bracket(prim: &Prim, name: &str, time: f64) -> Result<Option<Bracket>> {
     let read = |t: f64| {
         prim.attribute(name)
             .bracketing_time_samples(TimeCode::new(t))
             .map_err(|e| {
-                format!(
+                Error::msg(format!(
                     "{}.{name}: cannot read its time samples: {e:#}",
                     prim.path()
-                )
+                ))
             })
     };
     let Some((lower, upper)) = read(time)? else {
@@ -93,7 +94,7 @@ pub(super) struct Motion {
 impl Motion {
     /// The motion at time code `time` for `n` instances (`None` when nothing applies: usd-core
     /// then interpolates the samples). `per_second` is the stage's `timeCodesPerSecond`.
-    pub fn read(prim: &Prim, time: f64, n: usize, per_second: f64) -> Result<Motion, String> {
+    pub fn read(prim: &Prim, time: f64, n: usize, per_second: f64) -> Result<Motion> {
         let mut notes = Vec::new();
         let orientations = if value::raw(prim, "orientations", At::new(Some(time)))?.is_some() {
             "orientations"
@@ -178,7 +179,7 @@ fn rate(
     (time, per_second): (f64, f64),
     n: usize,
     notes: &mut Vec<String>,
-) -> Result<Option<Rate>, String> {
+) -> Result<Option<Rate>> {
     let Some(base) = bracket(prim, over, time)? else {
         return Ok(None);
     };

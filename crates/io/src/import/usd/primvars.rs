@@ -6,6 +6,7 @@
 //! cannot be read, or whose length does not fit its interpolation, is left out with a warning.
 
 use super::value::{self, At, ValueResult};
+use crate::error::{Error, Result};
 use crate::scene::attributes::{corners, runs, MaterialRun};
 use crate::scene::{Attributes, SceneBuilder};
 use openusd::sdf::Value;
@@ -50,7 +51,7 @@ pub fn read(prim: &Prim, at: At, topology: &Topology) -> (Attributes, Vec<String
 fn left_out<T>(
     prim: &Prim,
     name: &str,
-    read: Result<Vec<T>, String>,
+    read: Result<Vec<T>>,
     warnings: &mut Vec<String>,
 ) -> Vec<T> {
     read.unwrap_or_else(|why| {
@@ -68,13 +69,13 @@ fn expand<T: Copy>(
     at: At,
     topology: &Topology,
     values: Option<Vec<T>>,
-) -> Result<Vec<[T; 3]>, String> {
+) -> Result<Vec<[T; 3]>> {
     let Some(mut values) = values else {
         return Ok(Vec::new());
     };
     if let Some(indices) = value::ints(prim, &format!("{name}:indices"), at)? {
         if indices.iter().any(|&i| i < 0 || i as usize >= values.len()) {
-            return Err("an index of its :indices is out of range".into());
+            return Err(Error::msg("an index of its :indices is out of range"));
         }
         values = indices.iter().map(|&i| values[i as usize]).collect();
     }
@@ -87,13 +88,13 @@ fn expand<T: Copy>(
             topology.face_count,
         ),
         "constant" => (vec![[0; 3]; topology.triangles.len()], 1),
-        other => return Err(format!("interpolation '{other}' is not read")),
+        other => return Err(Error::msg(format!("interpolation '{other}' is not read"))),
     };
     if values.len() < needed {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "{} values for {interpolation} interpolation, which needs {needed}",
             values.len()
-        ));
+        )));
     }
     Ok(corners(&values, &per_triangle))
 }
@@ -117,11 +118,11 @@ fn vec2s(prim: &Prim, name: &str, at: At) -> ValueResult<Vec<[f32; 2]>> {
         Value::Vec2dVec(v) => v.iter().map(|p| [p.x as f32, p.y as f32]).collect(),
         Value::Vec2hVec(v) => v.iter().map(|p| [p.x.to_f32(), p.y.to_f32()]).collect(),
         _ => {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "{}.{name}: expected an array of 2-vectors, found {}",
                 prim.path(),
                 value::value_kind(&value)
-            ))
+            )))
         }
     }))
 }

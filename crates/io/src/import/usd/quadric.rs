@@ -3,6 +3,7 @@
 //! (docs/RAYCAST_quadric.md, docs/usd.md).
 
 use super::value::{self, At};
+use crate::error::{Error, Result};
 use crate::quadric::QuadricSpec;
 use openusd::usd::Prim;
 
@@ -17,28 +18,39 @@ const BOUNDS_MIN: &str = "raycast:quadric:boundsMin";
 const BOUNDS_MAX: &str = "raycast:quadric:boundsMax";
 
 /// True when the prim has any `raycast:quadric:` property.
-pub fn has_quadric(prim: &Prim) -> Result<bool, String> {
+pub fn has_quadric(prim: &Prim) -> Result<bool> {
     let names = prim
         .property_names()
-        .map_err(|e| format!("{}: cannot list properties: {e}", prim.path()))?;
+        .map_err(|e| Error::msg(format!("{}: cannot list properties: {e}", prim.path())))?;
     Ok(names.iter().any(|n| n.as_str().starts_with(PREFIX)))
 }
 
 /// Reads the quadric of a prim that has `raycast:quadric:` properties. The error does not
 /// name the prim (the caller prefixes it).
-pub fn read(prim: &Prim, at: At) -> Result<QuadricSpec, String> {
-    let strip = |e: String| {
+pub fn read(prim: &Prim, at: At) -> Result<QuadricSpec> {
+    let strip = |e: Error| {
         // value readers name `<prim>.<attr>`: keep only the attribute part.
         let prefix = format!("{}.", prim.path());
-        e.strip_prefix(&prefix).map(str::to_string).unwrap_or(e)
+        match e.message.strip_prefix(&prefix) {
+            Some(attribute) => Error::msg(attribute),
+            None => e,
+        }
     };
     let min = value::vec3(prim, BOUNDS_MIN, at).map_err(strip)?;
     let max = value::vec3(prim, BOUNDS_MAX, at).map_err(strip)?;
     let bounds = match (min, max) {
         (Some(min), Some(max)) => Some([min, max]),
         (None, None) => None,
-        (Some(_), None) => return Err(format!("{BOUNDS_MIN} is given without {BOUNDS_MAX}")),
-        (None, Some(_)) => return Err(format!("{BOUNDS_MAX} is given without {BOUNDS_MIN}")),
+        (Some(_), None) => {
+            return Err(Error::msg(format!(
+                "{BOUNDS_MIN} is given without {BOUNDS_MAX}"
+            )))
+        }
+        (None, Some(_)) => {
+            return Err(Error::msg(format!(
+                "{BOUNDS_MAX} is given without {BOUNDS_MIN}"
+            )))
+        }
     };
     let coefficients = value::numbers(prim, COEFFICIENTS, at).map_err(strip)?;
     let q = value::matrix3_rows(prim, Q, at).map_err(strip)?;
@@ -46,22 +58,26 @@ pub fn read(prim: &Prim, at: At) -> Result<QuadricSpec, String> {
     let r = value::scalar(prim, R, at).map_err(strip)?;
     let matrix_form = q.is_some() || p.is_some() || r.is_some();
     match (coefficients, matrix_form) {
-        (Some(_), true) => Err(format!(
+        (Some(_), true) => Err(Error::msg(format!(
             "give either {COEFFICIENTS} or {Q}/{P}/{R}, not both"
-        )),
+        ))),
         (Some(c), false) => {
-            let c: [f64; 10] = c
-                .as_slice()
-                .try_into()
-                .map_err(|_| format!("{COEFFICIENTS} has {} numbers, expected 10", c.len()))?;
+            let c: [f64; 10] = c.as_slice().try_into().map_err(|_| {
+                Error::msg(format!(
+                    "{COEFFICIENTS} has {} numbers, expected 10",
+                    c.len()
+                ))
+            })?;
             QuadricSpec::from_coefficients(c, bounds)
         }
         (None, true) => {
-            let q = q.ok_or(format!("missing {Q}"))?;
-            let p = p.ok_or(format!("missing {P}"))?;
-            let r = r.ok_or(format!("missing {R}"))?;
+            let q = q.ok_or_else(|| Error::msg(format!("missing {Q}")))?;
+            let p = p.ok_or_else(|| Error::msg(format!("missing {P}")))?;
+            let r = r.ok_or_else(|| Error::msg(format!("missing {R}")))?;
             QuadricSpec::from_matrices(q, p.to_array(), r, bounds)
         }
-        (None, false) => Err(format!("missing {COEFFICIENTS} (or {Q}, {P} and {R})")),
+        (None, false) => Err(Error::msg(format!(
+            "missing {COEFFICIENTS} (or {Q}, {P} and {R})"
+        ))),
     }
 }

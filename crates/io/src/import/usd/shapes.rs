@@ -21,6 +21,7 @@
 //! 1.9e-5 of the radius).
 
 use super::value::{self, At};
+use crate::error::{Error, Result};
 use crate::quadric::QuadricSpec;
 use glam::{DMat4, DVec3, DVec4};
 use openusd::usd::Prim;
@@ -54,20 +55,20 @@ pub fn is_shape(type_name: &str) -> bool {
 }
 
 /// A positive, finite size attribute with its fallback.
-fn size(prim: &Prim, name: &str, fallback: f64, at: At) -> Result<f64, String> {
+fn size(prim: &Prim, name: &str, fallback: f64, at: At) -> Result<f64> {
     let x = value::scalar(prim, name, at)?.unwrap_or(fallback);
     if x.is_finite() && x >= 0.0 {
         Ok(x)
     } else {
-        Err(format!(
+        Err(Error::msg(format!(
             "{}.{name}: {x} is not a finite non-negative number",
             prim.path()
-        ))
+        )))
     }
 }
 
 /// The `axis` token (fallback `Z`) as the canonical → local permutation.
-fn axis_frame(prim: &Prim, at: At) -> Result<(char, DMat4), String> {
+fn axis_frame(prim: &Prim, at: At) -> Result<(char, DMat4)> {
     let axis = value::token(prim, "axis", at)?.unwrap_or_else(|| "Z".into());
     let cols = |u: DVec3, v: DVec3, w: DVec3| {
         DMat4::from_cols(
@@ -81,22 +82,29 @@ fn axis_frame(prim: &Prim, at: At) -> Result<(char, DMat4), String> {
         "X" => Ok(('X', cols(DVec3::Y, DVec3::Z, DVec3::X))),
         "Y" => Ok(('Y', cols(DVec3::Z, DVec3::X, DVec3::Y))),
         "Z" => Ok(('Z', DMat4::IDENTITY)),
-        other => Err(format!("{}.axis: '{other}' is not X, Y or Z", prim.path())),
+        other => Err(Error::msg(format!(
+            "{}.axis: '{other}' is not X, Y or Z",
+            prim.path()
+        ))),
     }
 }
 
 /// The surfaces of a gprim; `Ok(Err(reason))` when it has nothing to draw (a warning), `Err`
 /// for an attribute that cannot be read as its schema says.
-pub fn parts(prim: &Prim, type_name: &str, at: At) -> Result<Result<Vec<Part>, String>, String> {
+pub fn parts(prim: &Prim, type_name: &str, at: At) -> Result<Result<Vec<Part>>> {
     let path = prim.path();
-    let empty = |what: &str| Ok(Err(format!("{path}: {type_name} with {what}: skipped")));
+    let empty = |what: &str| {
+        Ok(Err(Error::msg(format!(
+            "{path}: {type_name} with {what}: skipped"
+        ))))
+    };
     match type_name {
         "Sphere" => {
             let r = size(prim, "radius", 1.0, at)?;
             if r == 0.0 {
                 return empty("radius 0");
             }
-            let part = sphere(r, 0.0, None).map_err(|e| format!("{path}: {e}"))?;
+            let part = sphere(r, 0.0, None).map_err(|e| e.context(path))?;
             Ok(Ok(vec![part]))
         }
         "Cube" => {
@@ -125,7 +133,7 @@ pub fn parts(prim: &Prim, type_name: &str, at: At) -> Result<Result<Vec<Part>, S
                 return empty("zero height or radius");
             }
             let (_, frame) = axis_frame(prim, at)?;
-            let parts = frustum(bottom, top, h, frame).map_err(|e| format!("{path}: {e}"))?;
+            let parts = frustum(bottom, top, h, frame).map_err(|e| e.context(path))?;
             Ok(Ok(parts))
         }
         "Capsule" | "Capsule_1" => {
@@ -147,12 +155,12 @@ pub fn parts(prim: &Prim, type_name: &str, at: At) -> Result<Result<Vec<Part>, S
             let mut parts = Vec::new();
             if h > 0.0 {
                 parts.push(Part::Quadric {
-                    spec: Box::new(side(r, r, h).map_err(|e| format!("{path}: {e}"))?),
+                    spec: Box::new(side(r, r, h).map_err(|e| e.context(path))?),
                     frame,
                 });
             }
             for centre in [h / 2.0, -h / 2.0] {
-                parts.push(sphere(r, centre, Some(frame)).map_err(|e| format!("{path}: {e}"))?);
+                parts.push(sphere(r, centre, Some(frame)).map_err(|e| e.context(path))?);
             }
             Ok(Ok(parts))
         }
@@ -174,21 +182,21 @@ pub fn parts(prim: &Prim, type_name: &str, at: At) -> Result<Result<Vec<Part>, S
                 ],
                 Some([-half, half]),
             )
-            .map_err(|e| format!("{path}: {e}"))?;
+            .map_err(|e| e.context(path))?;
             Ok(Ok(vec![Part::Quadric {
                 spec: Box::new(spec),
                 frame: DMat4::IDENTITY,
             }]))
         }
-        _ => Ok(Err(format!(
+        _ => Ok(Err(Error::msg(format!(
             "{path}: {type_name} is not an intrinsic shape"
-        ))),
+        )))),
     }
 }
 
 /// A sphere of radius `r` centred at `w = centre` on the canonical axis; with a frame it is
 /// the hemisphere on the far side of `w = centre` (`+` for a centre of positive sign, `−` else).
-fn sphere(r: f64, centre: f64, frame: Option<DMat4>) -> Result<Part, String> {
+fn sphere(r: f64, centre: f64, frame: Option<DMat4>) -> Result<Part> {
     let coefficients = [
         1.0,
         1.0,
@@ -218,7 +226,7 @@ fn sphere(r: f64, centre: f64, frame: Option<DMat4>) -> Result<Part, String> {
 
 /// The side of a cone frustum along `w`: radius `bottom` at `w = −h/2`, `top` at `+h/2`:
 /// `u² + v² − (a + b w)² = 0` with `a = (top + bottom)/2`, `b = (top − bottom)/h`.
-fn side(bottom: f64, top: f64, h: f64) -> Result<QuadricSpec, String> {
+fn side(bottom: f64, top: f64, h: f64) -> Result<QuadricSpec> {
     let a = (top + bottom) / 2.0;
     let b = (top - bottom) / h;
     let r = top.max(bottom);
@@ -240,7 +248,7 @@ fn side(bottom: f64, top: f64, h: f64) -> Result<QuadricSpec, String> {
 }
 
 /// Side and caps of a cylinder, cone or frustum, placed by `frame`.
-fn frustum(bottom: f64, top: f64, h: f64, frame: DMat4) -> Result<Vec<Part>, String> {
+fn frustum(bottom: f64, top: f64, h: f64, frame: DMat4) -> Result<Vec<Part>> {
     let mut parts = vec![Part::Quadric {
         spec: Box::new(side(bottom, top, h)?),
         frame,

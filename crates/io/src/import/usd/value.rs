@@ -9,6 +9,7 @@
 //! does for `UsdTimeCode::Default()`: an attribute with time samples but no default value
 //! reads as unauthored.
 
+use crate::error::{Error, Result};
 use glam::{DMat4, DQuat, DVec3};
 use openusd::sdf::Value;
 use openusd::usd::{Prim, TimeCode};
@@ -33,7 +34,7 @@ impl At {
     /// The lower of `prim.name`'s time samples bracketing the time (usd-core's
     /// `_GetAttrForTransforms`, where velocities move a PointInstancer's positions on from);
     /// the default time code when the attribute has no samples or no time is chosen.
-    pub fn held_sample(self, prim: &Prim, name: &str) -> Result<At, String> {
+    pub fn held_sample(self, prim: &Prim, name: &str) -> Result<At> {
         let Some(time) = self.time else {
             return Ok(self);
         };
@@ -41,10 +42,10 @@ impl At {
             .attribute(name)
             .bracketing_time_samples(TimeCode::new(time))
             .map_err(|e| {
-                format!(
+                Error::msg(format!(
                     "{}.{name}: cannot read its time samples: {e:#}",
                     prim.path()
-                )
+                ))
             })?
             .map(|(lower, _)| lower);
         Ok(At { time: lower })
@@ -52,7 +53,7 @@ impl At {
 }
 
 /// Result of a value read: the message names the attribute.
-pub type ValueResult<T> = std::result::Result<Option<T>, String>;
+pub type ValueResult<T> = Result<Option<T>>;
 
 /// The raw composed value of `prim.name` at `at`, `None` when unauthored or blocked.
 pub fn raw(prim: &Prim, name: &str, at: At) -> ValueResult<Value> {
@@ -61,7 +62,7 @@ pub fn raw(prim: &Prim, name: &str, at: At) -> ValueResult<Value> {
         None => attribute.get::<Value>(),
         Some(time) => attribute.get_at::<Value>(TimeCode::new(time)),
     }
-    .map_err(|e| format!("{}.{name}: cannot be read: {e}", prim.path()))?;
+    .map_err(|e| Error::msg(format!("{}.{name}: cannot be read: {e}", prim.path())))?;
     Ok(value.filter(|v| !matches!(v, Value::ValueBlock | Value::None)))
 }
 
@@ -70,12 +71,12 @@ pub fn has_time_samples(prim: &Prim, name: &str) -> bool {
     prim.attribute(name).num_time_samples().is_ok_and(|n| n > 0)
 }
 
-fn wrong_type(prim: &Prim, name: &str, expected: &str, value: &Value) -> String {
-    format!(
+fn wrong_type(prim: &Prim, name: &str, expected: &str, value: &Value) -> Error {
+    Error::msg(format!(
         "{}.{name}: expected {expected}, found {}",
         prim.path(),
         value_kind(value)
-    )
+    ))
 }
 
 /// A short description of a value's type for error messages.
@@ -213,7 +214,7 @@ pub fn tokens(prim: &Prim, name: &str, at: At) -> ValueResult<Vec<String>> {
 
 /// True when `prim.name` has an authored value: a default or time samples (usd-core's
 /// `HasAuthoredValue`).
-pub fn is_authored(prim: &Prim, name: &str) -> Result<bool, String> {
+pub fn is_authored(prim: &Prim, name: &str) -> Result<bool> {
     Ok(raw(prim, name, At::new(None))?.is_some() || has_time_samples(prim, name))
 }
 
@@ -325,18 +326,23 @@ pub fn vec2(prim: &Prim, name: &str, at: At) -> ValueResult<[f64; 2]> {
 /// as a plain integer array: that replaces the weaker opinions, as an explicit list op does.
 /// `Ok(None)` when no layer authors it.
 pub fn int64_list_metadata(prim: &Prim, name: &str) -> ValueResult<Vec<i64>> {
-    let stack = prim
-        .prim_stack()
-        .map_err(|e| format!("{}: cannot read its prim stack: {e:#}", prim.path()))?;
+    let stack = prim.prim_stack().map_err(|e| {
+        Error::msg(format!(
+            "{}: cannot read its prim stack: {e:#}",
+            prim.path()
+        ))
+    })?;
     let mut composed: Option<Vec<i64>> = None;
     for (layer, path) in stack.iter().rev() {
         let Some(layer) = prim.stage().layer(layer) else {
             continue;
         };
-        let value = layer
-            .data()
-            .try_field(path, name)
-            .map_err(|e| format!("{}: metadata {name} cannot be read: {e}", prim.path()))?;
+        let value = layer.data().try_field(path, name).map_err(|e| {
+            Error::msg(format!(
+                "{}: metadata {name} cannot be read: {e}",
+                prim.path()
+            ))
+        })?;
         let Some(value) = value else {
             continue;
         };
@@ -346,11 +352,11 @@ pub fn int64_list_metadata(prim: &Prim, name: &str) -> ValueResult<Vec<i64>> {
             Value::IntVec(v) => v.iter().map(|&x| x as i64).collect(),
             Value::Int64Vec(v) => v.clone(),
             other => {
-                return Err(format!(
+                return Err(Error::msg(format!(
                     "{}: metadata {name}: expected an int64 list op, found {}",
                     prim.path(),
                     value_kind(other)
-                ))
+                )))
             }
         });
     }

@@ -7,6 +7,7 @@
 //! `GetVariantSets().SetSelection(SET, NAME)` on a session layer. The walk goes down from
 //! the root, so variant sets that a selection brings in are met and chosen in turn.
 
+use crate::error::{Error, Result};
 use crate::scene::VariantSetInfo;
 use openusd::sdf::{self, AbstractData, Value};
 use openusd::usd::{Prim, Stage};
@@ -22,13 +23,13 @@ pub struct Choice {
 }
 
 /// Parses `SET=NAME` (a usage error otherwise).
-pub fn parse_choice(text: &str) -> Result<Choice, String> {
+pub fn parse_choice(text: &str) -> Result<Choice> {
     match text.split_once('=') {
         Some((set, name)) if !set.trim().is_empty() && !name.trim().is_empty() => Ok(Choice {
             set: set.trim().to_string(),
             name: name.trim().to_string(),
         }),
-        _ => Err(format!("--variant '{text}': expected SET=NAME")),
+        _ => Err(Error::msg(format!("--variant '{text}': expected SET=NAME"))),
     }
 }
 
@@ -61,7 +62,7 @@ impl Variants {
 
     /// Lists `prim`'s variant sets and applies the choices that name one of them. Instance
     /// proxies are skipped (usd-core cannot author on them either).
-    pub fn visit(&mut self, stage: &Stage, prim: &Prim) -> Result<(), String> {
+    pub fn visit(&mut self, stage: &Stage, prim: &Prim) -> Result<()> {
         let path = prim.path().to_string();
         if self.listed.contains_key(&path) {
             return Ok(());
@@ -69,7 +70,9 @@ impl Variants {
         let selections = prim
             .variant_sets()
             .get_all_variant_selections()
-            .map_err(|e| format!("{path}: cannot read its variant selections: {e:#}"))?;
+            .map_err(|e| {
+                Error::msg(format!("{path}: cannot read its variant selections: {e:#}"))
+            })?;
         if selections.is_empty() || prim.is_instance_proxy().unwrap_or(false) {
             return Ok(());
         }
@@ -85,11 +88,11 @@ impl Variants {
                 .map(|c| c.name.clone());
             if let Some(name) = &wanted {
                 if !names.contains(name) {
-                    return Err(format!(
+                    return Err(Error::msg(format!(
                         "--variant {set}={name}: {path} has no variant '{name}' in its set \
                          '{set}' (choices: {})",
                         names.join(", ")
-                    ));
+                    )));
                 }
                 if *name != authored {
                     self.authored
@@ -117,9 +120,9 @@ impl Variants {
             self.sets.retain(|s| s.prim != path);
             self.depth += 1;
             if self.depth > MAX_NESTED_SELECTIONS {
-                return Err(format!(
+                return Err(Error::msg(format!(
                     "{path}: variant selections nest deeper than {MAX_NESTED_SELECTIONS}"
-                ));
+                )));
             }
             let relisted = self.visit(stage, prim);
             self.depth -= 1;
@@ -129,7 +132,7 @@ impl Variants {
     }
 
     /// The sets met, or an error naming a chosen set that no drawn prim has.
-    pub fn finish(self) -> Result<Vec<VariantSetInfo>, String> {
+    pub fn finish(self) -> Result<Vec<VariantSetInfo>> {
         for choice in &self.choices {
             if !self.sets.iter().any(|s| s.set == choice.set) {
                 let mut known: Vec<&str> = self.sets.iter().map(|s| s.set.as_str()).collect();
@@ -140,10 +143,10 @@ impl Variants {
                 } else {
                     format!("variant sets: {}", known.join(", "))
                 };
-                return Err(format!(
+                return Err(Error::msg(format!(
                     "--variant {}={}: no drawn prim has a variant set '{}' ({known})",
                     choice.set, choice.name, choice.set
-                ));
+                )));
             }
         }
         Ok(self.sets)
@@ -151,10 +154,13 @@ impl Variants {
 }
 
 /// Each variant set's variants over the prim's stack, sorted (as usd-core lists them).
-fn variant_choices(stage: &Stage, prim: &Prim) -> Result<HashMap<String, Vec<String>>, String> {
-    let stack = prim
-        .prim_stack()
-        .map_err(|e| format!("{}: cannot read its prim stack: {e:#}", prim.path()))?;
+fn variant_choices(stage: &Stage, prim: &Prim) -> Result<HashMap<String, Vec<String>>> {
+    let stack = prim.prim_stack().map_err(|e| {
+        Error::msg(format!(
+            "{}: cannot read its prim stack: {e:#}",
+            prim.path()
+        ))
+    })?;
     let mut choices: HashMap<String, Vec<String>> = HashMap::new();
     for (layer, path) in &stack {
         let Some(layer) = stage.layer(layer) else {
@@ -189,9 +195,10 @@ fn tokens(data: &dyn AbstractData, path: &sdf::Path, field: &str) -> Vec<String>
 
 /// Authors `chosen` into the prim's `variantSelection` on the root layer, keeping the
 /// selections that layer already authors for other sets.
-fn select(stage: &Stage, prim: &Prim, chosen: &[(String, String)]) -> Result<(), String> {
-    let fail =
-        |e: &dyn std::fmt::Display| format!("{}: cannot select its variants: {e}", prim.path());
+fn select(stage: &Stage, prim: &Prim, chosen: &[(String, String)]) -> Result<()> {
+    let fail = |e: &dyn std::fmt::Display| {
+        Error::msg(format!("{}: cannot select its variants: {e}", prim.path()))
+    };
     stage
         .set_edit_target(stage.edit_target_root())
         .map_err(|e| fail(&e))?;

@@ -10,6 +10,7 @@
 //! `xformOpOrder` lists ops outermost first: for `[A, B, C]` a point `p` maps to `A·B·C·p`.
 
 use super::value::{self, value_matrix4, value_quat, value_scalar, value_vec3, At};
+use crate::error::{Error, Result};
 use glam::{DMat4, DQuat, DVec3};
 use openusd::sdf::Value;
 use openusd::usd::Prim;
@@ -29,7 +30,7 @@ pub struct Local {
 /// Composes the prim's `xformOpOrder`. Problems that usd-core reports as warnings (an op
 /// attribute that is not authored, an unknown op name) are pushed to `warnings` and the op
 /// is skipped; a value of the wrong type or a singular inverted op is an error.
-pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Result<Local, String> {
+pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Result<Local> {
     let order = match value::raw(prim, "xformOpOrder", at)? {
         None => {
             return Ok(Local {
@@ -45,11 +46,11 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Resul
             .map(|t| t.as_str().to_string())
             .collect::<Vec<String>>(),
         Some(other) => {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "{}.xformOpOrder: expected token[], found {}",
                 prim.path(),
                 value::value_kind(&other)
-            ))
+            )))
         }
     };
     let mut matrix = DMat4::IDENTITY;
@@ -60,10 +61,10 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Resul
                 resets = true;
                 continue;
             }
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "{}.xformOpOrder: {RESET} is only valid as the first entry (found at {i})",
                 prim.path()
-            ));
+            )));
         }
         let (inverted, name) = match entry.strip_prefix(INVERT) {
             Some(rest) => (true, rest),
@@ -74,10 +75,10 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Resul
         };
         let op = if inverted {
             invert(op).ok_or_else(|| {
-                format!(
+                Error::msg(format!(
                     "{}: {entry} cannot be inverted (its matrix is singular)",
                     prim.path()
-                )
+                ))
             })?
         } else {
             op
@@ -85,10 +86,10 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Resul
         matrix *= op;
     }
     if !matrix.is_finite() {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "{}: the local transform is not finite",
             prim.path()
-        ));
+        )));
     }
     Ok(Local { matrix, resets })
 }
@@ -114,12 +115,7 @@ fn is_property_name(name: &str) -> bool {
 }
 
 /// The matrix of one op, `None` (with a warning) when it cannot be evaluated.
-fn op_matrix(
-    prim: &Prim,
-    name: &str,
-    at: At,
-    warnings: &mut Vec<String>,
-) -> Result<Option<DMat4>, String> {
+fn op_matrix(prim: &Prim, name: &str, at: At, warnings: &mut Vec<String>) -> Result<Option<DMat4>> {
     let Some(rest) = name.strip_prefix("xformOp:") else {
         warnings.push(format!(
             "{}: xformOpOrder entry '{name}' is not an xformOp: ignored",
@@ -128,11 +124,11 @@ fn op_matrix(
         return Ok(None);
     };
     if !is_property_name(name) {
-        return Err(format!(
+        return Err(Error::msg(format!(
             "{}.xformOpOrder: entry '{}' is not an attribute name",
             prim.path(),
             name.escape_debug()
-        ));
+        )));
     }
     let kind = rest.split(':').next().unwrap_or(rest);
     let Some(raw) = value::raw(prim, name, at)? else {
@@ -145,11 +141,11 @@ fn op_matrix(
         return Ok(None);
     };
     let bad = |expected: &str| {
-        format!(
+        Error::msg(format!(
             "{}.{name}: expected {expected}, found {}",
             prim.path(),
             value::value_kind(&raw)
-        )
+        ))
     };
     let scalar = || value_scalar(&raw).ok_or_else(|| bad("a number"));
     let vector = || value_vec3(&raw).ok_or_else(|| bad("a 3-vector"));
@@ -185,10 +181,10 @@ fn op_matrix(
         "orient" => {
             let q = value_quat(&raw).ok_or_else(|| bad("a quaternion"))?;
             if q.length_squared() == 0.0 || !q.is_finite() {
-                return Err(format!(
+                return Err(Error::msg(format!(
                     "{}.{name}: zero or non-finite quaternion",
                     prim.path()
-                ));
+                )));
             }
             DMat4::from_quat(orient_rotation(q))
         }

@@ -17,6 +17,7 @@
 
 use super::super::err;
 use super::super::value::{self, At};
+use crate::error::{Error, Result};
 use glam::DVec3;
 use openusd::sdf::Value;
 use openusd::usd::Prim;
@@ -46,7 +47,7 @@ pub(super) struct BlendShapes {
 impl BlendShapes {
     /// The blend shapes of mesh `prim`: `Ok(None)` when it has none, `Ok(Some(Err(why)))` when
     /// usd-core would not apply them (`why` says so).
-    pub fn read(prim: &Prim, at: At) -> Result<Option<Result<BlendShapes, String>>, String> {
+    pub fn read(prim: &Prim, at: At) -> Result<Option<Result<BlendShapes>>> {
         let Some(names) = value::tokens(prim, "skel:blendShapes", at)? else {
             return Ok(None);
         };
@@ -55,11 +56,11 @@ impl BlendShapes {
             .targets()
             .map_err(|e| err(prim, e))?;
         if names.len() != targets.len() {
-            return Ok(Some(Err(format!(
+            return Ok(Some(Err(Error::msg(format!(
                 "{} skel:blendShapes for {} skel:blendShapeTargets",
                 names.len(),
                 targets.len()
-            ))));
+            )))));
         }
         let mut shapes = Vec::with_capacity(targets.len());
         for target in targets {
@@ -74,11 +75,7 @@ impl BlendShapes {
 
     /// Moves `points` by the shapes at the animation's weights (`names` and `weights` in the
     /// animation's order); `Err(why)` when an offset names no point.
-    pub fn apply(
-        &self,
-        (names, weights): (&[String], &[f32]),
-        points: &mut [DVec3],
-    ) -> Result<(), String> {
+    pub fn apply(&self, (names, weights): (&[String], &[f32]), points: &mut [DVec3]) -> Result<()> {
         for (name, shape) in self.names.iter().zip(&self.shapes) {
             let Some(shape) = shape else { continue };
             let w = names
@@ -101,13 +98,13 @@ impl BlendShapes {
 
 impl Shape {
     /// The BlendShape at `prim` (`Ok(Ok(None))`: inactive, moves nothing).
-    fn read(prim: &Prim, at: At) -> Result<Result<Option<Shape>, String>, String> {
+    fn read(prim: &Prim, at: At) -> Result<Result<Option<Shape>>> {
         let path = prim.path();
         let type_name = prim.type_name().map_err(|e| err(prim, e))?;
         if type_name.as_deref() != Some("BlendShape") {
-            return Ok(Err(format!(
+            return Ok(Err(Error::msg(format!(
                 "skel:blendShapeTargets names {path}, which is not a BlendShape"
-            )));
+            ))));
         }
         if !prim.is_active().map_err(|e| err(prim, e))? {
             return Ok(Ok(None));
@@ -129,14 +126,18 @@ impl Shape {
             None => None,
             Some(ints) => match ints.iter().map(|&i| usize::try_from(i)).collect() {
                 Ok(indices) => Some(indices),
-                Err(_) => return Ok(Err(format!("{path}.pointIndices has a negative index"))),
+                Err(_) => {
+                    return Ok(Err(Error::msg(format!(
+                        "{path}.pointIndices has a negative index"
+                    ))))
+                }
             },
         };
         Ok(Ok(Some(Shape { subs, indices })))
     }
 
     /// Adds `offsets × weight` to the points the shape moves.
-    fn displace(&self, offsets: &[DVec3], weight: f64, points: &mut [DVec3]) -> Result<(), String> {
+    fn displace(&self, offsets: &[DVec3], weight: f64, points: &mut [DVec3]) -> Result<()> {
         let n = points.len();
         match &self.indices {
             None if offsets.len() == n => {
@@ -145,25 +146,27 @@ impl Shape {
                 }
             }
             None => {
-                return Err(format!(
+                return Err(Error::msg(format!(
                     "a blend shape has {} offsets for {n} points",
                     offsets.len()
-                ))
+                )))
             }
             Some(indices) if indices.len() == offsets.len() => {
                 for (&i, o) in indices.iter().zip(offsets) {
                     let point = points.get_mut(i).ok_or_else(|| {
-                        format!("a blend shape's pointIndices names point {i} of {n}")
+                        Error::msg(format!(
+                            "a blend shape's pointIndices names point {i} of {n}"
+                        ))
                     })?;
                     *point += *o * weight;
                 }
             }
             Some(indices) => {
-                return Err(format!(
+                return Err(Error::msg(format!(
                     "a blend shape has {} offsets for {} pointIndices",
                     offsets.len(),
                     indices.len()
-                ))
+                )))
             }
         }
         Ok(())
@@ -171,7 +174,7 @@ impl Shape {
 }
 
 /// The `inbetweens:NAME` sub-shapes of `prim` with a usable `weight`.
-fn inbetweens(prim: &Prim, at: At) -> Result<Vec<SubShape>, String> {
+fn inbetweens(prim: &Prim, at: At) -> Result<Vec<SubShape>> {
     let mut subs = Vec::new();
     for name in prim.property_names().map_err(|e| err(prim, e))? {
         let name = name.as_str();
@@ -181,7 +184,12 @@ fn inbetweens(prim: &Prim, at: At) -> Result<Vec<SubShape>, String> {
         let weight = prim
             .attribute(name)
             .get_metadata::<Value>("weight")
-            .map_err(|e| format!("{}.{name}: cannot read its weight: {e:#}", prim.path()))?;
+            .map_err(|e| {
+                Error::msg(format!(
+                    "{}.{name}: cannot read its weight: {e:#}",
+                    prim.path()
+                ))
+            })?;
         // The weight is a float (usd-core's `GetWeight(float*)`).
         let Some(weight) = weight.as_ref().and_then(value::value_scalar) else {
             continue;

@@ -3,6 +3,7 @@
 //! `UsdSkelSkinTransformLBS` apply them, in f64.
 
 use super::super::value::{self, At};
+use crate::error::{Error, Result};
 use glam::{DMat4, DVec3, DVec4};
 use openusd::usd::Prim;
 
@@ -25,33 +26,29 @@ pub struct Influences {
 impl Influences {
     /// Reads the influences from the prims that author them (they are inherited down
     /// namespace); `Ok(Err(why))` when usd-core would refuse them (a warning).
-    pub fn read(
-        indices_prim: &Prim,
-        weights_prim: &Prim,
-        at: At,
-    ) -> Result<Result<Influences, String>, String> {
+    pub fn read(indices_prim: &Prim, weights_prim: &Prim, at: At) -> Result<Result<Influences>> {
         let (indices, index_size, index_interp) = primvar(indices_prim, INDICES, at)?;
         let (weights, weight_size, weight_interp) = primvar(weights_prim, WEIGHTS, at)?;
         let indices: Vec<i64> = indices.iter().map(|&x| x as i64).collect();
         if index_size != weight_size {
-            return Ok(Err(format!(
+            return Ok(Err(Error::msg(format!(
                 "jointIndices elementSize {index_size} differs from jointWeights elementSize {weight_size}"
-            )));
+            ))));
         }
         if index_size < 1 {
-            return Ok(Err(format!(
+            return Ok(Err(Error::msg(format!(
                 "joint influences have elementSize {index_size}"
-            )));
+            ))));
         }
         if index_interp != weight_interp {
-            return Ok(Err(format!(
+            return Ok(Err(Error::msg(format!(
                 "jointIndices interpolation {index_interp} differs from jointWeights interpolation {weight_interp}"
-            )));
+            ))));
         }
         if index_interp != "constant" && index_interp != "vertex" {
-            return Ok(Err(format!(
+            return Ok(Err(Error::msg(format!(
                 "joint influences have interpolation {index_interp} (constant or vertex)"
-            )));
+            ))));
         }
         let per_point = index_size as usize;
         let rigid = index_interp == "constant";
@@ -59,11 +56,11 @@ impl Influences {
             || !indices.len().is_multiple_of(per_point)
             || (rigid && indices.len() != per_point)
         {
-            return Ok(Err(format!(
+            return Ok(Err(Error::msg(format!(
                 "{} jointIndices and {} jointWeights do not fit elementSize {per_point} ({index_interp})",
                 indices.len(),
                 weights.len()
-            )));
+            ))));
         }
         Ok(Ok(Influences {
             indices,
@@ -82,14 +79,14 @@ impl Influences {
         points: &[DVec3],
         joints: &[DMat4],
         geom_bind: DMat4,
-    ) -> Result<Vec<DVec3>, String> {
+    ) -> Result<Vec<DVec3>> {
         if self.indices.len() != points.len() * self.per_point {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "{} influences for {} points of {} each",
                 self.indices.len(),
                 points.len(),
                 self.per_point
-            ));
+            )));
         }
         let mut skinned = Vec::with_capacity(points.len());
         for (i, p) in points.iter().enumerate() {
@@ -112,7 +109,7 @@ impl Influences {
     /// `UsdSkelSkinTransformLBS`): `X_j · G` for one influence of weight 1, else the weighted
     /// sum of `X_j · G` with its last row reset to (0, 0, 0, 1), which is the transform usd-core
     /// rebuilds from the skinned origin and axes.
-    pub fn skin_transform(&self, joints: &[DMat4], geom_bind: DMat4) -> Result<DMat4, String> {
+    pub fn skin_transform(&self, joints: &[DMat4], geom_bind: DMat4) -> Result<DMat4> {
         if self.per_point == 1 && (self.weights[0] - 1.0).abs() <= 1e-6 {
             return Ok(*self.joint(0, joints)? * geom_bind);
         }
@@ -129,23 +126,23 @@ impl Influences {
         ))
     }
 
-    fn joint<'a>(&self, k: usize, joints: &'a [DMat4]) -> Result<&'a DMat4, String> {
+    fn joint<'a>(&self, k: usize, joints: &'a [DMat4]) -> Result<&'a DMat4> {
         let index = self.indices[k];
         usize::try_from(index)
             .ok()
             .and_then(|i| joints.get(i))
             .ok_or_else(|| {
-                format!(
+                Error::msg(format!(
                     "joint index {index} is out of range for {} joints",
                     joints.len()
-                )
+                ))
             })
     }
 }
 
 /// A primvar's flattened values (through `:indices` when it is indexed), `elementSize`
 /// (fallback 1) and `interpolation` (fallback `constant`).
-fn primvar(prim: &Prim, name: &str, at: At) -> Result<(Vec<f64>, i64, String), String> {
+fn primvar(prim: &Prim, name: &str, at: At) -> Result<(Vec<f64>, i64, String)> {
     let values = value::numbers(prim, name, at)?.unwrap_or_default();
     let values = match value::ints(prim, &format!("{name}:indices"), at)? {
         None => values,
@@ -154,7 +151,10 @@ fn primvar(prim: &Prim, name: &str, at: At) -> Result<(Vec<f64>, i64, String), S
             for i in indices {
                 let v = usize::try_from(i).ok().and_then(|i| values.get(i));
                 flat.push(*v.ok_or_else(|| {
-                    format!("{}.{name}:indices: {i} is out of range", prim.path())
+                    Error::msg(format!(
+                        "{}.{name}:indices: {i} is out of range",
+                        prim.path()
+                    ))
                 })?);
             }
             flat
@@ -163,12 +163,12 @@ fn primvar(prim: &Prim, name: &str, at: At) -> Result<(Vec<f64>, i64, String), S
     let attribute = prim.attribute(name);
     let element_size = attribute
         .get_metadata::<openusd::sdf::Value>("elementSize")
-        .map_err(|e| format!("{}.{name}: elementSize: {e:#}", prim.path()))?
+        .map_err(|e| Error::msg(format!("{}.{name}: elementSize: {e:#}", prim.path())))?
         .and_then(|v| value::value_scalar(&v))
         .map_or(1, |x| x as i64);
     let interpolation = attribute
         .get_metadata::<openusd::sdf::Value>("interpolation")
-        .map_err(|e| format!("{}.{name}: interpolation: {e:#}", prim.path()))?
+        .map_err(|e| Error::msg(format!("{}.{name}: interpolation: {e:#}", prim.path())))?
         .and_then(|v| match v {
             openusd::sdf::Value::Token(t) => Some(t.as_str().to_string()),
             openusd::sdf::Value::String(s) => Some(s),

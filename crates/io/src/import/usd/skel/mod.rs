@@ -26,6 +26,7 @@ mod skeleton;
 
 use super::value;
 use super::{err, Loader};
+use crate::error::{Error, Result};
 use crate::scene::SkeletonInfo;
 use blend_shapes::BlendShapes;
 use glam::{DMat4, DVec3};
@@ -109,7 +110,7 @@ impl Binding {
         parent: Option<&Rc<Binding>>,
         prim: &Prim,
         type_name: &str,
-    ) -> Result<Option<Rc<Binding>>, String> {
+    ) -> Result<Option<Rc<Binding>>> {
         let parent = match parent {
             Some(parent) => parent.clone(),
             None if type_name == "SkelRoot" => Rc::new(Binding::default()),
@@ -151,7 +152,7 @@ impl Loader {
         prim: &Prim,
         type_name: &str,
         binding: &Binding,
-    ) -> Result<Option<Pose>, String> {
+    ) -> Result<Option<Pose>> {
         let (Some(skel), Some(indices), Some(weights)) = (
             &binding.skeleton,
             &binding.joint_indices,
@@ -164,7 +165,7 @@ impl Loader {
             return Ok(None);
         };
         self.warn_unsupported_skinning(prim)?;
-        let not_skinned = |why: String| format!("{path}: {why}: not skinned");
+        let not_skinned = |why: Error| format!("{path}: {why}: not skinned");
         let influences = match Influences::read(indices, weights, self.at)? {
             Ok(influences) => influences,
             Err(why) => {
@@ -195,9 +196,9 @@ impl Loader {
                 .map(|m| Pose::Rigid(posed.world * m))
         } else if type_name != "Mesh" {
             self.warn_unapplied_blend_shapes(prim)?;
-            Err(format!(
+            Err(Error::msg(format!(
                 "{type_name} prims with vertex influences are not skinned here"
-            ))
+            )))
         } else {
             let Some(mesh) = self.mesh(prim)? else {
                 return Ok(None);
@@ -228,7 +229,7 @@ impl Loader {
     }
 
     /// Warnings for what a skinned prim asks for that is not applied.
-    fn warn_unsupported_skinning(&mut self, prim: &Prim) -> Result<(), String> {
+    fn warn_unsupported_skinning(&mut self, prim: &Prim) -> Result<()> {
         let method = value::token(prim, "primvars:skel:skinningMethod", self.at)?;
         if let Some(method) = method.filter(|m| m != "classicLinear") {
             self.warnings.push(format!(
@@ -246,7 +247,7 @@ impl Loader {
         (prim, skel): (&Prim, &Prim),
         weights: Option<&BlendWeights>,
         points: &mut [DVec3],
-    ) -> Result<(), String> {
+    ) -> Result<()> {
         let Some(shapes) = BlendShapes::read(prim, self.at)? else {
             return Ok(());
         };
@@ -273,7 +274,7 @@ impl Loader {
     }
 
     /// A warning for blend shapes on a prim skinned rigidly or not as a mesh.
-    fn warn_unapplied_blend_shapes(&mut self, prim: &Prim) -> Result<(), String> {
+    fn warn_unapplied_blend_shapes(&mut self, prim: &Prim) -> Result<()> {
         if value::is_authored(prim, "skel:blendShapes")? {
             self.warnings.push(format!(
                 "{}: blend shapes are applied to meshes with vertex influences only (drawn without them)",
@@ -285,7 +286,7 @@ impl Loader {
 
     /// The skeleton at `prim` posed at the load's time code, once per skeleton; `None` (with
     /// one warning) when it cannot be posed.
-    fn posed_skeleton(&mut self, prim: &Prim) -> Result<Option<Rc<Posed>>, String> {
+    fn posed_skeleton(&mut self, prim: &Prim) -> Result<Option<Rc<Posed>>> {
         let path = prim.path().to_string();
         if let Some(posed) = self.skels.posed.get(&path) {
             return Ok(posed.clone());
@@ -303,16 +304,16 @@ impl Loader {
         Ok(posed)
     }
 
-    fn pose_skeleton(&mut self, prim: &Prim) -> Result<Result<Posed, String>, String> {
+    fn pose_skeleton(&mut self, prim: &Prim) -> Result<Result<Posed>> {
         let type_name = prim.type_name().map_err(|e| err(prim, e))?;
         if type_name.as_deref() != Some("Skeleton") {
-            return Ok(Err(
-                "skel:skeleton targets a prim that is not a Skeleton".into()
-            ));
+            return Ok(Err(Error::msg(
+                "skel:skeleton targets a prim that is not a Skeleton",
+            )));
         }
         let skeleton = match Skeleton::read(prim, self.at)? {
             Ok(skeleton) => skeleton,
-            Err(why) => return Ok(Err(format!("skeleton {why}"))),
+            Err(why) => return Ok(Err(Error::msg(format!("skeleton {why}")))),
         };
         let source = animation_source(prim)?;
         let animation = match &source {
@@ -328,7 +329,7 @@ impl Loader {
         }
         let skinning = match skeleton.skinning_transforms(animation.as_ref(), self.at)? {
             Ok(skinning) => skinning,
-            Err(why) => return Ok(Err(format!("skeleton {why}"))),
+            Err(why) => return Ok(Err(Error::msg(format!("skeleton {why}")))),
         };
         let world = self.world_of_prim(prim)?;
         let blend_weights = match &animation {
@@ -356,7 +357,7 @@ impl Loader {
 
 /// The `skel:animationSource` bound on `skeleton` or its nearest ancestor that binds one
 /// (usd-core's `GetInheritedAnimationSource`).
-fn animation_source(skeleton: &Prim) -> Result<Option<Prim>, String> {
+fn animation_source(skeleton: &Prim) -> Result<Option<Prim>> {
     let stage = skeleton.stage();
     let mut path = Some(skeleton.path().clone());
     while let Some(p) = path.filter(|p| !p.is_abs_root()) {

@@ -6,6 +6,7 @@
 //! transform is that times the inverse of its bind transform.
 
 use super::super::value::{self, At};
+use crate::error::{Error, Result};
 use glam::{DMat4, DQuat, DVec3};
 use openusd::usd::Prim;
 
@@ -30,7 +31,7 @@ pub struct Animation {
 impl Skeleton {
     /// Reads `joints`, `bindTransforms` and `restTransforms`; `Err` is why the skeleton cannot
     /// pose anything (a warning: usd-core skins nothing with it either).
-    pub fn read(prim: &Prim, at: At) -> Result<Result<Skeleton, String>, String> {
+    pub fn read(prim: &Prim, at: At) -> Result<Result<Skeleton>> {
         let joints = value::tokens(prim, "joints", at)?.unwrap_or_default();
         let parents = match parents(&joints) {
             Ok(parents) => parents,
@@ -38,19 +39,19 @@ impl Skeleton {
         };
         let bind = value::matrices(prim, "bindTransforms", at)?.unwrap_or_default();
         if bind.len() != joints.len() {
-            return Ok(Err(format!(
+            return Ok(Err(Error::msg(format!(
                 "has {} bindTransforms for {} joints",
                 bind.len(),
                 joints.len()
-            )));
+            ))));
         }
         let mut inverse_bind = Vec::with_capacity(bind.len());
         for (m, joint) in bind.iter().zip(&joints) {
             let det = m.determinant();
             if !det.is_finite() || det == 0.0 {
-                return Ok(Err(format!(
+                return Ok(Err(Error::msg(format!(
                     "the bind transform of joint {joint} is singular"
-                )));
+                ))));
             }
             inverse_bind.push(m.inverse());
         }
@@ -70,7 +71,7 @@ impl Skeleton {
         &self,
         animation: Option<&Animation>,
         at: At,
-    ) -> Result<Result<Vec<DMat4>, String>, String> {
+    ) -> Result<Result<Vec<DMat4>>> {
         let local = match self.local_transforms(animation, at)? {
             Ok(local) => local,
             Err(why) => return Ok(Err(why)),
@@ -95,7 +96,7 @@ impl Skeleton {
         &self,
         animation: Option<&Animation>,
         at: At,
-    ) -> Result<Result<Vec<DMat4>, String>, String> {
+    ) -> Result<Result<Vec<DMat4>>> {
         let no_rest = "has no restTransforms with one matrix per joint";
         let mapping: Vec<Option<usize>> = match animation {
             Some(anim) => self
@@ -107,19 +108,19 @@ impl Skeleton {
         };
         let animated = animation.filter(|_| mapping.iter().any(Option::is_some));
         let Some(anim) = animated else {
-            return Ok(self.rest.clone().ok_or_else(|| no_rest.to_string()));
+            return Ok(self.rest.clone().ok_or_else(|| Error::msg(no_rest)));
         };
         let sparse = mapping.iter().any(Option::is_none);
         let Some(values) = anim.local_transforms(at)? else {
-            return Ok(self.rest.clone().ok_or_else(|| no_rest.to_string()));
+            return Ok(self.rest.clone().ok_or_else(|| Error::msg(no_rest)));
         };
         let mut local = match (&self.rest, sparse) {
             (Some(rest), _) => rest.clone(),
             (None, false) => vec![DMat4::IDENTITY; self.joints.len()],
             (None, true) => {
-                return Ok(Err(format!(
+                return Ok(Err(Error::msg(format!(
                     "{no_rest}, and its animation poses only some joints"
-                )))
+                ))))
             }
         };
         for (target, source) in mapping.iter().enumerate() {
@@ -140,7 +141,7 @@ pub struct BlendWeights {
 
 impl Animation {
     /// The SkelAnimation at `prim`, `None` when the prim is not one.
-    pub fn read(prim: &Prim, at: At) -> Result<Option<Animation>, String> {
+    pub fn read(prim: &Prim, at: At) -> Result<Option<Animation>> {
         let type_name = prim.type_name().map_err(|e| super::super::err(prim, e))?;
         if type_name.as_deref() != Some("SkelAnimation") {
             return Ok(None);
@@ -154,7 +155,7 @@ impl Animation {
 
     /// The animation's blend shape names and weights at `at` (`None` when it weighs none, or
     /// when the two lengths differ: usd-core's mapper then fails).
-    pub fn blend_shape_weights(&self, at: At) -> Result<Option<BlendWeights>, String> {
+    pub fn blend_shape_weights(&self, at: At) -> Result<Option<BlendWeights>> {
         let names = value::tokens(&self.prim, "blendShapes", at)?;
         let weights = value::numbers(&self.prim, "blendShapeWeights", at)?;
         let (Some(names), Some(weights)) = (names, weights) else {
@@ -171,7 +172,7 @@ impl Animation {
     /// The animation's joint-local transforms at `at` in its own joint order; `None` when
     /// `translations`, `rotations` and `scales` are not all there with one value per joint
     /// (usd-core then poses the rest transforms).
-    fn local_transforms(&self, at: At) -> Result<Option<Vec<DMat4>>, String> {
+    fn local_transforms(&self, at: At) -> Result<Option<Vec<DMat4>>> {
         let translations = value::vec3s(&self.prim, "translations", at)?;
         let rotations = value::quats(&self.prim, "rotations", at)?;
         let scales = value::vec3s(&self.prim, "scales", at)?;
@@ -190,11 +191,11 @@ impl Animation {
 
 /// Each joint's parent: the nearest of its ancestor paths that is a joint; an error when a
 /// parent comes after its child or a path repeats (usd-core's `UsdSkelTopology::Validate`).
-fn parents(joints: &[String]) -> Result<Vec<Option<usize>>, String> {
+fn parents(joints: &[String]) -> Result<Vec<Option<usize>>> {
     let mut parents = Vec::with_capacity(joints.len());
     for (i, joint) in joints.iter().enumerate() {
         if joints[..i].contains(joint) {
-            return Err(format!("joint {joint} is listed twice"));
+            return Err(Error::msg(format!("joint {joint} is listed twice")));
         }
         let mut parent = None;
         let mut path = joint.as_str();
@@ -206,10 +207,10 @@ fn parents(joints: &[String]) -> Result<Vec<Option<usize>>, String> {
             }
         }
         if let Some(p) = parent.filter(|&p| p > i) {
-            return Err(format!(
+            return Err(Error::msg(format!(
                 "joint {joint} comes before its parent {} (joints must list parents first)",
                 joints[p]
-            ));
+            )));
         }
         parents.push(parent);
     }
@@ -274,6 +275,7 @@ mod tests {
         let misordered = ["a/b", "a"].map(String::from);
         assert!(parents(&misordered)
             .unwrap_err()
+            .message
             .contains("before its parent"));
     }
 
