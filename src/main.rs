@@ -98,7 +98,7 @@ enum TimeArg {
 }
 
 /// A finite number, or text with a colon (a sequence).
-fn parse_time(text: &str) -> Result<TimeArg, String> {
+fn parse_time(text: &str) -> raycast::Result<TimeArg> {
     match text.contains(':') {
         true => Ok(TimeArg::Sequence(text.to_string())),
         false => parse_finite(text).map(TimeArg::At),
@@ -292,67 +292,76 @@ struct RenderArgs {
     pinhole: cli::camera::PinholeArgs,
 }
 
-fn parse_vec3(text: &str) -> Result<DVec3, String> {
+/// A usage error: an option value the command line refuses.
+fn usage(message: String) -> raycast::Error {
+    raycast::Error::usage(message)
+}
+
+fn parse_vec3(text: &str) -> raycast::Result<DVec3> {
     let parts: Vec<f64> = text
         .split(',')
         .map(|p| {
             p.trim()
                 .parse::<f64>()
-                .map_err(|_| format!("'{p}' is not a number"))
+                .map_err(|_| usage(format!("'{p}' is not a number")))
         })
         .collect::<Result<_, _>>()?;
     match parts[..] {
         [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok(DVec3::new(x, y, z)),
-        _ => Err(format!("expected three finite numbers x,y,z, got '{text}'")),
+        _ => Err(usage(format!(
+            "expected three finite numbers x,y,z, got '{text}'"
+        ))),
     }
 }
 
 /// An image side in pixels: 1 to 32768.
-fn parse_side(text: &str) -> Result<usize, String> {
+fn parse_side(text: &str) -> raycast::Result<usize> {
     match text.trim().parse::<usize>() {
         Ok(n) if (1..=raycast::camera::MAX_SIDE).contains(&n) => Ok(n),
-        _ => Err(format!(
+        _ => Err(usage(format!(
             "'{text}' is not an image side (1 to {} pixels)",
             raycast::camera::MAX_SIDE
-        )),
+        ))),
     }
 }
 
 /// A vertical field of view strictly between 0 and 180 degrees.
-fn parse_fov(text: &str) -> Result<f64, String> {
+fn parse_fov(text: &str) -> raycast::Result<f64> {
     match text.trim().parse::<f64>() {
         Ok(v) if v > 0.0 && v < 180.0 => Ok(v),
-        _ => Err(format!(
+        _ => Err(usage(format!(
             "'{text}' is not a field of view (between 0 and 180 degrees)"
-        )),
+        ))),
     }
 }
 
 /// Two finite numbers NEAR,FAR with NEAR < FAR.
-fn parse_range(text: &str) -> Result<[f64; 2], String> {
+fn parse_range(text: &str) -> raycast::Result<[f64; 2]> {
     let values: Vec<f64> = text
         .split(',')
         .filter_map(|v| v.trim().parse().ok())
         .collect();
     match values[..] {
         [near, far] if near.is_finite() && far.is_finite() && near < far => Ok([near, far]),
-        _ => Err(format!("expected NEAR,FAR with NEAR < FAR, got '{text}'")),
+        _ => Err(usage(format!(
+            "expected NEAR,FAR with NEAR < FAR, got '{text}'"
+        ))),
     }
 }
 
 /// A finite number.
-fn parse_finite(text: &str) -> Result<f64, String> {
+fn parse_finite(text: &str) -> raycast::Result<f64> {
     match text.trim().parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
-        _ => Err(format!("'{text}' is not a finite number")),
+        _ => Err(usage(format!("'{text}' is not a finite number"))),
     }
 }
 
 /// A positive finite number.
-fn parse_positive(text: &str) -> Result<f64, String> {
+fn parse_positive(text: &str) -> raycast::Result<f64> {
     match text.trim().parse::<f64>() {
         Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
-        _ => Err(format!("'{text}' is not a positive number")),
+        _ => Err(usage(format!("'{text}' is not a positive number"))),
     }
 }
 

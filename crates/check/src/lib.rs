@@ -371,17 +371,18 @@ fn parent_of(path: &Path) -> PathBuf {
 /// The assets named by `paths`: files as given (whatever their extension), folders searched
 /// recursively (symbolic links not followed) for the extensions `check` handles, in
 /// [`report_order`].
-/// A path that does not exist is an error (exit code 2).
-pub fn discover(paths: &[PathBuf]) -> Result<Vec<Asset>, String> {
+/// A path that does not exist is a usage error (exit code 2).
+pub fn discover(paths: &[PathBuf]) -> error::Result<Vec<Asset>> {
     let mut found = Vec::new();
+    let unreadable =
+        |path: &Path, e: std::io::Error| Error::in_file(path, e.to_string()).as_usage();
     for path in paths {
-        let meta = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let meta = std::fs::metadata(path).map_err(|e| unreadable(path, e))?;
         if meta.is_dir() {
             let mut stack = vec![path.clone()];
             let mut in_dir = Vec::new();
             while let Some(dir) = stack.pop() {
-                let entries =
-                    std::fs::read_dir(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+                let entries = std::fs::read_dir(&dir).map_err(|e| unreadable(&dir, e))?;
                 for entry in entries.flatten() {
                     let Ok(kind) = entry.file_type() else {
                         continue;
@@ -395,11 +396,12 @@ pub fn discover(paths: &[PathBuf]) -> Result<Vec<Asset>, String> {
                 }
             }
             if in_dir.is_empty() {
-                return Err(format!(
-                    "{}: no assets in this folder (searched for .gltf, .glb, .obj, .ply, .stl, \
+                return Err(Error::in_file(
+                    path,
+                    "no assets in this folder (searched for .gltf, .glb, .obj, .ply, .stl, \
                      .usd, .usda, .usdc and .usdz files)",
-                    path.display()
-                ));
+                )
+                .as_usage());
             }
             found.extend(in_dir.into_iter().map(|p| Asset::found_in(p, path)));
         } else {
@@ -427,14 +429,14 @@ pub fn check_all(
     options: &CheckOptions,
     jobs: usize,
     progress: &(dyn Fn() + Sync),
-) -> Result<Vec<AssetReport>, String> {
+) -> error::Result<Vec<AssetReport>> {
     // Readers of hostile files may recurse deeply: give each worker a large stack (only the
     // pages used are committed).
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
         .stack_size(CHECK_STACK_BYTES)
         .build()
-        .map_err(|e| format!("cannot start {jobs} threads: {e}"))?;
+        .map_err(|e| Error::usage(format!("cannot start {jobs} threads: {e}")))?;
     Ok(pool.install(|| {
         assets
             .par_iter()
@@ -609,11 +611,11 @@ fn importer_warning(format: &str, warning: &str, findings: &mut Findings) {
 }
 
 /// Parses `MIN..MAX` (either side may be empty for no bound).
-pub fn parse_range(text: &str) -> Result<(f64, f64), String> {
+pub fn parse_range(text: &str) -> error::Result<(f64, f64)> {
     let (a, b) = text
         .split_once("..")
-        .ok_or_else(|| format!("'{text}': expected MIN..MAX"))?;
-    let side = |s: &str, default: f64| -> Result<f64, String> {
+        .ok_or_else(|| Error::usage(format!("'{text}': expected MIN..MAX")))?;
+    let side = |s: &str, default: f64| -> error::Result<f64> {
         let s = s.trim();
         if s.is_empty() {
             Ok(default)
@@ -621,12 +623,12 @@ pub fn parse_range(text: &str) -> Result<(f64, f64), String> {
             s.parse::<f64>()
                 .ok()
                 .filter(|v| !v.is_nan())
-                .ok_or_else(|| format!("'{s}' is not a number"))
+                .ok_or_else(|| Error::usage(format!("'{s}' is not a number")))
         }
     };
     let (min, max) = (side(a, 0.0)?, side(b, f64::INFINITY)?);
     if min > max {
-        return Err(format!("'{text}': MIN is larger than MAX"));
+        return Err(Error::usage(format!("'{text}': MIN is larger than MAX")));
     }
     Ok((min, max))
 }
@@ -639,6 +641,10 @@ mod tests {
     fn ranges() {
         assert_eq!(parse_range("0.5..2"), Ok((0.5, 2.0)));
         assert_eq!(parse_range("1..").map(|r| r.0), Ok(1.0));
+        assert_eq!(
+            parse_range("2..1").map_err(|e| e.to_string()),
+            Err("'2..1': MIN is larger than MAX".to_string())
+        );
         assert!(parse_range("2..1").is_err());
     }
 

@@ -122,7 +122,7 @@ fn merged(options: &RunOptions) -> Result<Outcome> {
 /// Finds, selects and checks the assets; with `--shard`, also the shard's header.
 fn checked(options: &RunOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<Outcome> {
     let started = Instant::now();
-    let mut assets = discover(&options.paths).map_err(Error::usage)?;
+    let mut assets = discover(&options.paths)?;
     if let Some(root) = &options.root {
         for asset in &mut assets {
             asset.root = root.clone();
@@ -144,7 +144,7 @@ fn checked(options: &RunOptions, progress: &(dyn Fn(usize, usize) + Sync)) -> Re
         progress(done.fetch_add(1, Ordering::Relaxed) + 1, assets.len())
     });
     std::panic::set_hook(hook);
-    let mut reports = reports.map_err(Error::usage)?;
+    let mut reports = reports?;
     if let Some(max) = options.max_findings {
         for report in &mut reports {
             report.limit_findings(max);

@@ -119,11 +119,12 @@ impl fmt::Display for Aov {
 }
 
 impl FromStr for Aov {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
         Aov::ALL.into_iter().find(|a| a.name() == s).ok_or_else(|| {
             let names: Vec<&str> = Aov::ALL.iter().map(|a| a.name()).collect();
-            format!("unknown AOV '{s}' (choose from {})", names.join(", "))
+            let message = format!("unknown AOV '{s}' (choose from {})", names.join(", "));
+            crate::Error::usage(message)
         })
     }
 }
