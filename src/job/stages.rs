@@ -66,7 +66,7 @@ pub(super) fn load(job: &RenderJob, source: Option<&import::Source>) -> Result<L
         None => import::load(&job.scene, &job.load)?,
     };
     let seconds = started.elapsed().as_secs_f64();
-    let mut warnings = scene.warnings.clone();
+    let mut warnings: Vec<String> = scene.warnings.iter().map(ToString::to_string).collect();
     warnings.append(&mut ray_warnings);
     warnings.extend(render::attribute_warnings(&scene, &job.aovs));
     Ok(Loaded {

@@ -82,9 +82,9 @@ fn triangle_list_strip_and_fan_and_skipped_points_lines() {
     assert_eq!(scene.objects.len(), 3);
     assert_eq!(scene.triangle_count(), 8);
     assert!(
-        scene.warnings.iter().any(|w| w.contains("Points")),
+        lines(&scene).iter().any(|w| w.contains("Points")),
         "{:?}",
-        scene.warnings
+        lines(&scene)
     );
     let cases: [([f64; 2], &str, u32); 9] = [
         ([-3.5, 0.25], "tris", 1),

@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use common::{assert_hit, cast_one, fixture, load};
+use common::{assert_hit, cast_one, fixture, lines, load};
 use glam::DVec3;
 use raycast::check::{check_asset, Asset, CheckOptions};
 use raycast::import::{self, LoadOptions};
@@ -76,7 +76,7 @@ fn every_ply_encoding_reads_the_cube_in_order() {
         let scene = load(&format!("ply/{name}.ply"));
         assert_eq!(scene.objects.len(), 1);
         assert_eq!(scene.objects[0].name, name);
-        assert!(scene.warnings.is_empty(), "{name}: {:?}", scene.warnings);
+        assert!(lines(&scene).is_empty(), "{name}: {:?}", lines(&scene));
         // fixtures/README.md: (0.5,-0.25,5) along -Z hits prim 0 at depth 4.
         let s = cast_one(&scene, [0.5, -0.25, 5.0], [0.0, 0.0, -1.0]);
         assert_hit(&s, name, 4.0, [0.0, 0.0, 1.0], &[0]);
@@ -119,9 +119,9 @@ fn polygons_fan_from_their_first_corner() {
 fn points_only_ply_is_an_empty_scene_with_the_gltf_warning() {
     let scene = load("ply/points_only.ply");
     assert!(scene.objects.is_empty());
-    assert_eq!(scene.warnings, [import::EMPTY_SCENE]);
+    assert_eq!(lines(&scene), [import::EMPTY_SCENE]);
     let gltf = load("bad/empty.gltf");
-    assert!(gltf.warnings.iter().any(|w| w == import::EMPTY_SCENE));
+    assert!(lines(&gltf).iter().any(|w| w == import::EMPTY_SCENE));
 }
 
 #[test]
@@ -130,7 +130,7 @@ fn unread_triangle_strips_are_one_warning() {
     let scene = load("ply/tristrips.ply");
     assert_eq!(scene.objects[0].triangles, 1);
     assert_eq!(
-        scene.warnings,
+        lines(&scene),
         ["1 'tristrips' records not read: raycast reads the 'face' element only"]
     );
 }

@@ -5,7 +5,7 @@
 
 use crate::common;
 
-use common::{assert_hit, cast_one, load};
+use common::{assert_hit, cast_one, lines, load};
 
 #[test]
 fn obj_continuations_and_empty_usemtl_load_as_trimesh_reads_them() {
@@ -20,7 +20,7 @@ fn obj_continuations_and_empty_usemtl_load_as_trimesh_reads_them() {
     assert_eq!(scene.triangle_count(), 33);
     // One warning per kind of skipped statement, naming its first line.
     assert_eq!(
-        scene.warnings,
+        lines(&scene),
         [
             "line 2: empty 'mtllib' statement skipped",
             "line 34: 'vc' is not an OBJ statement: skipped (and 1 more line)",
@@ -41,15 +41,15 @@ fn obj_without_faces_is_an_empty_scene_with_the_gltf_warning() {
     let gltf = load("bad/empty.gltf");
     let gltf_warning = "the scene holds no triangles or quadrics";
     assert!(
-        gltf.warnings.iter().any(|w| w == gltf_warning),
+        lines(&gltf).iter().any(|w| w == gltf_warning),
         "{:?}",
-        gltf.warnings
+        lines(&gltf)
     );
     // trimesh: no geometry (empty, comments only) or a PointCloud (vertices only).
     for name in ["empty", "comments_only", "vertices_only"] {
         let scene = load(&format!("obj/{name}.obj"));
         assert!(scene.objects.is_empty(), "{name}: {:?}", scene.objects);
-        assert_eq!(scene.warnings, [gltf_warning], "{name}");
+        assert_eq!(lines(&scene), [gltf_warning], "{name}");
     }
 }
 
@@ -60,7 +60,7 @@ fn obj_without_faces_is_an_empty_scene_with_the_gltf_warning() {
 #[test]
 fn usda_number_literals_read_as_usd_core_reads_them() {
     let scene = load("usd/number_literals.usda");
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert!(lines(&scene).is_empty(), "{:?}", lines(&scene));
     let quad = &scene.objects[0];
     assert_eq!((quad.name.as_str(), quad.triangles), ("/World/quad", 2));
     let bounds = scene.object_bounds(quad);
@@ -81,7 +81,7 @@ fn usda_number_literals_read_as_usd_core_reads_them() {
 fn legacy_and_unknown_type_names_read_as_usd_core_reads_them() {
     let scene = load("usd/type_names.usda");
     assert_eq!(
-        scene.warnings,
+        lines(&scene),
         [
             "2 attributes of value types USD does not know, values not read (as usd-core leaves \
              them): /World/tri.primvars:skel:jointWeights (flaot), /World/tri.raycast_test:typo \
@@ -122,7 +122,7 @@ fn unpadded_glb_chunks_render_with_a_warning_and_fail_check() {
     let scene = load("gltf/cube_unpadded.glb");
     assert_eq!(scene.triangle_count(), 12);
     assert_eq!(
-        scene.warnings,
+        lines(&scene),
         ["chunk 0 length 746 is not a multiple of 4: read anyway (`raycast check` reports it as an error)"]
     );
     let s = cast_one(&scene, [0.25, 0.5, 5.0], [0.0, 0.0, -1.0]);
@@ -151,7 +151,7 @@ fn unpadded_glb_chunks_render_with_a_warning_and_fail_check() {
 /// vertices, 2 faces), with the one warning of its kind.
 fn assert_quad(relative: &str, warning: &str) {
     let scene = load(relative);
-    assert_eq!(scene.warnings, [warning], "{relative}");
+    assert_eq!(lines(&scene), [warning], "{relative}");
     assert_eq!(scene.objects.len(), 1, "{relative}");
     assert_eq!(scene.triangle_count(), 2, "{relative}");
     let bounds = scene.object_bounds(&scene.objects[0]);
@@ -207,7 +207,7 @@ fn obj_misspelt_exponents_and_partial_colours_read_as_trimesh() {
         "line 4: '1.0+e0' is not a number: read as 1.0e0, as trimesh reads it (and 1 more line)",
     );
     let scene = load("obj/partial_colours.obj");
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert!(lines(&scene).is_empty(), "{:?}", lines(&scene));
     assert_eq!(scene.triangle_count(), 2);
     let s = cast_one(&scene, [1.5, 0.25, 3.0], [0.0, 0.0, -1.0]);
     assert_hit(&s, "quad", 3.0, [0.0, 0.0, 1.0], &[0]);

@@ -248,7 +248,7 @@ fn composition_matches_usd_core() {
     ] {
         assert!(!names.contains(&name), "{name} should not be drawn");
     }
-    let warnings = scene.warnings.join("\n");
+    let warnings = lines(&scene).join("\n");
     for note in [
         "invisible prims skipped: /World/Hidden",
         "guide or proxy prims skipped: /World/Guide",

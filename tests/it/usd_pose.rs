@@ -240,14 +240,15 @@ fn time_samples_read_as_usd_core_reads_them() {
         );
         let range = numbers(&usd["timeCodeRange"]);
         assert_eq!(stage.time_code_range, Some([range[0], range[1]]));
-        let misaligned = scene.warnings.iter().filter(|w| {
+        let shown = lines(&scene);
+        let misaligned = shown.iter().filter(|w| {
             w.starts_with("/World/Drift: velocities samples are not aligned with positions")
         });
         assert_eq!(
             misaligned.count(),
             time.is_some() as usize,
             "{:?}",
-            scene.warnings
+            lines(&scene)
         );
     }
 }
@@ -256,16 +257,15 @@ fn time_samples_read_as_usd_core_reads_them() {
 #[test]
 fn default_time_says_which_pose_was_drawn() {
     let scene = load("time_samples.usda", None, &[]);
-    let notes: Vec<&String> = scene
-        .warnings
+    let shown = lines(&scene);
+    let notes: Vec<&String> = shown
         .iter()
         .filter(|w| w.contains("drawn at the default time code"))
         .collect();
-    assert_eq!(notes.len(), 1, "{:?}", scene.warnings);
+    assert_eq!(notes.len(), 1, "{:?}", lines(&scene));
     assert!(scene.stage.as_ref().unwrap().time_sampled_attributes > 0);
     let timed = load("time_samples.usda", Some(3.0), &[]);
-    assert!(!timed
-        .warnings
+    assert!(!lines(&timed)
         .iter()
         .any(|w| w.contains("default time code")));
 }
@@ -524,24 +524,24 @@ fn unsupported_skinning_is_named() {
         },
     )
     .unwrap();
-    let has = |needle: &str| scene.warnings.iter().filter(|w| w.contains(needle)).count();
+    let has = |needle: &str| lines(&scene).iter().filter(|w| w.contains(needle)).count();
     assert_eq!(
         has("/World/Arm/ArmMesh: skel:skinningMethod dualQuaternion is not supported"),
         1,
         "{:?}",
-        scene.warnings
+        lines(&scene)
     );
     assert_eq!(
         has("/World/Arm/ArmMesh: 1 skel:blendShapes for 2 skel:blendShapeTargets: blend shapes not applied"),
         1,
         "{:?}",
-        scene.warnings
+        lines(&scene)
     );
     assert_eq!(
         has("/World/Rest/Skel: skeleton joint Root/Tip comes before its parent Root"),
         1,
         "{:?}",
-        scene.warnings
+        lines(&scene)
     );
-    assert!(scene.warnings.iter().all(|w| !w.contains('\n')));
+    assert!(lines(&scene).iter().all(|w| !w.contains('\n')));
 }

@@ -556,13 +556,13 @@ fn check_into(
             };
             let code = match format {
                 "gltf" | "glb" | "obj" => Code::LoadFailed,
-                _ => usd::load_failure_code(&e.message),
+                _ => usd::load_failure_code(&e),
             };
             findings.push(
                 severity,
                 code,
                 "",
-                format!("the importer refuses the asset: {}", e.message),
+                format!("the importer refuses the asset: {}", e.detail()),
             );
             return None;
         }
@@ -570,7 +570,7 @@ fn check_into(
     let mut warnings = scene.warnings.clone();
     crate::import::sort_warnings(&mut warnings);
     for warning in &warnings {
-        importer_warning(format, warning, findings);
+        importer_warning(warning, findings);
     }
     if let Some(golden) = &options.golden {
         let key = path.strip_prefix(root).unwrap_or(path);
@@ -579,35 +579,24 @@ fn check_into(
     Some(geometry::check(&scene, options, findings))
 }
 
-/// Maps an importer warning to a finding.
-fn importer_warning(format: &str, warning: &str, findings: &mut Findings) {
-    if warning.contains("holds no triangles") || warning.contains("holds no faces") {
-        // Reported by the geometric checks as EMPTY_SCENE.
-        return;
+/// Maps an importer warning to a finding, by its code: an empty scene is left to the
+/// geometric checks (`EMPTY_SCENE`), USD composition problems are findings of their own
+/// ([`usd::composition_finding`]), attributes of value types USD does not know a warning
+/// (usd-core opens such a layer too, and leaves the values unread), a value the file holds but
+/// the reader cannot decode (a corrupt crate field) an error at that value (the render skips
+/// the prim and goes on), anything else an `IMPORTER_NOTE` info at the warning's location.
+fn importer_warning(warning: &Diagnostic, findings: &mut Findings) {
+    let line = warning.to_string();
+    match warning.code {
+        Code::EmptyScene => {}
+        Code::UsdCompositionCycle
+        | Code::MissingReference
+        | Code::UsdUnsupportedLayer
+        | Code::UsdCompositionError => usd::composition_finding(warning, findings),
+        Code::UsdUnknownValueType => findings.warn(warning.code, "", line),
+        Code::UsdUnreadableValue => findings.error(warning.code, warning.location.clone(), line),
+        _ => findings.info(Code::ImporterNote, warning.location.clone(), line),
     }
-    if format == "usd" {
-        if let Some(rest) = warning.strip_prefix("composition: ") {
-            usd::composition_finding(rest, findings);
-            return;
-        }
-        if warning.contains(crate::import::usd::UNKNOWN_VALUE_TYPE) {
-            // usd-core opens such a layer too, and leaves the values unread.
-            findings.warn(Code::UsdUnknownValueType, "", warning.to_string());
-            return;
-        }
-        if let Some((location, _)) = warning.split_once(": cannot be read: ") {
-            // A value the file holds but the reader cannot decode (a corrupt crate field):
-            // the file is broken there, though the render skips the prim and goes on.
-            findings.error(Code::UsdUnreadableValue, location, warning.to_string());
-            return;
-        }
-    }
-    let location = warning
-        .split_once(": ")
-        .map(|(head, _)| head)
-        .filter(|head| head.starts_with('/'))
-        .unwrap_or("");
-    findings.info(Code::ImporterNote, location, warning.to_string());
 }
 
 /// Parses `MIN..MAX` (either side may be empty for no bound).

@@ -3,11 +3,11 @@
 //! prim path as location.
 
 use super::{CheckOptions, Finding, Findings, SceneStats};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::import::usd::child::{last_words, run_child, stopped_how};
 use crate::import::{self, LoadOptions};
 use crate::scene::Scene;
-use crate::Code;
+use crate::{Code, Diagnostic, Severity};
 use std::path::Path;
 
 /// Checks that can refuse a file before the USD reader sees it: `.usdz` packages must store
@@ -102,7 +102,7 @@ pub fn load(path: &Path, root: &Path, options: &CheckOptions, f: &mut Findings) 
         // A refused layer is also unresolved: report it once.
         scene
             .warnings
-            .retain(|w| !refused.iter().any(|r| w.contains(r.as_str())));
+            .retain(|w| !refused.iter().any(|r| w.message.contains(r.as_str())));
     }
     for asset in refused {
         f.error(
@@ -116,35 +116,34 @@ pub fn load(path: &Path, root: &Path, options: &CheckOptions, f: &mut Findings) 
 
 /// The code of a USD file the importer refuses: `USD_INVALID_PATH` for a path that cannot be
 /// an `SdfPath` (an ill-formed `<...>` literal, an `xformOpOrder` entry that is no attribute
-/// name; such paths once sent the reader's ancestor walks round without end), else
-/// `LOAD_FAILED`.
-pub fn load_failure_code(message: &str) -> Code {
-    if message.contains("ill-formed path <") || message.contains("is not an attribute name") {
-        Code::UsdInvalidPath
-    } else {
-        Code::LoadFailed
+/// name; such paths once sent the reader's ancestor walks round without end: the importer's
+/// error carries the code), else `LOAD_FAILED`.
+pub fn load_failure_code(error: &Error) -> Code {
+    match error.code {
+        Some(Code::UsdInvalidPath) => Code::UsdInvalidPath,
+        _ => Code::LoadFailed,
     }
 }
 
-/// Maps one composition problem reported by the USD reader to a finding: a layer that cannot
-/// be found is `MISSING_REFERENCE` and a composition cycle `USD_COMPOSITION_CYCLE` (both
-/// errors), a layer of a format the reader does not know (MaterialX, for instance) an info,
-/// anything else a `USD_COMPOSITION_ERROR` warning. The location is the prim the arc is
-/// authored on, when the message names it.
-pub fn composition_finding(message: &str, f: &mut Findings) {
+/// Maps one composition problem reported by the USD reader (the importer gave it its code) to
+/// a finding: a layer that cannot be found (`MISSING_REFERENCE`) and a composition cycle
+/// (`USD_COMPOSITION_CYCLE`) are errors, layers of a format the reader does not know
+/// (`USD_UNSUPPORTED_LAYER`: MaterialX, for instance) an info, anything else
+/// (`USD_COMPOSITION_ERROR`) a warning. The location is the prim the arc is authored on: the
+/// reader's error names it last, after " at ", and holds it in no field of its own that the
+/// scene keeps.
+pub fn composition_finding(problem: &Diagnostic, f: &mut Findings) {
+    let message = &problem.message;
     let location = message
         .rsplit_once(" at /")
         .map(|(_, rest)| format!("/{}", rest.split([' ', ':']).next().unwrap_or("")))
         .unwrap_or_default();
-    if message.contains(import::usd::UNREAD_LAYER) || message.contains(import::usd::UNREAD_NOTE) {
-        f.info(Code::UsdUnsupportedLayer, location, message.to_string());
-    } else if message.contains("cycle") {
-        f.error(Code::UsdCompositionCycle, location, message.to_string());
-    } else if message.starts_with("unresolved") {
-        f.error(Code::MissingReference, location, message.to_string());
-    } else {
-        f.warn(Code::UsdCompositionError, location, message.to_string());
-    }
+    let severity = match problem.code {
+        Code::UsdUnsupportedLayer => Severity::Info,
+        Code::UsdCompositionError => Severity::Warning,
+        _ => Severity::Error,
+    };
+    f.push(severity, problem.code, location, message.clone());
 }
 
 /// Checks a USD asset in a child `raycast check` (see [`CheckOptions::isolate_usd`]) and

@@ -9,6 +9,9 @@ use std::path::{Path, PathBuf};
 pub struct Error {
     /// The file the error is about, if any.
     pub path: Option<PathBuf>,
+    /// Where in the file, when the reader knows (a USD prim or attribute path); empty
+    /// otherwise. Shown before the message.
+    pub location: String,
     /// What is wrong, in one line.
     pub message: String,
     /// Whether the request itself is invalid (the command line exits 2) or the run failed
@@ -41,6 +44,7 @@ impl Error {
     pub fn in_file(path: impl AsRef<Path>, message: impl Into<String>) -> Self {
         Error {
             path: Some(path.as_ref().to_path_buf()),
+            location: String::new(),
             message: message.into(),
             kind: ErrorKind::Failure,
             code: None,
@@ -51,6 +55,7 @@ impl Error {
     pub fn msg(message: impl Into<String>) -> Self {
         Error {
             path: None,
+            location: String::new(),
             message: message.into(),
             kind: ErrorKind::Failure,
             code: None,
@@ -63,6 +68,35 @@ impl Error {
             kind: ErrorKind::Usage,
             ..Error::msg(message)
         }
+    }
+
+    /// An error about the part of a file at `location` (a prim or attribute path), that
+    /// concerns no particular file yet ([`Error::with_path`] adds it).
+    pub fn at(location: impl Into<String>, message: impl Into<String>) -> Self {
+        Error {
+            location: location.into(),
+            ..Error::msg(message)
+        }
+    }
+
+    /// `location: message`, or the message alone: the error without its file.
+    pub fn detail(&self) -> String {
+        if self.location.is_empty() {
+            self.message.clone()
+        } else {
+            format!("{}: {}", self.location, self.message)
+        }
+    }
+
+    /// The error as a warning diagnostic of a reader that reads on: its own code, else
+    /// `code`, its location and message (the file left out: a warning is about the file
+    /// being read).
+    pub fn to_warning(&self, code: Code) -> Diagnostic {
+        Diagnostic::warning(
+            self.code.unwrap_or(code),
+            self.location.clone(),
+            self.message.clone(),
+        )
     }
 
     /// The error a fail-fast reader stops with: `diagnostic`, about `path`, with its code.
@@ -99,9 +133,11 @@ impl Error {
     }
 
     /// This error with its message prefixed: `"{prefix}: {message}"` (the file it names, if
-    /// any, is kept and still printed first).
+    /// any, is kept and still printed first; its location, if any, moves into the message
+    /// after the prefix, so the text reads as before).
     pub fn context(mut self, prefix: impl fmt::Display) -> Self {
-        self.message = format!("{prefix}: {}", self.message);
+        self.message = format!("{prefix}: {}", self.detail());
+        self.location.clear();
         self
     }
 
@@ -116,10 +152,13 @@ impl Error {
 
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match &self.path {
-            Some(path) => write!(f, "{}: {}", path.display(), self.message),
-            None => f.write_str(&self.message),
+        if let Some(path) = &self.path {
+            write!(f, "{}: ", path.display())?;
         }
+        if !self.location.is_empty() {
+            write!(f, "{}: ", self.location)?;
+        }
+        f.write_str(&self.message)
     }
 }
 

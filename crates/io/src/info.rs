@@ -121,7 +121,7 @@ impl SceneInfo {
             decoded: scene.decoded.clone(),
             stage: scene.stage.clone(),
             pose: scene.pose.clone(),
-            warnings: scene.warnings.clone(),
+            warnings: scene.warnings.iter().map(ToString::to_string).collect(),
         }
     }
 }

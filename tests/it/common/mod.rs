@@ -19,6 +19,11 @@ pub fn fixture(relative: &str) -> PathBuf {
 }
 
 /// Loads a fixture with default options.
+/// The scene's warnings as the lines the command line prints.
+pub fn lines(scene: &Scene) -> Vec<String> {
+    scene.warnings.iter().map(ToString::to_string).collect()
+}
+
 pub fn load(relative: &str) -> Scene {
     import::load(&fixture(relative), &LoadOptions::default())
         .unwrap_or_else(|e| panic!("{relative} should load: {e}"))

@@ -7,6 +7,7 @@ use super::{near_origin, Object, ObjectKind, Part, PartKind, PoseInfo, Scene, St
 use crate::accel::OctreeParams;
 use crate::bound::transform::BoundedMat4;
 use crate::camera::Camera;
+use crate::diagnostic::{Code, Diagnostic};
 use crate::geometry::Aabb;
 use crate::quadric::Quadric;
 use glam::{DMat3, DMat4, DVec3};
@@ -42,7 +43,7 @@ pub struct SceneBuilder {
     /// `(object, first primitive inside it, part)`, in the order added.
     items: Vec<(u32, u32, Item)>,
     cameras: Vec<Camera>,
-    warnings: Vec<String>,
+    warnings: Vec<Diagnostic>,
     extensions_used: Vec<String>,
     decoded: Vec<String>,
     stage: Option<StageInfo>,
@@ -169,8 +170,13 @@ impl SceneBuilder {
     }
 
     /// Records a warning.
-    pub fn warn(&mut self, warning: impl Into<String>) {
-        self.warnings.push(warning.into());
+    pub fn warn(&mut self, warning: Diagnostic) {
+        self.warnings.push(warning);
+    }
+
+    /// Records a warning about the whole file (no location) of code `IMPORTER_NOTE`.
+    pub fn note(&mut self, message: impl Into<String>) {
+        self.warn(Diagnostic::note(Code::ImporterNote, message));
     }
 
     /// Records the extensions the file declares.

@@ -234,8 +234,9 @@ pub struct Scene {
     pub objects: Vec<Object>,
     /// Cameras defined by the file.
     pub cameras: Vec<Camera>,
-    /// Things the importer skipped or repaired, one line each.
-    pub warnings: Vec<String>,
+    /// Things the importer skipped or repaired, one diagnostic each (one line as shown by
+    /// their `Display`; the codes say what `raycast check` makes of them).
+    pub warnings: Vec<crate::diagnostic::Diagnostic>,
     /// Extensions the file declares (glTF `extensionsUsed`).
     pub extensions_used: Vec<String>,
     /// What the importer decoded, one line per extension (Draco, meshopt, GPU instancing).

@@ -14,6 +14,7 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::quadric::Quadric;
 use crate::scene::{Mesh, Scene, SceneBuilder};
 use glam::{DMat4, DVec3, DVec4};
+use raycast_core::diagnostic::{Code, Diagnostic};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -45,6 +46,11 @@ pub const FILE_TYPES: &str = ".gltf, .glb, .obj, .ply, .stl, .usda, .usdc, .usd 
 
 /// The warning of every reader for a scene with nothing to draw.
 pub const EMPTY_SCENE: &str = "the scene holds no triangles or quadrics";
+
+/// The [`EMPTY_SCENE`] warning (code `EMPTY_SCENE`).
+pub fn empty_scene() -> Diagnostic {
+    Diagnostic::note(Code::EmptyScene, EMPTY_SCENE)
+}
 
 /// Loads a `.gltf`, `.glb`, `.obj`, `.ply`, `.stl`, `.usda`, `.usdc`, `.usd` or `.usdz` file,
 /// choosing the importer by extension after checking that the content is that format.
@@ -136,10 +142,10 @@ pub fn mesh_file_scene(
 ) -> Scene {
     let mut builder = SceneBuilder::new();
     for warning in warnings {
-        builder.warn(warning);
+        builder.note(warning);
     }
     if meshes.is_empty() && quadrics.is_empty() {
-        builder.warn(EMPTY_SCENE);
+        builder.warn(empty_scene());
     }
     for (name, mesh) in meshes {
         let id = builder.new_object(name.clone(), format!("{kind}:{name}"));
@@ -221,9 +227,9 @@ pub(crate) fn read_error(path: &Path, e: std::io::Error) -> Error {
 
 /// Sorts warnings and drops repeats, so that every run lists them the same way whatever
 /// order a reader produced them in.
-pub fn sort_warnings(warnings: &mut Vec<String>) {
-    warnings.sort();
-    warnings.dedup();
+pub fn sort_warnings(warnings: &mut Vec<Diagnostic>) {
+    warnings.sort_by_cached_key(Diagnostic::to_string);
+    warnings.dedup_by(|a, b| a.to_string() == b.to_string());
 }
 
 /// Local triangles placed in the world by `world`. A mirroring transform flips the winding back

@@ -103,7 +103,7 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
     }
     let mut builder = SceneBuilder::new();
     for warning in normal.warnings {
-        builder.warn(warning);
+        builder.note(warning);
     }
     let materials = model_materials(&normal.text, &models, &mut builder);
     let mut triangles = 0;
@@ -124,7 +124,7 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Scene> {
     }
     if triangles == 0 {
         // The words of the glTF and USD readers' warning for an empty scene.
-        builder.warn(super::EMPTY_SCENE);
+        builder.warn(super::empty_scene());
     }
     Ok(builder.finish(path.to_path_buf()))
 }
@@ -192,7 +192,7 @@ fn model_materials(
     let counts: Vec<usize> = models.iter().map(|m| m.mesh.indices.len() / 3).collect();
     if per_triangle.len() != counts.iter().sum::<usize>() {
         if !names.is_empty() {
-            builder.warn("usemtl: the faces could not be matched to their materials: left out");
+            builder.note("usemtl: the faces could not be matched to their materials: left out");
         }
         return counts.iter().map(|&n| vec![0; n]).collect();
     }

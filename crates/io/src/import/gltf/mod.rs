@@ -127,7 +127,7 @@ pub struct Prepared {
     /// The animation to play (`--animation`).
     animation: Option<String>,
     /// What the document layer noticed while reading (warnings), put before the scene's own.
-    notes: Vec<String>,
+    notes: Vec<Diagnostic>,
     /// Whether the animations' data were loaded (the document was prepared with a time).
     animating: bool,
     /// What accessors without a buffer view may take in each build (the memory limit less
@@ -181,7 +181,7 @@ pub fn prepare(bytes: Vec<u8>, path: &Path, options: &LoadOptions) -> Result<Pre
         path: path.to_path_buf(),
         choice: options.scene.clone(),
         animation: options.animation.clone(),
-        notes: notes.map(Diagnostic::to_string).collect(),
+        notes: notes.cloned().collect(),
         animating: options.time.is_some(),
         unbacked: std::sync::Mutex::new(doc.unbacked_left()),
         doc,

@@ -69,7 +69,7 @@ pub fn build_at(
     };
     if let Some(pose) = super::pose::pose_info(doc, timing.time, &chosen) {
         if timing.time.is_none() && !pose.animations.is_empty() {
-            walk.builder.warn(format!(
+            walk.builder.note(format!(
                 "the file has {} animations; drawn without --time: the nodes' own transforms and default morph weights",
                 pose.animations.len()
             ));
@@ -94,7 +94,7 @@ pub fn build_at(
             let roots = doc.parentless_nodes();
             if !roots.is_empty() {
                 walk.builder
-                    .warn("the file defines no scene: drawing every root node");
+                    .note("the file defines no scene: drawing every root node");
             }
             roots
         }
@@ -104,7 +104,7 @@ pub fn build_at(
         walk.builder.note_decoded(line);
     }
     if walk.builder.object_count() == 0 {
-        walk.builder.warn(crate::import::EMPTY_SCENE);
+        walk.builder.warn(crate::import::empty_scene());
     }
     Ok(walk.builder.finish(path.to_path_buf()))
 }
@@ -459,14 +459,15 @@ impl Walk<'_> {
                 }
                 Ok(None) => {
                     let why = self.doc.primitive_skip_reason(mesh, prim);
-                    self.builder
-                        .warn(format!("/meshes/{mesh}/primitives/{prim}: {why}"));
+                    let at = format!("/meshes/{mesh}/primitives/{prim}");
+                    self.builder.warn(note_at(at, why));
                 }
                 // A buffer without a uri, or on the network, is valid: its data is simply
                 // not here. The primitive is left out rather than the file refused.
-                Err(e) if e.code == NO_DATA => self
-                    .builder
-                    .warn(format!("/meshes/{mesh}/primitives/{prim}: skipped: {e}")),
+                Err(e) if e.code == NO_DATA => {
+                    let at = format!("/meshes/{mesh}/primitives/{prim}");
+                    self.builder.warn(note_at(at, format!("skipped: {e}")));
+                }
                 Err(e) => return Err(e),
             }
         }
@@ -477,12 +478,13 @@ impl Walk<'_> {
         let spec = match self.doc.camera(camera) {
             Ok(spec) => spec,
             Err(e) => {
-                self.builder.warn(format!("{e}: camera skipped"));
+                let message = format!("{}: camera skipped", e.message);
+                self.builder.warn(note_at(e.location, message));
                 return;
             }
         };
         let Some(to_world) = Camera::orthonormalised(*world) else {
-            self.builder.warn(format!(
+            self.builder.note(format!(
                 "camera on node '{node_name}' has a degenerate transform: skipped"
             ));
             return;
@@ -497,4 +499,9 @@ impl Walk<'_> {
             to_world,
         });
     }
+}
+
+/// An importer's warning about the part of the file at JSON pointer `at`.
+fn note_at(at: impl Into<String>, message: impl Into<String>) -> Diagnostic {
+    Diagnostic::warning(Code::ImporterNote, at, message)
 }

@@ -4,6 +4,7 @@
 //! warning, and its hits hold the miss value.
 
 use super::decode;
+use super::diagnostics::{Code, Diagnostic};
 use super::document::{index_of, Document};
 use super::geometry::Geometry;
 use crate::error::{Error, Result};
@@ -21,7 +22,12 @@ pub fn material_name(doc: &Document, index: usize) -> String {
 impl Document {
     /// Reads primitive `prim`'s texture coordinates, normals and material into `geometry`;
     /// returns a warning for each attribute that the file has but that cannot be read.
-    pub fn read_shading(&self, mesh: usize, prim: usize, geometry: &mut Geometry) -> Vec<String> {
+    pub fn read_shading(
+        &self,
+        mesh: usize,
+        prim: usize,
+        geometry: &mut Geometry,
+    ) -> Vec<Diagnostic> {
         let mut warnings = Vec::new();
         let Ok((json, at)) = self.primitive_json(mesh, prim) else {
             return warnings;
@@ -35,7 +41,11 @@ impl Document {
             match self.attribute(mesh, prim, accessor, name, comps, n) {
                 Ok(values) => Some(values),
                 Err(why) => {
-                    warnings.push(format!("{at}/attributes/{name}: {why}: left out"));
+                    warnings.push(Diagnostic::warning(
+                        Code::ImporterNote,
+                        format!("{at}/attributes/{name}"),
+                        format!("{why}: left out"),
+                    ));
                     None
                 }
             }

@@ -3,6 +3,7 @@
 //! unit), the clipping range, and a warning for what is skipped or ignored.
 
 use super::value;
+use super::warning_at;
 use super::Loader;
 use crate::camera::{Camera, Projection};
 use crate::error::Result;
@@ -13,9 +14,9 @@ impl Loader {
     /// A UsdGeomCamera as a camera named by its prim path.
     pub(super) fn camera(&mut self, prim: &Prim, name: &str, world: DMat4) -> Result<()> {
         let Some(to_world) = Camera::orthonormalised(world) else {
-            self.warnings.push(format!(
-                "{}: camera has a degenerate transform: skipped",
-                prim.path()
+            self.warnings.push(warning_at(
+                prim.path().to_string(),
+                "camera has a degenerate transform: skipped",
             ));
             return Ok(());
         };
@@ -27,9 +28,9 @@ impl Loader {
             value::token(prim, "projection", self.at)?.unwrap_or_else(|| "perspective".into());
         let positive = |x: f64| x.is_finite() && x > 0.0;
         if !positive(horizontal) || !positive(vertical) {
-            self.warnings.push(format!(
-                "{}: camera apertures must be positive: skipped",
-                prim.path()
+            self.warnings.push(warning_at(
+                prim.path().to_string(),
+                "camera apertures must be positive: skipped",
             ));
             return Ok(());
         }
@@ -40,9 +41,9 @@ impl Loader {
             },
             _ => {
                 if !positive(focal) {
-                    self.warnings.push(format!(
-                        "{}: camera focalLength must be positive: skipped",
-                        prim.path()
+                    self.warnings.push(warning_at(
+                        prim.path().to_string(),
+                        "camera focalLength must be positive: skipped",
                     ));
                     return Ok(());
                 }
@@ -53,9 +54,9 @@ impl Loader {
         };
         for offset in ["horizontalApertureOffset", "verticalApertureOffset"] {
             if value::scalar(prim, offset, self.at)?.is_some_and(|x| x != 0.0) {
-                self.warnings.push(format!(
-                    "{}: camera {offset} is not supported (ignored)",
-                    prim.path()
+                self.warnings.push(warning_at(
+                    prim.path().to_string(),
+                    format!("camera {offset} is not supported (ignored)"),
                 ));
             }
         }

@@ -4,6 +4,7 @@
 
 use openusd::pcp;
 use openusd::usd::Stage;
+use raycast_core::diagnostic::{Code, Diagnostic};
 use std::collections::BTreeSet;
 
 /// What the USD reader says of a referenced layer whose format it cannot read.
@@ -19,9 +20,12 @@ struct Unread {
     site: String,
 }
 
-/// The composition warnings of `stage`, each one line: every problem in its own line, and
-/// the layers of unknown formats counted in one.
-pub fn warnings(stage: &Stage) -> Vec<String> {
+/// The composition warnings of `stage`, each one line (`composition: ...`): every problem in
+/// its own line, and the layers of unknown formats counted in one. Each has its code: a
+/// composition cycle `USD_COMPOSITION_CYCLE`, a layer or prim that cannot be found
+/// `MISSING_REFERENCE`, the layers of unknown formats `USD_UNSUPPORTED_LAYER`, anything else
+/// `USD_COMPOSITION_ERROR`.
+pub fn warnings(stage: &Stage) -> Vec<Diagnostic> {
     let mut unread = Vec::new();
     let mut lines = Vec::new();
     for error in stage.composition_errors() {
@@ -35,11 +39,29 @@ pub fn warnings(stage: &Stage) -> Vec<String> {
                 asset: asset_path.clone(),
                 site: site_path.to_string(),
             }),
-            _ => lines.push(format!("composition: {error}")),
+            _ => lines.push(composition(code_of(&error), format!("{error}"))),
         }
     }
-    lines.extend(unread_note(unread));
+    let note = unread_note(unread);
+    lines.extend(note.map(|line| composition(Code::UsdUnsupportedLayer, line)));
     lines
+}
+
+/// The code of a composition problem.
+fn code_of(error: &pcp::Error) -> Code {
+    match error {
+        pcp::Error::ArcCycle(_) => Code::UsdCompositionCycle,
+        pcp::Error::UnresolvedLayer { .. } | pcp::Error::UnresolvedPrimPath { .. } => {
+            Code::MissingReference
+        }
+        _ => Code::UsdCompositionError,
+    }
+}
+
+/// A composition warning: `composition: {message}`, the location naming the kind of
+/// problem as the line shows it.
+fn composition(code: Code, message: String) -> Diagnostic {
+    Diagnostic::warning(code, "composition", message)
 }
 
 /// One line for the layers of unknown formats, naming their kinds and the first of them.
@@ -55,7 +77,7 @@ fn unread_note(mut unread: Vec<Unread>) -> Option<String> {
         "references"
     };
     Some(format!(
-        "composition: {count} {references} to layers {UNREAD_NOTE} ({}) skipped: materials \
+        "{count} {references} to layers {UNREAD_NOTE} ({}) skipped: materials \
          and the like, not needed for ray casting; first: @{}@ at {}",
         kinds.join(", "),
         first.asset,

@@ -7,10 +7,12 @@
 
 use super::motion::Motion;
 use super::value::{self, At};
+use super::warning_at;
 use super::{err, Instance, Loader, MAX_INSTANCER_DEPTH};
 use crate::error::{Error, Result};
 use glam::{DMat4, DQuat, DVec3};
 use openusd::usd::Prim;
+use raycast_core::diagnostic::Diagnostic;
 use std::collections::HashSet;
 
 /// The per-instance arrays of a point instancer, checked against `protoIndices`.
@@ -33,7 +35,7 @@ impl Arrays {
         prim: &Prim,
         at: At,
         per_second: f64,
-        notes: &mut Vec<String>,
+        notes: &mut Vec<Diagnostic>,
     ) -> Result<Result<Arrays>> {
         let Some(indices) = value::ints(prim, "protoIndices", at)? else {
             return Ok(Err(Error::msg("has no protoIndices")));
@@ -112,9 +114,7 @@ impl Loader {
     ) -> Result<()> {
         let path = prim.path().to_string();
         if depth >= MAX_INSTANCER_DEPTH {
-            return Err(Error::msg(format!(
-                "{path}: point instancers nest deeper than {MAX_INSTANCER_DEPTH} (a prototype instancing itself?)"
-            )));
+            return Err(Error::at(path.to_string(), format!("point instancers nest deeper than {MAX_INSTANCER_DEPTH} (a prototype instancing itself?)")));
         }
         let targets = prim
             .relationship("prototypes")
@@ -132,8 +132,11 @@ impl Loader {
         let arrays = match Arrays::read(prim, self.at, per_second, &mut self.warnings)? {
             Ok(arrays) => arrays,
             Err(why) => {
-                self.warnings
-                    .push(format!("{path}: point instancer {why}: nothing drawn"));
+                self.warnings.push(super::warning_because(
+                    path.to_string(),
+                    &why,
+                    format!("point instancer {why}: nothing drawn"),
+                ));
                 return Ok(());
             }
         };
@@ -196,8 +199,9 @@ impl Loader {
             }
         }
         if bad_index > 0 {
-            self.warnings.push(format!(
-                "{path}: {bad_index} instances have a protoIndex with no prototype: skipped"
+            self.warnings.push(warning_at(
+                path.to_string(),
+                format!("{bad_index} instances have a protoIndex with no prototype: skipped"),
             ));
         }
         Ok(())

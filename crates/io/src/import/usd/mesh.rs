@@ -4,6 +4,7 @@ use super::value::{self, At};
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
 use openusd::usd::Prim;
+use raycast_core::diagnostic::{Code, Diagnostic};
 
 /// What reading a mesh gave.
 pub enum MeshRead {
@@ -19,10 +20,10 @@ pub enum MeshRead {
         /// Faces with fewer than three vertices that were dropped.
         degenerate_faces: usize,
         /// Primvars that could not be read (left out).
-        warnings: Vec<String>,
+        warnings: Vec<Diagnostic>,
     },
     /// Nothing to draw, with the reason (a warning).
-    Skip(String),
+    Skip(Diagnostic),
 }
 
 /// Reads `points`, `faceVertexCounts`, `faceVertexIndices`, `orientation` and
@@ -32,7 +33,11 @@ pub enum MeshRead {
 pub fn read(prim: &Prim, at: At) -> Result<MeshRead> {
     match read_checked(prim, at) {
         Ok(read) => Ok(read),
-        Err(message) => Ok(MeshRead::Skip(format!("{message}: mesh skipped"))),
+        Err(e) => {
+            let mut skipped = e.to_warning(Code::ImporterNote);
+            skipped.message.push_str(": mesh skipped");
+            Ok(MeshRead::Skip(skipped))
+        }
     }
 }
 
@@ -51,48 +56,59 @@ fn read_checked(prim: &Prim, at: At) -> Result<MeshRead> {
         } else {
             "has no points or faces"
         };
-        return Ok(MeshRead::Skip(format!(
-            "{path}: empty mesh ({why}): skipped"
+        return Ok(MeshRead::Skip(super::warning_at(
+            path.to_string(),
+            format!("empty mesh ({why}): skipped"),
         )));
     };
     if points.is_empty() || counts.is_empty() || indices.is_empty() {
-        return Ok(MeshRead::Skip(format!(
-            "{path}: empty mesh (no points or faces): skipped"
+        return Ok(MeshRead::Skip(super::warning_at(
+            path.to_string(),
+            "empty mesh (no points or faces): skipped",
         )));
     }
     if let Some(i) = points.iter().position(|p| !p.is_finite()) {
-        return Ok(MeshRead::Skip(format!(
-            "{path}: point {i} is not finite: mesh skipped"
+        return Ok(MeshRead::Skip(super::warning_at(
+            path.to_string(),
+            format!("point {i} is not finite: mesh skipped"),
         )));
     }
     if let Some(&bad) = counts.iter().find(|&&c| c < 0) {
-        return Ok(MeshRead::Skip(format!(
-            "{path}: faceVertexCounts holds {bad}: mesh skipped"
+        return Ok(MeshRead::Skip(super::warning_at(
+            path.to_string(),
+            format!("faceVertexCounts holds {bad}: mesh skipped"),
         )));
     }
     let total: i64 = counts.iter().sum();
     if total != indices.len() as i64 {
-        return Ok(MeshRead::Skip(format!(
-            "{path}: faceVertexCounts add up to {total} but faceVertexIndices has {}: mesh skipped",
-            indices.len()
+        return Ok(MeshRead::Skip(super::warning_at(
+            path.to_string(),
+            format!(
+                "faceVertexCounts add up to {total} but faceVertexIndices has {}: mesh skipped",
+                indices.len()
+            ),
         )));
     }
     if let Some(&bad) = indices
         .iter()
         .find(|&&i| i < 0 || i as usize >= points.len())
     {
-        return Ok(MeshRead::Skip(format!(
-            "{path}: faceVertexIndices holds {bad}, out of range for {} points: mesh skipped",
-            points.len()
+        return Ok(MeshRead::Skip(super::warning_at(
+            path.to_string(),
+            format!(
+                "faceVertexIndices holds {bad}, out of range for {} points: mesh skipped",
+                points.len()
+            ),
         )));
     }
     let left_handed = match value::token(prim, "orientation", at)?.as_deref() {
         None | Some("rightHanded") => false,
         Some("leftHanded") => true,
         Some(other) => {
-            return Err(Error::msg(format!(
-                "{path}.orientation: '{other}' is neither rightHanded nor leftHanded"
-            )));
+            return Err(Error::at(
+                format!("{path}.orientation"),
+                format!("'{other}' is neither rightHanded nor leftHanded"),
+            ));
         }
     };
     // USD's fallback subdivisionScheme is catmullClark: a mesh is a subdivision surface
@@ -124,8 +140,9 @@ fn read_checked(prim: &Prim, at: At) -> Result<MeshRead> {
         }
     }
     if triangles.is_empty() {
-        return Ok(MeshRead::Skip(format!(
-            "{path}: empty mesh (no face has three vertices): skipped"
+        return Ok(MeshRead::Skip(super::warning_at(
+            path.to_string(),
+            "empty mesh (no face has three vertices): skipped",
         )));
     }
     // Indices and points were checked above, so this always succeeds.
@@ -139,7 +156,10 @@ fn read_checked(prim: &Prim, at: At) -> Result<MeshRead> {
     };
     let (attributes, warnings) = super::primvars::read(prim, at, &topology);
     let Some(mesh) = Mesh::new(points, triangles) else {
-        return Ok(MeshRead::Skip(format!("{path}: invalid mesh: skipped")));
+        return Ok(MeshRead::Skip(super::warning_at(
+            path.to_string(),
+            "invalid mesh: skipped",
+        )));
     };
     Ok(MeshRead::Triangles {
         mesh: mesh.with_attributes(attributes),

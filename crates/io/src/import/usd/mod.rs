@@ -48,6 +48,7 @@ use crate::scene::{Mesh, Scene, SceneBuilder, StageInfo};
 use glam::{DMat4, DVec3};
 use openusd::sdf;
 use openusd::usd::{Prim, Stage};
+use raycast_core::diagnostic::{Code, Diagnostic};
 use shapes::Part;
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::path::Path;
@@ -210,7 +211,7 @@ fn load_stage(
         None => Stage::open(text),
         Some(confine) => Stage::builder().resolver(confine).open(text),
     }
-    .map_err(|e| Error::in_file(path, format!("cannot open the USD stage: {e:#}")))?;
+    .map_err(|e| open_error(path, &e))?;
     let mut loader = Loader {
         at: value::At::new(options.time),
         variants: variants::Variants::new(options.variants.clone()),
@@ -249,18 +250,21 @@ fn load_stage(
         } else {
             String::new()
         };
-        builder.warn(format!(
+        builder.note(format!(
             "{} {what}: {}{more}",
             prims.len(),
             shown.join(", ")
         ));
     }
     if builder.object_count() == 0 {
-        builder.warn("the stage holds no triangles or quadrics");
+        builder.warn(Diagnostic::note(
+            Code::EmptyScene,
+            "the stage holds no triangles or quadrics",
+        ));
     }
     let (sampled, first) = time_sampled_attributes(&stage);
     if let Some(first) = first.filter(|_| options.time.is_none()) {
-        builder.warn(format!(
+        builder.note(format!(
             "the stage has time samples ({sampled} attribute specs, such as {first}): drawn at \
              the default time code, as usd-core's Usd.TimeCode.Default() reads it; --time CODE \
              draws it at a time code"
@@ -375,7 +379,7 @@ struct Loader {
     stage: Stage,
     builder: SceneBuilder,
     /// Warnings, in the order met.
-    warnings: Vec<String>,
+    warnings: Vec<Diagnostic>,
     /// Aggregated notes: what happened -> prims it happened to.
     notes: BTreeMap<&'static str, Vec<String>>,
     /// Mesh data by the path it was read from (prototype paths for instance proxies).
@@ -401,7 +405,7 @@ fn is_xformable(type_name: &str) -> bool {
 }
 
 pub(super) fn err(prim: &Prim, e: impl std::fmt::Display) -> Error {
-    Error::msg(format!("{}: {e:#}", prim.path()))
+    Error::at(prim.path().to_string(), format!("{e:#}"))
 }
 
 impl Loader {
@@ -422,9 +426,12 @@ impl Loader {
                 .map(|p| self.stage.prim(p))
                 .is_some_and(|p| p.is_valid().unwrap_or(false));
             if !exists {
-                self.warnings.push(format!(
-                    "defaultPrim '{}' does not exist: drawing the whole stage",
-                    name.as_str()
+                self.warnings.push(Diagnostic::note(
+                    Code::ImporterNote,
+                    format!(
+                        "defaultPrim '{}' does not exist: drawing the whole stage",
+                        name.as_str()
+                    ),
                 ));
             }
         }
@@ -506,10 +513,10 @@ impl Loader {
         if world.is_finite() {
             Ok(world)
         } else {
-            Err(Error::msg(format!(
-                "{}: world transform is not finite",
-                prim.path()
-            )))
+            Err(Error::at(
+                prim.path().to_string(),
+                "world transform is not finite",
+            ))
         }
     }
 
@@ -645,13 +652,16 @@ impl Loader {
                 }
                 if let Some(points) = skinned {
                     let Some(posed) = mesh.mesh.with_positions(points) else {
-                        self.warnings
-                            .push(format!("{source}: a skinned point is not finite: skipped"));
+                        self.warnings.push(warning_at(
+                            source.to_string(),
+                            "a skinned point is not finite: skipped",
+                        ));
                         return Ok(());
                     };
                     if posed.attributes().is_some_and(|a| !a.normals.is_empty()) {
-                        self.warnings.push(format!(
-                            "{source}: normals of a UsdSkel-skinned mesh are not posed: left out"
+                        self.warnings.push(warning_at(
+                            source.to_string(),
+                            "normals of a UsdSkel-skinned mesh are not posed: left out",
                         ));
                     }
                     mesh.mesh = Arc::new(posed.without_normals());
@@ -664,14 +674,15 @@ impl Loader {
                     let id = target.id(&mut self.builder);
                     self.builder.place_mesh(id, mesh.mesh, world);
                 } else {
-                    self.warnings.push(format!(
-                        "{source}: its projective transform sends points to infinity: skipped"
+                    self.warnings.push(warning_at(
+                        source.to_string(),
+                        "its projective transform sends points to infinity: skipped",
                     ));
                 }
             }
         } else if shapes::is_shape(type_name) {
             match shapes::parts(prim, type_name, self.at)? {
-                Err(reason) => self.warnings.push(reason.to_string()),
+                Err(reason) => self.warnings.push(reason.to_warning(Code::ImporterNote)),
                 Ok(parts) => {
                     for part in parts {
                         match part {
@@ -734,9 +745,9 @@ impl Loader {
             } => {
                 self.warnings.extend(warnings);
                 if degenerate_faces > 0 {
-                    self.warnings.push(format!(
-                        "{}: {degenerate_faces} faces with fewer than 3 vertices skipped",
-                        prim.path()
+                    self.warnings.push(warning_at(
+                        prim.path().to_string(),
+                        format!("{degenerate_faces} faces with fewer than 3 vertices skipped"),
                     ));
                 }
                 Some(CachedMesh {
@@ -749,4 +760,32 @@ impl Loader {
         self.meshes.insert(key, read.clone());
         Ok(read)
     }
+}
+
+/// The error of a stage that cannot be opened. openusd's parser reports a path that cannot be
+/// an `SdfPath` (an ill-formed `<...>` literal) only in the words of its message, so that is
+/// where its code `USD_INVALID_PATH` comes from; any other failure has no code of its own.
+fn open_error(path: &Path, e: &impl std::fmt::Display) -> Error {
+    let message = format!("{e:#}");
+    let error = Error::in_file(path, format!("cannot open the USD stage: {message}"));
+    if message.contains("ill-formed path <") {
+        error.with_code(Code::UsdInvalidPath)
+    } else {
+        error
+    }
+}
+
+/// An importer's warning about the prim or attribute at `location`, of code `IMPORTER_NOTE`.
+pub(super) fn warning_at(location: impl Into<String>, message: impl Into<String>) -> Diagnostic {
+    Diagnostic::warning(Code::ImporterNote, location, message)
+}
+
+/// A warning at `location` because of `why`, a read that failed: of `why`'s code (a value
+/// that cannot be decoded is `USD_UNREADABLE_VALUE`), else `IMPORTER_NOTE`.
+pub(super) fn warning_because(
+    location: impl Into<String>,
+    why: &Error,
+    message: impl Into<String>,
+) -> Diagnostic {
+    Diagnostic::warning(why.code.unwrap_or(Code::ImporterNote), location, message)
 }

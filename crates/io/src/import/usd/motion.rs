@@ -20,6 +20,7 @@ use super::value::{self, At};
 use crate::error::{Error, Result};
 use glam::{DMat4, DQuat, DVec3};
 use openusd::usd::{Prim, TimeCode};
+use raycast_core::diagnostic::Diagnostic;
 
 /// usd-core's `UsdTimeCode::SafeStep()`: the step past a sample at which its bracketing pair
 /// is looked up again (`1e6 · ε · 10`).
@@ -41,10 +42,10 @@ fn bracket(prim: &Prim, name: &str, time: f64) -> Result<Option<Bracket>> {
         prim.attribute(name)
             .bracketing_time_samples(TimeCode::new(t))
             .map_err(|e| {
-                Error::msg(format!(
-                    "{}.{name}: cannot read its time samples: {e:#}",
-                    prim.path()
-                ))
+                Error::at(
+                    format!("{}.{name}", prim.path()),
+                    format!("cannot read its time samples: {e:#}"),
+                )
             })
     };
     let Some((lower, upper)) = read(time)? else {
@@ -88,7 +89,7 @@ pub(super) struct Motion {
     accelerations: Option<Vec<DVec3>>,
     angular: Option<Rate>,
     /// usd-core's warnings about rates it left out (misaligned samples, wrong lengths).
-    pub notes: Vec<String>,
+    pub notes: Vec<Diagnostic>,
 }
 
 impl Motion {
@@ -178,7 +179,7 @@ fn rate(
     (name, over): (&str, &str),
     (time, per_second): (f64, f64),
     n: usize,
-    notes: &mut Vec<String>,
+    notes: &mut Vec<Diagnostic>,
 ) -> Result<Option<Rate>> {
     let Some(base) = bracket(prim, over, time)? else {
         return Ok(None);
@@ -190,15 +191,21 @@ fn rate(
     };
     let path = prim.path();
     let Some(own) = own.filter(|own| aligned(&base, own)) else {
-        notes.push(format!(
-            "{path}: {name} samples are not aligned with {over} samples: not applied (as usd-core)"
+        notes.push(super::warning_at(
+            path.to_string(),
+            format!(
+                "{name} samples are not aligned with {over} samples: not applied (as usd-core)"
+            ),
         ));
         return Ok(None);
     };
     if values.len() != n {
-        notes.push(format!(
-            "{path}: found {} {name}, but expected {n}: not applied (as usd-core)",
-            values.len()
+        notes.push(super::warning_at(
+            path.to_string(),
+            format!(
+                "found {} {name}, but expected {n}: not applied (as usd-core)",
+                values.len()
+            ),
         ));
         return Ok(None);
     }

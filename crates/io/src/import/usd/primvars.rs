@@ -11,6 +11,7 @@ use crate::scene::attributes::{corners, runs, MaterialRun};
 use crate::scene::{Attributes, SceneBuilder};
 use openusd::sdf::Value;
 use openusd::usd::Prim;
+use raycast_core::diagnostic::Diagnostic;
 
 /// A triangulated mesh's topology, as [`super::mesh`] made it.
 pub struct Topology<'a> {
@@ -28,7 +29,7 @@ pub struct Topology<'a> {
 
 /// The texture coordinates and normals of a mesh's triangle corners, and warnings for the
 /// primvars left out.
-pub fn read(prim: &Prim, at: At, topology: &Topology) -> (Attributes, Vec<String>) {
+pub fn read(prim: &Prim, at: At, topology: &Topology) -> (Attributes, Vec<Diagnostic>) {
     let mut warnings = Vec::new();
     let uv =
         vec2s(prim, "primvars:st", at).and_then(|v| expand(prim, "primvars:st", at, topology, v));
@@ -52,10 +53,11 @@ fn left_out<T>(
     prim: &Prim,
     name: &str,
     read: Result<Vec<T>>,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Diagnostic>,
 ) -> Vec<T> {
     read.unwrap_or_else(|why| {
-        warnings.push(format!("{}.{name}: {why}: left out", prim.path()));
+        let at = format!("{}.{name}", prim.path());
+        warnings.push(super::warning_because(at, &why, format!("{why}: left out")));
         Vec::new()
     })
 }
@@ -118,11 +120,13 @@ fn vec2s(prim: &Prim, name: &str, at: At) -> ValueResult<Vec<[f32; 2]>> {
         Value::Vec2dVec(v) => v.iter().map(|p| [p.x as f32, p.y as f32]).collect(),
         Value::Vec2hVec(v) => v.iter().map(|p| [p.x.to_f32(), p.y.to_f32()]).collect(),
         _ => {
-            return Err(Error::msg(format!(
-                "{}.{name}: expected an array of 2-vectors, found {}",
-                prim.path(),
-                value::value_kind(&value)
-            )))
+            return Err(Error::at(
+                format!("{}.{name}", prim.path()),
+                format!(
+                    "expected an array of 2-vectors, found {}",
+                    value::value_kind(&value)
+                ),
+            ))
         }
     }))
 }

@@ -19,9 +19,12 @@ const BOUNDS_MAX: &str = "raycast:quadric:boundsMax";
 
 /// True when the prim has any `raycast:quadric:` property.
 pub fn has_quadric(prim: &Prim) -> Result<bool> {
-    let names = prim
-        .property_names()
-        .map_err(|e| Error::msg(format!("{}: cannot list properties: {e}", prim.path())))?;
+    let names = prim.property_names().map_err(|e| {
+        Error::at(
+            prim.path().to_string(),
+            format!("cannot list properties: {e}"),
+        )
+    })?;
     Ok(names.iter().any(|n| n.as_str().starts_with(PREFIX)))
 }
 

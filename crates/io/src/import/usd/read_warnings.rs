@@ -5,6 +5,7 @@
 
 use openusd::sdf::ReadWarning;
 use openusd::usd::Stage;
+use raycast_core::diagnostic::{Code, Diagnostic};
 
 /// The words of the one warning for attributes of unknown value types (`raycast check` maps
 /// it to `USD_UNKNOWN_VALUE_TYPE`).
@@ -15,7 +16,7 @@ const SHOWN: usize = 3;
 
 /// The read warnings of every layer of `stage`, each one line: one for all the attributes of
 /// unknown value types (sorted by path), one per other warning.
-pub fn warnings(stage: &Stage) -> Vec<String> {
+pub fn warnings(stage: &Stage) -> Vec<Diagnostic> {
     let mut unknown = Vec::new();
     let mut lines = Vec::new();
     for identifier in stage.layer_identifiers() {
@@ -27,13 +28,18 @@ pub fn warnings(stage: &Stage) -> Vec<String> {
                 ReadWarning::UnknownValueType { path, type_name } => {
                     unknown.push(format!("{path} ({type_name})"))
                 }
-                other => lines.push(format!("{identifier}: {other}")),
+                other => lines.push(Diagnostic::warning(
+                    Code::ImporterNote,
+                    identifier.clone(),
+                    other.to_string(),
+                )),
             }
         }
     }
     unknown.sort();
     unknown.dedup();
-    lines.extend(unknown_note(&unknown));
+    let note = unknown_note(&unknown);
+    lines.extend(note.map(|line| Diagnostic::note(Code::UsdUnknownValueType, line)));
     lines
 }
 

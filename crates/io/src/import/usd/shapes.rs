@@ -60,10 +60,10 @@ fn size(prim: &Prim, name: &str, fallback: f64, at: At) -> Result<f64> {
     if x.is_finite() && x >= 0.0 {
         Ok(x)
     } else {
-        Err(Error::msg(format!(
-            "{}.{name}: {x} is not a finite non-negative number",
-            prim.path()
-        )))
+        Err(Error::at(
+            format!("{}.{name}", prim.path()),
+            format!("{x} is not a finite non-negative number"),
+        ))
     }
 }
 
@@ -82,10 +82,10 @@ fn axis_frame(prim: &Prim, at: At) -> Result<(char, DMat4)> {
         "X" => Ok(('X', cols(DVec3::Y, DVec3::Z, DVec3::X))),
         "Y" => Ok(('Y', cols(DVec3::Z, DVec3::X, DVec3::Y))),
         "Z" => Ok(('Z', DMat4::IDENTITY)),
-        other => Err(Error::msg(format!(
-            "{}.axis: '{other}' is not X, Y or Z",
-            prim.path()
-        ))),
+        other => Err(Error::at(
+            format!("{}.axis", prim.path()),
+            format!("'{other}' is not X, Y or Z"),
+        )),
     }
 }
 
@@ -94,9 +94,10 @@ fn axis_frame(prim: &Prim, at: At) -> Result<(char, DMat4)> {
 pub fn parts(prim: &Prim, type_name: &str, at: At) -> Result<Result<Vec<Part>>> {
     let path = prim.path();
     let empty = |what: &str| {
-        Ok(Err(Error::msg(format!(
-            "{path}: {type_name} with {what}: skipped"
-        ))))
+        Ok(Err(Error::at(
+            path.to_string(),
+            format!("{type_name} with {what}: skipped"),
+        )))
     };
     match type_name {
         "Sphere" => {
@@ -188,9 +189,10 @@ pub fn parts(prim: &Prim, type_name: &str, at: At) -> Result<Result<Vec<Part>>> 
                 frame: DMat4::IDENTITY,
             }]))
         }
-        _ => Ok(Err(Error::msg(format!(
-            "{path}: {type_name} is not an intrinsic shape"
-        )))),
+        _ => Ok(Err(Error::at(
+            path.to_string(),
+            format!("{type_name} is not an intrinsic shape"),
+        ))),
     }
 }
 

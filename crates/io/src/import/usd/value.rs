@@ -13,6 +13,7 @@ use crate::error::{Error, Result};
 use glam::{DMat4, DQuat, DVec3};
 use openusd::sdf::Value;
 use openusd::usd::{Prim, TimeCode};
+use raycast_core::diagnostic::Code;
 
 /// When attribute values are read: a time code, or the default time code (`None`).
 #[derive(Debug, Clone, Copy)]
@@ -42,10 +43,10 @@ impl At {
             .attribute(name)
             .bracketing_time_samples(TimeCode::new(time))
             .map_err(|e| {
-                Error::msg(format!(
-                    "{}.{name}: cannot read its time samples: {e:#}",
-                    prim.path()
-                ))
+                Error::at(
+                    format!("{}.{name}", prim.path()),
+                    format!("cannot read its time samples: {e:#}"),
+                )
             })?
             .map(|(lower, _)| lower);
         Ok(At { time: lower })
@@ -62,7 +63,13 @@ pub fn raw(prim: &Prim, name: &str, at: At) -> ValueResult<Value> {
         None => attribute.get::<Value>(),
         Some(time) => attribute.get_at::<Value>(TimeCode::new(time)),
     }
-    .map_err(|e| Error::msg(format!("{}.{name}: cannot be read: {e}", prim.path())))?;
+    .map_err(|e| {
+        Error::at(
+            format!("{}.{name}", prim.path()),
+            format!("cannot be read: {e}"),
+        )
+        .with_code(Code::UsdUnreadableValue)
+    })?;
     Ok(value.filter(|v| !matches!(v, Value::ValueBlock | Value::None)))
 }
 
@@ -72,11 +79,10 @@ pub fn has_time_samples(prim: &Prim, name: &str) -> bool {
 }
 
 fn wrong_type(prim: &Prim, name: &str, expected: &str, value: &Value) -> Error {
-    Error::msg(format!(
-        "{}.{name}: expected {expected}, found {}",
-        prim.path(),
-        value_kind(value)
-    ))
+    Error::at(
+        format!("{}.{name}", prim.path()),
+        format!("expected {expected}, found {}", value_kind(value)),
+    )
 }
 
 /// A short description of a value's type for error messages.
@@ -327,10 +333,10 @@ pub fn vec2(prim: &Prim, name: &str, at: At) -> ValueResult<[f64; 2]> {
 /// `Ok(None)` when no layer authors it.
 pub fn int64_list_metadata(prim: &Prim, name: &str) -> ValueResult<Vec<i64>> {
     let stack = prim.prim_stack().map_err(|e| {
-        Error::msg(format!(
-            "{}: cannot read its prim stack: {e:#}",
-            prim.path()
-        ))
+        Error::at(
+            prim.path().to_string(),
+            format!("cannot read its prim stack: {e:#}"),
+        )
     })?;
     let mut composed: Option<Vec<i64>> = None;
     for (layer, path) in stack.iter().rev() {
@@ -338,10 +344,10 @@ pub fn int64_list_metadata(prim: &Prim, name: &str) -> ValueResult<Vec<i64>> {
             continue;
         };
         let value = layer.data().try_field(path, name).map_err(|e| {
-            Error::msg(format!(
-                "{}: metadata {name} cannot be read: {e}",
-                prim.path()
-            ))
+            Error::at(
+                prim.path().to_string(),
+                format!("metadata {name} cannot be read: {e}"),
+            )
         })?;
         let Some(value) = value else {
             continue;
@@ -352,11 +358,13 @@ pub fn int64_list_metadata(prim: &Prim, name: &str) -> ValueResult<Vec<i64>> {
             Value::IntVec(v) => v.iter().map(|&x| x as i64).collect(),
             Value::Int64Vec(v) => v.clone(),
             other => {
-                return Err(Error::msg(format!(
-                    "{}: metadata {name}: expected an int64 list op, found {}",
-                    prim.path(),
-                    value_kind(other)
-                )))
+                return Err(Error::at(
+                    prim.path().to_string(),
+                    format!(
+                        "metadata {name}: expected an int64 list op, found {}",
+                        value_kind(other)
+                    ),
+                ))
             }
         });
     }

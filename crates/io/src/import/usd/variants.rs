@@ -71,7 +71,10 @@ impl Variants {
             .variant_sets()
             .get_all_variant_selections()
             .map_err(|e| {
-                Error::msg(format!("{path}: cannot read its variant selections: {e:#}"))
+                Error::at(
+                    path.to_string(),
+                    format!("cannot read its variant selections: {e:#}"),
+                )
             })?;
         if selections.is_empty() || prim.is_instance_proxy().unwrap_or(false) {
             return Ok(());
@@ -120,9 +123,10 @@ impl Variants {
             self.sets.retain(|s| s.prim != path);
             self.depth += 1;
             if self.depth > MAX_NESTED_SELECTIONS {
-                return Err(Error::msg(format!(
-                    "{path}: variant selections nest deeper than {MAX_NESTED_SELECTIONS}"
-                )));
+                return Err(Error::at(
+                    path.to_string(),
+                    format!("variant selections nest deeper than {MAX_NESTED_SELECTIONS}"),
+                ));
             }
             let relisted = self.visit(stage, prim);
             self.depth -= 1;
@@ -156,10 +160,10 @@ impl Variants {
 /// Each variant set's variants over the prim's stack, sorted (as usd-core lists them).
 fn variant_choices(stage: &Stage, prim: &Prim) -> Result<HashMap<String, Vec<String>>> {
     let stack = prim.prim_stack().map_err(|e| {
-        Error::msg(format!(
-            "{}: cannot read its prim stack: {e:#}",
-            prim.path()
-        ))
+        Error::at(
+            prim.path().to_string(),
+            format!("cannot read its prim stack: {e:#}"),
+        )
     })?;
     let mut choices: HashMap<String, Vec<String>> = HashMap::new();
     for (layer, path) in &stack {
@@ -197,7 +201,10 @@ fn tokens(data: &dyn AbstractData, path: &sdf::Path, field: &str) -> Vec<String>
 /// selections that layer already authors for other sets.
 fn select(stage: &Stage, prim: &Prim, chosen: &[(String, String)]) -> Result<()> {
     let fail = |e: &dyn std::fmt::Display| {
-        Error::msg(format!("{}: cannot select its variants: {e}", prim.path()))
+        Error::at(
+            prim.path().to_string(),
+            format!("cannot select its variants: {e}"),
+        )
     };
     stage
         .set_edit_target(stage.edit_target_root())

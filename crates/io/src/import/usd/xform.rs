@@ -10,10 +10,12 @@
 //! `xformOpOrder` lists ops outermost first: for `[A, B, C]` a point `p` maps to `A·B·C·p`.
 
 use super::value::{self, value_matrix4, value_quat, value_scalar, value_vec3, At};
+use super::warning_at;
 use crate::error::{Error, Result};
 use glam::{DMat4, DQuat, DVec3};
 use openusd::sdf::Value;
 use openusd::usd::Prim;
+use raycast_core::diagnostic::{Code, Diagnostic};
 
 const INVERT: &str = "!invert!";
 const RESET: &str = "!resetXformStack!";
@@ -30,7 +32,7 @@ pub struct Local {
 /// Composes the prim's `xformOpOrder`. Problems that usd-core reports as warnings (an op
 /// attribute that is not authored, an unknown op name) are pushed to `warnings` and the op
 /// is skipped; a value of the wrong type or a singular inverted op is an error.
-pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Result<Local> {
+pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<Diagnostic>) -> Result<Local> {
     let order = match value::raw(prim, "xformOpOrder", at)? {
         None => {
             return Ok(Local {
@@ -46,11 +48,10 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Resul
             .map(|t| t.as_str().to_string())
             .collect::<Vec<String>>(),
         Some(other) => {
-            return Err(Error::msg(format!(
-                "{}.xformOpOrder: expected token[], found {}",
-                prim.path(),
-                value::value_kind(&other)
-            )))
+            return Err(Error::at(
+                format!("{}.xformOpOrder", prim.path()),
+                format!("expected token[], found {}", value::value_kind(&other)),
+            ))
         }
     };
     let mut matrix = DMat4::IDENTITY;
@@ -61,10 +62,10 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Resul
                 resets = true;
                 continue;
             }
-            return Err(Error::msg(format!(
-                "{}.xformOpOrder: {RESET} is only valid as the first entry (found at {i})",
-                prim.path()
-            )));
+            return Err(Error::at(
+                format!("{}.xformOpOrder", prim.path()),
+                format!("{RESET} is only valid as the first entry (found at {i})"),
+            ));
         }
         let (inverted, name) = match entry.strip_prefix(INVERT) {
             Some(rest) => (true, rest),
@@ -75,10 +76,10 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Resul
         };
         let op = if inverted {
             invert(op).ok_or_else(|| {
-                Error::msg(format!(
-                    "{}: {entry} cannot be inverted (its matrix is singular)",
-                    prim.path()
-                ))
+                Error::at(
+                    prim.path().to_string(),
+                    format!("{entry} cannot be inverted (its matrix is singular)"),
+                )
             })?
         } else {
             op
@@ -86,10 +87,10 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<String>) -> Resul
         matrix *= op;
     }
     if !matrix.is_finite() {
-        return Err(Error::msg(format!(
-            "{}: the local transform is not finite",
-            prim.path()
-        )));
+        return Err(Error::at(
+            prim.path().to_string(),
+            "the local transform is not finite",
+        ));
     }
     Ok(Local { matrix, resets })
 }
@@ -115,20 +116,25 @@ fn is_property_name(name: &str) -> bool {
 }
 
 /// The matrix of one op, `None` (with a warning) when it cannot be evaluated.
-fn op_matrix(prim: &Prim, name: &str, at: At, warnings: &mut Vec<String>) -> Result<Option<DMat4>> {
+fn op_matrix(
+    prim: &Prim,
+    name: &str,
+    at: At,
+    warnings: &mut Vec<Diagnostic>,
+) -> Result<Option<DMat4>> {
     let Some(rest) = name.strip_prefix("xformOp:") else {
-        warnings.push(format!(
-            "{}: xformOpOrder entry '{name}' is not an xformOp: ignored",
-            prim.path()
+        warnings.push(warning_at(
+            prim.path().to_string(),
+            format!("xformOpOrder entry '{name}' is not an xformOp: ignored"),
         ));
         return Ok(None);
     };
     if !is_property_name(name) {
-        return Err(Error::msg(format!(
-            "{}.xformOpOrder: entry '{}' is not an attribute name",
-            prim.path(),
-            name.escape_debug()
-        )));
+        return Err(Error::at(
+            format!("{}.xformOpOrder", prim.path()),
+            format!("entry '{}' is not an attribute name", name.escape_debug()),
+        )
+        .with_code(Code::UsdInvalidPath));
     }
     let kind = rest.split(':').next().unwrap_or(rest);
     let Some(raw) = value::raw(prim, name, at)? else {
@@ -137,15 +143,17 @@ fn op_matrix(prim: &Prim, name: &str, at: At, warnings: &mut Vec<String>) -> Res
         } else {
             "is not authored"
         };
-        warnings.push(format!("{}: xformOp {name} {why}: ignored", prim.path()));
+        warnings.push(warning_at(
+            prim.path().to_string(),
+            format!("xformOp {name} {why}: ignored"),
+        ));
         return Ok(None);
     };
     let bad = |expected: &str| {
-        Error::msg(format!(
-            "{}.{name}: expected {expected}, found {}",
-            prim.path(),
-            value::value_kind(&raw)
-        ))
+        Error::at(
+            format!("{}.{name}", prim.path()),
+            format!("expected {expected}, found {}", value::value_kind(&raw)),
+        )
     };
     let scalar = || value_scalar(&raw).ok_or_else(|| bad("a number"));
     let vector = || value_vec3(&raw).ok_or_else(|| bad("a 3-vector"));
@@ -181,18 +189,18 @@ fn op_matrix(prim: &Prim, name: &str, at: At, warnings: &mut Vec<String>) -> Res
         "orient" => {
             let q = value_quat(&raw).ok_or_else(|| bad("a quaternion"))?;
             if q.length_squared() == 0.0 || !q.is_finite() {
-                return Err(Error::msg(format!(
-                    "{}.{name}: zero or non-finite quaternion",
-                    prim.path()
-                )));
+                return Err(Error::at(
+                    format!("{}.{name}", prim.path()),
+                    "zero or non-finite quaternion",
+                ));
             }
             DMat4::from_quat(orient_rotation(q))
         }
         "transform" => value_matrix4(&raw).ok_or_else(|| bad("a matrix4d"))?,
         _ => {
-            warnings.push(format!(
-                "{}: unknown xformOp kind '{kind}' ({name}): ignored",
-                prim.path()
+            warnings.push(warning_at(
+                prim.path().to_string(),
+                format!("unknown xformOp kind '{kind}' ({name}): ignored"),
             ));
             return Ok(None);
         }

@@ -185,10 +185,10 @@ fn inbetweens(prim: &Prim, at: At) -> Result<Vec<SubShape>> {
             .attribute(name)
             .get_metadata::<Value>("weight")
             .map_err(|e| {
-                Error::msg(format!(
-                    "{}.{name}: cannot read its weight: {e:#}",
-                    prim.path()
-                ))
+                Error::at(
+                    format!("{}.{name}", prim.path()),
+                    format!("cannot read its weight: {e:#}"),
+                )
             })?;
         // The weight is a float (usd-core's `GetWeight(float*)`).
         let Some(weight) = weight.as_ref().and_then(value::value_scalar) else {

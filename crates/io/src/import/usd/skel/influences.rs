@@ -163,12 +163,22 @@ fn primvar(prim: &Prim, name: &str, at: At) -> Result<(Vec<f64>, i64, String)> {
     let attribute = prim.attribute(name);
     let element_size = attribute
         .get_metadata::<openusd::sdf::Value>("elementSize")
-        .map_err(|e| Error::msg(format!("{}.{name}: elementSize: {e:#}", prim.path())))?
+        .map_err(|e| {
+            Error::at(
+                format!("{}.{name}", prim.path()),
+                format!("elementSize: {e:#}"),
+            )
+        })?
         .and_then(|v| value::value_scalar(&v))
         .map_or(1, |x| x as i64);
     let interpolation = attribute
         .get_metadata::<openusd::sdf::Value>("interpolation")
-        .map_err(|e| Error::msg(format!("{}.{name}: interpolation: {e:#}", prim.path())))?
+        .map_err(|e| {
+            Error::at(
+                format!("{}.{name}", prim.path()),
+                format!("interpolation: {e:#}"),
+            )
+        })?
         .and_then(|v| match v {
             openusd::sdf::Value::Token(t) => Some(t.as_str().to_string()),
             openusd::sdf::Value::String(s) => Some(s),

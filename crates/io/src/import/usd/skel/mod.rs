@@ -26,6 +26,7 @@ mod skeleton;
 
 use super::value;
 use super::{err, Loader};
+use super::{warning_at, warning_because};
 use crate::error::{Error, Result};
 use crate::scene::SkeletonInfo;
 use blend_shapes::BlendShapes;
@@ -165,7 +166,8 @@ impl Loader {
             return Ok(None);
         };
         self.warn_unsupported_skinning(prim)?;
-        let not_skinned = |why: Error| format!("{path}: {why}: not skinned");
+        let not_skinned =
+            |why: Error| warning_because(path.to_string(), &why, format!("{why}: not skinned"));
         let influences = match Influences::read(indices, weights, self.at)? {
             Ok(influences) => influences,
             Err(why) => {
@@ -232,10 +234,7 @@ impl Loader {
     fn warn_unsupported_skinning(&mut self, prim: &Prim) -> Result<()> {
         let method = value::token(prim, "primvars:skel:skinningMethod", self.at)?;
         if let Some(method) = method.filter(|m| m != "classicLinear") {
-            self.warnings.push(format!(
-                "{}: skel:skinningMethod {method} is not supported: drawn with linear blend skinning",
-                prim.path()
-            ));
+            self.warnings.push(warning_at(prim.path().to_string(), format!("skel:skinningMethod {method} is not supported: drawn with linear blend skinning")));
         }
         Ok(())
     }
@@ -266,9 +265,11 @@ impl Loader {
                     info.blend_shaped.push(prim.path().to_string());
                 }
             }
-            Err(why) => self
-                .warnings
-                .push(format!("{}: {why}: blend shapes not applied", prim.path())),
+            Err(why) => self.warnings.push(warning_because(
+                prim.path().to_string(),
+                &why,
+                format!("{why}: blend shapes not applied"),
+            )),
         }
         Ok(())
     }
@@ -276,10 +277,7 @@ impl Loader {
     /// A warning for blend shapes on a prim skinned rigidly or not as a mesh.
     fn warn_unapplied_blend_shapes(&mut self, prim: &Prim) -> Result<()> {
         if value::is_authored(prim, "skel:blendShapes")? {
-            self.warnings.push(format!(
-                "{}: blend shapes are applied to meshes with vertex influences only (drawn without them)",
-                prim.path()
-            ));
+            self.warnings.push(warning_at(prim.path().to_string(), "blend shapes are applied to meshes with vertex influences only (drawn without them)"));
         }
         Ok(())
     }
@@ -295,8 +293,11 @@ impl Loader {
         let posed = match posed {
             Ok(posed) => Some(Rc::new(posed)),
             Err(why) => {
-                self.warnings
-                    .push(format!("{path}: {why}: the prims it binds are not skinned"));
+                self.warnings.push(warning_because(
+                    path.to_string(),
+                    &why,
+                    format!("{why}: the prims it binds are not skinned"),
+                ));
                 None
             }
         };
@@ -321,10 +322,12 @@ impl Loader {
             None => None,
         };
         if let (Some(source), None) = (&source, &animation) {
-            self.warnings.push(format!(
-                "{}: skel:animationSource {} is not a SkelAnimation: rest pose drawn",
-                prim.path(),
-                source.path()
+            self.warnings.push(warning_at(
+                prim.path().to_string(),
+                format!(
+                    "skel:animationSource {} is not a SkelAnimation: rest pose drawn",
+                    source.path()
+                ),
             ));
         }
         let skinning = match skeleton.skinning_transforms(animation.as_ref(), self.at)? {
