@@ -274,12 +274,11 @@ mod tests {
             infos: 0,
             seconds: 0.0,
             scene: None,
-            findings: vec![Finding {
-                code: crate::Code::IndexOob,
-                severity: Severity::Error,
-                location: "line 7".into(),
-                message: "50% <bad>\nnext".into(),
-            }],
+            findings: vec![Finding::error(
+                crate::Code::IndexOob,
+                "line 7",
+                "50% <bad>\nnext",
+            )],
             omitted: 0,
         }
     }

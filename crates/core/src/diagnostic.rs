@@ -289,6 +289,10 @@ pub struct Diagnostic {
     pub location: String,
     /// One line for a person.
     pub message: String,
+    /// Where the reader came to the problem from, when that is not where it lies (an accessor
+    /// read for a mesh primitive, a node): shown after the message as `(read for ...)`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reached_from: Option<String>,
 }
 
 impl Diagnostic {
@@ -304,7 +308,18 @@ impl Diagnostic {
             severity,
             location: location.into(),
             message: message.into(),
+            reached_from: None,
         }
+    }
+
+    /// The same diagnostic reached from `at` (a primitive, a node), so that a fail-fast error
+    /// names both; a diagnostic that lies under `at`, or was reached from somewhere already,
+    /// is kept as it is.
+    pub fn within(mut self, at: &str) -> Diagnostic {
+        if !self.location.starts_with(at) && self.reached_from.is_none() {
+            self.reached_from = Some(at.to_string());
+        }
+        self
     }
 
     /// An error diagnostic.
@@ -324,12 +339,16 @@ impl Diagnostic {
 }
 
 impl fmt::Display for Diagnostic {
-    /// `location: message`, or the message alone for the whole file.
+    /// `location: message`, or the message alone for the whole file; then `(read for ...)`
+    /// when it was reached from elsewhere.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.location.is_empty() {
-            f.write_str(&self.message)
-        } else {
-            write!(f, "{}: {}", self.location, self.message)
+        if !self.location.is_empty() {
+            write!(f, "{}: ", self.location)?;
+        }
+        f.write_str(&self.message)?;
+        match &self.reached_from {
+            Some(at) => write!(f, " (read for {at})"),
+            None => Ok(()),
         }
     }
 }
@@ -369,5 +388,12 @@ mod tests {
             Diagnostic::note(Code::ImporterNote, "whole").to_string(),
             "whole"
         );
+        let reached = at.within("/meshes/0/primitives/0").within("/nodes/3");
+        assert_eq!(
+            reached.to_string(),
+            "/accessors/0: too long (read for /meshes/0/primitives/0)"
+        );
+        let under = Diagnostic::error(Code::AccessorTooLong, "/nodes/3/mesh", "bad");
+        assert_eq!(under.within("/nodes/3").to_string(), "/nodes/3/mesh: bad");
     }
 }

@@ -2,7 +2,7 @@
 //! next to each other as soon as the cell splits, and every buffer is reused from cell to
 //! cell, so that no node or reference is copied after it is written.
 
-use super::build::{add_child, child_budget, octant_counts, Builder, Children, Node, Subtree};
+use super::cells::{add_child, child_budget, octant_counts, Builder, Children, Node, Subtree};
 use super::OctreeStats;
 use crate::accel::PrimitiveSet;
 use crate::geometry::Aabb;

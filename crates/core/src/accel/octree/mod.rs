@@ -70,6 +70,7 @@
 
 mod arena;
 mod build;
+mod cells;
 mod lanes;
 mod leaf;
 mod nearest;
@@ -80,7 +81,8 @@ mod wide;
 use super::{f32_above, prepare_ray_with, set_bits, Hit, PreparedRay, PrimitiveSet, GROUP};
 use crate::geometry::Aabb;
 pub use crate::simd::Kernel;
-use build::{cube_around, Builder};
+use build::cube_around;
+use cells::Builder;
 use glam::DVec3;
 use lanes::Lanes;
 pub use packet::WIDTH as PACKET;
@@ -176,7 +178,7 @@ impl Octree {
             margin,
         };
         let all: Vec<u32> = (0..set.len() as u32).collect();
-        let budget = build::MAX_REFERENCES_PER_PRIMITIVE * all.len() as f64;
+        let budget = cells::MAX_REFERENCES_PER_PRIMITIVE * all.len() as f64;
         let tree = builder.subtree(&root, all, 0, budget);
         let (mut layout, sources) = Layout::new(&tree.nodes, &tree.refs);
         leaf::fill(&mut layout, &sources, &tree.parts);

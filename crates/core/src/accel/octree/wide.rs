@@ -12,7 +12,7 @@
 //! a slightly looser box: a plane moves outward by less than one step, about 1/230 of the
 //! node's box (or 2⁻¹⁹ of its coordinates' magnitude, which keeps `k` small).
 
-use super::build::{Node, INTERIOR};
+use super::cells::{Node, INTERIOR};
 use super::leaf::{self, HEADER};
 use rayon::prelude::*;
 #[cfg(target_arch = "x86_64")]

@@ -6,7 +6,7 @@
 //! Where two chosen animations animate the same property of a node, the first one sets it.
 //! KHR_animation_pointer is not read.
 
-use super::diagnostics::{Code, Diagnostic, Within};
+use super::diagnostics::{Code, Diagnostic};
 use super::document::{array, index_of, Document};
 use crate::error::Error;
 use glam::{DQuat, DVec3};

@@ -9,22 +9,6 @@
 
 pub use raycast_core::diagnostic::{Code, Diagnostic, Severity};
 
-/// A diagnostic reached from somewhere: a primitive, a node.
-pub trait Within {
-    /// The same diagnostic, its message suffixed with where it was reached from (a
-    /// primitive, a node), so that a fail-fast error names both; once only.
-    fn within(self, at: &str) -> Diagnostic;
-}
-
-impl Within for Diagnostic {
-    fn within(mut self, at: &str) -> Diagnostic {
-        if !self.location.starts_with(at) && !self.message.contains("(read for ") {
-            self.message = format!("{} (read for {at})", self.message);
-        }
-        self
-    }
-}
-
 /// Where diagnostics go.
 pub trait Sink {
     /// Records a diagnostic.

@@ -3,7 +3,7 @@
 //! KHR_draco_mesh_compression is offered to [`super::decode::draco_primitive`] first.
 
 use super::decode;
-use super::diagnostics::{Code, Diagnostic, Within};
+use super::diagnostics::{Code, Diagnostic};
 use super::document::{extension, index_of, Document};
 use super::geometry::{Geometry, TriangleMode, DRACO};
 use glam::DVec3;

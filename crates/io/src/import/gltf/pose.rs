@@ -16,7 +16,7 @@
 
 use super::animation::NodeValues;
 use super::decode;
-use super::diagnostics::{Code, Diagnostic, FailFast, Within};
+use super::diagnostics::{Code, Diagnostic, FailFast};
 use super::document::{array, as_index, index_of, numbers, Document};
 use super::geometry::Geometry;
 use super::node::animated_transform;

@@ -6,7 +6,7 @@ use super::accessor::NO_DATA;
 use super::animation::NodeValues;
 use super::buffers::Need;
 use super::decode::{self, GPU_INSTANCING, MESHOPT};
-use super::diagnostics::{Code, Diagnostic, FailFast, Within};
+use super::diagnostics::{Code, Diagnostic, FailFast};
 use super::document::{array, as_index, extension, index_of, Document};
 use super::geometry::DRACO;
 use super::node::{bounded_transform, Node};
