@@ -7,7 +7,7 @@
 //! With `t_min = 0` the nearest hit of [`Tracer::nearest`] is exactly [`Tracer::trace`]'s (the
 //! same search), so buffers filled from either are bit-identical.
 //!
-//! With the `bvh-oracle` feature, [`BvhTracer`] finds the same nearest hits through an obvhs
+//! With the `bvh-oracle` feature, `BvhTracer` finds the same nearest hits through an obvhs
 //! BVH, for the tests and benchmarks that check and measure the octree against it.
 
 mod distance;
@@ -49,7 +49,7 @@ pub fn estimated_build_bytes(scene: &Scene) -> u64 {
 
 /// What the renderer fills its buffers from ([`crate::render::trace`]): the nearest hits of
 /// many rays in their ranges. [`Tracer`] is the one implementation of the command line and
-/// the Python package; [`BvhTracer`] (feature `bvh-oracle`) the oracle of tests and benches.
+/// the Python package; `BvhTracer` (feature `bvh-oracle`) the oracle of tests and benches.
 pub trait NearestHits: Sync {
     /// The scene the hits are in.
     fn scene(&self) -> &Scene;

@@ -36,33 +36,11 @@
 //! brute force would find, bit for bit, for either kernel.
 
 use super::lanes::{self, Kernel, Lanes};
-use super::wide::{Layout, Wide, LEAF};
+use super::layout::{box_words, Layout, HEADER, ROWS};
+use super::wide::{Wide, LEAF};
 use rayon::prelude::*;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
-
-/// Words of a leaf's header in [`Layout::refs`]: count, parent and lane.
-pub(super) const HEADER: usize = 2;
-
-/// Bytes per reference: six planes.
-const ROWS: usize = 6;
-
-/// Words after the last leaf: an eight-byte load from any row of its boxes stays in the array.
-pub(super) const SLACK_WORDS: usize = 2;
-
-/// The header of a leaf of `count` references in lane `lane` of node `parent`.
-pub(super) fn header(count: usize, parent: usize, lane: usize) -> [u32; HEADER] {
-    assert!(
-        parent < 1 << 28,
-        "{parent} nodes: too many for a leaf's header"
-    );
-    [count as u32, (parent << 3 | lane) as u32]
-}
-
-/// Words of the boxes of a leaf of `count` references.
-pub(super) fn box_words(count: usize) -> usize {
-    (ROWS * count).div_ceil(4)
-}
 
 /// Fills the boxes of every leaf of `layout`, each at `sources` (where it starts in the
 /// layout, and where its references' `parts`, the boxes of their primitives' parts in it,

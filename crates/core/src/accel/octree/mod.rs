@@ -72,6 +72,7 @@ mod arena;
 mod build;
 mod cells;
 mod lanes;
+mod layout;
 mod leaf;
 mod nearest;
 mod packet;
@@ -85,11 +86,11 @@ use build::cube_around;
 use cells::Builder;
 use glam::DVec3;
 use lanes::Lanes;
+use layout::Layout;
 pub use packet::WIDTH as PACKET;
 use rayon::prelude::*;
 use serde::Serialize;
 use traverse::Unobserved;
-use wide::Layout;
 
 /// Parameters of the build rule (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

@@ -13,10 +13,11 @@
 //! octant; and the boundary-trap rule is applied per ray.
 
 use super::lanes::{Kernel, Lanes, TINY, UNIT};
+use super::layout::Layout;
 use super::leaf;
 use super::traverse::{self, Unobserved, STACK};
 use super::wide::LIMIT;
-use super::wide::{Layout, Wide, LEAF};
+use super::wide::{Wide, LEAF};
 use crate::accel::{f32_above, set_bits as bits};
 use glam::DVec3;
 #[cfg(target_arch = "x86_64")]

@@ -1,9 +1,10 @@
 //! Unit tests of the node test: the culling audit for every kernel, and rays lying in planes.
 
 use super::lanes::{Kernel, Lanes};
+use super::layout::Layout;
 use super::packet::{Bundle, Tested};
 use super::traverse::{self, Observer};
-use super::wide::{Layout, Wide};
+use super::wide::Wide;
 use super::*;
 use crate::accel::{brute_force, f32_above, prepare_ray, test_primitive};
 use crate::scene::{Scene, SceneBuilder};

@@ -1,7 +1,8 @@
 //! The stack traversal over eight-wide nodes.
 
 use super::lanes::{self, Kernel, Lanes};
-use super::wide::{Layout, Wide, LEAF};
+use super::layout::Layout;
+use super::wide::{Wide, LEAF};
 use super::DEPTH_CAP;
 use crate::accel::f32_above;
 use std::mem::MaybeUninit;

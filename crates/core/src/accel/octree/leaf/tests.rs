@@ -1,6 +1,7 @@
 //! The leaf filter against the exact test, on rays aimed at vertices and edges, grazing, and
 //! from far away.
 
+use super::super::layout::SLACK_WORDS;
 use super::super::traverse::{self, Unobserved};
 use super::super::{Octree, OctreeParams};
 use super::*;
