@@ -515,7 +515,7 @@ fn check_into(
     // The same words as a render's for content that is another format than the name says.
     let extension = crate::import::extension_of(path);
     if let Err(e) = crate::import::sniff::check_content(path, &extension) {
-        findings.error(Code::FileTypeMismatch, "", e.message);
+        findings.error(Code::FileTypeMismatch, "", e.detail());
         return None;
     }
     let scene = match format {

@@ -312,6 +312,15 @@ impl Diagnostic {
         }
     }
 
+    /// The message, followed by `(read for ...)` when it was reached from elsewhere: the
+    /// diagnostic without its location.
+    pub fn text(&self) -> String {
+        match &self.reached_from {
+            Some(at) => format!("{} (read for {at})", self.message),
+            None => self.message.clone(),
+        }
+    }
+
     /// The same diagnostic reached from `at` (a primitive, a node), so that a fail-fast error
     /// names both; a diagnostic that lies under `at`, or was reached from somewhere already,
     /// is kept as it is.
@@ -345,11 +354,7 @@ impl fmt::Display for Diagnostic {
         if !self.location.is_empty() {
             write!(f, "{}: ", self.location)?;
         }
-        f.write_str(&self.message)?;
-        match &self.reached_from {
-            Some(at) => write!(f, " (read for {at})"),
-            None => Ok(()),
-        }
+        f.write_str(&self.text())
     }
 }
 
@@ -389,6 +394,7 @@ mod tests {
             "whole"
         );
         let reached = at.within("/meshes/0/primitives/0").within("/nodes/3");
+        assert_eq!(reached.text(), "too long (read for /meshes/0/primitives/0)");
         assert_eq!(
             reached.to_string(),
             "/accessors/0: too long (read for /meshes/0/primitives/0)"

@@ -59,7 +59,8 @@ struct Collect<'f> {
 impl Sink for Collect<'_> {
     fn push(&mut self, d: Diagnostic) {
         self.too_large |= d.code == Code::AssetTooLarge;
-        self.f.push(d.severity, d.code, d.location, d.message);
+        let message = d.text();
+        self.f.push(d.severity, d.code, d.location, message);
     }
 }
 
@@ -118,12 +119,7 @@ pub fn check(
     // The walker does not decode: a decoder's error is reported with its own code.
     if let Err(e) = &built {
         if DECODE_ERRORS.contains(&e.code) {
-            f.push(
-                Severity::Error,
-                e.code,
-                e.location.clone(),
-                e.message.clone(),
-            );
+            f.push(Severity::Error, e.code, e.location.clone(), e.text());
         }
     }
     // The importer's verdict keeps the layer's code, so a reader of the report need not

@@ -478,7 +478,7 @@ impl Walk<'_> {
         let spec = match self.doc.camera(camera) {
             Ok(spec) => spec,
             Err(e) => {
-                let message = format!("{}: camera skipped", e.message);
+                let message = format!("{}: camera skipped", e.text());
                 self.builder.warn(note_at(e.location, message));
                 return;
             }

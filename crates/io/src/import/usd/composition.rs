@@ -50,9 +50,14 @@ pub fn warnings(stage: &Stage) -> Vec<Diagnostic> {
 /// The code of a composition problem.
 fn code_of(error: &pcp::Error) -> Code {
     match error {
-        pcp::Error::ArcCycle(_) => Code::UsdCompositionCycle,
-        pcp::Error::UnresolvedLayer { .. } | pcp::Error::UnresolvedPrimPath { .. } => {
-            Code::MissingReference
+        pcp::Error::ArcCycle(_) | pcp::Error::SublayerCycle { .. } => Code::UsdCompositionCycle,
+        pcp::Error::UnresolvedLayer { .. }
+        | pcp::Error::UnresolvedPrimPath { .. }
+        | pcp::Error::UnresolvedSublayer { .. } => Code::MissingReference,
+        // A sublayer of a format the reader has no reader for (the reader says so in its
+        // reason, as for the referenced layers above).
+        pcp::Error::MalformedSublayer { reason, .. } if reason.contains(UNREAD_LAYER) => {
+            Code::UsdUnsupportedLayer
         }
         _ => Code::UsdCompositionError,
     }
