@@ -48,8 +48,8 @@ fn _raycast(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<camera::PyCamera>()?;
     m.add_function(wrap_pyfunction!(scene::load_path, m)?)?;
     m.add_function(wrap_pyfunction!(scene::load_bytes, m)?)?;
-    m.add_function(wrap_pyfunction!(objects::load_arrays, m)?)?;
-    m.add_function(wrap_pyfunction!(objects::load_objects, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::load_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::load_objects, m)?)?;
     m.add_function(wrap_pyfunction!(distance::closest_points, m)?)?;
     m.add_function(wrap_pyfunction!(distance::signed_distance, m)?)?;
     m.add_function(wrap_pyfunction!(camera::look_at, m)?)?;

@@ -2,7 +2,6 @@
 //! `Scene.from_objects` (meshes and quadrics by coefficients), and the arrays they keep for
 //! pickling.
 
-use crate::scene::{Pose, PyScene, Source};
 use glam::{DMat4, DVec3};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2};
@@ -137,33 +136,28 @@ fn quadric_part(args: QuadricArgs) -> Result<QuadricPart, Error> {
     Ok(QuadricPart { args, quadric })
 }
 
-/// A scene of one mesh, `mesh`, from `vertices` (N, 3) and triangle `faces` (M, 3) of vertex
-/// indices: every index in 0..N and every vertex finite, else a ValueError naming the first
-/// that is not.
-#[pyfunction]
-pub fn load_arrays(
-    py: Python<'_>,
+/// The objects of a scene of one mesh, `mesh`, from `vertices` (N, 3) and triangle `faces`
+/// (M, 3) of vertex indices: every index in 0..N and every vertex finite, else a ValueError
+/// naming the first that is not.
+pub(crate) fn one_mesh(
     vertices: PyReadonlyArray2<'_, f64>,
     faces: PyReadonlyArray2<'_, i64>,
-) -> PyResult<PyScene> {
+) -> PyResult<Objects> {
     let mesh = mesh_part("mesh".to_string(), &vertices, &faces)
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let objects = Objects {
+    Ok(Objects {
         meshes: vec![mesh],
         quadrics: Vec::new(),
-    };
-    PyScene::build(py, Source::Arrays(objects), None, Pose::default())
+    })
 }
 
-/// A scene of several objects: `meshes` as (name, vertices, faces), checked as
-/// [`load_arrays`] checks one, then `quadrics` (see [`QuadricArgs`]); object ids in that
-/// order from 1. A ValueError names the first object that is wrong and what is wrong.
-#[pyfunction]
-pub fn load_objects(
-    py: Python<'_>,
+/// The objects of a scene of several: `meshes` as (name, vertices, faces), checked as
+/// [`one_mesh`] checks one, then `quadrics` (see [`QuadricArgs`]); object ids in that order
+/// from 1. A ValueError names the first object that is wrong and what is wrong.
+pub(crate) fn many(
     meshes: Vec<(String, PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>)>,
     quadrics: Vec<QuadricArgs>,
-) -> PyResult<PyScene> {
+) -> PyResult<Objects> {
     let meshes = meshes
         .into_iter()
         .map(|(name, v, f)| {
@@ -180,6 +174,5 @@ pub fn load_objects(
         })
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let objects = Objects { meshes, quadrics };
-    PyScene::build(py, Source::Arrays(objects), None, Pose::default())
+    Ok(Objects { meshes, quadrics })
 }

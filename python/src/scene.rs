@@ -3,7 +3,7 @@
 use crate::arrays::RayArrays;
 use crate::camera::PyCamera;
 use crate::fill::{array, trace_dict};
-use crate::objects::{MeshArrays, Objects, QuadricArgs};
+use crate::objects::{self, MeshArrays, Objects, QuadricArgs};
 use crate::threads;
 use glam::DVec3;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
@@ -152,6 +152,29 @@ impl PyScene {
         };
         trace_dict(py, &self.tracer(), &rays, outputs, shape, nthreads)
     }
+}
+
+/// A scene of one mesh from arrays (`Scene.from_arrays`; see [`objects::one_mesh`]).
+#[pyfunction]
+pub fn load_arrays(
+    py: Python<'_>,
+    vertices: PyReadonlyArray2<'_, f64>,
+    faces: PyReadonlyArray2<'_, i64>,
+) -> PyResult<PyScene> {
+    let objects = objects::one_mesh(vertices, faces)?;
+    PyScene::build(py, Source::Arrays(objects), None, Pose::default())
+}
+
+/// A scene of meshes and quadrics from arrays (`Scene.from_objects`; see
+/// [`objects::many`]).
+#[pyfunction]
+pub fn load_objects(
+    py: Python<'_>,
+    meshes: Vec<(String, PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, i64>)>,
+    quadrics: Vec<QuadricArgs>,
+) -> PyResult<PyScene> {
+    let objects = objects::many(meshes, quadrics)?;
+    PyScene::build(py, Source::Arrays(objects), None, Pose::default())
 }
 
 /// Loads the scene file `path` (`scene`: a glTF scene by index or name, a USD prim path;

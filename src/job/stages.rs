@@ -325,10 +325,9 @@ fn trace_all(
     };
     let buffers = render::trace(tracer, &rays, &job.aovs, progress)
         .map_err(|i| Error::msg(format!("ray {i} cannot be traced")))?;
-    let hits = match job.hits {
-        Some(limit) => Some(tracer.hit_lists(source, range, limit.count())),
-        None => None,
-    };
+    let hits = job
+        .hits
+        .map(|limit| tracer.hit_lists(source, range, limit.count()));
     Ok((buffers, hits))
 }
 

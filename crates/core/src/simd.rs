@@ -1,4 +1,8 @@
-//! The one choice of CPU kernel for every SIMD path of the core.
+//! The one choice of CPU kernel for every SIMD path of the core, and the width of a packet.
+
+/// Rays in a packet: the octree's packet traversal and the triangle packet pre-filter take
+/// this many rays together (eight f32 lanes, one AVX2 register).
+pub const PACKET: usize = 8;
 
 /// Which implementation of the SIMD paths runs: the octree's node and leaf tests, the
 /// triangle pre-filters and the instance bounds test. Every kernel gives the same answers,

@@ -34,10 +34,6 @@ pub mod bounded;
 pub mod transform;
 pub mod triangle;
 
-use crate::geometry::triangle::WatertightRay;
-use crate::geometry::Ray;
-use crate::scene::{Crossing, Scene};
-use crate::trace::Tracer;
 use bounded::{gamma, up, Bounded};
 use glam::{DMat3, DVec3};
 use std::ops::{Add, Mul, Sub};
@@ -153,108 +149,4 @@ pub struct HitBound {
     /// The exact crossing is inside the primitive, in front of the origin and isolated, and
     /// the primitive has no other exact crossing nearer than `t + δ`.
     pub certain: bool,
-}
-
-/// The bound of `hit`, the nearest hit of `ray`: computed once per hit and shared by the
-/// `error` and `certain` AOVs.
-pub fn hit_bound(scene: &Scene, ray: &Ray, hit: &Crossing) -> HitBound {
-    scene.hit_bound(hit, ray.origin, ray.dir)
-}
-
-/// The `error` AOV of a hit of `ray` from its bound: a bound on `|t·|d| − t*·|d||` (see the
-/// module docs).
-pub fn depth_error(bound: &HitBound, ray: &Ray) -> f64 {
-    depth_bound(bound.t, ray.dir).error
-}
-
-/// `t·|d|` as the trace computes it (`dot` then `sqrt`), with its bound.
-fn depth_bound(t: Bounded, dir: DVec3) -> Bounded {
-    let d = bounded::exact3(dir);
-    t.mul(bounded::dot3(&d, &d).sqrt())
-}
-
-/// The `certain` AOV of `ray` with its nearest hit `hit` (and the hit's [`hit_bound`]) in the
-/// range `(t_min, t_max]` (see the module docs). A hit must lie in the range by more than its
-/// bound; crossings before `t_min` count as competitors too (conservative).
-///
-/// Cost: the hit's own test comes first (most uncertain hits are decided there, at no extra
-/// cost); then one scalar traversal of the octree up to `t + δ` (or `t_max` for a miss),
-/// each candidate passed over by [`triangle::certainly_apart`]'s f64 filters (a depth range,
-/// the sheared triangle's box, the edge functions' signs) before any bounded recomputation.
-pub fn certain(
-    query: &Tracer,
-    ray: &Ray,
-    hit: Option<(&Crossing, &HitBound)>,
-    (t_min, t_max): (f64, f64),
-) -> bool {
-    let scene = query.scene;
-    let t_limit = match hit {
-        Some((_, bound)) => {
-            let (low, high) = (
-                bound.t.value - bound.t.error,
-                up(bound.t.value + bound.t.error),
-            );
-            if !bound.certain || low.is_nan() || low <= t_min || high > t_max {
-                return false;
-            }
-            high
-        }
-        None => t_max,
-    };
-    let hit = hit.map(|(h, _)| scene.with_inner(h, ray.origin, ray.dir));
-    let probe = Probe::new(
-        ray,
-        t_limit,
-        hit.as_ref(),
-        query.octree.root().size().max_element(),
-    );
-    let mut certain = true;
-    let local = ray.origin - scene.anchor;
-    query
-        .octree
-        .traverse(local, ray.dir, t_limit, |refs, _, _| {
-            if refs
-                .iter()
-                .any(|&prim| scene.may_cross(prim as usize, &probe))
-            {
-                certain = false;
-                f64::NEG_INFINITY
-            } else {
-                t_limit
-            }
-        });
-    certain
-}
-
-/// One `certain` query: the exact ray, the range `(0, limit]` searched for competitors, the
-/// hit they compete with, and the size of the scene octree's root (see [`CELL_SLACK`]); the
-/// ray's watertight set-up made once for all candidates.
-#[derive(Debug, Clone, Copy)]
-pub struct Probe<'a> {
-    /// The ray's f64 origin, taken as exact.
-    pub origin: DVec3,
-    /// The ray's f64 direction, taken as exact.
-    pub dir: DVec3,
-    /// The same ray prepared for the watertight test's frame.
-    pub watertight: WatertightRay,
-    /// Competitors are crossings in `(0, limit]`.
-    pub limit: f64,
-    /// The reported hit (its instance triangle found), or `None` for a miss.
-    pub hit: Option<&'a Crossing>,
-    /// The largest side of the scene octree's root.
-    pub root: f64,
-}
-
-impl<'a> Probe<'a> {
-    /// The probe of `ray` up to `limit` against `hit`.
-    pub fn new(ray: &Ray, limit: f64, hit: Option<&'a Crossing>, root: f64) -> Probe<'a> {
-        Probe {
-            origin: ray.origin,
-            dir: ray.dir,
-            watertight: WatertightRay::new(ray.origin, ray.dir),
-            limit,
-            hit,
-            root,
-        }
-    }
 }

@@ -3,8 +3,8 @@
 //! bounds, and never for a ray that can.
 
 use super::Aabb;
-use crate::accel::PACKET;
 use crate::simd::Kernel;
+use crate::simd::PACKET;
 use glam::DVec3;
 
 /// A primitive's world bounds, with what the pre-test's margin needs.

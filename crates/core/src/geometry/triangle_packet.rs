@@ -14,8 +14,8 @@
 //! instructions per four pairs where the single-ray test spends some sixty per pair.
 
 use super::triangle::WatertightRay;
-use crate::accel::PACKET;
 use crate::simd::Kernel;
+use crate::simd::PACKET;
 use glam::DVec3;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;

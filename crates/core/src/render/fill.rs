@@ -169,14 +169,14 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
         self.scene.locate_crossing(hit, ray.origin, ray.dir)
     }
 
-    /// The bound of each hit of the block ([`crate::bound::hit_bound`]), made on first use
+    /// The bound of each hit of the block ([`super::bounds::hit_bound`]), made on first use
     /// and shared by the `error` and `certain` columns.
     fn hit_bounds(&self, hits: &[Option<Crossing>]) -> &[Option<HitBound>] {
         self.bounds.get_or_init(|| {
             let each = hits.iter().enumerate();
             each.map(|(j, hit)| {
                 let hit = hit.as_ref()?;
-                Some(crate::bound::hit_bound(self.scene, &self.ray(j), hit))
+                Some(super::bounds::hit_bound(self.scene, &self.ray(j), hit))
             })
             .collect()
         })
@@ -226,7 +226,7 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
                 let bounds = self.hit_bounds(hits);
                 fill(out, hits, 0.0, |j, _| {
                     bounds[j].map_or(f64::INFINITY, |b| {
-                        crate::bound::depth_error(&b, &self.ray(j))
+                        super::bounds::depth_error(&b, &self.ray(j))
                     })
                 })
             }
@@ -237,7 +237,7 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
                     let range = (self.range)(self.start + j);
                     let hit = hit.as_ref().zip(bounds[j].as_ref());
                     let certain = query.as_ref().is_some_and(|query| {
-                        crate::bound::certain(query, &self.ray(j), hit, range)
+                        super::bounds::certain(query, &self.ray(j), hit, range)
                     });
                     *slot = u8::from(certain);
                 }

@@ -3,6 +3,7 @@
 //! Every ray is traced independently and results are stored by ray index, so the buffers are
 //! bit-identical for any thread count. Only the requested AOVs are computed.
 
+mod bounds;
 mod fill;
 pub mod samples;
 

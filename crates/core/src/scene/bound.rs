@@ -7,11 +7,46 @@ use crate::bound::bounded;
 use crate::bound::bounded::{exact3, gamma, up, BVec3, Bounded};
 use crate::bound::transform::moved;
 use crate::bound::triangle::{self, TriangleBound};
-use crate::bound::{mapped, HitBound, Probe, Side, CELL_SLACK};
+use crate::bound::{mapped, HitBound, Side, CELL_SLACK};
+use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Aabb;
+use crate::geometry::Ray;
 use crate::quadric::{Others, QuadricBound, RootBound};
 use glam::{DMat3, DVec3};
 use std::ops::Sub;
+
+/// One `certain` query: the exact ray, the range `(0, limit]` searched for competitors, the
+/// hit they compete with, and the size of the scene octree's root (see [`crate::bound::CELL_SLACK`]); the
+/// ray's watertight set-up made once for all candidates.
+#[derive(Debug, Clone, Copy)]
+pub struct Probe<'a> {
+    /// The ray's f64 origin, taken as exact.
+    pub origin: DVec3,
+    /// The ray's f64 direction, taken as exact.
+    pub dir: DVec3,
+    /// The same ray prepared for the watertight test's frame.
+    pub watertight: WatertightRay,
+    /// Competitors are crossings in `(0, limit]`.
+    pub limit: f64,
+    /// The reported hit (its instance triangle found), or `None` for a miss.
+    pub hit: Option<&'a Crossing>,
+    /// The largest side of the scene octree's root.
+    pub root: f64,
+}
+
+impl<'a> Probe<'a> {
+    /// The probe of `ray` up to `limit` against `hit`.
+    pub fn new(ray: &Ray, limit: f64, hit: Option<&'a Crossing>, root: f64) -> Probe<'a> {
+        Probe {
+            origin: ray.origin,
+            dir: ray.dir,
+            watertight: WatertightRay::new(ray.origin, ray.dir),
+            limit,
+            hit,
+            root,
+        }
+    }
+}
 
 /// Whether a bounded crossing `t` may lie in `(0, limit]`.
 fn may_lie_in(t: Bounded, limit: f64) -> bool {

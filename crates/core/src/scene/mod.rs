@@ -31,6 +31,7 @@ mod shading;
 pub mod topology;
 
 pub use attributes::Attributes;
+pub use bound::Probe;
 pub use builder::SceneBuilder;
 pub use hits::{Crossing, EdgeRule};
 pub use instance::{Instance, StoredMesh};

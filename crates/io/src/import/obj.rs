@@ -8,65 +8,13 @@
 //! then continuations are joined and empty or unknown statements skipped with a warning
 //! (see [`super::obj_text`]).
 
+use super::obj_text::{quoted, STATEMENTS};
 use crate::error::{Error, Result};
 use crate::scene::attributes::{corners, runs};
 use crate::scene::{Attributes, Mesh, Scene, SceneBuilder};
 use glam::{DMat4, DVec3};
 use std::path::Path;
 use std::sync::Arc;
-
-/// The keywords of the OBJ format (Wavefront's specification: vertex data, free-form curve
-/// and surface attributes and bodies, elements, connectivity, grouping, display and render
-/// attributes, and the superseded and general statements).
-pub(crate) const STATEMENTS: &[&str] = &[
-    "v",
-    "vt",
-    "vn",
-    "vp",
-    "cstype",
-    "deg",
-    "bmat",
-    "step",
-    "p",
-    "l",
-    "f",
-    "curv",
-    "curv2",
-    "surf",
-    "parm",
-    "trim",
-    "hole",
-    "scrv",
-    "sp",
-    "end",
-    "con",
-    "g",
-    "s",
-    "mg",
-    "o",
-    "bevel",
-    "c_interp",
-    "d_interp",
-    "lod",
-    "usemtl",
-    "mtllib",
-    "shadow_obj",
-    "trace_obj",
-    "ctech",
-    "stech",
-    "maplib",
-    "usemap",
-    "call",
-    "csh",
-    "bsp",
-    "bzp",
-    "cdc",
-    "cdp",
-    "res",
-];
-
-/// Characters of a foreign line quoted in a message.
-const QUOTED_CHARS: usize = 24;
 
 /// Loads an OBJ file. Materials are named by `usemtl`; MTL files are not read.
 pub fn load(path: &Path) -> Result<Scene> {
@@ -164,20 +112,6 @@ pub fn check_statements(text: &str) -> Result<()> {
         ))),
         None => Ok(()),
     }
-}
-
-/// The start of a foreign line, for a message: at most [`QUOTED_CHARS`] characters, control
-/// characters escaped.
-pub(crate) fn quoted(line: &str) -> String {
-    let mut out: String = line
-        .chars()
-        .take(QUOTED_CHARS)
-        .flat_map(char::escape_debug)
-        .collect();
-    if line.chars().nth(QUOTED_CHARS).is_some() {
-        out.push('…');
-    }
-    out
 }
 
 /// Each model's triangles' materials (scene material ids, 0: none), from the `usemtl`

@@ -8,7 +8,6 @@
 //! the first of its physical lines and the lines it swallowed become blank, so that line `n`
 //! of the result is line `n` of the file and messages name the file's own lines.
 
-use super::obj::STATEMENTS;
 use std::collections::BTreeMap;
 
 /// Statements that mean something without arguments (`g` and `o` start an unnamed group or
@@ -94,7 +93,7 @@ pub fn normalise(text: &str) -> ObjText {
         warnings.push(format!(
             "line {}: '{}' is not an OBJ statement: skipped{}",
             s.first,
-            super::obj::quoted(keyword),
+            quoted(keyword),
             more(s.count)
         ));
     }
@@ -118,7 +117,7 @@ impl Misspelt {
         let (line, written, read) = self.first.as_ref()?;
         Some(format!(
             "line {line}: '{}' is not a number: read as {read}, as trimesh reads it{}",
-            super::obj::quoted(written),
+            quoted(written),
             more(self.lines)
         ))
     }
@@ -204,6 +203,73 @@ pub fn face_materials(text: &str) -> (Vec<String>, Vec<u32>) {
         }
     }
     (names, per_triangle)
+}
+
+/// The keywords of the OBJ format (Wavefront's specification: vertex data, free-form curve
+/// and surface attributes and bodies, elements, connectivity, grouping, display and render
+/// attributes, and the superseded and general statements).
+pub(crate) const STATEMENTS: &[&str] = &[
+    "v",
+    "vt",
+    "vn",
+    "vp",
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "p",
+    "l",
+    "f",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "g",
+    "s",
+    "mg",
+    "o",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "lod",
+    "usemtl",
+    "mtllib",
+    "shadow_obj",
+    "trace_obj",
+    "ctech",
+    "stech",
+    "maplib",
+    "usemap",
+    "call",
+    "csh",
+    "bsp",
+    "bzp",
+    "cdc",
+    "cdp",
+    "res",
+];
+
+/// Characters of a foreign line quoted in a message.
+const QUOTED_CHARS: usize = 24;
+
+/// The start of a foreign line, for a message: at most [`QUOTED_CHARS`] characters, control
+/// characters escaped.
+pub(crate) fn quoted(line: &str) -> String {
+    let mut out: String = line
+        .chars()
+        .take(QUOTED_CHARS)
+        .flat_map(char::escape_debug)
+        .collect();
+    if line.chars().nth(QUOTED_CHARS).is_some() {
+        out.push('…');
+    }
+    out
 }
 
 #[cfg(test)]

@@ -24,8 +24,8 @@ use glam::DVec3;
 use std::arch::x86_64::*;
 use std::mem::MaybeUninit;
 
-/// Rays in a packet.
-pub const WIDTH: usize = 8;
+/// Rays in a packet ([`crate::simd::PACKET`]).
+pub const WIDTH: usize = crate::simd::PACKET;
 
 /// Eight rays set up for the packet test: per axis, one value per ray.
 #[derive(Debug, Clone, Copy)]

@@ -15,8 +15,9 @@
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
-/// A child reference with this bit set names a leaf (the index in [`super::layout::Layout::refs`] of its
-/// reference count, followed by its references); otherwise it names a node.
+/// A child reference with this bit set names a leaf (the index in
+/// [`super::layout::Layout::refs`] of its reference count, followed by its references);
+/// otherwise it names a node.
 pub(super) const LEAF: u32 = 1 << 31;
 
 /// Below this magnitude a ray's `|r|` loses relative precision in f32, and above it for `s`

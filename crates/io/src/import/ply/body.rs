@@ -159,7 +159,7 @@ impl<'a> Body<'a> {
             Some(v) if !scalar.is_integer() || in_range(scalar, v) => Ok(v),
             _ => Err(Fault::NotA(
                 scalar,
-                super::super::obj::quoted(&String::from_utf8_lossy(token)),
+                super::super::obj_text::quoted(&String::from_utf8_lossy(token)),
             )),
         }
     }

@@ -203,7 +203,7 @@ pub fn parse(bytes: &[u8]) -> Result<Header, PlyError> {
             ["ply" | "format" | "end_header", ..] => {
                 return Err(error(number, format!("a bad '{}' line", words[0])));
             }
-            _ => unknown_lines.push((number, super::super::obj::quoted(text.trim()))),
+            _ => unknown_lines.push((number, super::super::obj_text::quoted(text.trim()))),
         }
     }
     let format = format.ok_or_else(|| error(2, "the header has no 'format' line".into()))?;

@@ -234,7 +234,13 @@ impl Loader {
     fn warn_unsupported_skinning(&mut self, prim: &Prim) -> Result<()> {
         let method = value::token(prim, "primvars:skel:skinningMethod", self.at)?;
         if let Some(method) = method.filter(|m| m != "classicLinear") {
-            self.warnings.push(warning_at(prim.path().to_string(), format!("skel:skinningMethod {method} is not supported: drawn with linear blend skinning")));
+            self.warnings.push(warning_at(
+                prim.path().to_string(),
+                format!(
+                    "skel:skinningMethod {method} is not supported: drawn with linear blend \
+                     skinning"
+                ),
+            ));
         }
         Ok(())
     }
@@ -277,7 +283,11 @@ impl Loader {
     /// A warning for blend shapes on a prim skinned rigidly or not as a mesh.
     fn warn_unapplied_blend_shapes(&mut self, prim: &Prim) -> Result<()> {
         if value::is_authored(prim, "skel:blendShapes")? {
-            self.warnings.push(warning_at(prim.path().to_string(), "blend shapes are applied to meshes with vertex influences only (drawn without them)"));
+            self.warnings.push(warning_at(
+                prim.path().to_string(),
+                "blend shapes are applied to meshes with vertex influences only (drawn without \
+                 them)",
+            ));
         }
         Ok(())
     }

@@ -1,0 +1,83 @@
+//! The `error` and `certain` buffers of a trace, from the bounds of [`crate::bound`] (what
+//! they bound and mean is said there): a hit's bound, its depth error, and the search for a
+//! competitor that decides `certain`.
+
+use crate::bound::bounded::{self, up, Bounded};
+use crate::bound::HitBound;
+use crate::geometry::Ray;
+use crate::scene::{Crossing, Probe, Scene};
+use crate::trace::Tracer;
+use glam::DVec3;
+use std::ops::Mul;
+
+/// The bound of `hit`, the nearest hit of `ray`: computed once per hit and shared by the
+/// `error` and `certain` AOVs.
+pub fn hit_bound(scene: &Scene, ray: &Ray, hit: &Crossing) -> HitBound {
+    scene.hit_bound(hit, ray.origin, ray.dir)
+}
+
+/// The `error` AOV of a hit of `ray` from its bound: a bound on `|t·|d| − t*·|d||` (see the
+/// module docs).
+pub fn depth_error(bound: &HitBound, ray: &Ray) -> f64 {
+    depth_bound(bound.t, ray.dir).error
+}
+
+/// `t·|d|` as the trace computes it (`dot` then `sqrt`), with its bound.
+fn depth_bound(t: Bounded, dir: DVec3) -> Bounded {
+    let d = bounded::exact3(dir);
+    t.mul(bounded::dot3(&d, &d).sqrt())
+}
+
+/// The `certain` AOV of `ray` with its nearest hit `hit` (and the hit's [`hit_bound`]) in the
+/// range `(t_min, t_max]` (see the module docs). A hit must lie in the range by more than its
+/// bound; crossings before `t_min` count as competitors too (conservative).
+///
+/// Cost: the hit's own test comes first (most uncertain hits are decided there, at no extra
+/// cost); then one scalar traversal of the octree up to `t + δ` (or `t_max` for a miss),
+/// each candidate passed over by [`crate::bound::triangle::certainly_apart`]'s f64 filters (a
+/// depth range, the sheared triangle's box, the edge functions' signs) before any bounded
+/// recomputation.
+pub fn certain(
+    query: &Tracer,
+    ray: &Ray,
+    hit: Option<(&Crossing, &HitBound)>,
+    (t_min, t_max): (f64, f64),
+) -> bool {
+    let scene = query.scene;
+    let t_limit = match hit {
+        Some((_, bound)) => {
+            let (low, high) = (
+                bound.t.value - bound.t.error,
+                up(bound.t.value + bound.t.error),
+            );
+            if !bound.certain || low.is_nan() || low <= t_min || high > t_max {
+                return false;
+            }
+            high
+        }
+        None => t_max,
+    };
+    let hit = hit.map(|(h, _)| scene.with_inner(h, ray.origin, ray.dir));
+    let probe = Probe::new(
+        ray,
+        t_limit,
+        hit.as_ref(),
+        query.octree.root().size().max_element(),
+    );
+    let mut certain = true;
+    let local = ray.origin - scene.anchor;
+    query
+        .octree
+        .traverse(local, ray.dir, t_limit, |refs, _, _| {
+            if refs
+                .iter()
+                .any(|&prim| scene.may_cross(prim as usize, &probe))
+            {
+                certain = false;
+                f64::NEG_INFINITY
+            } else {
+                t_limit
+            }
+        });
+    certain
+}
