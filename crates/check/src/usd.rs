@@ -97,13 +97,9 @@ pub fn load(path: &Path, root: &Path, options: &CheckOptions, f: &mut Findings) 
     if options.allow_outside {
         return import::usd::load(path, &load);
     }
-    let (mut result, refused) = import::usd::load_confined(path, &load, root);
-    if let Ok(scene) = &mut result {
-        // A refused layer is also unresolved: report it once.
-        scene
-            .warnings
-            .retain(|w| !refused.iter().any(|r| w.message.contains(r.as_str())));
-    }
+    // A refused layer is reported once, as PATH_OUTSIDE_ASSET: the importer leaves it out of
+    // the unresolved ones.
+    let (result, refused) = import::usd::load_confined(path, &load, root);
     for asset in refused {
         f.error(
             Code::PathOutsideAsset,
@@ -125,19 +121,13 @@ pub fn load_failure_code(error: &Error) -> Code {
     }
 }
 
-/// Maps one composition problem reported by the USD reader (the importer gave it its code) to
-/// a finding: a layer that cannot be found (`MISSING_REFERENCE`) and a composition cycle
-/// (`USD_COMPOSITION_CYCLE`) are errors, layers of a format the reader does not know
-/// (`USD_UNSUPPORTED_LAYER`: MaterialX, for instance) an info, anything else
-/// (`USD_COMPOSITION_ERROR`) a warning. The location is the prim the arc is authored on: the
-/// reader's error names it last, after " at ", and holds it in no field of its own that the
-/// scene keeps.
+/// Maps one composition problem reported by the USD reader (the importer gave it its code and
+/// its location, the prim the arc is authored on) to a finding: a layer that cannot be found
+/// (`MISSING_REFERENCE`) and a composition cycle (`USD_COMPOSITION_CYCLE`) are errors, layers
+/// of a format the reader does not know (`USD_UNSUPPORTED_LAYER`: MaterialX, for instance) an
+/// info, anything else (`USD_COMPOSITION_ERROR`) a warning.
 pub fn composition_finding(problem: &Diagnostic, f: &mut Findings) {
-    let message = &problem.message;
-    let location = message
-        .rsplit_once(" at /")
-        .map(|(_, rest)| format!("/{}", rest.split([' ', ':']).next().unwrap_or("")))
-        .unwrap_or_default();
+    let (message, location) = (&problem.message, problem.location.clone());
     let severity = match problem.code {
         Code::UsdUnsupportedLayer => Severity::Info,
         Code::UsdCompositionError => Severity::Warning,

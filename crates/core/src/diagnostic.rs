@@ -293,6 +293,11 @@ pub struct Diagnostic {
     /// read for a mesh primitive, a node): shown after the message as `(read for ...)`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reached_from: Option<String>,
+    /// What the line is headed with instead of the location, for a problem whose line names
+    /// its kind first (a USD composition problem: `composition: ...`, its location the prim
+    /// the arc is authored on). Not part of a report's JSON.
+    #[serde(skip)]
+    pub heading: Option<&'static str>,
 }
 
 impl Diagnostic {
@@ -309,6 +314,7 @@ impl Diagnostic {
             location: location.into(),
             message: message.into(),
             reached_from: None,
+            heading: None,
         }
     }
 
@@ -348,11 +354,13 @@ impl Diagnostic {
 }
 
 impl fmt::Display for Diagnostic {
-    /// `location: message`, or the message alone for the whole file; then `(read for ...)`
-    /// when it was reached from elsewhere.
+    /// `location: message` (`heading: message` with a heading), or the message alone for the
+    /// whole file; then `(read for ...)` when it was reached from elsewhere.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if !self.location.is_empty() {
-            write!(f, "{}: ", self.location)?;
+        match self.heading {
+            Some(heading) => write!(f, "{heading}: ")?,
+            None if !self.location.is_empty() => write!(f, "{}: ", self.location)?,
+            None => {}
         }
         f.write_str(&self.text())
     }
@@ -399,6 +407,11 @@ mod tests {
             reached.to_string(),
             "/accessors/0: too long (read for /meshes/0/primitives/0)"
         );
+        let headed = Diagnostic {
+            heading: Some("composition"),
+            ..Diagnostic::warning(Code::MissingReference, "/World", "unresolved layer")
+        };
+        assert_eq!(headed.to_string(), "composition: unresolved layer");
         let under = Diagnostic::error(Code::AccessorTooLong, "/nodes/3/mesh", "bad");
         assert_eq!(under.within("/nodes/3").to_string(), "/nodes/3/mesh: bad");
     }

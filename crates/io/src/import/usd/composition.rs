@@ -25,10 +25,14 @@ struct Unread {
 /// composition cycle `USD_COMPOSITION_CYCLE`, a layer or prim that cannot be found
 /// `MISSING_REFERENCE`, the layers of unknown formats `USD_UNSUPPORTED_LAYER`, anything else
 /// `USD_COMPOSITION_ERROR`.
-pub fn warnings(stage: &Stage) -> Vec<Diagnostic> {
+pub fn warnings(stage: &Stage, refused: &[String]) -> Vec<Diagnostic> {
     let mut unread = Vec::new();
     let mut lines = Vec::new();
     for error in stage.composition_errors() {
+        if asset_of(&error).is_some_and(|asset| refused.iter().any(|r| asset.contains(r.as_str())))
+        {
+            continue;
+        }
         match &error {
             pcp::Error::MalformedLayer {
                 asset_path,
@@ -39,12 +43,47 @@ pub fn warnings(stage: &Stage) -> Vec<Diagnostic> {
                 asset: asset_path.clone(),
                 site: site_path.to_string(),
             }),
-            _ => lines.push(composition(code_of(&error), format!("{error}"))),
+            _ => lines.push(composition(
+                code_of(&error),
+                site_of(&error),
+                format!("{error}"),
+            )),
         }
     }
     let note = unread_note(unread);
-    lines.extend(note.map(|line| composition(Code::UsdUnsupportedLayer, line)));
+    lines.extend(note.map(|(site, line)| composition(Code::UsdUnsupportedLayer, site, line)));
     lines
+}
+
+/// The asset path of a layer the problem is about, if it is about one.
+fn asset_of(error: &pcp::Error) -> Option<&str> {
+    use pcp::Error::*;
+    match error {
+        UnresolvedLayer { asset_path, .. }
+        | MalformedLayer { asset_path, .. }
+        | MutedAssetPath { asset_path, .. }
+        | UnresolvedSublayer { asset_path, .. }
+        | MalformedSublayer { asset_path, .. } => Some(asset_path),
+        _ => None,
+    }
+}
+
+/// The prim the problem's arc is authored on, where the error names one; empty otherwise.
+fn site_of(error: &pcp::Error) -> String {
+    use pcp::Error::*;
+    match error {
+        ArcCycle(chain) => chain.composing.to_string(),
+        UnresolvedLayer { site_path, .. }
+        | MalformedLayer { site_path, .. }
+        | MutedAssetPath { site_path, .. }
+        | InvalidPrimPath { site_path, .. }
+        | UnresolvedPrimPath { site_path, .. }
+        | MissingDefaultPrim { site_path, .. }
+        | InvalidDefaultPrim { site_path, .. }
+        | InvalidExpression { site_path, .. } => site_path.to_string(),
+        ProhibitedRelocationSource { site, .. } => site.to_string(),
+        _ => String::new(),
+    }
 }
 
 /// The code of a composition problem.
@@ -63,14 +102,17 @@ fn code_of(error: &pcp::Error) -> Code {
     }
 }
 
-/// A composition warning: `composition: {message}`, the location naming the kind of
-/// problem as the line shows it.
-fn composition(code: Code, message: String) -> Diagnostic {
-    Diagnostic::warning(code, "composition", message)
+/// A composition warning at the prim `site`: the line reads `composition: {message}`.
+fn composition(code: Code, site: String, message: String) -> Diagnostic {
+    Diagnostic {
+        heading: Some("composition"),
+        ..Diagnostic::warning(code, site, message)
+    }
 }
 
-/// One line for the layers of unknown formats, naming their kinds and the first of them.
-fn unread_note(mut unread: Vec<Unread>) -> Option<String> {
+/// One line for the layers of unknown formats, naming their kinds and the first of them, with
+/// the prim that first one is referenced on.
+fn unread_note(mut unread: Vec<Unread>) -> Option<(String, String)> {
     unread.sort_by(|a, b| (&a.asset, &a.site).cmp(&(&b.asset, &b.site)));
     let first = unread.first()?;
     let kinds: BTreeSet<String> = unread.iter().map(|u| kind_of(&u.asset)).collect();
@@ -81,13 +123,14 @@ fn unread_note(mut unread: Vec<Unread>) -> Option<String> {
     } else {
         "references"
     };
-    Some(format!(
+    let line = format!(
         "{count} {references} to layers {UNREAD_NOTE} ({}) skipped: materials \
          and the like, not needed for ray casting; first: @{}@ at {}",
         kinds.join(", "),
         first.asset,
         first.site
-    ))
+    );
+    Some((first.site.clone(), line))
 }
 
 /// The kind of layer an asset path names: `MaterialX .mtlx` for MaterialX, else its

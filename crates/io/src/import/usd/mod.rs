@@ -207,6 +207,7 @@ fn load_stage(
     confine: Option<confine::Confined>,
 ) -> Result<Scene> {
     let fail = |e: Error| e.with_path(path);
+    let refused = confine.as_ref().map(|c| c.refused.clone());
     let stage = match confine {
         None => Stage::open(text),
         Some(confine) => Stage::builder().resolver(confine).open(text),
@@ -234,7 +235,12 @@ fn load_stage(
     let variant_sets = std::mem::replace(&mut loader.variants, variants::Variants::new(Vec::new()))
         .finish()
         .map_err(fail)?;
-    for warning in composition::warnings(&stage)
+    // A layer the confinement refused is reported as refused (`raycast check`'s
+    // PATH_OUTSIDE_ASSET, or the render's error), not as unresolved too.
+    let refused = refused
+        .and_then(|r| r.lock().ok().map(|r| r.clone()))
+        .unwrap_or_default();
+    for warning in composition::warnings(&stage, &refused)
         .into_iter()
         .chain(read_warnings::warnings(&stage))
     {
