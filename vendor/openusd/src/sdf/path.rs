@@ -53,6 +53,26 @@ impl FromStr for Path {
     }
 }
 
+/// The error of a layer refused for a `<...>` path literal that cannot be an `SdfPath`
+/// ([`path_syntax_error`]): the literal's first 40 characters and what is wrong, so that a
+/// reader can tell this refusal from others by its type (`anyhow::Error::chain`, then
+/// `is::<IllFormedPath>()`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct IllFormedPath {
+    /// The literal's first 40 characters, escaped, `...` after a longer one.
+    pub shown: String,
+    /// What is wrong, and where.
+    pub problem: String,
+}
+
+impl std::fmt::Display for IllFormedPath {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "ill-formed path <{}>: {}", self.shown, self.problem)
+    }
+}
+
+impl std::error::Error for IllFormedPath {}
+
 /// Why `text` cannot be an `SdfPath`, judged by its punctuation alone: whitespace or a
 /// control character, `<`, `>` or `@` (none belongs to a path; a `<...>` literal that swallowed
 /// them lost its `>`), a `{` opened inside a variant selection or never closed, a `}` that

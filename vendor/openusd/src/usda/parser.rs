@@ -2013,7 +2013,7 @@ fn checked_path_ref(text: &str) -> Result<&str> {
             if text.chars().count() > 40 {
                 shown.push_str("...");
             }
-            bail!("ill-formed path <{shown}>: {problem}")
+            Err(sdf::IllFormedPath { shown, problem }.into())
         }
     }
 }

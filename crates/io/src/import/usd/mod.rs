@@ -212,7 +212,10 @@ fn load_stage(
         None => Stage::open(text),
         Some(confine) => Stage::builder().resolver(confine).open(text),
     }
-    .map_err(|e| open_error(path, &e))?;
+    .map_err(|e| {
+        let ill_formed = e.chain().any(|c| c.is::<sdf::IllFormedPath>());
+        open_error(path, &e, ill_formed)
+    })?;
     let mut loader = Loader {
         at: value::At::new(options.time),
         variants: variants::Variants::new(options.variants.clone()),
@@ -768,13 +771,12 @@ impl Loader {
     }
 }
 
-/// The error of a stage that cannot be opened. openusd's parser reports a path that cannot be
-/// an `SdfPath` (an ill-formed `<...>` literal) only in the words of its message, so that is
-/// where its code `USD_INVALID_PATH` comes from; any other failure has no code of its own.
-fn open_error(path: &Path, e: &impl std::fmt::Display) -> Error {
-    let message = format!("{e:#}");
-    let error = Error::in_file(path, format!("cannot open the USD stage: {message}"));
-    if message.contains("ill-formed path <") {
+/// The error of a stage that cannot be opened: `USD_INVALID_PATH` when the reader refused
+/// a `<...>` literal that cannot be an `SdfPath` (`ill_formed`: openusd's
+/// `sdf::IllFormedPath` in the error's chain), else no code of its own.
+fn open_error(path: &Path, e: &impl std::fmt::Display, ill_formed: bool) -> Error {
+    let error = Error::in_file(path, format!("cannot open the USD stage: {e:#}"));
+    if ill_formed {
         error.with_code(Code::UsdInvalidPath)
     } else {
         error
