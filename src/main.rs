@@ -436,7 +436,7 @@ fn info(args: InfoArgs) -> raycast::Result<()> {
                 eprintln!("raycast: error: {e}");
                 records.push(InfoRecord::Failed {
                     scene: path.display().to_string(),
-                    error: e.message.clone(),
+                    error: e.detail(),
                 });
                 failed = Some(e);
             }

@@ -425,6 +425,33 @@ fn bad_quadric_prims_are_errors() {
     }
 }
 
+/// A `raycast:quadric:` attribute of the wrong type is an error naming the prim once, then
+/// the attribute alone: `/Q: raycast:quadric: raycast:quadric:boundsMin: ...` (the value
+/// reader's location `/Q.raycast:quadric:boundsMin` loses its prim, which the prefix names).
+#[test]
+fn a_quadric_attribute_of_the_wrong_type_names_the_prim_once() {
+    let path = temp_file(
+        "quadric-wrong-type",
+        "q.usda",
+        "#usda 1.0\n\ndef Xform \"Q\"\n{\n\
+         \x20   custom double3 raycast:quadric:P = (0, 0, 0)\n\
+         \x20   custom matrix3d raycast:quadric:Q = ( (1, 0, 0), (0, 1, 0), (0, 0, 1) )\n\
+         \x20   custom double raycast:quadric:R = -1\n\
+         \x20   custom double raycast:quadric:boundsMin = -2\n\
+         \x20   custom double3 raycast:quadric:boundsMax = (2, 2, 2)\n}\n",
+    );
+    let error = import::load(&path, &LoadOptions::default())
+        .expect_err("a double is no 3-vector")
+        .to_string();
+    assert!(
+        error.ends_with(
+            "q.usda: /Q: raycast:quadric: raycast:quadric:boundsMin: expected a 3-vector, \
+             found Double"
+        ),
+        "{error}"
+    );
+}
+
 /// A missing or malformed file is an error naming it, never a panic.
 #[test]
 fn unreadable_files_are_errors() {

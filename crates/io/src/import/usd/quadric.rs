@@ -31,13 +31,13 @@ pub fn has_quadric(prim: &Prim) -> Result<bool> {
 /// Reads the quadric of a prim that has `raycast:quadric:` properties. The error does not
 /// name the prim (the caller prefixes it).
 pub fn read(prim: &Prim, at: At) -> Result<QuadricSpec> {
-    let strip = |e: Error| {
-        // value readers name `<prim>.<attr>`: keep only the attribute part.
+    let strip = |mut e: Error| {
+        // value readers locate `<prim>.<attr>`: keep only the attribute part.
         let prefix = format!("{}.", prim.path());
-        match e.message.strip_prefix(&prefix) {
-            Some(attribute) => Error::msg(attribute),
-            None => e,
+        if let Some(attribute) = e.location.strip_prefix(&prefix) {
+            e.location = attribute.to_string();
         }
+        e
     };
     let min = value::vec3(prim, BOUNDS_MIN, at).map_err(strip)?;
     let max = value::vec3(prim, BOUNDS_MAX, at).map_err(strip)?;
