@@ -98,7 +98,7 @@ def test_thread_scaling_writes_one_line_per_run(tmp_path):
     runs = len(thread_scaling.ACCELS) * len(thread_scaling.THREADS) * len(thread_scaling.RUNS)
     assert len(rows) == len(thread_scaling.SCENES) * runs
     assert rows[0] == ["stanford-bunny.obj", "octree", "1", "1", "0.5", "1.25"]
-    assert rows[-1] == ["DamagedHelmet.glb", "bvh", "16", "3", "0.5", "16.25"]
+    assert rows[-1] == ["DamagedHelmet.glb", "octree", "16", "3", "0.5", "16.25"]
     assert (out / "machine.txt").read_text().startswith(f"cpu: {os.cpu_count()} cores,")
     assert not (out / "pinning.txt").exists()
     assert Path(out / "topology.txt").exists()

@@ -13,6 +13,7 @@ Run: .venv/bin/python -m pytest tests/python/test_quadric_distance.py
 """
 
 import json
+import math
 
 import mpmath
 import numpy as np
@@ -44,12 +45,48 @@ KINDS = {
 }
 
 
+# The placements and query points are computed with one float operation at a time in a fixed
+# order (no BLAS or LAPACK, whose kernels numpy picks by CPU and whose rounding differs from one
+# CPU to another), so the test's inputs are the same bits on every machine.
+
+
+def _matmul(a, b):
+    """a @ b for 3×3 arrays, summed left to right."""
+    return np.array(
+        [
+            [a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j] for j in range(3)]
+            for i in range(3)
+        ]
+    )
+
+
+def _matvec(a, v):
+    """a @ v for a 3×3 array and a 3-vector, summed left to right."""
+    return np.array([a[i][0] * v[0] + a[i][1] * v[1] + a[i][2] * v[2] for i in range(3)])
+
+
+def _norm(v):
+    """|v|, its squares summed left to right."""
+    return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
+
+def _orthonormal(m):
+    """The columns of `m` made orthonormal by Gram-Schmidt: a rotation or a reflection."""
+    cols = []
+    for j in range(3):
+        v = np.array([m[i][j] for i in range(3)])
+        for c in cols:
+            v = v - (c[0] * v[0] + c[1] * v[1] + c[2] * v[2]) * c
+        cols.append(v / _norm(v))
+    return np.array([[cols[j][i] for j in range(3)] for i in range(3)])
+
+
 def placement(rng, offset):
     """A random rotation times scales 0.5..2 and shears up to 0.3, translated to `offset`
     plus up to 3 in each axis: a 3×4 row-major [A | t]."""
-    rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    rotation = _orthonormal(rng.normal(size=(3, 3)))
     shear = np.eye(3) + np.triu(rng.uniform(-0.3, 0.3, size=(3, 3)), 1)
-    a = rotation @ shear @ np.diag(rng.uniform(0.5, 2.0, size=3))
+    a = _matmul(_matmul(rotation, shear), np.diag(rng.uniform(0.5, 2.0, size=3)))
     t = np.asarray(offset, dtype=float) + rng.uniform(-3, 3, size=3)
     return np.hstack([a, t[:, None]])
 
@@ -72,9 +109,11 @@ def query_points(rng, clipped, affine, box):
     lo, hi = (np.array([-1.0, -2.0, -0.5]), np.array([1.0, 2.0, 0.5])) if box is None else box
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     a, t = affine[:, :3], affine[:, 3]
-    centre = a @ ((lo + hi) / 2) + t
-    half = np.linalg.norm(a @ ((hi - lo) / 2))
-    points = [a @ rng.uniform(lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo)) + t for _ in range(6)]
+    centre = _matvec(a, (lo + hi) / 2) + t
+    half = _norm(_matvec(a, (hi - lo) / 2))
+    points = [
+        _matvec(a, rng.uniform(lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo))) + t for _ in range(6)
+    ]
     for _ in range(3):
         # 1e-12 off the surface along its normal, either side.
         d = [mpmath.mpf(v) for v in rng.normal(size=3)]
@@ -89,7 +128,7 @@ def query_points(rng, clipped, affine, box):
     points.append(centre + 1e-13 * rng.normal(size=3))
     for _ in range(2):
         u = rng.normal(size=3)
-        points.append(centre + 1e6 * u / np.linalg.norm(u))
+        points.append(centre + 1e6 * u / _norm(u))
     return np.array(points), centre, half
 
 
@@ -106,7 +145,7 @@ def measure(tmp_path, name, seed, offset):
     rows = []
     for i, point in enumerate(points):
         ref, _ = clipped.nearest(point)
-        scale = np.linalg.norm(point - centre) + half + np.linalg.norm(centre)
+        scale = _norm(point - centre) + half + _norm(centre)
         rows.append((found["distance"][i], float(ref), scale))
     return rows, found, points, clipped
 

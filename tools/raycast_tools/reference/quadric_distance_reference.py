@@ -153,9 +153,13 @@ class Clipped:
         nu = sum(grad[i] * resid[i] for i in free) / norm if norm > TINY**2 else mpmath.mpf(0)
         n = len(free)
         equations, grad = self._equations(x, nu, xp, free)
+        # Converged when the residual is at the working precision relative to the problem's
+        # size: the stationarity equations hold terms of the query's distance, so a query 1e6
+        # away cannot get them below 1e-45 absolute in 50 digits.
+        tolerance = mpmath.mpf(10) ** -(DIGITS - 5) * (1 + max(abs(v) for v in xp)) ** 2
         for _ in range(80):
             size = max(abs(e) for e in equations)
-            if size < mpmath.mpf(10) ** -(DIGITS - 5):
+            if size < tolerance:
                 return x if self.in_box(x) else None
             jac = mpmath.matrix(n + 1, n + 1)
             for row, i in enumerate(free):
