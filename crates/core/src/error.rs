@@ -101,7 +101,9 @@ impl Error {
 
     /// The error a fail-fast reader stops with: `diagnostic`, about `path`, with its code.
     pub fn from_diagnostic(path: impl AsRef<Path>, diagnostic: &Diagnostic) -> Self {
-        Error::in_file(path, diagnostic.to_string()).with_code(diagnostic.code)
+        Error::at(diagnostic.location.clone(), diagnostic.text())
+            .with_path(path)
+            .with_code(diagnostic.code)
     }
 
     /// This error with the diagnostic code `code`.
@@ -155,10 +157,7 @@ impl fmt::Display for Error {
         if let Some(path) = &self.path {
             write!(f, "{}: ", path.display())?;
         }
-        if !self.location.is_empty() {
-            write!(f, "{}: ", self.location)?;
-        }
-        f.write_str(&self.message)
+        f.write_str(&self.detail())
     }
 }
 

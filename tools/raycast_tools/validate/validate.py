@@ -454,18 +454,27 @@ def _load_obj(path: Path) -> RefScene:
         maintain_order=True,
         process=False,
     )
-    objects = []
+    objects = [
+        RefObject(f"obj:{gname}", str(gname), -1, tris, False)
+        for gname, tris in _scene_triangles(scene)
+    ]
+    ref = RefScene(path, objects)
+    ref.finish()
+    return ref
+
+
+def _scene_triangles(scene):
+    """(geometry name, world triangles as float64 (n, 3, 3)) of each trimesh mesh with faces
+    in a trimesh scene, placed by its node's transform."""
+    import trimesh
+
     for frame in scene.graph.nodes_geometry:
         T, gname = scene.graph[frame]
         geom = scene.geometry[gname]
         if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
             continue
         v = np.asarray(geom.vertices, dtype=np.float64)
-        tris = v[np.asarray(geom.faces)] @ np.asarray(T)[:3, :3].T + np.asarray(T)[:3, 3]
-        objects.append(RefObject(f"obj:{gname}", str(gname), -1, tris, False))
-    ref = RefScene(path, objects)
-    ref.finish()
-    return ref
+        yield gname, v[np.asarray(geom.faces)] @ np.asarray(T)[:3, :3].T + np.asarray(T)[:3, 3]
 
 
 def _ply_face_count(path: Path) -> int | None:
@@ -489,13 +498,7 @@ def _load_mesh_file(path: Path) -> RefScene:
     kind = path.suffix.lower()[1:]
     scene = trimesh.load(str(path), force="scene", process=False)
     objects = []
-    for frame in scene.graph.nodes_geometry:
-        T, gname = scene.graph[frame]
-        geom = scene.geometry[gname]
-        if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
-            continue
-        v = np.asarray(geom.vertices, dtype=np.float64)
-        tris = v[np.asarray(geom.faces)] @ np.asarray(T)[:3, :3].T + np.asarray(T)[:3, 3]
+    for gname, tris in _scene_triangles(scene):
         name = Path(str(gname)).stem if str(gname).lower().endswith(f".{kind}") else str(gname)
         objects.append(RefObject(f"{kind}:{name}", name, -1, tris, False))
     ref = RefScene(path, objects)

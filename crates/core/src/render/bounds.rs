@@ -38,12 +38,12 @@ fn depth_bound(t: Bounded, dir: DVec3) -> Bounded {
 /// depth range, the sheared triangle's box, the edge functions' signs) before any bounded
 /// recomputation.
 pub fn certain(
-    query: &Tracer,
+    tracer: &Tracer,
     ray: &Ray,
     hit: Option<(&Crossing, &HitBound)>,
     (t_min, t_max): (f64, f64),
 ) -> bool {
-    let scene = query.scene;
+    let scene = tracer.scene;
     let t_limit = match hit {
         Some((_, bound)) => {
             let (low, high) = (
@@ -62,11 +62,11 @@ pub fn certain(
         ray,
         t_limit,
         hit.as_ref(),
-        query.octree.root().size().max_element(),
+        tracer.octree.root().size().max_element(),
     );
     let mut certain = true;
     let local = ray.origin - scene.anchor;
-    query
+    tracer
         .octree
         .traverse(local, ray.dir, t_limit, |refs, _, _| {
             if refs

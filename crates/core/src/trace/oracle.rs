@@ -22,7 +22,7 @@ impl BvhTracer<'_> {
     /// The nearest crossing of `ray` with `0 < t <= t_max`, as [`Tracer::nearest`] finds it
     /// with `t_min = 0`; `None` for any other `t_min`.
     pub fn nearest(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Crossing> {
-        if !ray.is_valid() || t_min != 0.0 || t_max.is_nan() {
+        if t_min != 0.0 || !super::traceable(ray, t_min, t_max) {
             return None;
         }
         let local = ray.origin - self.scene.anchor;

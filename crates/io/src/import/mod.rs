@@ -228,8 +228,11 @@ pub(crate) fn read_error(path: &Path, e: std::io::Error) -> Error {
 /// Sorts warnings and drops repeats, so that every run lists them the same way whatever
 /// order a reader produced them in.
 pub fn sort_warnings(warnings: &mut Vec<Diagnostic>) {
-    warnings.sort_by_cached_key(Diagnostic::to_string);
-    warnings.dedup_by(|a, b| a.to_string() == b.to_string());
+    let mut lines: Vec<(String, Diagnostic)> =
+        warnings.drain(..).map(|d| (d.to_string(), d)).collect();
+    lines.sort_by(|a, b| a.0.cmp(&b.0));
+    lines.dedup_by(|a, b| a.0 == b.0);
+    warnings.extend(lines.into_iter().map(|(_, d)| d));
 }
 
 /// Local triangles placed in the world by `world`. A mirroring transform flips the winding back
