@@ -12,12 +12,12 @@
 //!
 //! `ρ` is the operation's own rounding error, computed exactly rather than bounded by the
 //! standard model's `γ₁|fl(z)|` (Higham's `γₙ = nu / (1 − nu)`, `u = 2⁻⁵³`): Knuth's two-sum for
-//! a sum, Dekker's two-product for a product, and for a quotient `q` the remainder
+//! a sum, a fused multiply-add `a·b − fl(a·b)` for a product, and for a quotient `q` the remainder
 //! `a − q·b` (exact to one rounding) over `|b|`. An operation that happens to be exact (adding
 //! zero, a product of short mantissas) then adds nothing, which keeps the bound within a
-//! small factor of the actual error. Products below about 2⁻⁹⁶⁹ may lose the exactness of the
-//! two-product to underflow; each product's bound gets `2⁻¹⁰⁷²` more, and a product too large
-//! to split falls back to `γ₁|fl(ab)|`.
+//! small factor of the actual error. A product's rounding error below the subnormal range is
+//! itself rounded (by at most `2⁻¹⁰⁷⁵`); each product's bound gets `2⁻¹⁰⁷²` more, and a
+//! product that overflows falls back to `γ₁|fl(ab)|`.
 //!
 //! The bounds themselves are sums and products of non-negative numbers evaluated in f64: a few
 //! roundings, each at most a relative `u`. [`up`] multiplies each by `1 + 2⁻⁵⁰` (more than
@@ -40,7 +40,7 @@ pub fn gamma(n: u32) -> f64 {
 const SLACK: f64 = 1.0 / (1u64 << 50) as f64;
 
 /// `x` rounded up past the roundings of its own evaluation (see the module docs).
-#[inline]
+#[inline(always)]
 pub fn up(x: f64) -> f64 {
     (x * (1.0 + SLACK)).next_up()
 }
@@ -54,26 +54,19 @@ pub fn down(x: f64) -> f64 {
 /// Extra absolute bound per product, for the underflow of its rounding error.
 const UNDERFLOW: f64 = 4.0 * f64::MIN_POSITIVE * f64::EPSILON;
 
-/// Dekker's splitting constant `2²⁷ + 1`.
-const SPLIT: f64 = 134_217_729.0;
-
-/// The halves `(hi, lo)` of `a`, `hi + lo = a` exactly, each of at most 26 significant bits
-/// (Dekker's split).
-fn split(a: f64) -> (f64, f64) {
-    let c = SPLIT * a;
-    let hi = c - (c - a);
-    (hi, a - hi)
-}
-
-/// The exact rounding error `a·b − fl(a·b)` (Dekker's two-product), or `None` when the
-/// splitting overflows.
+/// The exact rounding error `a·b − fl(a·b)`, or `None` when it cannot be had: the product
+/// overflowed (`p` infinite), or an operand is not finite. A fused multiply-add gives it in
+/// one correctly rounded operation (IEEE 754's `fusedMultiplyAdd`: the same bits on every CPU,
+/// whether the instruction or libm computes it); it is exact unless the error is below the
+/// subnormal range, which the callers' `2⁻¹⁰⁷²` per product covers.
+#[inline(always)]
 fn product_error(a: f64, b: f64, p: f64) -> Option<f64> {
-    let ((ah, al), (bh, bl)) = (split(a), split(b));
-    let error = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
+    let error = a.mul_add(b, -p);
     error.is_finite().then_some(error)
 }
 
 /// The exact rounding error `a + b − fl(a + b)` (Knuth's two-sum).
+#[inline(always)]
 fn sum_error(a: f64, b: f64, s: f64) -> f64 {
     let bb = s - a;
     (a - (s - bb)) + (b - bb)
@@ -132,7 +125,7 @@ impl std::ops::Add for Bounded {
     type Output = Bounded;
 
     /// `self + other`.
-    #[inline]
+    #[inline(always)]
     fn add(self, other: Bounded) -> Bounded {
         let value = self.value + other.value;
         let rounding = sum_error(self.value, other.value, value).abs();
@@ -149,7 +142,7 @@ impl std::ops::Sub for Bounded {
     type Output = Bounded;
 
     /// `self − other`.
-    #[inline]
+    #[inline(always)]
     fn sub(self, other: Bounded) -> Bounded {
         self + -other
     }
@@ -159,7 +152,7 @@ impl std::ops::Mul for Bounded {
     type Output = Bounded;
 
     /// `self · other`.
-    #[inline]
+    #[inline(always)]
     fn mul(self, other: Bounded) -> Bounded {
         let value = self.value * other.value;
         let spread = self.value.abs() * other.error
@@ -175,7 +168,7 @@ impl std::ops::Div for Bounded {
     type Output = Bounded;
 
     /// `self / other`; an infinite bound when `other` may be zero.
-    #[inline]
+    #[inline(always)]
     fn div(self, other: Bounded) -> Bounded {
         let value = self.value / other.value;
         let b = other.value.abs();

@@ -48,27 +48,42 @@ pub struct TriangleBound {
 
 /// The bound for the ray `origin + t·dir` and the triangle `tri`, all with per-component
 /// bounds on their distance from the exact values.
+#[inline(always)]
 pub fn bound(origin: &BVec3, dir: &BVec3, tri: &[BVec3; 3]) -> TriangleBound {
-    let [kx, ky, kz] = WatertightRay::new(values3(origin), values3(dir)).axes();
+    let axes = WatertightRay::new(values3(origin), values3(dir)).axes();
+    let [kx, ky, kz] = axes;
     let one = Bounded::exact(1.0);
-    let (sx, sy, sz) = (dir[kx].div(dir[kz]), dir[ky].div(dir[kz]), one.div(dir[kz]));
-    let shear_one = |v: &BVec3| {
-        let (x, y, z) = (
-            v[kx].sub(origin[kx]),
-            v[ky].sub(origin[ky]),
-            v[kz].sub(origin[kz]),
-        );
-        [x.sub(sx.mul(z)), y.sub(sy.mul(z)), z]
-    };
-    // Written out: array `map`s are left as calls here.
-    let [a, b, c] = [shear_one(&tri[0]), shear_one(&tri[1]), shear_one(&tri[2])];
-    let edge = |p: &BVec3, q: &BVec3| p[0].mul(q[1]).sub(p[1].mul(q[0]));
+    let shear = [dir[kx].div(dir[kz]), dir[ky].div(dir[kz]), one.div(dir[kz])];
+    let [a, b, c] = [
+        sheared(&tri[0], origin, axes, &shear),
+        sheared(&tri[1], origin, axes, &shear),
+        sheared(&tri[2], origin, axes, &shear),
+    ];
     let e = [edge(&c, &b), edge(&a, &c), edge(&b, &a)];
     let z = [a[2], b[2], c[2]];
     TriangleBound {
         side: side(&e),
-        t: plane_t(&e, &z, sz),
+        t: plane_t(&e, &z, shear[2]),
     }
+}
+
+/// Vertex `v` relative to `origin`, permuted to `axes` and sheared by `(s_x, s_y)`: the
+/// watertight test's `(x − s_x z, y − s_y z, z)`. Functions, not closures, so that they inline
+/// into [`crate::render::bounds::fused`]'s FMA code.
+#[inline(always)]
+fn sheared(v: &BVec3, origin: &BVec3, [kx, ky, kz]: [usize; 3], shear: &BVec3) -> BVec3 {
+    let (x, y, z) = (
+        v[kx].sub(origin[kx]),
+        v[ky].sub(origin[ky]),
+        v[kz].sub(origin[kz]),
+    );
+    [x.sub(shear[0].mul(z)), y.sub(shear[1].mul(z)), z]
+}
+
+/// The edge function `p_x q_y − p_y q_x` of two sheared vertices.
+#[inline(always)]
+fn edge(p: &BVec3, q: &BVec3) -> Bounded {
+    p[0].mul(q[1]).sub(p[1].mul(q[0]))
 }
 
 /// Whether the exact ray certainly has no crossing with the triangle in `(0, limit]`, for an
@@ -187,6 +202,7 @@ fn side(e: &[Bounded; 3]) -> Side {
 
 /// `t` from the edge functions `e`, the vertices' unscaled `z` and the scale `sz = 1/d_z`, as
 /// the test computes it, with the bound of the module docs.
+#[inline(always)]
 fn plane_t(e: &[Bounded; 3], z: &[Bounded; 3], sz: Bounded) -> Bounded {
     let det = e[0].value + e[1].value + e[2].value;
     let scaled = |i: usize| e[i].value * sz.value * z[i].value;

@@ -6,23 +6,51 @@ use crate::bound::bounded::{self, up, Bounded};
 use crate::bound::HitBound;
 use crate::geometry::Ray;
 use crate::scene::{Crossing, Probe, Scene};
+use crate::simd::Kernel;
 use crate::trace::Tracer;
 use glam::DVec3;
 use std::ops::Mul;
 
+/// Runs `work` compiled for FMA where `kernel` allows it: the bounded arithmetic's exact
+/// product errors ([`bounded`]) are fused multiply-adds, one instruction there and a call into
+/// the runtime otherwise. The same bits either way: a fused multiply-add is correctly rounded
+/// on every CPU.
+#[inline(always)]
+pub fn fused<R>(kernel: Kernel, work: impl FnOnce() -> R) -> R {
+    match kernel {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Kernel::Avx2` is only chosen where `Kernel::available` said so.
+        Kernel::Avx2 => unsafe { fused_avx2(work) },
+        _ => work(),
+    }
+}
+
+/// [`fused`]'s work compiled with FMA, so that what it inlines uses the instruction.
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn fused_avx2<R>(work: impl FnOnce() -> R) -> R {
+    work()
+}
+
 /// The bound of `hit`, the nearest hit of `ray`: computed once per hit and shared by the
 /// `error` and `certain` AOVs.
+#[inline(always)]
 pub fn hit_bound(scene: &Scene, ray: &Ray, hit: &Crossing) -> HitBound {
     scene.hit_bound(hit, ray.origin, ray.dir)
 }
 
 /// The `error` AOV of a hit of `ray` from its bound: a bound on `|t·|d| − t*·|d||` (see the
 /// module docs).
+#[inline(always)]
 pub fn depth_error(bound: &HitBound, ray: &Ray) -> f64 {
     depth_bound(bound.t, ray.dir).error
 }
 
 /// `t·|d|` as the trace computes it (`dot` then `sqrt`), with its bound.
+#[inline(always)]
 fn depth_bound(t: Bounded, dir: DVec3) -> Bounded {
     let d = bounded::exact3(dir);
     t.mul(bounded::dot3(&d, &d).sqrt())

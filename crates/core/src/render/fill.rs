@@ -10,6 +10,7 @@ use crate::bound::HitBound;
 use crate::geometry::Ray;
 use crate::geometry::RaySource;
 use crate::scene::{Crossing, Located, Scene};
+use crate::simd::Kernel;
 use crate::trace::{traceable, NearestHits};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -169,16 +170,25 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
         self.scene.locate_crossing(hit, ray.origin, ray.dir)
     }
 
+    /// The kernel of the tracer's octree (the portable one for a tracer without one).
+    fn kernel(&self) -> Kernel {
+        self.tracer
+            .tracer()
+            .map_or(Kernel::Portable, |t| t.octree.kernel())
+    }
+
     /// The bound of each hit of the block ([`super::bounds::hit_bound`]), made on first use
     /// and shared by the `error` and `certain` columns.
     fn hit_bounds(&self, hits: &[Option<Crossing>]) -> &[Option<HitBound>] {
         self.bounds.get_or_init(|| {
-            let each = hits.iter().enumerate();
-            each.map(|(j, hit)| {
-                let hit = hit.as_ref()?;
-                Some(super::bounds::hit_bound(self.scene, &self.ray(j), hit))
+            super::bounds::fused(self.kernel(), || {
+                let each = hits.iter().enumerate();
+                each.map(|(j, hit)| {
+                    let hit = hit.as_ref()?;
+                    Some(super::bounds::hit_bound(self.scene, &self.ray(j), hit))
+                })
+                .collect()
             })
-            .collect()
         })
     }
 
@@ -224,9 +234,11 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
             }
             (Aov::Error, Slot::Float(out)) => {
                 let bounds = self.hit_bounds(hits);
-                fill(out, hits, 0.0, |j, _| {
-                    bounds[j].map_or(f64::INFINITY, |b| {
-                        super::bounds::depth_error(&b, &self.ray(j))
+                super::bounds::fused(self.kernel(), || {
+                    fill(out, hits, 0.0, |j, _| {
+                        bounds[j].map_or(f64::INFINITY, |b| {
+                            super::bounds::depth_error(&b, &self.ray(j))
+                        })
                     })
                 })
             }

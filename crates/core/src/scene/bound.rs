@@ -92,6 +92,7 @@ fn exit_t(aabb: &Aabb, origin: DVec3, dir: DVec3) -> f64 {
 
 impl Scene {
     /// The bound of `hit`, a crossing of the ray `origin + t·dir` (see [`crate::bound`]).
+    #[inline(always)]
     pub fn hit_bound(&self, hit: &Crossing, origin: DVec3, dir: DVec3) -> HitBound {
         let unbounded = HitBound {
             t: Bounded::new(hit.t, f64::INFINITY),
