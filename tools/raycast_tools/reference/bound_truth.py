@@ -95,6 +95,64 @@ def trs(translation, rotation, scale):
     return cols + [exact(t) for t in translation] + [Fraction(1)]
 
 
+def _mp_fraction(v):
+    """An mpmath number as the exact Fraction of its binary value."""
+    v = mpmath.mpf(v)
+    man, exp = v.man_exp  # the magnitude's mantissa and exponent: the sign apart
+    return (-1 if v < 0 else 1) * Fraction(man) * Fraction(2) ** exp if man else Fraction(0)
+
+
+def _rotation_cols(r):
+    """A 3×3 mpmath rotation (rows) as a column-major 4×4 list of Fractions."""
+    cols = []
+    for c in range(3):
+        cols += [_mp_fraction(r[row][c]) for row in range(3)] + [Fraction(0)]
+    return cols + [Fraction(0)] * 3 + [Fraction(1)]
+
+
+def usd_rotation(axis: int, degrees: float):
+    """USD's rotateX/Y/Z by `degrees` (the f64 value as read), the exact angle degrees·π/180:
+    column-major Fractions within 2⁻⁴⁰⁰ of the exact entries (mpmath at 460 bits)."""
+    with mpmath.workprec(460):
+        a = mpmath.mpf(float(degrees)) * mpmath.pi / 180
+        c, s = mpmath.cos(a), mpmath.sin(a)
+        i, j = (axis + 1) % 3, (axis + 2) % 3
+        r = [[mpmath.mpf(int(row == col)) for col in range(3)] for row in range(3)]
+        r[i][i], r[j][j], r[j][i], r[i][j] = c, c, s, -s
+        return _rotation_cols(r)
+
+
+def usd_orient(w, x, y, z):
+    """USD's `orient` as usd-core reads it (GfRotation): the real part clamped to [-1, 1] is the
+    cosine of half the angle, the imaginary part only the axis; the exact rotation of that
+    unit quaternion, as in usd_rotation."""
+    with mpmath.workprec(460):
+        w = min(max(mpmath.mpf(float(w)), -1), 1)
+        v = [mpmath.mpf(float(c)) for c in (x, y, z)]
+        k = mpmath.sqrt(1 - w * w) / mpmath.sqrt(sum(c * c for c in v))
+        x, y, z = (c * k for c in v)
+        r = [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+        return _rotation_cols(r)
+
+
+def translation(t):
+    """The exact column-major matrix of a translation."""
+    cols = [Fraction(int(r == c)) for c in range(3) for r in range(4)]
+    return cols + [exact(x) for x in t] + [Fraction(1)]
+
+
+def scaling(s):
+    """The exact column-major matrix of a scale."""
+    cols = []
+    for c in range(3):
+        cols += [exact(s[c]) if r == c else Fraction(0) for r in range(4)]
+    return cols + [Fraction(0)] * 3 + [Fraction(1)]
+
+
 @dataclass
 class Triangle:
     """One world triangle, exact, with raycast's object name and prim number."""

@@ -183,6 +183,85 @@ def gltf_scene(path: Path, rng, layout: str):
     return bt.Truth(tris, [])
 
 
+def f32(values):
+    """Random values rounded to f32, as floats (written so that a reader gets them back)."""
+    return [float(np.float32(v)) for v in values]
+
+
+def usd_ops(ops) -> tuple[str, list]:
+    """A prim's xform op lines and its exact column-major matrix: `ops` lists (kind, value)
+    outermost first, the values already f32 where the attribute is a float type."""
+    lines, order, m = [], [], bt.translation([0, 0, 0])
+    for kind, value in ops:
+        name = f"xformOp:{kind}"
+        order.append(f'"{name}"')
+        if kind == "translate":
+            lines.append(f"double3 {name} = ({value[0]!r}, {value[1]!r}, {value[2]!r})")
+            op = bt.translation(value)
+        elif kind == "scale":
+            lines.append(f"float3 {name} = ({value[0]!r}, {value[1]!r}, {value[2]!r})")
+            op = bt.scaling(value)
+        elif kind == "orient":
+            lines.append(f"quatf {name} = ({', '.join(repr(c) for c in value)})")
+            op = bt.usd_orient(*value)
+        elif kind == "rotateXYZ":
+            lines.append(f"float3 {name} = ({value[0]!r}, {value[1]!r}, {value[2]!r})")
+            # X first, then Y, then Z: Rz·Ry·Rx.
+            op = bt.compose(
+                bt.usd_rotation(2, value[2]),
+                bt.compose(bt.usd_rotation(1, value[1]), bt.usd_rotation(0, value[0])),
+            )
+        else:  # rotateX, rotateY, rotateZ
+            lines.append(f"float {name} = {value!r}")
+            op = bt.usd_rotation("XYZ".index(kind[-1]), value)
+        m = bt.compose(m, op)
+    lines.append(f"uniform token[] xformOpOrder = [{', '.join(order)}]")
+    return "\n".join(lines), m
+
+
+def usd_scene(path: Path, rng):
+    """A .usda of one f32 mesh under a parent Xform (translate up to 1e4, rotateXYZ in
+    degrees, scale) in three Mesh prims of their own ops (translate, orient quatf not exactly
+    unit, rotateZ): USD's ops composed in f64 by the importer, exactly by the truth (rotations
+    of the exact angles, bt.usd_rotation, bt.usd_orient), so the bound must carry the angles'
+    conversion, libm's sin and cos, the orient reading and the products."""
+    pts, faces = terrain(rng, 4, 2.0)
+    pts32 = pts.astype(np.float32)
+    local = [bt.frac3(p) for p in pts32.astype(np.float64)]
+    parent_lines, parent = usd_ops(
+        [
+            ("translate", rng.uniform(-1e4, 1e4, 3).tolist()),
+            ("rotateXYZ", f32(rng.uniform(-180, 180, 3))),
+            ("scale", f32(rng.uniform(20.0, 80.0, 3))),
+        ]
+    )
+    point_text = ", ".join(f"({x!r}, {y!r}, {z!r})" for x, y, z in pts32.astype(float).tolist())
+    counts = ", ".join("3" for _ in faces)
+    indices = ", ".join(str(i) for i in faces.flatten().tolist())
+    meshes, draws = [], []
+    for k in range(3):
+        q = rng.normal(size=4)
+        lines, m = usd_ops(
+            [
+                ("translate", rng.uniform(-3, 3, 3).tolist()),
+                ("orient", f32(q / np.linalg.norm(q))),
+                ("rotateZ", f32([rng.uniform(-360, 360)])[0]),
+            ]
+        )
+        body = f"int[] faceVertexCounts = [{counts}]\nint[] faceVertexIndices = [{indices}]\n"
+        body += f"point3f[] points = [{point_text}]\n{lines}"
+        meshes.append(f'def Mesh "leaf{k}"\n{{\n{body}\n}}')
+        draws.append((f"/parent/leaf{k}", bt.compose(parent, m)))
+    children = "\n".join(meshes)
+    text = f'#usda 1.0\n\ndef Xform "parent"\n{{\n{parent_lines}\n{children}\n}}\n'
+    path.write_text(text)
+    tris = []
+    for name, m in draws:
+        world = [bt.place(m, p) for p in local]
+        tris += [bt.Triangle([world[i] for i in f], name, k) for k, f in enumerate(faces.tolist())]
+    return bt.Truth(tris, [])
+
+
 def quadric_prim(ext: dict, matrix, name: str) -> bt.QuadricPrim:
     """A RAYCAST_quadric extension (either form) as exact coefficients."""
     if "coefficients" in ext:
@@ -374,6 +453,11 @@ def run_all(raycast, n: int, seed: int, work: Path) -> list[Tally]:
     t = Tally("sphere silhouettes")
     truth, o, d = sphere_scene(work / "spheres.gltf", rng, n)
     run_case(raycast, work / "spheres.gltf", truth, o, d, t, work)
+    tallies.append(t)
+    t = Tally("USD xform ops")
+    truth = usd_scene(work / "usd_ops.usda", rng)
+    o, d = mesh_rays(world_triangles(truth), n, rng)
+    run_case(raycast, work / "usd_ops.usda", truth, o, d, t, work)
     tallies.append(t)
     t = Tally("stiff quadric cases")
     stiff_cases(raycast, t, work)

@@ -31,6 +31,7 @@
 //! (the ray traced is the one bounded).
 
 pub mod bounded;
+pub mod rotation;
 pub mod transform;
 pub mod triangle;
 

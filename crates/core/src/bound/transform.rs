@@ -112,7 +112,13 @@ impl BoundedMat4 {
             let value = DMat4::from_scale_rotation_translation(scale, rotation, translation);
             return BoundedMat4::exact(value);
         }
-        let q = rotation.to_array().map(Bounded::exact);
+        BoundedMat4::trs_bounded(translation, rotation.to_array().map(Bounded::exact), scale)
+    }
+
+    /// [`BoundedMat4::trs`] for a quaternion `(x, y, z, w)` whose components are themselves
+    /// within bounds of the exact ones (a rotation computed from an axis and an angle): the
+    /// exact matrix is that of the exact quaternion, normalized exactly.
+    pub fn trs_bounded(translation: DVec3, q: [Bounded; 4], scale: DVec3) -> BoundedMat4 {
         // `DVec4::normalize`: the product with the reciprocal of the length.
         let length = q[0]
             .mul(q[0])
@@ -120,7 +126,14 @@ impl BoundedMat4 {
             .add(q[2].mul(q[2]))
             .add(q[3].mul(q[3]));
         let recip = Bounded::exact(1.0).div(length.sqrt());
-        let [x, y, z, w] = q.map(|c| c.mul(recip));
+        BoundedMat4::trs_as_given(translation, q.map(|c| c.mul(recip)), scale)
+    }
+
+    /// `T · R · S` with the rotation formula applied to the quaternion `(x, y, z, w)` as given,
+    /// not normalized (glam's `from_scale_rotation_translation`, and USD's point instancers,
+    /// apply it so), each component within its bound of the exact one.
+    pub fn trs_as_given(translation: DVec3, q: [Bounded; 4], scale: DVec3) -> BoundedMat4 {
+        let [x, y, z, w] = q;
         // `DMat4::quat_to_axes`.
         let (x2, y2, z2) = (x.add(x), y.add(y), z.add(z));
         let (xx, xy, xz) = (x.mul(x2), x.mul(y2), x.mul(z2));

@@ -12,6 +12,8 @@ use super::{err, Instance, Loader, MAX_INSTANCER_DEPTH};
 use crate::error::{Error, Result};
 use glam::{DMat4, DQuat, DVec3};
 use openusd::usd::Prim;
+use raycast_core::bound::bounded::Bounded;
+use raycast_core::bound::transform::BoundedMat4;
 use raycast_core::diagnostic::Diagnostic;
 use std::collections::HashSet;
 
@@ -108,7 +110,7 @@ impl Loader {
     pub(super) fn point_instancer(
         &mut self,
         prim: &Prim,
-        world: DMat4,
+        world: BoundedMat4,
         outer: &mut Option<Instance>,
         depth: usize,
     ) -> Result<()> {
@@ -177,7 +179,8 @@ impl Loader {
                 Some(motion) => motion.instance(i, positions[i], rotation, scale),
                 None => DMat4::from_scale_rotation_translation(scale, rotation, positions[i]),
             };
-            let instance_world = world * local;
+            let trs = (positions[i], rotation, scale);
+            let instance_world = world.then_bounded(&instance_bound(trs, local, motion.is_some()));
             // Nested in an outer instance, this instance draws into the outer one's object.
             let mut inner = Some(match outer {
                 Some(outer) => Instance {
@@ -206,4 +209,29 @@ impl Loader {
         }
         Ok(())
     }
+}
+
+/// The bound of an instance's local matrix `local` ([`BoundedMat4`], for the `error` and
+/// `certain` AOVs): `T(position)·R(orientation)·S(scale)` with the rotation formula on the
+/// quaternion as stored, evaluated as glam evaluates it; not bounded (`+∞`) when velocities or
+/// angular velocities moved it (their f32 steps are not analysed).
+fn instance_bound(
+    (position, rotation, scale): (DVec3, DQuat, DVec3),
+    local: DMat4,
+    moved: bool,
+) -> BoundedMat4 {
+    if moved {
+        return BoundedMat4 {
+            value: local,
+            error: DMat4::from_cols_array(&[f64::INFINITY; 16]),
+        };
+    }
+    if rotation == DQuat::IDENTITY {
+        // Products with 0 and 1: exact.
+        return BoundedMat4::exact(local);
+    }
+    let q = rotation.to_array().map(Bounded::exact);
+    let bounded = BoundedMat4::trs_as_given(position, q, scale);
+    debug_assert_eq!(bounded.value, local);
+    bounded
 }

@@ -42,6 +42,7 @@ pub use variants::{parse_choice, Choice};
 
 use super::LoadOptions;
 use crate::error::{Error, Result};
+use crate::bound::transform::BoundedMat4;
 use crate::quadric::Quadric;
 use crate::scene::attributes::runs;
 use crate::scene::{Mesh, Scene, SceneBuilder, StageInfo};
@@ -427,7 +428,7 @@ impl Loader {
 
     /// The prims to walk, with their parents' world transforms: every root prim, or the
     /// prim named by `--scene`.
-    fn roots(&mut self, choice: Option<&str>) -> Result<Vec<(Prim, DMat4)>> {
+    fn roots(&mut self, choice: Option<&str>) -> Result<Vec<(Prim, BoundedMat4)>> {
         if let Some(name) = self.stage.default_prim() {
             let path = format!("/{}", name.as_str());
             let exists = sdf::Path::new(&path)
@@ -455,7 +456,7 @@ impl Loader {
                     let path = sdf::Path::new(&format!("/{}", name.as_str())).map_err(|e| {
                         Error::msg(format!("bad root prim name '{}': {e}", name.as_str()))
                     })?;
-                    roots.push((self.stage.prim(path), DMat4::IDENTITY));
+                    roots.push((self.stage.prim(path), BoundedMat4::exact(DMat4::IDENTITY)));
                 }
                 Ok(roots)
             }
@@ -483,8 +484,8 @@ impl Loader {
 
     /// World transform of the parent of any prim: its ancestors' transforms composed from
     /// the root.
-    fn parent_world_of(&mut self, prim: &Prim) -> Result<DMat4> {
-        let mut world = DMat4::IDENTITY;
+    fn parent_world_of(&mut self, prim: &Prim) -> Result<BoundedMat4> {
+        let mut world = BoundedMat4::exact(DMat4::IDENTITY);
         let mut ancestors: Vec<Prim> = Vec::new();
         let mut p = prim.path().parent();
         while let Some(parent) = p {
@@ -503,11 +504,11 @@ impl Loader {
     /// World transform of any prim (a skeleton, wherever it is in namespace).
     fn world_of_prim(&mut self, prim: &Prim) -> Result<DMat4> {
         let parent = self.parent_world_of(prim)?;
-        self.world_of(prim, parent)
+        Ok(self.world_of(prim, parent)?.value)
     }
 
-    /// World transform of `prim` given its parent's.
-    fn world_of(&mut self, prim: &Prim, parent: DMat4) -> Result<DMat4> {
+    /// World transform of `prim` given its parent's, with the bound of its composition.
+    fn world_of(&mut self, prim: &Prim, parent: BoundedMat4) -> Result<BoundedMat4> {
         let type_name = prim.type_name().map_err(|e| err(prim, e))?;
         let type_name = type_name.as_deref().unwrap_or("");
         if !is_xformable(type_name) {
@@ -517,9 +518,9 @@ impl Loader {
         let world = if local.resets {
             local.matrix
         } else {
-            parent * local.matrix
+            parent.then_bounded(&local.matrix)
         };
-        if world.is_finite() {
+        if world.value.is_finite() {
             Ok(world)
         } else {
             Err(Error::at(
@@ -547,7 +548,7 @@ impl Loader {
     fn walk(
         &mut self,
         prim: &Prim,
-        parent_world: DMat4,
+        parent_world: BoundedMat4,
         purpose: Option<Rc<str>>,
         skel: Option<Rc<skel::Binding>>,
         instance: &mut Option<Instance>,
@@ -588,7 +589,7 @@ impl Loader {
         let world = if is_instance_root {
             // A point-instance prototype keeps its own transform under the instance's.
             let local = xform::local_transform(prim, self.at, &mut self.warnings)?;
-            parent_world * local.matrix
+            parent_world.then_bounded(&local.matrix)
         } else {
             self.world_of(prim, parent_world)?
         };
@@ -601,8 +602,13 @@ impl Loader {
         // A rigidly skinned prim moves with its children; skinned points move the mesh only.
         let (world, drawn_world, skinned) = match pose {
             None => (world, world, None),
-            Some(skel::Pose::Rigid(moved)) => (moved, moved, None),
-            Some(skel::Pose::Points { points, skel_world }) => (world, skel_world, Some(points)),
+            Some(skel::Pose::Rigid(moved)) => {
+                let moved = BoundedMat4::exact(moved);
+                (moved, moved, None)
+            }
+            Some(skel::Pose::Points { points, skel_world }) => {
+                (world, BoundedMat4::exact(skel_world), Some(points))
+            }
         };
         let hidden_purpose = matches!(purpose.as_deref(), Some("guide") | Some("proxy"));
         let draws =
@@ -642,7 +648,7 @@ impl Loader {
         &mut self,
         prim: &Prim,
         type_name: &str,
-        world: DMat4,
+        world: BoundedMat4,
         skinned: Option<Vec<DVec3>>,
         instance: &mut Option<Instance>,
     ) -> Result<()> {
@@ -679,9 +685,9 @@ impl Loader {
                 if !runs.is_empty() {
                     mesh.mesh = Arc::new(Mesh::clone(&mesh.mesh).with_materials(runs));
                 }
-                if mesh.mesh.places_finitely(&world) {
+                if mesh.mesh.places_finitely(&world.value) {
                     let id = target.id(&mut self.builder);
-                    self.builder.place_mesh(id, mesh.mesh, world);
+                    self.builder.place_composed_mesh(id, mesh.mesh, world);
                 } else {
                     self.warnings.push(warning_at(
                         source.to_string(),
@@ -696,7 +702,8 @@ impl Loader {
                     for part in parts {
                         match part {
                             Part::Quadric { spec, frame, .. } => {
-                                let quadric = Quadric::new(&spec, world * frame)
+                                let quadric = Quadric::new(&spec, world.value * frame)
+                                    .map(|q| q.with_composition(&world.then(&frame)))
                                     .map_err(|e| e.context(format!("{source} ({type_name})")))?;
                                 let id = target.id(&mut self.builder);
                                 let material = self.bound_material(prim);
@@ -707,18 +714,19 @@ impl Loader {
                                 let material = self.bound_material(prim);
                                 let runs = runs(&vec![material; triangles.len()]);
                                 let mesh = Mesh::from_soup(&triangles).with_materials(runs);
-                                self.builder.place_mesh(id, Arc::new(mesh), world);
+                                self.builder.place_composed_mesh(id, Arc::new(mesh), world);
                             }
                         }
                     }
                 }
             }
         } else if type_name == "Camera" {
-            self.camera(prim, &name, world)?;
+            self.camera(prim, &name, world.value)?;
         }
         if quadric::has_quadric(prim)? {
             let quadric = quadric::read(prim, self.at)
-                .and_then(|spec| Quadric::new(&spec, world))
+                .and_then(|spec| Quadric::new(&spec, world.value))
+                .map(|quadric| quadric.with_composition(&world))
                 .map_err(|e| e.context(format!("{source}: raycast:quadric")))?;
             let id = target.id(&mut self.builder);
             self.builder.place_quadric(id, quadric);

@@ -8,14 +8,26 @@
 //! `!resetXformStack!`.
 //!
 //! `xformOpOrder` lists ops outermost first: for `[A, B, C]` a point `p` maps to `A·B·C·p`.
+//!
+//! Each op's matrix and the product come with a bound on their distance from the exact
+//! matrices of the op values as read ([`BoundedMat4`], for the `error` and `certain` AOVs):
+//! translations, scales and `transform` matrices are exact; a rotation in degrees carries its
+//! angle's conversion and libm's `sin`/`cos` ([`rotation::about_axis`]); `orient` the f64
+//! evaluation of usd-core's axis-and-angle reading ([`orient_rotation`]); the products their
+//! roundings ([`BoundedMat4::then_bounded`]). An inverted op other than a translation (whose
+//! inverse is exact) is not bounded (`+∞`).
 
 use super::value::{self, value_matrix4, value_quat, value_scalar, value_vec3, At};
 use super::warning_at;
 use crate::error::{Error, Result};
-use glam::{DMat4, DQuat, DVec3};
+use glam::{DMat3, DMat4, DQuat, DVec3};
 use openusd::sdf::Value;
 use openusd::usd::Prim;
+use raycast_core::bound::bounded::Bounded;
+use raycast_core::bound::rotation;
+use raycast_core::bound::transform::BoundedMat4;
 use raycast_core::diagnostic::{Code, Diagnostic};
+use std::ops::{Div, Mul, Sub};
 
 const INVERT: &str = "!invert!";
 const RESET: &str = "!resetXformStack!";
@@ -23,8 +35,8 @@ const RESET: &str = "!resetXformStack!";
 /// A prim's local transform.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Local {
-    /// Local-to-parent matrix (column vectors).
-    pub matrix: DMat4,
+    /// Local-to-parent matrix (column vectors), with its bound.
+    pub matrix: BoundedMat4,
     /// `!resetXformStack!`: the matrix is local-to-world, the parent's transform is dropped.
     pub resets: bool,
 }
@@ -36,7 +48,7 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<Diagnostic>) -> R
     let order = match value::raw(prim, "xformOpOrder", at)? {
         None => {
             return Ok(Local {
-                matrix: DMat4::IDENTITY,
+                matrix: BoundedMat4::exact(DMat4::IDENTITY),
                 resets: false,
             })
         }
@@ -54,7 +66,7 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<Diagnostic>) -> R
             ))
         }
     };
-    let mut matrix = DMat4::IDENTITY;
+    let mut matrix = BoundedMat4::exact(DMat4::IDENTITY);
     let mut resets = false;
     for (i, entry) in order.iter().enumerate() {
         if entry == RESET {
@@ -84,9 +96,9 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<Diagnostic>) -> R
         } else {
             op
         };
-        matrix *= op;
+        matrix = matrix.then_bounded(&op);
     }
-    if !matrix.is_finite() {
+    if !matrix.value.is_finite() {
         return Err(Error::at(
             prim.path().to_string(),
             "the local transform is not finite",
@@ -95,12 +107,26 @@ pub fn local_transform(prim: &Prim, at: At, warnings: &mut Vec<Diagnostic>) -> R
     Ok(Local { matrix, resets })
 }
 
-/// Inverse of an op matrix, `None` when it is singular.
-fn invert(m: DMat4) -> Option<DMat4> {
-    let det = m.determinant();
-    let scale =
-        m.x_axis.truncate().length() * m.y_axis.truncate().length() * m.z_axis.truncate().length();
-    (det.is_finite() && det.abs() > 1e-300 && det.abs() > 1e-14 * scale).then(|| m.inverse())
+/// Inverse of an op matrix, `None` when it is singular. A translation's is exact (its negation,
+/// as glam's inverse computes it); any other's bound is not made (`+∞`).
+fn invert(m: BoundedMat4) -> Option<BoundedMat4> {
+    let value = m.value;
+    let det = value.determinant();
+    let scale = value.x_axis.truncate().length()
+        * value.y_axis.truncate().length()
+        * value.z_axis.truncate().length();
+    if !(det.is_finite() && det.abs() > 1e-300 && det.abs() > 1e-14 * scale) {
+        return None;
+    }
+    if m.is_exact() && DMat3::from_mat4(value) == DMat3::IDENTITY {
+        return Some(BoundedMat4::exact(DMat4::from_translation(
+            -value.w_axis.truncate(),
+        )));
+    }
+    Some(BoundedMat4 {
+        value: value.inverse(),
+        error: DMat4::from_cols_array(&[f64::INFINITY; 16]),
+    })
 }
 
 /// Whether `name` can name an attribute: identifiers (a letter or `_`, then letters, digits
@@ -121,7 +147,7 @@ fn op_matrix(
     name: &str,
     at: At,
     warnings: &mut Vec<Diagnostic>,
-) -> Result<Option<DMat4>> {
+) -> Result<Option<BoundedMat4>> {
     let Some(rest) = name.strip_prefix("xformOp:") else {
         warnings.push(warning_at(
             prim.path().to_string(),
@@ -157,32 +183,30 @@ fn op_matrix(
     };
     let scalar = || value_scalar(&raw).ok_or_else(|| bad("a number"));
     let vector = || value_vec3(&raw).ok_or_else(|| bad("a 3-vector"));
-    let rx = |deg: f64| DMat4::from_rotation_x(deg.to_radians());
-    let ry = |deg: f64| DMat4::from_rotation_y(deg.to_radians());
-    let rz = |deg: f64| DMat4::from_rotation_z(deg.to_radians());
+    let exact = BoundedMat4::exact;
     let matrix = match kind {
-        "translate" => DMat4::from_translation(vector()?),
-        "translateX" => DMat4::from_translation(DVec3::X * scalar()?),
-        "translateY" => DMat4::from_translation(DVec3::Y * scalar()?),
-        "translateZ" => DMat4::from_translation(DVec3::Z * scalar()?),
-        "scale" => DMat4::from_scale(vector()?),
-        "scaleX" => DMat4::from_scale(DVec3::new(scalar()?, 1.0, 1.0)),
-        "scaleY" => DMat4::from_scale(DVec3::new(1.0, scalar()?, 1.0)),
-        "scaleZ" => DMat4::from_scale(DVec3::new(1.0, 1.0, scalar()?)),
-        "rotateX" => rx(scalar()?),
-        "rotateY" => ry(scalar()?),
-        "rotateZ" => rz(scalar()?),
+        "translate" => exact(DMat4::from_translation(vector()?)),
+        "translateX" => exact(DMat4::from_translation(DVec3::X * scalar()?)),
+        "translateY" => exact(DMat4::from_translation(DVec3::Y * scalar()?)),
+        "translateZ" => exact(DMat4::from_translation(DVec3::Z * scalar()?)),
+        "scale" => exact(DMat4::from_scale(vector()?)),
+        "scaleX" => exact(DMat4::from_scale(DVec3::new(scalar()?, 1.0, 1.0))),
+        "scaleY" => exact(DMat4::from_scale(DVec3::new(1.0, scalar()?, 1.0))),
+        "scaleZ" => exact(DMat4::from_scale(DVec3::new(1.0, 1.0, scalar()?))),
+        "rotateX" => rotation::about_axis(0, scalar()?),
+        "rotateY" => rotation::about_axis(1, scalar()?),
+        "rotateZ" => rotation::about_axis(2, scalar()?),
         // `rotateXYZ` rotates about X first, then Y, then Z: R = Rz·Ry·Rx for column vectors.
         "rotateXYZ" | "rotateXZY" | "rotateYXZ" | "rotateYZX" | "rotateZXY" | "rotateZYX" => {
             let angles = vector()?;
-            let mut m = DMat4::IDENTITY;
+            let mut m = exact(DMat4::IDENTITY);
             for axis in kind["rotate".len()..].chars() {
-                let r = match axis {
-                    'X' => rx(angles.x),
-                    'Y' => ry(angles.y),
-                    _ => rz(angles.z),
+                let axis = match axis {
+                    'X' => 0,
+                    'Y' => 1,
+                    _ => 2,
                 };
-                m = r * m;
+                m = rotation::about_axis(axis, angles[axis]).then_bounded(&m);
             }
             m
         }
@@ -194,9 +218,9 @@ fn op_matrix(
                     "zero or non-finite quaternion",
                 ));
             }
-            DMat4::from_quat(orient_rotation(q))
+            orient_rotation(q)
         }
-        "transform" => value_matrix4(&raw).ok_or_else(|| bad("a matrix4d"))?,
+        "transform" => exact(value_matrix4(&raw).ok_or_else(|| bad("a matrix4d"))?),
         _ => {
             warnings.push(warning_at(
                 prim.path().to_string(),
@@ -212,16 +236,26 @@ fn op_matrix(
 /// to [-1, 1], is the cosine of half the angle and the imaginary part gives only the axis. A
 /// quaternion that is not exactly unit (any `quatf` such as `(0.8, 0.2, 0.4, 0.4)` rounded to
 /// f32) is therefore not normalised as a whole: doing so turned that one by 3.4e-8.
-fn orient_rotation(q: DQuat) -> DQuat {
+///
+/// The exact rotation is that of the unit quaternion `(v·√(1 − w²)/|v|, w)`; the same steps in
+/// [`Bounded`] arithmetic (the axis length's square root, `1 − w²`, the quotient) and glam's
+/// normalisation and multiplying out ([`BoundedMat4::trs_bounded`]) give the value glam
+/// computes, bit for bit, and its bound.
+fn orient_rotation(q: DQuat) -> BoundedMat4 {
     let axis = glam::DVec3::new(q.x, q.y, q.z);
     let length = axis.length();
     // GfRotation's GF_MIN_VECTOR_LENGTH: a shorter axis is no rotation.
     if length <= 1e-10 {
-        return DQuat::IDENTITY;
+        return BoundedMat4::exact(DMat4::IDENTITY);
     }
-    let cos = q.w.clamp(-1.0, 1.0);
-    let v = axis * ((1.0 - cos * cos).sqrt() / length);
-    DQuat::from_xyzw(v.x, v.y, v.z, cos).normalize()
+    let cos = Bounded::exact(q.w.clamp(-1.0, 1.0));
+    let [x, y, z] = [q.x, q.y, q.z].map(Bounded::exact);
+    // `DVec3::length`: the square root of the dot product, summed left to right.
+    let norm = (x.mul(x) + y.mul(y) + z.mul(z)).sqrt();
+    let sin = Bounded::exact(1.0).sub(cos.mul(cos)).sqrt();
+    let factor = sin.div(norm);
+    let v = [x, y, z].map(|c| c.mul(factor));
+    BoundedMat4::trs_bounded(DVec3::ZERO, [v[0], v[1], v[2], cos], DVec3::ONE)
 }
 
 #[cfg(test)]
@@ -243,7 +277,7 @@ mod tests {
     #[test]
     fn orient_of_a_not_quite_unit_quatf_is_usd_cores_rotation() {
         let [w, x, y, z] = [0.8f32, 0.2, 0.4, 0.4].map(f64::from);
-        let m = DMat4::from_quat(orient_rotation(DQuat::from_xyzw(x, y, z, w)));
+        let m = orient_rotation(DQuat::from_xyzw(x, y, z, w)).value;
         for (r, row) in USD_ROWS.iter().enumerate() {
             for (c, &expected) in row.iter().enumerate() {
                 let got = m.col(r)[c];
