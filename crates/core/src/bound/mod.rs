@@ -25,10 +25,12 @@
 //! the root, so a primitive whose stored geometry or mapped ray may be off by more than 1e-10
 //! of its octree's root counts as a possible crossing.
 //!
-//! Not covered (the bound takes them as exact): the rounding of USD transform ops composed in
-//! f64, of an animation's interpolated translation, rotation and scale, of decimal numbers
-//! read into f64, of posed (skinned, morphed) vertices, and of the camera's ray generation
-//! (the ray traced is the one bounded).
+//! USD transform ops are bounded against the exact composition of the op values as read
+//! (rotations in degrees: [`rotation`]). Not covered (the bound takes them as exact): the
+//! rounding of an animation's interpolated translation, rotation and scale, of decimal numbers
+//! read into f64, of a rigidly skinned USD prim's joint transform, of posed (skinned, morphed)
+//! vertices, and of the camera's ray generation (the ray traced is the one bounded); an
+//! inverted USD op other than a translation and point instances moved by velocities get `+∞`.
 
 pub mod bounded;
 pub mod rotation;

@@ -288,4 +288,25 @@ mod tests {
             }
         }
     }
+
+    /// An inverted translation (a pivot's `!invert!`) is glam's inverse, bit for bit, and
+    /// exact; any other inverted op is left unbounded.
+    #[test]
+    fn an_inverted_translation_is_exact_and_glams_inverse() {
+        for t in [
+            DVec3::new(0.1, -2.5e7, 3.0e-9),
+            DVec3::new(1.0 / 3.0, 7.0, -0.7),
+        ] {
+            let m = DMat4::from_translation(t);
+            let inverse = invert(BoundedMat4::exact(m)).unwrap();
+            assert_eq!(inverse.value, m.inverse());
+            assert!(inverse.is_exact());
+        }
+        let turned = invert(rotation_about_z(30.0)).unwrap();
+        assert!(turned.error.x_axis.x.is_infinite());
+    }
+
+    fn rotation_about_z(degrees: f64) -> BoundedMat4 {
+        raycast_core::bound::rotation::about_axis(2, degrees)
+    }
 }
