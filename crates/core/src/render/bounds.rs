@@ -94,12 +94,21 @@ pub fn certain(
     );
     let mut certain = true;
     let local = ray.origin - scene.anchor;
+    // The primitives passed over last, by index modulo 32: a primitive in several leaves along
+    // the ray is weighed once (its answer cannot change between leaves).
+    let mut seen = [u32::MAX; 32];
+    let mut first_visit = |prim: u32| {
+        let slot = &mut seen[prim as usize % 32];
+        let first = *slot != prim;
+        *slot = prim;
+        first
+    };
     tracer
         .octree
         .traverse(local, ray.dir, t_limit, |refs, _, _| {
             if refs
                 .iter()
-                .any(|&prim| scene.may_cross(prim as usize, &probe))
+                .any(|&prim| first_visit(prim) && scene.may_cross(prim as usize, &probe))
             {
                 certain = false;
                 f64::NEG_INFINITY
