@@ -208,6 +208,11 @@ pub fn within3(v: DVec3, error: f64) -> BVec3 {
     v.to_array().map(|x| Bounded::new(x, error))
 }
 
+/// The bounds of a bounded vector's components.
+pub fn errors3(v: &BVec3) -> DVec3 {
+    DVec3::new(v[0].error, v[1].error, v[2].error)
+}
+
 /// The values of a bounded vector.
 pub fn values3(v: &BVec3) -> DVec3 {
     DVec3::new(v[0].value, v[1].value, v[2].value)

@@ -33,6 +33,7 @@
 //! inverted USD op other than a translation and point instances moved by velocities get `+∞`.
 
 pub mod bounded;
+pub mod residual;
 pub mod rotation;
 pub mod transform;
 pub mod triangle;

@@ -2,7 +2,8 @@
 //! they bound and mean is said there): a hit's bound, its depth error, and the search for a
 //! competitor that decides `certain`.
 
-use crate::bound::bounded::{self, up, Bounded};
+use crate::bound::bounded::{self, gamma, up, Bounded};
+use crate::bound::residual;
 use crate::bound::HitBound;
 use crate::geometry::Ray;
 use crate::scene::{Crossing, Probe, Scene};
@@ -36,17 +37,29 @@ unsafe fn fused_avx2<R>(work: impl FnOnce() -> R) -> R {
 }
 
 /// The bound of `hit`, the nearest hit of `ray`: computed once per hit and shared by the
-/// `error` and `certain` AOVs.
+/// `error` and `certain` AOVs; whether the primitive's own decision is certain only when
+/// `decide` (the `certain` AOV) asks for it.
 #[inline(always)]
-pub fn hit_bound(scene: &Scene, ray: &Ray, hit: &Crossing) -> HitBound {
-    scene.hit_bound(hit, ray.origin, ray.dir)
+pub fn hit_bound(scene: &Scene, ray: &Ray, hit: &Crossing, decide: bool) -> HitBound {
+    scene.hit_bound(hit, ray.origin, ray.dir, decide)
 }
 
 /// The `error` AOV of a hit of `ray` from its bound: a bound on `|t·|d| − t*·|d||` (see the
 /// module docs).
 #[inline(always)]
 pub fn depth_error(bound: &HitBound, ray: &Ray) -> f64 {
-    depth_bound(bound.t, ray.dir).error
+    let (t, dir) = (bound.t.value, ray.dir);
+    if !(residual::in_range(t) && dir.to_array().into_iter().all(residual::in_range)) {
+        return depth_bound(bound.t, dir).error;
+    }
+    // The standard model (see [`residual`]'s module docs for its range): `fl(d·d)` is within
+    // `γ₃` of `|d|²` (three products, two sums, all terms non-negative), so its rounded
+    // square root `L̂` is within `γ₄L̂` of `|d|`, and the depth `fl(t·L̂)` within `γ₁` of `t·L̂`:
+    // `|depth − t*|d|| ≤ γ₁|depth| + γ₄|t|L̂ + δₜL̂(1 + γ₄)`.
+    let length = dir.length();
+    let depth = t * length;
+    let error = gamma(1) * depth.abs() + gamma(4) * (t.abs() * length);
+    up(error + up(bound.t.error * length) * (1.0 + gamma(4)))
 }
 
 /// `t·|d|` as the trace computes it (`dot` then `sqrt`), with its bound.

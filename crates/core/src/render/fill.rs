@@ -154,6 +154,8 @@ struct Block<'a, S: ?Sized> {
     range: &'a (dyn Fn(usize) -> (f64, f64) + Sync),
     /// The hits' bounds, once `error` or `certain` asks for them.
     bounds: OnceCell<Vec<Option<HitBound>>>,
+    /// Whether the `certain` AOV is asked for (the hits' bounds then decide it too).
+    decide: bool,
 }
 
 impl<S: RaySource + ?Sized> Block<'_, S> {
@@ -185,7 +187,8 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
                 let each = hits.iter().enumerate();
                 each.map(|(j, hit)| {
                     let hit = hit.as_ref()?;
-                    Some(super::bounds::hit_bound(self.scene, &self.ray(j), hit))
+                    let ray = self.ray(j);
+                    Some(super::bounds::hit_bound(self.scene, &ray, hit, self.decide))
                 })
                 .collect()
             })
@@ -338,6 +341,7 @@ where
             forward,
             range: &rays.range,
             bounds: OnceCell::new(),
+            decide: aovs.contains(&Aov::Certain),
         };
         let order = tile_order(len, width);
         let indices: Vec<usize> = match &order {

@@ -4,7 +4,8 @@
 use super::instance::StoredMesh;
 use super::{Crossing, Scene, Top};
 use crate::bound::bounded;
-use crate::bound::bounded::{exact3, gamma, up, BVec3, Bounded};
+use crate::bound::bounded::{errors3, exact3, gamma, up, values3, BVec3, Bounded};
+use crate::bound::residual::{self, NearRay};
 use crate::bound::transform::moved;
 use crate::bound::triangle::{self, TriangleBound};
 use crate::bound::{mapped, HitBound, Side, CELL_SLACK};
@@ -91,17 +92,24 @@ fn exit_t(aabb: &Aabb, origin: DVec3, dir: DVec3) -> f64 {
 }
 
 impl Scene {
-    /// The bound of `hit`, a crossing of the ray `origin + t·dir` (see [`crate::bound`]).
+    /// The bound of `hit`, a crossing of the ray `origin + t·dir` (see [`crate::bound`]). A
+    /// triangle's `t` is bounded by the residual of its exact plane
+    /// ([`crate::bound::residual`]), or where that declines by the bounded recomputation of the
+    /// watertight test; whether its own decision is certain (which takes that recomputation)
+    /// only when `decide` asks for it (`certain` is `false` otherwise).
     #[inline(always)]
-    pub fn hit_bound(&self, hit: &Crossing, origin: DVec3, dir: DVec3) -> HitBound {
+    pub fn hit_bound(&self, hit: &Crossing, origin: DVec3, dir: DVec3, decide: bool) -> HitBound {
         let unbounded = HitBound {
             t: Bounded::new(hit.t, f64::INFINITY),
             certain: false,
         };
         match self.top(hit.top as usize) {
             Top::Triangle(i) => {
-                let b = triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));
-                triangle_hit(&b, hit.t)
+                let tri = self.world.mesh.triangle(i);
+                let ray = NearRay::exact(origin, dir);
+                let full =
+                    || triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));
+                triangle_hit(&ray, &tri, self.placement_of(i), hit.t, decide, full)
             }
             Top::Instance(k) => {
                 let stored = &self.meshes[self.instances[k].mesh as usize];
@@ -110,7 +118,19 @@ impl Scene {
                 };
                 let (o, d) = self.instance_ray(k, origin, dir);
                 let tri = self.bounded_instance_triangle(k, stored, inner as usize);
-                triangle_hit(&triangle::bound(&o, &d, &tri), hit.t)
+                let ray = NearRay {
+                    origin: values3(&o),
+                    origin_error: errors3(&o),
+                    dir: values3(&d),
+                    dir_error: errors3(&d),
+                };
+                let vertex_error = tri
+                    .iter()
+                    .map(|v| errors3(v).max_element())
+                    .fold(0.0, f64::max);
+                let stored_tri = tri.map(|v| values3(&v));
+                let full = || triangle::bound(&o, &d, &tri);
+                triangle_hit(&ray, &stored_tri, vertex_error, hit.t, decide, full)
             }
             Top::Quadric(q) => quadric_hit(&self.quadrics[q].bound_roots(origin, dir), hit.t),
         }
@@ -313,13 +333,28 @@ impl Scene {
     }
 }
 
-/// A triangle hit's bound: the reported `t` within the distance to the recomputed one plus its
-/// bound; certain when the exact ray crosses the interior in front of the origin.
-fn triangle_hit(b: &TriangleBound, t: f64) -> HitBound {
-    let error = up((t - b.t.value).abs() + b.t.error);
+/// A triangle hit's bound: the reported `t` within the residual bound of its exact plane
+/// ([`residual::plane_error`]), or, where that declines, within the distance to the recomputed
+/// `t` plus its bound (`full`, [`triangle::bound`]); certain (asked by `decide`) when the exact
+/// ray crosses the interior in front of the origin.
+#[inline(always)]
+fn triangle_hit(
+    ray: &NearRay,
+    tri: &[DVec3; 3],
+    vertex_error: f64,
+    t: f64,
+    decide: bool,
+    full: impl Fn() -> TriangleBound,
+) -> HitBound {
+    let fast = residual::plane_error(ray, tri, vertex_error, t);
+    let full = (decide || fast.is_none()).then(full);
+    let recomputed = |b: &TriangleBound| up((t - b.t.value).abs() + b.t.error);
+    let error = fast.or_else(|| full.as_ref().map(recomputed));
+    let error = error.unwrap_or(f64::INFINITY);
+    let inside = full.is_some_and(|b| b.side == Side::Inside);
     HitBound {
         t: Bounded::new(t, error),
-        certain: b.side == Side::Inside && t - error > 0.0,
+        certain: decide && inside && t - error > 0.0,
     }
 }
 

@@ -41,8 +41,8 @@ mod xform;
 pub use variants::{parse_choice, Choice};
 
 use super::LoadOptions;
-use crate::error::{Error, Result};
 use crate::bound::transform::BoundedMat4;
+use crate::error::{Error, Result};
 use crate::quadric::Quadric;
 use crate::scene::attributes::runs;
 use crate::scene::{Mesh, Scene, SceneBuilder, StageInfo};
