@@ -10,10 +10,13 @@
 //! product of the transforms above it (a translation/rotation/scale node's matrix that of its
 //! exactly normalized quaternion), the f64 normalization's, multiplying out's and
 //! composition's rounding carried in [`transform::BoundedMat4`]. When `certain` is 1, that crossing
-//! is the exact nearest hit. It is a forward error analysis of the operations the tracer
-//! performs, carried in [`bounded::Bounded`] (value plus bound, Higham's `γₙ`); the derivations
-//! are in [`triangle`] and [`crate::quadric::Quadric::bound_roots`]. `+∞` where no bound can be
-//! made (a ray in a triangle's plane); `0` for a miss.
+//! is the exact nearest hit. It is a forward error analysis: a triangle hit's `t` by the
+//! residual of the exact plane at the reported point ([`residual`]: `|t − t*| = |R*|/|D*|`,
+//! both evaluated with Higham's `γₙ` and moved by the vertices' and the ray's bounds), or where
+//! its standard model does not apply, and for the hit's own decision, the watertight test
+//! recomputed in [`bounded::Bounded`] (value plus bound, each operation's exact rounding:
+//! [`triangle`]); a quadric's roots by [`crate::quadric::Quadric::bound_roots`]. `+∞` where no
+//! bound can be made (a ray in a triangle's plane); `0` for a miss.
 //!
 //! # What `certain` means
 //! 1 when no exact values within the bounds can change the ray's decision: the hit primitive's

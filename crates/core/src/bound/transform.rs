@@ -246,6 +246,49 @@ mod tests {
         }
     }
 
+    /// The rotation formula on a quaternion as given (USD's point instancers) is glam's, bit
+    /// for bit, without normalizing; its bound covers the distance to the same formula in
+    /// exact arithmetic (the entries recomputed with Dekker's exact products: a different
+    /// method from the fused multiply-adds of the bounded type).
+    #[test]
+    fn trs_as_given_is_glams_matrix_and_bounds_the_formula() {
+        let exact_product = |a: f64, b: f64| {
+            let split = |x: f64| {
+                let c = 134_217_729.0 * x;
+                let hi = c - (c - x);
+                (hi, x - hi)
+            };
+            let ((ah, al), (bh, bl)) = (split(a), split(b));
+            let p = a * b;
+            (p, ((ah * bh - p) + ah * bl + al * bh) + al * bl)
+        };
+        let mut rng = crate::test_rng::Rng(11);
+        for _ in 0..500 {
+            let (xyz, w) = (rng.point(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+            let q = DQuat::from_xyzw(xyz.x, xyz.y, xyz.z, w);
+            let bounded = BoundedMat4::trs_as_given(
+                DVec3::ZERO,
+                q.to_array().map(Bounded::exact),
+                DVec3::ONE,
+            );
+            let glam = DMat4::from_scale_rotation_translation(DVec3::ONE, q, DVec3::ZERO);
+            assert_eq!(bounded.value.to_cols_array(), glam.to_cols_array());
+            // Entry (0, 0), 1 − 2(y² + z²), as a double-double: the products' exact parts
+            // summed by two-sums, within about 50u² of the exact value.
+            let ((yy, yy_low), (zz, zz_low)) = (exact_product(q.y, q.y), exact_product(q.z, q.z));
+            let (mut hi, mut lo) = (1.0f64, 0.0f64);
+            for term in [-2.0 * yy, -2.0 * zz, -2.0 * yy_low, -2.0 * zz_low] {
+                let sum = hi + term;
+                let back = sum - hi;
+                lo += (hi - (sum - back)) + (term - back);
+                hi = sum;
+            }
+            let distance = ((bounded.value.x_axis.x - hi) - lo).abs();
+            let slack = 64.0 * f64::EPSILON * f64::EPSILON;
+            assert!(distance <= bounded.error.x_axis.x * (1.0 + 1e-15) + slack);
+        }
+    }
+
     /// The quarter turn about z, `(0, 0, sin 45°, cos 45°)` in f64, is not exactly unit: its
     /// matrix's zero entries keep only the products' underflow allowance, while the entries
     /// near 0.0 and 1 carry the normalization's and the products' roundings, a few units of
