@@ -117,10 +117,8 @@ pub fn plane_error(ray: &NearRay, tri: &[DVec3; 3], vertex_error: f64, t: f64) -
         (0.0, 0.0)
     } else {
         let normal = (n.abs() + n_err, normal_move(vertex_error, e1, e2));
-        (
-            residual_move(ray, tri, vertex_error, t)?,
-            direction_move(ray, normal),
-        )
+        let r_move = residual_move(ray, (vertex_error, t), (e1, e2), (n, n_err), (q, q_err))?;
+        (r_move, direction_move(ray, normal))
     };
     let inflate = |x: f64| x * (1.0 + 1.0 / (1u64 << 40) as f64);
     let numerator = up(inflate(r.abs() + r_err + r_move));
@@ -159,40 +157,50 @@ fn direction_move(ray: &NearRay, (n_abs, moved): (DVec3, DVec3)) -> f64 {
 /// `None` outside the standard model's range. With `A = a − p`, `B = b − p`, `C = c − p`
 /// (`p = o + t·d`), `R = −det(A, B, C)`, and the exact scene's `R*` is the same determinant
 /// with each column moved by `α′`, `|α′ᵢ| ≤ Pᵢ = ε + eₒᵢ + |t|e_dᵢ`. Multilinearity gives the
-/// first-order terms `α′·(B × C)` (and the two others: for a point inside the triangle each
-/// cross product is its barycentric weight times `n`, so they sum to about `P·|n|`), the
-/// second-order `C·(α′ × β′)`, at most `Σᵢ|Cᵢ|·2PⱼPₖ`, and the third `6PₓP_yP_z`.
+/// first-order terms `α′·(B × C)`, `β′·(C × A)`, `γ′·(A × B)` (for a point inside the triangle
+/// each cross product is its barycentric weight times `n`, so they sum to about `P·|n|`), the
+/// second-order `C·(α′ × β′)` and its like, at most `Σᵢ|Cᵢ|·2PⱼPₖ`, and the third
+/// `6PₓP_yP_z`. The cross products come from what [`plane_error`] computed: `A = −X`,
+/// `B = E₁ − X`, `C = E₂ − X`, so `A × B = E₁ × X`, `C × A = X × E₂` and
+/// `B × C = n − E₁ × X − X × E₂`.
 #[inline(always)]
-fn residual_move(ray: &NearRay, tri: &[DVec3; 3], eps: f64, t: f64) -> Option<f64> {
-    let g = gamma(1);
+fn residual_move(
+    ray: &NearRay,
+    (eps, t): (f64, f64),
+    (e1, e2): (DVec3, DVec3),
+    (n, n_err): (DVec3, DVec3),
+    (q, q_err): (DVec3, DVec3),
+) -> Option<f64> {
     let moved = ray.origin_error + ray.dir_error * t.abs() + DVec3::splat(eps);
-    let w = ray.dir * t;
-    let p = ray.origin + w;
-    let p_err = (w.abs() + p.abs()) * g;
-    let column = |v: DVec3| {
-        let x = v - p;
-        (x, p_err + x.abs() * g)
-    };
-    let [(a, da), (b, db), (c, dc)] = [column(tri[0]), column(tri[1]), column(tri[2])];
-    if !(fits3(p) & fits3(a) & fits3(b) & fits3(c) & fits3(moved)) {
+    if !fits3(moved) {
         return None;
     }
-    // `|x × y|` per coordinate, from the computed columns and their bounds.
-    let cross = |x: DVec3, dx: DVec3, y: DVec3, dy: DVec3| {
-        let ((xj, xk), (yj, yk)) = (after(x), after(y));
-        let ((dxj, dxk), (dyj, dyk)) = (after(dx), after(dy));
-        let (first, second) = (xj * yk, xk * yj);
-        let value = (first - second).abs() + (first.abs() + second.abs()) * gamma(3);
-        let carried =
-            xj.abs() * dyk + dxj * (yk.abs() + dyk) + xk.abs() * dyj + dxk * (yj.abs() + dyj);
-        value + carried
-    };
-    let first = moved.dot(cross(b, db, c, dc) + cross(c, dc, a, da) + cross(a, da, b, db));
+    let (s1, s2) = (e1.abs() * gamma(1), e2.abs() * gamma(1));
+    let (c1, c1_err) = cross(e1, s1, q, q_err);
+    let (c2, c2_err) = cross(q, q_err, e2, s2);
+    let rest = n - c1 - c2;
+    let rest_err = (n.abs() + c1.abs() + c2.abs()) * gamma(2) + n_err + c1_err + c2_err;
+    let crosses = (c1.abs() + c1_err) + (c2.abs() + c2_err) + (rest.abs() + rest_err);
+    let first = moved.dot(crosses);
     let (mj, mk) = after(moved);
-    let columns = a.abs() + b.abs() + c.abs() + da + db + dc;
+    let x = q.abs() + q_err;
+    let columns = x * 3.0 + e1.abs() + s1 + e2.abs() + s2;
     let second = columns.dot(mj * mk * 2.0);
     let third = 6.0 * moved.x * moved.y * moved.z;
     Some(first + second + third)
+}
+
+/// `fl(x × y)` and a bound on its distance from the exact `x* × y*` for `x*`, `y*` within
+/// `dx`, `dy` of `x`, `y`: each component's products and difference (`γ₃` of the products'
+/// magnitudes) and the carried bounds.
+#[inline(always)]
+fn cross(x: DVec3, dx: DVec3, y: DVec3, dy: DVec3) -> (DVec3, DVec3) {
+    let ((xj, xk), (yj, yk)) = (after(x), after(y));
+    let ((dxj, dxk), (dyj, dyk)) = (after(dx), after(dy));
+    let (first, second) = (xj * yk, xk * yj);
+    let rounding = (first.abs() + second.abs()) * gamma(3);
+    let carried = xj.abs() * dyk + dxj * (yk.abs() + dyk) + xk.abs() * dyj + dxk * (yj.abs() + dyj);
+    (first - second, rounding + carried)
 }
 
 /// `fl(x·y)` summed as `(x₀y₀ + x₁y₁) + x₂y₂`, and a bound on its distance from the exact `x*·y*`
