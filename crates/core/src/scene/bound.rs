@@ -132,7 +132,17 @@ impl Scene {
                 let full = || triangle::bound(&o, &d, &tri);
                 triangle_hit(&ray, &stored_tri, vertex_error, hit.t, decide, full)
             }
-            Top::Quadric(q) => quadric_hit(&self.quadrics[q].bound_roots(origin, dir), hit.t),
+            Top::Quadric(q) => {
+                let quadric = &self.quadrics[q];
+                let (error, isolated) = quadric.bound_root_at(origin, dir, hit.t);
+                let certain = decide
+                    && isolated
+                    && quadric_certain(&quadric.bound_roots(origin, dir), hit.t, error);
+                HitBound {
+                    t: Bounded::new(hit.t, error),
+                    certain,
+                }
+            }
         }
     }
 
@@ -175,7 +185,7 @@ impl Scene {
                 triangle_competes(&b, limit)
             }
             Top::Instance(k) => self.instance_may_cross(k, origin, dir, limit, own),
-            // The hit quadric's other roots are weighed by its hit bound ([`quadric_hit`]).
+            // The hit quadric's other roots are weighed by its hit bound ([`quadric_certain`]).
             Top::Quadric(q) => {
                 if own.is_some() || !self.quadrics[q].may_reach(origin, dir, limit) {
                     return false;
@@ -366,21 +376,16 @@ fn nearest_root(b: &QuadricBound, t: f64) -> Option<usize> {
     })
 }
 
-/// A quadric hit's bound: the reported `t` within the distance to the nearest computed root
-/// plus its bound; certain when that root is isolated, inside the clip box, in front of the
-/// origin, and no other exact root may be a nearer valid crossing.
-fn quadric_hit(b: &QuadricBound, t: f64) -> HitBound {
+/// Whether a quadric hit at `t`, the only exact root within `error` of it, is the exact nearest
+/// valid crossing of its quadric: `t` is a computed root, isolated (so the same exact root),
+/// inside the clip box and in front of the origin, and no other exact root may be a nearer
+/// valid crossing.
+fn quadric_certain(b: &QuadricBound, t: f64, error: f64) -> bool {
     let Some(i) = nearest_root(b, t) else {
-        return HitBound {
-            t: Bounded::new(t, f64::INFINITY),
-            certain: false,
-        };
+        return false;
     };
     let root = b.roots[i];
-    let error = up((t - root.t.value).abs() + root.t.error);
-    let own = root.isolated && root.clip == Side::Inside && t - error > 0.0;
-    HitBound {
-        t: Bounded::new(t, error),
-        certain: own && !quadric_competes(b, up(t + error), Some(i)),
-    }
+    let error = error.max(root.t.error);
+    let own = root.t.value == t && root.isolated && root.clip == Side::Inside && t - error > 0.0;
+    own && !quadric_competes(b, up(t + error), Some(i))
 }

@@ -297,25 +297,22 @@ impl Quadric {
         (value, dot3(&gradient, v))
     }
 
+    /// A bound on the distance from `t` (a reported crossing of the world ray `origin +
+    /// t·dir`) to the nearest exact root, and whether exactly one exact root lies within it
+    /// (see the module docs): the check of one root, without the other root, the clip box or
+    /// the other coefficients that [`Quadric::bound_roots`] adds for a decision.
+    pub fn bound_root_at(&self, origin: DVec3, dir: DVec3, t: f64) -> (f64, bool) {
+        let (x0, v) = self.bounded_ray(origin, dir);
+        let q = rows(self.local.q, 0.0);
+        let k = crate::bound::bounded::dot3(&v, &mat_vec(&q, &v));
+        let (value, slope) = self.value_and_slope(t, &x0, &v);
+        isolate(value, slope, k)
+    }
+
     /// The bound of the computed root `t` (see the module docs) and its clip side.
     fn root_bound(&self, t: f64, c: &Coefficients, x0: &BVec3, v: &BVec3) -> RootBound {
         let (value, slope) = self.value_and_slope(t, x0, v);
-        let g = value.magnitude();
-        let m0 = down(slope.value.abs() - slope.error);
-        let mut bound = f64::INFINITY;
-        let mut isolated = false;
-        if m0 > 0.0 {
-            let r = up(2.0 * g / m0);
-            let m = down(m0 - up(2.0 * c.k.magnitude() * r));
-            if m > 0.0 && up(g / m) <= r {
-                bound = up(g / m);
-                isolated = true;
-            }
-        }
-        let k_low = down(c.k.value.abs() - c.k.error);
-        if k_low > 0.0 {
-            bound = bound.min(up(up(g / k_low).sqrt() * (1.0 + gamma(2))));
-        }
+        let (bound, isolated) = isolate(value, slope, c.k);
         let root = Bounded::new(t, bound);
         RootBound {
             t: root,
@@ -347,6 +344,29 @@ impl Quadric {
         }
         side
     }
+}
+
+/// From `g*(t)` (`value`), `g*'(t)` (`slope`) and `K*`, all bounded: a bound on the distance
+/// from `t` to the nearest exact root, and whether exactly one exact root lies within it (see
+/// the module docs).
+fn isolate(value: Bounded, slope: Bounded, k: Bounded) -> (f64, bool) {
+    let g = value.magnitude();
+    let m0 = down(slope.value.abs() - slope.error);
+    let mut bound = f64::INFINITY;
+    let mut isolated = false;
+    if m0 > 0.0 {
+        let r = up(2.0 * g / m0);
+        let m = down(m0 - up(2.0 * k.magnitude() * r));
+        if m > 0.0 && up(g / m) <= r {
+            bound = up(g / m);
+            isolated = true;
+        }
+    }
+    let k_low = down(k.value.abs() - k.error);
+    if k_low > 0.0 {
+        bound = bound.min(up(up(g / k_low).sqrt() * (1.0 + gamma(2))));
+    }
+    (bound, isolated)
 }
 
 /// Where exact roots other than `roots` may lie (see the module docs).
