@@ -103,3 +103,45 @@ fn surfaces_within_each_others_bounds_are_uncertain() {
         );
     }
 }
+
+/// `error` is one definition: the same bits whether `certain` is asked beside it or not
+/// (the hit's own decision takes the bounded recomputation, the error never does), on a
+/// mesh placed by a rotation (vertex bounds) and on a sphere (a quadric root).
+#[test]
+fn error_does_not_depend_on_certain_being_asked() {
+    use raycast::quadric::{Quadric, QuadricSpec};
+    let mut builder = SceneBuilder::new();
+    let id = builder.new_object("turned".into(), "test".into());
+    let square = raycast::scene::Mesh::from_soup(&[[
+        DVec3::new(-1.0, -1.0, 0.0),
+        DVec3::new(1.0, -1.0, 0.0),
+        DVec3::new(0.0, 1.0, 0.0),
+    ]]);
+    let turn = glam::DMat4::from_rotation_x(0.3) * glam::DMat4::from_translation(DVec3::X * 3.0);
+    builder.place_mesh(id, std::sync::Arc::new(square), turn);
+    let sphere = QuadricSpec::from_coefficients(
+        [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
+        None,
+    )
+    .unwrap();
+    let placed = Quadric::new(&sphere, glam::DMat4::from_translation(DVec3::new(-3.0, 0.1, 0.0)));
+    builder.add_quadric("sphere".into(), "test".into(), placed.unwrap());
+    let scene = builder.finish("mixed".into());
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let tracer = Tracer::new(&scene, &octree);
+    let rays: Vec<Ray> = (0..400)
+        .map(|i| {
+            let x = -4.5 + 9.0 * f64::from(i % 20) / 19.0;
+            let y = -1.5 + 3.0 * f64::from(i / 20) / 19.0;
+            Ray::new(DVec3::new(x, y, 10.0), DVec3::new(0.01, -0.02, -1.0))
+        })
+        .collect();
+    let alone = render(&tracer, &rays, &[Aov::Error], |_| {});
+    let both = render(&tracer, &rays, &[Aov::Error, Aov::Certain], |_| {});
+    let (alone, both) = (alone.floats(Aov::Error).unwrap(), both.floats(Aov::Error).unwrap());
+    let hits = alone.iter().filter(|e| **e > 0.0 && e.is_finite()).count();
+    assert!(hits > 50, "{hits} bounded hits");
+    for (i, (a, b)) in alone.iter().zip(both).enumerate() {
+        assert_eq!(a.to_bits(), b.to_bits(), "ray {i}");
+    }
+}

@@ -12,7 +12,7 @@ use crate::bound::{mapped, HitBound, Side, CELL_SLACK};
 use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Aabb;
 use crate::geometry::Ray;
-use crate::quadric::{Others, QuadricBound, RootBound};
+use crate::quadric::{Others, Quadric, QuadricBound, RootBound};
 use glam::{DMat3, DVec3};
 use std::ops::Sub;
 
@@ -132,17 +132,7 @@ impl Scene {
                 let full = || triangle::bound(&o, &d, &tri);
                 triangle_hit(&ray, &stored_tri, vertex_error, hit.t, decide, full)
             }
-            Top::Quadric(q) => {
-                let quadric = &self.quadrics[q];
-                let (error, isolated) = quadric.bound_root_at(origin, dir, hit.t);
-                let certain = decide
-                    && isolated
-                    && quadric_certain(&quadric.bound_roots(origin, dir), hit.t, error);
-                HitBound {
-                    t: Bounded::new(hit.t, error),
-                    certain,
-                }
-            }
+            Top::Quadric(q) => quadric_hit(&self.quadrics[q], origin, dir, hit.t, decide),
         }
     }
 
@@ -185,7 +175,7 @@ impl Scene {
                 triangle_competes(&b, limit)
             }
             Top::Instance(k) => self.instance_may_cross(k, origin, dir, limit, own),
-            // The hit quadric's other roots are weighed by its hit bound ([`quadric_certain`]).
+            // The hit quadric's other roots are weighed by its hit bound ([`quadric_hit`]).
             Top::Quadric(q) => {
                 if own.is_some() || !self.quadrics[q].may_reach(origin, dir, limit) {
                     return false;
@@ -376,16 +366,28 @@ fn nearest_root(b: &QuadricBound, t: f64) -> Option<usize> {
     })
 }
 
-/// Whether a quadric hit at `t`, the only exact root within `error` of it, is the exact nearest
-/// valid crossing of its quadric: `t` is a computed root, isolated (so the same exact root),
-/// inside the clip box and in front of the origin, and no other exact root may be a nearer
-/// valid crossing.
-fn quadric_certain(b: &QuadricBound, t: f64, error: f64) -> bool {
-    let Some(i) = nearest_root(b, t) else {
-        return false;
+/// A quadric hit's bound: the distance from the reported `t` to the nearest exact root
+/// ([`Quadric::bound_root_at`]); with `decide`, all roots are bounded ([`Quadric::bound_roots`])
+/// and the one the trace reports (the same check at the same `t`, so the same bound) decides:
+/// certain when it is isolated, inside the clip box and in front of the origin, and no other
+/// exact root may be a nearer valid crossing.
+fn quadric_hit(quadric: &Quadric, origin: DVec3, dir: DVec3, t: f64, decide: bool) -> HitBound {
+    let alone = || HitBound {
+        t: Bounded::new(t, quadric.bound_root_at(origin, dir, t).0),
+        certain: false,
+    };
+    if !decide {
+        return alone();
+    }
+    let b = quadric.bound_roots(origin, dir);
+    let Some(i) = nearest_root(&b, t).filter(|&i| b.roots[i].t.value == t) else {
+        return alone();
     };
     let root = b.roots[i];
-    let error = error.max(root.t.error);
-    let own = root.t.value == t && root.isolated && root.clip == Side::Inside && t - error > 0.0;
-    own && !quadric_competes(b, up(t + error), Some(i))
+    let error = root.t.error;
+    let own = root.isolated && root.clip == Side::Inside && t - error > 0.0;
+    HitBound {
+        t: root.t,
+        certain: own && !quadric_competes(&b, up(t + error), Some(i)),
+    }
 }
