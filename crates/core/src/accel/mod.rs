@@ -73,6 +73,12 @@ pub trait PrimitiveSet: Sync {
         1.0
     }
 
+    /// True when every primitive is a triangle: the octree then uses
+    /// [`OctreeParams::triangle_leaf_size`]. The default, false, suits mixed sets.
+    fn triangles_only(&self) -> bool {
+        false
+    }
+
     /// Conservative test: may primitive `index` touch the closed box `cell`?
     fn overlaps(&self, index: usize, cell: &Aabb) -> bool;
 

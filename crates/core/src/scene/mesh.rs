@@ -400,6 +400,10 @@ impl PrimitiveSet for MeshSet {
         Aabb::from_points(self.local(index))
     }
 
+    fn triangles_only(&self) -> bool {
+        true
+    }
+
     fn overlaps(&self, index: usize, cell: &Aabb) -> bool {
         triangle_box::overlaps_box(&self.local(index), cell)
     }

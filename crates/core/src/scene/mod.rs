@@ -567,6 +567,10 @@ impl PrimitiveSet for Scene {
         }
     }
 
+    fn triangles_only(&self) -> bool {
+        self.instances.is_empty() && self.quadrics.is_empty()
+    }
+
     /// Quadrics weigh [`Quadric::TEST_COST`]; triangles and instance boxes 1 (weighing the
     /// instances more changed nothing on the bench's mixed scene, whose top level holds four).
     fn cost(&self, index: usize) -> f64 {

@@ -3,7 +3,8 @@
 //! # Build rule
 //! Each reference weighs what testing its primitive costs ([`PrimitiveSet::cost`]: 1 for a
 //! triangle, `Quadric::TEST_COST` for a quadric), and a cell's weight `w` is the sum over its
-//! references. A cell becomes a leaf when `w <= leaf_size`, when it holds a single reference,
+//! references. A cell becomes a leaf when `w <= leaf_size` (`triangle_leaf_size`, twice as
+//! large, for a set of triangles alone), when it holds a single reference,
 //! when its depth reaches `max_depth`, or when splitting does not pay by the surface-area cost
 //! model: a leaf costs `w · intersection_cost`; a split costs
 //! `traversal_cost + Σ_children (area_child / area_cell) · w_child · intersection_cost`, where
@@ -99,6 +100,9 @@ pub struct OctreeParams {
     pub max_depth: u32,
     /// Cells whose references weigh at most this much (this many triangles) are never split.
     pub leaf_size: usize,
+    /// [`OctreeParams::leaf_size`] for a set of triangles alone
+    /// ([`PrimitiveSet::triangles_only`]).
+    pub triangle_leaf_size: usize,
     /// Cost of visiting one interior cell, in units of one triangle test.
     pub traversal_cost: f64,
     /// Cost of one ray/triangle test; a reference costs this times its primitive's
@@ -111,6 +115,7 @@ impl Default for OctreeParams {
         OctreeParams {
             max_depth: 16,
             leaf_size: 12,
+            triangle_leaf_size: 24,
             traversal_cost: 2.0,
             intersection_cost: 1.0,
         }
@@ -171,11 +176,19 @@ impl Octree {
             .into_par_iter()
             .any(|i| set.cost(i) != 1.0)
             .then(|| (0..set.len()).map(|i| set.cost(i)).collect());
+        let leaf_size = if set.triangles_only() {
+            params.triangle_leaf_size
+        } else {
+            params.leaf_size
+        };
         let builder = Builder {
             set,
             bounds,
             costs,
-            params,
+            params: OctreeParams {
+                leaf_size,
+                ..params
+            },
             margin,
         };
         let all: Vec<u32> = (0..set.len() as u32).collect();
