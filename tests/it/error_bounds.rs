@@ -119,12 +119,13 @@ fn error_does_not_depend_on_certain_being_asked() {
     ]]);
     let turn = glam::DMat4::from_rotation_x(0.3) * glam::DMat4::from_translation(DVec3::X * 3.0);
     builder.place_mesh(id, std::sync::Arc::new(square), turn);
-    let sphere = QuadricSpec::from_coefficients(
-        [1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0],
-        None,
-    )
-    .unwrap();
-    let placed = Quadric::new(&sphere, glam::DMat4::from_translation(DVec3::new(-3.0, 0.1, 0.0)));
+    let sphere =
+        QuadricSpec::from_coefficients([1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0], None)
+            .unwrap();
+    let placed = Quadric::new(
+        &sphere,
+        glam::DMat4::from_translation(DVec3::new(-3.0, 0.1, 0.0)),
+    );
     builder.add_quadric("sphere".into(), "test".into(), placed.unwrap());
     let scene = builder.finish("mixed".into());
     let octree = Octree::build(&scene, OctreeParams::default());
@@ -138,7 +139,10 @@ fn error_does_not_depend_on_certain_being_asked() {
         .collect();
     let alone = render(&tracer, &rays, &[Aov::Error], |_| {});
     let both = render(&tracer, &rays, &[Aov::Error, Aov::Certain], |_| {});
-    let (alone, both) = (alone.floats(Aov::Error).unwrap(), both.floats(Aov::Error).unwrap());
+    let (alone, both) = (
+        alone.floats(Aov::Error).unwrap(),
+        both.floats(Aov::Error).unwrap(),
+    );
     let hits = alone.iter().filter(|e| **e > 0.0 && e.is_finite()).count();
     assert!(hits > 50, "{hits} bounded hits");
     for (i, (a, b)) in alone.iter().zip(both).enumerate() {
