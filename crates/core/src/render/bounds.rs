@@ -7,34 +7,9 @@ use crate::bound::residual;
 use crate::bound::HitBound;
 use crate::geometry::Ray;
 use crate::scene::{Crossing, Probe, Scene};
-use crate::simd::Kernel;
 use crate::trace::Tracer;
 use glam::DVec3;
 use std::ops::Mul;
-
-/// Runs `work` compiled for FMA where `kernel` allows it: the bounded arithmetic's exact
-/// product errors ([`bounded`]) are fused multiply-adds, one instruction there and a call into
-/// the runtime otherwise. The same bits either way: a fused multiply-add is correctly rounded
-/// on every CPU.
-#[inline(always)]
-pub fn fused<R>(kernel: Kernel, work: impl FnOnce() -> R) -> R {
-    match kernel {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Kernel::Avx2` is only chosen where `Kernel::available` said so.
-        Kernel::Avx2 => unsafe { fused_avx2(work) },
-        _ => work(),
-    }
-}
-
-/// [`fused`]'s work compiled with FMA, so that what it inlines uses the instruction.
-///
-/// # Safety
-/// The CPU must support AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn fused_avx2<R>(work: impl FnOnce() -> R) -> R {
-    work()
-}
 
 /// The bound of `hit`, the nearest hit of `ray`: computed once per hit and shared by the
 /// `error` and `certain` AOVs; whether the primitive's own decision is certain only when
@@ -52,14 +27,37 @@ pub fn depth_error(bound: &HitBound, ray: &Ray) -> f64 {
     if !(residual::in_range(t) && dir.to_array().into_iter().all(residual::in_range)) {
         return depth_bound(bound.t, dir).error;
     }
-    // The standard model (see [`residual`]'s module docs for its range): `fl(d·d)` is within
-    // `γ₃` of `|d|²` (three products, two sums, all terms non-negative), so its rounded
-    // square root `L̂` is within `γ₄L̂` of `|d|`, and the depth `fl(t·L̂)` within `γ₁` of `t·L̂`:
-    // `|depth − t*|d|| ≤ γ₁|depth| + γ₄|t|L̂ + δₜL̂(1 + γ₄)`.
-    let length = dir.length();
+    // The exact roundings, by fused multiply-adds (exact in the range checked): `fl(d·d)` is
+    // `S` less the products' errors `eᵢ` and the sums' `σ`; `r = Ŝ − L̂²` is the square root's
+    // residual, so `|√Ŝ − L̂| ≤ |r| / (L̂(2 − u))`; `|√S − √Ŝ| ≤ |S − Ŝ| / (√Ŝ + √(Ŝ − E_S))`;
+    // the depth `fl(t·L̂)` is off by its own product's error. Then
+    // `|depth − t*|d|| ≤ e_depth + |t|·E_L + δₜ(L̂ + E_L)`.
+    let p = dir * dir;
+    let e = [
+        dir.x.mul_add(dir.x, -p.x).abs(),
+        dir.y.mul_add(dir.y, -p.y).abs(),
+        dir.z.mul_add(dir.z, -p.z).abs(),
+    ];
+    let partial = p.x + p.y;
+    let square = partial + p.z;
+    let sums = two_sum_error(p.x, p.y, partial) + two_sum_error(partial, p.z, square);
+    let square_error = up(e[0] + e[1] + e[2] + sums);
+    let length = square.sqrt();
+    let residual = (-length).mul_add(length, square).abs();
+    let below = bounded::down(square - square_error).max(0.0).sqrt();
+    let root_error = up(residual / bounded::down(length * (2.0 - gamma(1))))
+        + up(square_error / bounded::down(length + below));
     let depth = t * length;
-    let error = gamma(1) * depth.abs() + gamma(4) * (t.abs() * length);
-    up(error + up(bound.t.error * length) * (1.0 + gamma(4)))
+    let product = t.mul_add(length, -depth).abs();
+    let length_error = up(root_error);
+    up(up(product + t.abs() * length_error) + up(bound.t.error * up(length + length_error)))
+}
+
+/// `|a + b − fl(a + b)|`, exact (Knuth's two-sum) for `s = fl(a + b)`.
+#[inline(always)]
+fn two_sum_error(a: f64, b: f64, s: f64) -> f64 {
+    let bb = s - a;
+    ((a - (s - bb)) + (b - bb)).abs()
 }
 
 /// `t·|d|` as the trace computes it (`dot` then `sqrt`), with its bound.
