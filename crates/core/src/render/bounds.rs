@@ -103,7 +103,6 @@ pub fn certain(
         hit.as_ref(),
         tracer.octree.root().size().max_element(),
     );
-    let mut certain = true;
     let local = ray.origin - scene.anchor;
     // The primitives passed over last, by index modulo 32: a primitive in several leaves along
     // the ray is weighed once (its answer cannot change between leaves).
@@ -114,18 +113,8 @@ pub fn certain(
         *slot = prim;
         first
     };
-    tracer
+    let competes = |prim: u32| first_visit(prim) && scene.may_cross(prim as usize, &probe);
+    !tracer
         .octree
-        .traverse(local, ray.dir, t_limit, |refs, _, _| {
-            if refs
-                .iter()
-                .any(|&prim| first_visit(prim) && scene.may_cross(prim as usize, &probe))
-            {
-                certain = false;
-                f64::NEG_INFINITY
-            } else {
-                t_limit
-            }
-        });
-    certain
+        .any_reference(local, ray.dir, t_limit, competes)
 }

@@ -215,22 +215,13 @@ impl Scene {
             return true;
         }
         let skip = own.map(|h| h.inner);
-        let mut crossing = false;
-        octree.traverse(ov - stored.set.anchor, dv, limit, |refs, _, _| {
-            crossing = refs.iter().any(|&prim| {
-                if skip == Some(Some(prim)) {
-                    return false;
-                }
-                let tri = self.bounded_instance_triangle(k, stored, prim as usize);
-                triangle_competes(&triangle::bound(&o, &d, &tri), limit)
-            });
-            if crossing {
-                f64::NEG_INFINITY
-            } else {
-                limit
+        octree.any_reference(ov - stored.set.anchor, dv, limit, |prim| {
+            if skip == Some(Some(prim)) {
+                return false;
             }
-        });
-        crossing
+            let tri = self.bounded_instance_triangle(k, stored, prim as usize);
+            triangle_competes(&triangle::bound(&o, &d, &tri), limit)
+        })
     }
 
     /// A bound on how far the diagonal of `bounds` ([`Scene::world_bounds`], the box `raycast

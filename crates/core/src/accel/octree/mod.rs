@@ -449,6 +449,46 @@ impl Octree {
     }
 }
 
+impl Octree {
+    /// Whether `visit` returns true for some primitive the ray `origin + t · dir` may meet with
+    /// `0 <= t <= t_max`: the leaves it may reach front to back ([`Octree::traverse`]), each
+    /// leaf's references first passed through the leaf filter (module `leaf`: a reference is
+    /// dropped only when the ray meets its box, which holds its primitive's part in the leaf
+    /// grown by the build margin, nowhere in that range). Stops at the first true; a
+    /// primitive in several leaves may be visited once per leaf.
+    pub fn any_reference(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t_max: f64,
+        mut visit: impl FnMut(u32) -> bool,
+    ) -> bool {
+        let lanes = Lanes::new(origin, dir + DVec3::ZERO, self.scale);
+        let bound = f32_above(t_max);
+        let mut found = false;
+        let leaf = |child, _, _| {
+            let prims = self.layout.leaf(child);
+            for first in (0..prims.len()).step_by(8) {
+                let kept = leaf::chunk_mask(&self.layout, self.kernel, child, first, &lanes, bound);
+                if set_bits(kept).any(|j| visit(prims[first + j])) {
+                    found = true;
+                    return f64::NEG_INFINITY;
+                }
+            }
+            t_max
+        };
+        traverse::run(
+            &self.layout,
+            self.kernel,
+            &lanes,
+            t_max,
+            leaf,
+            &mut Unobserved,
+        );
+        found
+    }
+}
+
 /// The primitives a ray tested last, so that one referenced by several leaves along the ray
 /// is tested once. Skipping a repeat cannot change the answer: its test gives the same result,
 /// already folded into the best hit (kept even beyond the leaf that found it). Direct-mapped:
