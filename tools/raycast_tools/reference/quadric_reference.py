@@ -519,10 +519,11 @@ def mp_local_matrix(mp, node):
     return m
 
 
-def intersect_quadric_mp(q: Quadric, origin, direction, prec: int = 100):
+def intersect_quadric_mp(q: Quadric, origin, direction, prec: int = 100, exact: bool = False):
     """One ray against one quadric with mpmath at `prec` bits, from the exact JSON inputs.
 
-    Returns (t, depth, normal(3 floats), p_local) as floats; t = inf on a miss.
+    Returns (t, depth, normal(3 floats), p_local) as floats; t = inf on a miss. With `exact`,
+    the depth stays an mpmath number (not rounded to float64).
     """
     mp = _mp()
     with mp.workprec(prec):
@@ -580,7 +581,8 @@ def intersect_quadric_mp(q: Quadric, origin, direction, prec: int = 100):
             nn = mp.sqrt(dot(nw, nw))
             normal = [float(nw[k] / nn) for k in range(3)] if nn != 0 else [0.0, 0.0, 0.0]
             dlen = mp.sqrt(dot(dd, dd))
-            return float(tk), float(tk * dlen), normal, [float(p[k]) for k in range(3)]
+            depth = tk * dlen if exact else float(tk * dlen)
+            return float(tk), depth, normal, [float(p[k]) for k in range(3)]
         return math.inf, math.inf, [0.0, 0.0, 0.0], [math.nan] * 3
 
 
