@@ -67,7 +67,7 @@ fn product_error(a: f64, b: f64, p: f64) -> Option<f64> {
 
 /// The exact rounding error `a + b − fl(a + b)` (Knuth's two-sum).
 #[inline(always)]
-fn sum_error(a: f64, b: f64, s: f64) -> f64 {
+pub fn sum_error(a: f64, b: f64, s: f64) -> f64 {
     let bb = s - a;
     (a - (s - bb)) + (b - bb)
 }

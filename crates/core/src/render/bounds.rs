@@ -2,7 +2,7 @@
 //! they bound and mean is said there): a hit's bound, its depth error, and the search for a
 //! competitor that decides `certain`.
 
-use crate::bound::bounded::{self, gamma, up, Bounded};
+use crate::bound::bounded::{self, gamma, sum_error, up, Bounded};
 use crate::bound::residual;
 use crate::bound::HitBound;
 use crate::geometry::Ray;
@@ -40,7 +40,7 @@ pub fn depth_error(bound: &HitBound, ray: &Ray) -> f64 {
     ];
     let partial = p.x + p.y;
     let square = partial + p.z;
-    let sums = two_sum_error(p.x, p.y, partial) + two_sum_error(partial, p.z, square);
+    let sums = sum_error(p.x, p.y, partial).abs() + sum_error(partial, p.z, square).abs();
     let square_error = up(e[0] + e[1] + e[2] + sums);
     let length = square.sqrt();
     let residual = (-length).mul_add(length, square).abs();
@@ -51,13 +51,6 @@ pub fn depth_error(bound: &HitBound, ray: &Ray) -> f64 {
     let product = t.mul_add(length, -depth).abs();
     let length_error = up(root_error);
     up(up(product + t.abs() * length_error) + up(bound.t.error * up(length + length_error)))
-}
-
-/// `|a + b − fl(a + b)|`, exact (Knuth's two-sum) for `s = fl(a + b)`.
-#[inline(always)]
-fn two_sum_error(a: f64, b: f64, s: f64) -> f64 {
-    let bb = s - a;
-    ((a - (s - bb)) + (b - bb)).abs()
 }
 
 /// `t·|d|` as the trace computes it (`dot` then `sqrt`), with its bound.
@@ -104,16 +97,7 @@ pub fn certain(
         tracer.octree.root().size().max_element(),
     );
     let local = ray.origin - scene.anchor;
-    // The primitives passed over last, by index modulo 32: a primitive in several leaves along
-    // the ray is weighed once (its answer cannot change between leaves).
-    let mut seen = [u32::MAX; 32];
-    let mut first_visit = |prim: u32| {
-        let slot = &mut seen[prim as usize % 32];
-        let first = *slot != prim;
-        *slot = prim;
-        first
-    };
-    let competes = |prim: u32| first_visit(prim) && scene.may_cross(prim as usize, &probe);
+    let competes = |prim: u32| scene.may_cross(prim as usize, &probe);
     !tracer
         .octree
         .any_reference(local, ray.dir, t_limit, competes)

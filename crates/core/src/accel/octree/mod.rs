@@ -447,15 +447,13 @@ impl Octree {
             &mut Unobserved,
         );
     }
-}
 
-impl Octree {
     /// Whether `visit` returns true for some primitive the ray `origin + t · dir` may meet with
     /// `0 <= t <= t_max`: the leaves it may reach front to back ([`Octree::traverse`]), each
     /// leaf's references first passed through the leaf filter (module `leaf`: a reference is
     /// dropped only when the ray meets its box, which holds its primitive's part in the leaf
     /// grown by the build margin, nowhere in that range). Stops at the first true; a
-    /// primitive in several leaves may be visited once per leaf.
+    /// primitive kept in several leaves is visited once (the search's [`Mailbox`]).
     pub fn any_reference(
         &self,
         origin: DVec3,
@@ -466,11 +464,13 @@ impl Octree {
         let lanes = Lanes::new(origin, dir + DVec3::ZERO, self.scale);
         let bound = f32_above(t_max);
         let mut found = false;
+        let mut visited = Mailbox::default();
         let leaf = |child, _, _| {
             let prims = self.layout.leaf(child);
             for first in (0..prims.len()).step_by(8) {
                 let kept = leaf::chunk_mask(&self.layout, self.kernel, child, first, &lanes, bound);
-                if set_bits(kept).any(|j| visit(prims[first + j])) {
+                let prims = set_bits(kept).map(|j| prims[first + j]);
+                if prims.filter(|&p| visited.check_in(p)).any(&mut visit) {
                     found = true;
                     return f64::NEG_INFINITY;
                 }
