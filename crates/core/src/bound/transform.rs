@@ -47,6 +47,14 @@ impl BoundedMat4 {
         }
     }
 
+    /// A matrix whose distance from the exact one is not bounded (`+∞` everywhere).
+    pub fn unbounded(value: DMat4) -> BoundedMat4 {
+        BoundedMat4 {
+            value,
+            error: DMat4::from_cols_array(&[f64::INFINITY; 16]),
+        }
+    }
+
     /// `self · local` as glam computes it (the importer's product, bit for bit), with the bound
     /// of the module docs: each entry's sum of four products evaluated in [`Bounded`]
     /// arithmetic in glam's order (`((p₀l₀ + p₁l₁) + p₂l₂) + p₃l₃`), the parent's entries

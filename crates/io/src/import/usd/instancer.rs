@@ -175,12 +175,14 @@ impl Loader {
                 .filter(|q| q.is_finite())
                 .unwrap_or(glam::DQuat::IDENTITY);
             let scale = scales.as_ref().map_or(DVec3::ONE, |s| s[i]);
+            // Velocities' f32 steps are not analysed: a moved instance is not bounded.
             let local = match &motion {
-                Some(motion) => motion.instance(i, positions[i], rotation, scale),
-                None => DMat4::from_scale_rotation_translation(scale, rotation, positions[i]),
+                Some(motion) => {
+                    BoundedMat4::unbounded(motion.instance(i, positions[i], rotation, scale))
+                }
+                None => stored_trs(positions[i], rotation, scale),
             };
-            let trs = (positions[i], rotation, scale);
-            let instance_world = world.then_bounded(&instance_bound(trs, local, motion.is_some()));
+            let instance_world = world.then_bounded(&local);
             // Nested in an outer instance, this instance draws into the outer one's object.
             let mut inner = Some(match outer {
                 Some(outer) => Instance {
@@ -211,27 +213,15 @@ impl Loader {
     }
 }
 
-/// The bound of an instance's local matrix `local` ([`BoundedMat4`], for the `error` and
-/// `certain` AOVs): `T(position)·R(orientation)·S(scale)` with the rotation formula on the
-/// quaternion as stored, evaluated as glam evaluates it; not bounded (`+∞`) when velocities or
-/// angular velocities moved it (their f32 steps are not analysed).
-fn instance_bound(
-    (position, rotation, scale): (DVec3, DQuat, DVec3),
-    local: DMat4,
-    moved: bool,
-) -> BoundedMat4 {
-    if moved {
-        return BoundedMat4 {
-            value: local,
-            error: DMat4::from_cols_array(&[f64::INFINITY; 16]),
-        };
-    }
+/// An instance's `T(position)·R(orientation)·S(scale)` as glam's
+/// `from_scale_rotation_translation` computes it, the rotation formula on the quaternion as
+/// stored, with its bound ([`BoundedMat4::trs_as_given`]; for the `error` and `certain` AOVs).
+fn stored_trs(position: DVec3, rotation: DQuat, scale: DVec3) -> BoundedMat4 {
     if rotation == DQuat::IDENTITY {
         // Products with 0 and 1: exact.
-        return BoundedMat4::exact(local);
+        return BoundedMat4::exact(DMat4::from_scale_rotation_translation(
+            scale, rotation, position,
+        ));
     }
-    let q = rotation.to_array().map(Bounded::exact);
-    let bounded = BoundedMat4::trs_as_given(position, q, scale);
-    debug_assert_eq!(bounded.value, local);
-    bounded
+    BoundedMat4::trs_as_given(position, rotation.to_array().map(Bounded::exact), scale)
 }

@@ -123,10 +123,7 @@ fn invert(m: BoundedMat4) -> Option<BoundedMat4> {
             -value.w_axis.truncate(),
         )));
     }
-    Some(BoundedMat4 {
-        value: value.inverse(),
-        error: DMat4::from_cols_array(&[f64::INFINITY; 16]),
-    })
+    Some(BoundedMat4::unbounded(value.inverse()))
 }
 
 /// Whether `name` can name an attribute: identifiers (a letter or `_`, then letters, digits
