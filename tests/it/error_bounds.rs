@@ -149,3 +149,46 @@ fn error_does_not_depend_on_certain_being_asked() {
         assert_eq!(a.to_bits(), b.to_bits(), "ray {i}");
     }
 }
+
+/// `certain` is decided the same way for a ray alone and in a packet of eight (the packet's
+/// search for competitors traverses the octree once for all eight): rays straight down at
+/// two overlapping squares 1e-16 apart on the left (uncertain where both are crossed), a
+/// plain square on the right, with rays on and 1e-15 beside its diagonal and edges, misses
+/// beside it, and packets that mix all of these.
+#[test]
+fn certain_is_the_same_for_a_ray_alone_and_in_a_packet() {
+    let mut builder = SceneBuilder::new();
+    let square = |x0: f64, z: f64| {
+        let [a, b, c, d] =
+            [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].map(|[x, y]| DVec3::new(x0 + x, y, z));
+        vec![[a, b, c], [a, c, d]]
+    };
+    builder.add_mesh("near".into(), "test".into(), square(-1.5, 0.5 + 1e-16));
+    builder.add_mesh("far".into(), "test".into(), square(-1.2, 0.5));
+    builder.add_mesh("right".into(), "test".into(), square(0.5, 0.1));
+    let scene = builder.finish("squares".into());
+    let octree = Octree::build(&scene, OctreeParams::default());
+    let tracer = Tracer::new(&scene, &octree);
+    let offsets = [0.0, 1e-15, -1e-15, 0.25, 1.0];
+    let rays: Vec<Ray> = (0..800u32)
+        .map(|i| {
+            let x = -1.6 + 3.2 * f64::from(i % 40) / 39.0;
+            let y = f64::from(i / 40) / 19.0 + offsets[i as usize % offsets.len()];
+            // No zero component: the rays can go as packets.
+            Ray::new(DVec3::new(x, y, 2.0), DVec3::new(1e-3, 1e-3, -1.0))
+        })
+        .collect();
+    let together = render(&tracer, &rays, &[Aov::Certain], |_| {});
+    let together = together.flags(Aov::Certain).unwrap();
+    let alone: Vec<u8> = rays
+        .iter()
+        .map(|ray| render(&tracer, &vec![*ray], &[Aov::Certain], |_| {}))
+        .map(|b| b.flags(Aov::Certain).unwrap()[0])
+        .collect();
+    assert_eq!(together, alone.as_slice());
+    let uncertain = alone.iter().filter(|&&c| c == 0).count();
+    assert!(
+        (40..760).contains(&uncertain),
+        "{uncertain} of 800 uncertain: the scene should give both"
+    );
+}

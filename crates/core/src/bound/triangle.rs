@@ -111,7 +111,7 @@ pub fn certainly_apart(
     placement: f64,
     limit: f64,
 ) -> bool {
-    let [kx, ky, kz] = ray.axes();
+    let [_, _, kz] = ray.axes();
     let (shear, origin) = ray.shear_and_origin();
     let unit = super::bounded::UNIT;
     let depth = [
@@ -130,41 +130,87 @@ pub fn certainly_apart(
     if behind || beyond {
         return true;
     }
-    let (ex, ey) = (
-        pad(placement * (1.0 + shear.x.abs())),
-        pad(placement * (1.0 + shear.y.abs())),
-    );
-    // Per vertex: sheared x, its magnitude bound X, sheared y, Y (written out: no array
-    // `map`, which the compiler leaves as calls here).
-    let shear_one = |v: glam::DVec3| {
-        let p = (v - origin).to_array();
-        let (m, n) = (shear.x * p[kz], shear.y * p[kz]);
-        [
-            p[kx] - m,
-            p[kx].abs() + m.abs() + ex,
-            p[ky] - n,
-            p[ky].abs() + n.abs() + ey,
-        ]
-    };
-    let sheared = [shear_one(tri[0]), shear_one(tri[1]), shear_one(tri[2])];
-    if one_side(&sheared, 0, ex, unit) || one_side(&sheared, 2, ey, unit) {
+    let sheared = Sheared::new(ray, tri, placement);
+    if one_side(&sheared.vertices, 0, sheared.ex, unit)
+        || one_side(&sheared.vertices, 2, sheared.ey, unit)
+    {
         return true;
     }
-    let [a, b, c] = sheared;
-    let edge = |p: &[f64; 4], q: &[f64; 4]| {
-        let value = p[0] * q[2] - p[2] * q[0];
-        let first = 32.0 * unit * (p[1] * q[3] + p[3] * q[1]);
-        let moved = p[1] * ey + q[3] * ex + p[3] * ex + q[1] * ey + 2.0 * ex * ey;
-        // Twice: the slack for the second-order terms, then the evaluation's roundings.
-        (value, pad(pad(first + moved)))
-    };
-    let e = [edge(&c, &b), edge(&a, &c), edge(&b, &a)];
-    if e.iter().any(|(v, err)| !v.is_finite() || !err.is_finite()) {
+    let Some(e) = sheared.edges() else {
         return false;
-    }
+    };
     let positive = e.iter().any(|&(v, err)| v > err);
     let negative = e.iter().any(|&(v, err)| -v > err);
     positive && negative
+}
+
+/// Whether the exact ray certainly crosses the triangle's interior (not an edge or a vertex),
+/// for an exact ray and vertices within `placement` of the stored ones (per coordinate): the
+/// three edge functions of [`certainly_apart`]'s filter 3 each beyond their bound, all with
+/// the same sign. Sound and a little coarser than [`bound`]'s [`Side::Inside`], for a few
+/// dozen operations where that recomputes the test in bounded arithmetic; `false` means
+/// "not known", not "outside".
+pub fn certainly_inside(ray: &WatertightRay, tri: &[glam::DVec3; 3], placement: f64) -> bool {
+    let Some(e) = Sheared::new(ray, tri, placement).edges() else {
+        return false;
+    };
+    e.iter().all(|&(v, err)| v > err) || e.iter().all(|&(v, err)| -v > err)
+}
+
+/// A triangle sheared into the frame of a [`WatertightRay`] in f64, per vertex its sheared
+/// `x`, a bound `X` on its magnitude, its sheared `y` and `Y` (see [`certainly_apart`], filter
+/// 2), with `ε_x`, `ε_y`, what the vertices' own bound moves a sheared coordinate.
+struct Sheared {
+    vertices: [[f64; 4]; 3],
+    ex: f64,
+    ey: f64,
+}
+
+impl Sheared {
+    /// `tri`, with vertices within `placement` of the stored ones, in `ray`'s frame.
+    #[inline(always)]
+    fn new(ray: &WatertightRay, tri: &[glam::DVec3; 3], placement: f64) -> Sheared {
+        let [kx, ky, kz] = ray.axes();
+        let (shear, origin) = ray.shear_and_origin();
+        let (ex, ey) = (
+            pad(placement * (1.0 + shear.x.abs())),
+            pad(placement * (1.0 + shear.y.abs())),
+        );
+        // Written out: no array `map`, which the compiler leaves as calls here.
+        let shear_one = |v: glam::DVec3| {
+            let p = (v - origin).to_array();
+            let (m, n) = (shear.x * p[kz], shear.y * p[kz]);
+            [
+                p[kx] - m,
+                p[kx].abs() + m.abs() + ex,
+                p[ky] - n,
+                p[ky].abs() + n.abs() + ey,
+            ]
+        };
+        Sheared {
+            vertices: [shear_one(tri[0]), shear_one(tri[1]), shear_one(tri[2])],
+            ex,
+            ey,
+        }
+    }
+
+    /// The three edge functions, each with its bound ([`certainly_apart`], filter 3); `None`
+    /// when one is not finite.
+    #[inline(always)]
+    fn edges(&self) -> Option<[(f64, f64); 3]> {
+        let (ex, ey, unit) = (self.ex, self.ey, super::bounded::UNIT);
+        let [a, b, c] = &self.vertices;
+        let edge = |p: &[f64; 4], q: &[f64; 4]| {
+            let value = p[0] * q[2] - p[2] * q[0];
+            let first = 32.0 * unit * (p[1] * q[3] + p[3] * q[1]);
+            let moved = p[1] * ey + q[3] * ex + p[3] * ex + q[1] * ey + 2.0 * ex * ey;
+            // Twice: the slack for the second-order terms, then the evaluation's roundings.
+            (value, pad(pad(first + moved)))
+        };
+        let e = [edge(c, b), edge(a, c), edge(b, a)];
+        let finite = e.iter().all(|(v, err)| v.is_finite() && err.is_finite());
+        finite.then_some(e)
+    }
 }
 
 /// `x ≥ 0`, a bound of [`certainly_apart`] evaluated in a few f64 operations, raised past
@@ -301,6 +347,44 @@ mod tests {
         let past = WatertightRay::new(DVec3::new(1.0 + 1e-3, 0.0, 5.0), DVec3::NEG_Z);
         assert!(certainly_apart(&past, &edge, 0.0, f64::INFINITY));
         assert!(!certainly_apart(&past, &edge, 1e-2, f64::INFINITY));
+    }
+
+    /// The cheap interior test is sound where the bounded recomputation can tell, and says
+    /// "not known" on edges, at vertices and within the vertices' bound of an edge; on
+    /// interior rays of an ordinary triangle it agrees with the recomputation.
+    #[test]
+    fn the_cheap_interior_test_finds_interiors_and_not_edges() {
+        let corners = [[-1.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+        let stored = corners.map(DVec3::from_array);
+        let down = |x: f64, y: f64| (DVec3::new(x, y, 5.0), DVec3::new(0.01, -0.02, -1.0));
+        let inside = |(o, d): (DVec3, DVec3), placement: f64| {
+            certainly_inside(&WatertightRay::new(o, d), &stored, placement)
+        };
+        assert!(inside(down(0.0, 0.1), 0.0));
+        assert!(
+            !inside(down(0.0, 0.1), 0.5),
+            "vertices may move past the ray"
+        );
+        let (o, d) = down(0.0, 0.0);
+        let on_vertex = stored[1] - d * (stored[1].z - o.z) / d.z;
+        assert!(!inside((on_vertex, d), 0.0), "through a vertex");
+        assert!(!inside(down(3.0, 0.0), 0.0), "outside");
+        let mut agree = 0;
+        for i in 0..2000 {
+            let (x, y) = (
+                -1.2 + 2.4 * f64::from(i % 50) / 49.0,
+                f64::from(i / 50) / 39.0,
+            );
+            let ray = down(x - 0.5 * y, y - 0.5);
+            let full = bound(&exact3(ray.0), &exact3(ray.1), &tri(corners)).side;
+            if inside(ray, 0.0) {
+                assert_eq!(full, Side::Inside, "ray {ray:?}");
+                agree += 1;
+            } else {
+                assert_ne!(full, Side::Inside, "ray {ray:?}: a plain interior hit");
+            }
+        }
+        assert!(agree > 400, "{agree} interior rays");
     }
 
     /// A ray in the triangle's plane has no bounded t.

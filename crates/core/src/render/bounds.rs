@@ -2,6 +2,7 @@
 //! they bound and mean is said there): a hit's bound, its depth error, and the search for a
 //! competitor that decides `certain`.
 
+use crate::accel::PACKET;
 use crate::bound::bounded::{self, gamma, sum_error, up, Bounded};
 use crate::bound::residual;
 use crate::bound::HitBound;
@@ -68,37 +69,76 @@ fn depth_bound(t: Bounded, dir: DVec3) -> Bounded {
 /// cost); then one scalar traversal of the octree up to `t + δ` (or `t_max` for a miss),
 /// each candidate passed over by [`crate::bound::triangle::certainly_apart`]'s f64 filters (a
 /// depth range, the sheared triangle's box, the edge functions' signs) before any bounded
-/// recomputation.
+/// recomputation. [`certain_packet`] does the same for eight rays in one packet traversal.
 pub fn certain(
     tracer: &Tracer,
     ray: &Ray,
     hit: Option<(&Crossing, &HitBound)>,
-    (t_min, t_max): (f64, f64),
+    range: (f64, f64),
 ) -> bool {
-    let scene = tracer.scene;
-    let t_limit = match hit {
-        Some((_, bound)) => {
-            let (low, high) = (
-                bound.t.value - bound.t.error,
-                up(bound.t.value + bound.t.error),
-            );
-            if !bound.certain || low.is_nan() || low <= t_min || high > t_max {
-                return false;
-            }
-            high
-        }
-        None => t_max,
+    let Some(limit) = probe_limit(hit, range) else {
+        return false;
     };
+    let scene = tracer.scene;
     let hit = hit.map(|(h, _)| scene.with_inner(h, ray.origin, ray.dir));
-    let probe = Probe::new(
-        ray,
-        t_limit,
-        hit.as_ref(),
-        tracer.octree.root().size().max_element(),
-    );
+    let probe = probe(tracer, ray, limit, hit.as_ref());
     let local = ray.origin - scene.anchor;
     let competes = |prim: u32| scene.may_cross(prim as usize, &probe);
-    !tracer
+    !tracer.octree.any_reference(local, ray.dir, limit, competes)
+}
+
+/// [`certain`] for [`PACKET`] rays (with their hits and ranges), their competitors searched
+/// in one packet traversal of the octree ([`crate::accel::Octree::any_reference_packet`]),
+/// or ray by ray when they cannot go as one packet: the same answers either way.
+pub fn certain_packet(
+    tracer: &Tracer,
+    rays: &[Ray; PACKET],
+    hits: &[Option<(&Crossing, &HitBound)>; PACKET],
+    ranges: &[(f64, f64); PACKET],
+) -> [bool; PACKET] {
+    let limits: [Option<f64>; PACKET] = std::array::from_fn(|i| probe_limit(hits[i], ranges[i]));
+    if limits.iter().all(Option::is_none) {
+        return [false; PACKET];
+    }
+    let scene = tracer.scene;
+    let inner: [Option<Crossing>; PACKET] = std::array::from_fn(|i| {
+        let hit = hits[i].filter(|_| limits[i].is_some());
+        hit.map(|(h, _)| scene.with_inner(h, rays[i].origin, rays[i].dir))
+    });
+    let probes: [Probe; PACKET] = std::array::from_fn(|i| {
+        let limit = limits[i].unwrap_or(f64::NEG_INFINITY);
+        probe(tracer, &rays[i], limit, inner[i].as_ref())
+    });
+    let origins = rays.each_ref().map(|ray| ray.origin - scene.anchor);
+    let dirs = rays.each_ref().map(|ray| ray.dir);
+    let t_max = probes.each_ref().map(|p| p.limit);
+    let competes = |i: usize, prim: u32| scene.may_cross(prim as usize, &probes[i]);
+    let Some(found) = tracer
         .octree
-        .any_reference(local, ray.dir, t_limit, competes)
+        .any_reference_packet(&origins, &dirs, &t_max, competes)
+    else {
+        return std::array::from_fn(|i| certain(tracer, &rays[i], hits[i], ranges[i]));
+    };
+    std::array::from_fn(|i| limits[i].is_some() && found & (1 << i) == 0)
+}
+
+/// How far `certain`'s search for a competitor goes: `t + δ` for a hit whose own decision is
+/// certain and which lies inside `(t_min, t_max]` by more than its bound, `t_max` for a miss;
+/// `None` when the ray is uncertain already.
+fn probe_limit(hit: Option<(&Crossing, &HitBound)>, (t_min, t_max): (f64, f64)) -> Option<f64> {
+    let Some((_, bound)) = hit else {
+        return Some(t_max);
+    };
+    let (low, high) = (
+        bound.t.value - bound.t.error,
+        up(bound.t.value + bound.t.error),
+    );
+    let decided = !bound.certain || low.is_nan() || low <= t_min || high > t_max;
+    (!decided).then_some(high)
+}
+
+/// The probe of `ray` up to `limit` against its hit (its instance triangle found).
+fn probe<'a>(tracer: &Tracer, ray: &Ray, limit: f64, hit: Option<&'a Crossing>) -> Probe<'a> {
+    let root = tracer.octree.root().size().max_element();
+    Probe::new(ray, limit, hit, root)
 }

@@ -6,6 +6,7 @@
 //! [`trace`], so they share this loop.
 
 use super::Aov;
+use crate::accel::PACKET;
 use crate::bound::HitBound;
 use crate::geometry::Ray;
 use crate::geometry::RaySource;
@@ -156,6 +157,8 @@ struct Block<'a, S: ?Sized> {
     bounds: OnceCell<Vec<Option<(HitBound, f64)>>>,
     /// Whether the `certain` AOV is asked for (the hits' bounds then decide it too).
     decide: bool,
+    /// The order the block's rays were traced in ([`tile_order`]; `None`: as they come).
+    order: Option<Vec<usize>>,
 }
 
 impl<S: RaySource + ?Sized> Block<'_, S> {
@@ -237,19 +240,44 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
                     bounds[j].map_or(f64::INFINITY, |b| b.1)
                 })
             }
-            (Aov::Certain, Slot::Flag(out)) => {
-                let bounds = self.hit_bounds(hits);
-                let query = self.tracer.tracer();
-                for (j, (slot, hit)) in out.iter_mut().zip(hits).enumerate() {
-                    let range = (self.range)(self.start + j);
-                    let hit = hit.as_ref().zip(bounds[j].as_ref().map(|b| &b.0));
-                    let certain = query.as_ref().is_some_and(|query| {
-                        super::bounds::certain(query, &self.ray(j), hit, range)
-                    });
-                    *slot = u8::from(certain);
-                }
-            }
+            (Aov::Certain, Slot::Flag(out)) => self.certain(out, hits),
             _ => unreachable!("a column is made for its AOV's type"),
+        }
+    }
+
+    /// Fills `out`, the block's part of the `certain` column, from the block's `hits`: eight
+    /// rays at a time in the order they were traced (an image's 4 × 2 tiles), so that each
+    /// packet's search for competitors traverses the octree once
+    /// ([`super::bounds::certain_packet`]); the rest one by one. All 0 for a tracer without an
+    /// octree.
+    fn certain(&self, out: &mut [u8], hits: &[Option<Crossing>]) {
+        let Some(query) = self.tracer.tracer() else {
+            out.fill(0);
+            return;
+        };
+        let bounds = self.hit_bounds(hits);
+        let hit = |j: usize| hits[j].as_ref().zip(bounds[j].as_ref().map(|b| &b.0));
+        let range = |j: usize| (self.range)(self.start + j);
+        let as_given: Vec<usize>;
+        let order = match &self.order {
+            Some(order) => order,
+            None => {
+                as_given = (0..hits.len()).collect();
+                &as_given
+            }
+        };
+        let (packets, rest) = order.as_chunks::<PACKET>();
+        for packet in packets {
+            let rays = packet.map(|j| self.ray(j));
+            let flags =
+                super::bounds::certain_packet(&query, &rays, &packet.map(hit), &packet.map(range));
+            for (&j, flag) in packet.iter().zip(flags) {
+                out[j] = u8::from(flag);
+            }
+        }
+        for &j in rest {
+            let certain = super::bounds::certain(&query, &self.ray(j), hit(j), range(j));
+            out[j] = u8::from(certain);
         }
     }
 }
@@ -370,9 +398,9 @@ where
             range: &rays.range,
             bounds: OnceCell::new(),
             decide: aovs.contains(&Aov::Certain),
+            order: tile_order(len, width),
         };
-        let order = tile_order(len, width);
-        let indices: Vec<usize> = match &order {
+        let indices: Vec<usize> = match &block.order {
             Some(order) => order.iter().map(|&j| block.start + j).collect(),
             None => (block.start..block.start + len).collect(),
         };
@@ -386,9 +414,9 @@ where
                 .map(|(((&i, _), _), _)| i)
                 .min()
         });
-        if let Some(order) = order {
+        if let Some(order) = &block.order {
             let mut in_place = vec![None; len];
-            for (j, hit) in order.into_iter().zip(hits) {
+            for (&j, hit) in order.iter().zip(hits) {
                 in_place[j] = hit;
             }
             hits = in_place;

@@ -107,9 +107,15 @@ impl Scene {
             Top::Triangle(i) => {
                 let tri = self.world.mesh.triangle(i);
                 let ray = NearRay::exact(origin, dir);
+                let placement = self.placement_of(i);
+                let inside = || {
+                    let watertight = WatertightRay::new(origin, dir);
+                    triangle::certainly_inside(&watertight, &tri, placement)
+                };
                 let full =
                     || triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));
-                triangle_hit(&ray, &tri, self.placement_of(i), hit.t, decide, full)
+                let decide = decide.then(inside);
+                triangle_hit(&ray, &tri, placement, hit.t, decide, full)
             }
             Top::Instance(k) => {
                 let stored = &self.meshes[self.instances[k].mesh as usize];
@@ -130,6 +136,8 @@ impl Scene {
                     .fold(0.0, f64::max);
                 let stored_tri = tri.map(|v| values3(&v));
                 let full = || triangle::bound(&o, &d, &tri);
+                // The mapped ray is not exact: its side is the bounded recomputation's.
+                let decide = decide.then_some(false);
                 triangle_hit(&ray, &stored_tri, vertex_error, hit.t, decide, full)
             }
             Top::Quadric(q) => quadric_hit(&self.quadrics[q], origin, dir, hit.t, decide),
@@ -326,26 +334,28 @@ impl Scene {
 
 /// A triangle hit's bound: the reported `t` within the residual bound of its exact plane
 /// ([`residual::plane_error`]), or, where that declines, within the distance to the recomputed
-/// `t` plus its bound (`full`, [`triangle::bound`]); certain (asked by `decide`) when the exact
-/// ray crosses the interior in front of the origin.
+/// `t` plus its bound (`full`, [`triangle::bound`]). `decide` is `None` when `certain` is not
+/// asked; otherwise it says whether a cheaper test already found the exact ray inside the
+/// triangle ([`triangle::certainly_inside`]), and where it did not, the recomputation decides.
+/// Certain when the exact ray crosses the interior in front of the origin.
 #[inline(always)]
 fn triangle_hit(
     ray: &NearRay,
     tri: &[DVec3; 3],
     vertex_error: f64,
     t: f64,
-    decide: bool,
+    decide: Option<bool>,
     full: impl Fn() -> TriangleBound,
 ) -> HitBound {
     let fast = residual::plane_error(ray, tri, vertex_error, t);
-    let full = (decide || fast.is_none()).then(full);
+    let full = (decide == Some(false) || fast.is_none()).then(full);
     let recomputed = |b: &TriangleBound| up((t - b.t.value).abs() + b.t.error);
     let error = fast.or_else(|| full.as_ref().map(recomputed));
     let error = error.unwrap_or(f64::INFINITY);
-    let inside = full.is_some_and(|b| b.side == Side::Inside);
+    let inside = decide == Some(true) || full.is_some_and(|b| b.side == Side::Inside);
     HitBound {
         t: Bounded::new(t, error),
-        certain: decide && inside && t - error > 0.0,
+        certain: decide.is_some() && inside && t - error > 0.0,
     }
 }
 

@@ -487,6 +487,42 @@ impl Octree {
         );
         found
     }
+
+    /// [`Octree::any_reference`] for [`PACKET`] rays at once, traversing the octree together
+    /// (module `packet`, the same leaves and leaf filter as each ray alone): bit `i` of the
+    /// result is set when `visit(i, prim)` returns true for some primitive ray `i` may meet
+    /// with `0 <= t <= t_max[i]`; a ray stops at its first true, and a ray with a `t_max` of
+    /// `-∞` takes no part. Each primitive is offered to a ray once (the packet's mailbox).
+    /// `None` when the rays cannot go as one packet (see [`Octree::intersect_packet`]).
+    pub fn any_reference_packet(
+        &self,
+        origins: &[DVec3; PACKET],
+        dirs: &[DVec3; PACKET],
+        t_max: &[f64; PACKET],
+        mut visit: impl FnMut(usize, u32) -> bool,
+    ) -> Option<u32> {
+        let mut found = 0u32;
+        let mut offered = PacketMailbox::default();
+        let packed = packet::run(
+            &self.layout,
+            self.kernel,
+            origins,
+            dirs,
+            self.scale,
+            *t_max,
+            |_, refs, reach, limits| {
+                for (&prim, &rays) in refs.iter().zip(reach) {
+                    for i in set_bits(offered.check_in(prim, rays & !found)) {
+                        if visit(i, prim) {
+                            found |= 1 << i;
+                            limits[i] = f64::NEG_INFINITY;
+                        }
+                    }
+                }
+            },
+        );
+        packed.then_some(found)
+    }
 }
 
 /// The primitives a ray tested last, so that one referenced by several leaves along the ray
