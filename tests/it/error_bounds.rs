@@ -150,11 +150,12 @@ fn error_does_not_depend_on_certain_being_asked() {
     }
 }
 
-/// `certain` is decided the same way for a ray alone and in a packet of eight (the packet's
-/// search for competitors traverses the octree once for all eight): rays straight down at
-/// two overlapping squares 1e-16 apart on the left (uncertain where both are crossed), a
-/// plain square on the right, with rays on and 1e-15 beside its diagonal and edges, misses
-/// beside it, and packets that mix all of these.
+/// `certain` is decided the same way for a ray alone and in a packet of eight (decided from
+/// what the packet's search offered each ray, or by one packet traversal where that cannot
+/// tell): rays straight down at two overlapping squares 1e-16 apart on the left (uncertain
+/// where both are crossed), a plain square in the middle, with rays on and 1e-15 beside its
+/// diagonal and edges, misses beside it, a stack of fourteen squares on the right (more
+/// primitives offered than are noted), and packets that mix all of these.
 #[test]
 fn certain_is_the_same_for_a_ray_alone_and_in_a_packet() {
     let mut builder = SceneBuilder::new();
@@ -166,13 +167,17 @@ fn certain_is_the_same_for_a_ray_alone_and_in_a_packet() {
     builder.add_mesh("near".into(), "test".into(), square(-1.5, 0.5 + 1e-16));
     builder.add_mesh("far".into(), "test".into(), square(-1.2, 0.5));
     builder.add_mesh("right".into(), "test".into(), square(0.5, 0.1));
+    for k in 0..14 {
+        let name = format!("stack {k}");
+        builder.add_mesh(name, "test".into(), square(1.6, 0.2 + f64::from(k) * 1e-3));
+    }
     let scene = builder.finish("squares".into());
     let octree = Octree::build(&scene, OctreeParams::default());
     let tracer = Tracer::new(&scene, &octree);
     let offsets = [0.0, 1e-15, -1e-15, 0.25, 1.0];
     let rays: Vec<Ray> = (0..800u32)
         .map(|i| {
-            let x = -1.6 + 3.2 * f64::from(i % 40) / 39.0;
+            let x = -1.6 + 4.4 * f64::from(i % 40) / 39.0;
             let y = f64::from(i / 40) / 19.0 + offsets[i as usize % offsets.len()];
             // No zero component: the rays can go as packets.
             Ray::new(DVec3::new(x, y, 2.0), DVec3::new(1e-3, 1e-3, -1.0))

@@ -2,7 +2,7 @@
 //! they bound and mean is said there): a hit's bound, its depth error, and the search for a
 //! competitor that decides `certain`.
 
-use crate::accel::PACKET;
+use crate::accel::{Offered, PACKET};
 use crate::bound::bounded::{self, gamma, sum_error, up, Bounded};
 use crate::bound::residual;
 use crate::bound::HitBound;
@@ -69,7 +69,9 @@ fn depth_bound(t: Bounded, dir: DVec3) -> Bounded {
 /// cost); then one scalar traversal of the octree up to `t + δ` (or `t_max` for a miss),
 /// each candidate passed over by [`crate::bound::triangle::certainly_apart`]'s f64 filters (a
 /// depth range, the sheared triangle's box, the edge functions' signs) before any bounded
-/// recomputation. [`certain_packet`] does the same for eight rays in one packet traversal.
+/// recomputation. [`certain_packet`] does the same for eight rays in one packet traversal;
+/// [`certain_offered`] needs no traversal at all for a ray whose packet search noted what it
+/// offered the ray (the render's camera rays).
 pub fn certain(
     tracer: &Tracer,
     ray: &Ray,
@@ -120,6 +122,35 @@ pub fn certain_packet(
         return std::array::from_fn(|i| certain(tracer, &rays[i], hits[i], ranges[i]));
     };
     std::array::from_fn(|i| limits[i].is_some() && found & (1 << i) == 0)
+}
+
+/// [`certain`] from what the ray's packet search offered it ([`Offered`], module
+/// `accel::octree::notes`): the same answer without a second traversal, the offered
+/// primitives weighed as [`certain`] weighs those its traversal meets. `None` when the offers
+/// cannot decide it: more were offered than noted, or `t + δ` lies beyond the search's reach.
+pub fn certain_offered(
+    tracer: &Tracer,
+    ray: &Ray,
+    hit: Option<(&Crossing, &HitBound)>,
+    range: (f64, f64),
+    offered: &Offered,
+) -> Option<bool> {
+    let Some(limit) = probe_limit(hit, range) else {
+        return Some(false);
+    };
+    let prims = offered.prims()?;
+    let within = limit <= offered.reach;
+    if !within {
+        return None;
+    }
+    let scene = tracer.scene;
+    let hit = hit.map(|(h, _)| scene.with_inner(h, ray.origin, ray.dir));
+    let probe = probe(tracer, ray, limit, hit.as_ref());
+    Some(
+        !prims
+            .iter()
+            .any(|&prim| scene.may_cross(prim as usize, &probe)),
+    )
 }
 
 /// How far `certain`'s search for a competitor goes: `t + δ` for a hit whose own decision is

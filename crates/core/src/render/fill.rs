@@ -6,7 +6,7 @@
 //! [`trace`], so they share this loop.
 
 use super::Aov;
-use crate::accel::PACKET;
+use crate::accel::{Offered, PACKET};
 use crate::bound::HitBound;
 use crate::geometry::Ray;
 use crate::geometry::RaySource;
@@ -159,6 +159,8 @@ struct Block<'a, S: ?Sized> {
     decide: bool,
     /// The order the block's rays were traced in ([`tile_order`]; `None`: as they come).
     order: Option<Vec<usize>>,
+    /// What each ray's search offered it, for `certain` (empty when it is not asked).
+    offered: Vec<Option<Offered>>,
 }
 
 impl<S: RaySource + ?Sized> Block<'_, S> {
@@ -246,10 +248,11 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
     }
 
     /// Fills `out`, the block's part of the `certain` column, from the block's `hits`: eight
-    /// rays at a time in the order they were traced (an image's 4 × 2 tiles), so that each
-    /// packet's search for competitors traverses the octree once
-    /// ([`super::bounds::certain_packet`]); the rest one by one. All 0 for a tracer without an
-    /// octree.
+    /// rays at a time in the order they were traced (an image's 4 × 2 tiles), each decided
+    /// from what its packet search offered it ([`super::bounds::certain_offered`]), or, where
+    /// that cannot tell for some ray of the eight, by one packet traversal for all of them
+    /// ([`super::bounds::certain_packet`]); the rest one by one. All 0 for a tracer without
+    /// an octree.
     fn certain(&self, out: &mut [u8], hits: &[Option<Crossing>]) {
         let Some(query) = self.tracer.tracer() else {
             out.fill(0);
@@ -267,10 +270,23 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
             }
         };
         let (packets, rest) = order.as_chunks::<PACKET>();
+        let offered = |j: usize, ray: &Ray| {
+            let offered = self.offered.get(j)?.as_ref()?;
+            super::bounds::certain_offered(&query, ray, hit(j), range(j), offered)
+        };
         for packet in packets {
             let rays = packet.map(|j| self.ray(j));
-            let flags =
-                super::bounds::certain_packet(&query, &rays, &packet.map(hit), &packet.map(range));
+            let decided: [Option<bool>; PACKET] =
+                std::array::from_fn(|k| offered(packet[k], &rays[k]));
+            let flags = match decided.iter().all(Option::is_some) {
+                true => decided.map(|d| d == Some(true)),
+                false => super::bounds::certain_packet(
+                    &query,
+                    &rays,
+                    &packet.map(hit),
+                    &packet.map(range),
+                ),
+            };
             for (&j, flag) in packet.iter().zip(flags) {
                 out[j] = u8::from(flag);
             }
@@ -337,6 +353,20 @@ fn tile_order(len: usize, width: Option<usize>) -> Option<Vec<usize>> {
     Some(order)
 }
 
+/// `values`, given in the traced `order`, put back in the rays' own order (an empty list
+/// stays empty).
+#[inline(always)]
+fn in_place<T: Copy>(order: &[usize], values: Vec<Option<T>>) -> Vec<Option<T>> {
+    if values.is_empty() {
+        return values;
+    }
+    let mut in_place = vec![None; order.len()];
+    for (&j, value) in order.iter().zip(values) {
+        in_place[j] = value;
+    }
+    in_place
+}
+
 /// The width of a tile of [`tile_order`] (its height is two rows).
 const TILE: usize = 4;
 
@@ -388,7 +418,7 @@ where
         .unwrap_or((DVec3::ZERO, DVec3::ZERO));
     // Finds the block's hits, then fills each column's part, the columns one after another.
     let fill = |start: usize, len: usize, slots: &mut [Slot]| -> Option<usize> {
-        let block = Block {
+        let mut block = Block {
             tracer,
             scene: tracer.scene(),
             source: rays.source,
@@ -399,6 +429,7 @@ where
             bounds: OnceCell::new(),
             decide: aovs.contains(&Aov::Certain),
             order: tile_order(len, width),
+            offered: Vec::new(),
         };
         let indices: Vec<usize> = match &block.order {
             Some(order) => order.iter().map(|&j| block.start + j).collect(),
@@ -406,7 +437,11 @@ where
         };
         let ray_list: Vec<Ray> = indices.iter().map(|&i| rays.source.ray(i)).collect();
         let ranges: Vec<(f64, f64)> = indices.iter().map(|&i| (rays.range)(i)).collect();
-        let mut hits = tracer.nearest_all(&ray_list, &ranges);
+        let (mut hits, mut offered) = if block.decide {
+            tracer.nearest_all_offered(&ray_list, &ranges)
+        } else {
+            (tracer.nearest_all(&ray_list, &ranges), Vec::new())
+        };
         let refused = rays.refuse_untraceable.then(|| {
             let each = indices.iter().zip(&ray_list).zip(&ranges).zip(&hits);
             each.filter(|(_, hit)| hit.is_none())
@@ -415,12 +450,10 @@ where
                 .min()
         });
         if let Some(order) = &block.order {
-            let mut in_place = vec![None; len];
-            for (&j, hit) in order.iter().zip(hits) {
-                in_place[j] = hit;
-            }
-            hits = in_place;
+            hits = in_place(order, hits);
+            offered = in_place(order, offered);
         }
+        block.offered = offered;
         for (slot, &aov) in slots.iter_mut().zip(aovs) {
             block.fill(aov, slot, &hits);
         }

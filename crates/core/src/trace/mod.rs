@@ -18,7 +18,8 @@ pub use distance::{signed, winding_number, NearestPoint, Side, SignRule, Signer}
 #[cfg(feature = "bvh-oracle")]
 pub use oracle::BvhTracer;
 
-use crate::accel::{test_primitive, Hit, Octree, OctreeParams, PreparedRay, PrimitiveSet, PACKET};
+use crate::accel::{test_primitive, Hit, Notes, Octree, OctreeParams, Offered, PacketOffers};
+use crate::accel::{PreparedRay, PrimitiveSet, Unnoted, PACKET};
 use crate::geometry::{Ray, RaySource};
 use crate::quadric::Quadric;
 use crate::scene::{Crossing, EdgeRule, Scene, SceneRay};
@@ -57,6 +58,16 @@ pub trait NearestHits: Sync {
     /// The nearest crossing of each of `rays` in its range of `ranges` (see
     /// [`Tracer::nearest`]).
     fn nearest_all(&self, rays: &[Ray], ranges: &[(f64, f64)]) -> Vec<Option<Crossing>>;
+
+    /// [`NearestHits::nearest_all`], with what each ray's search offered it where it was
+    /// noted ([`Tracer::nearest_all_offered`]); none by default.
+    fn nearest_all_offered(
+        &self,
+        rays: &[Ray],
+        ranges: &[(f64, f64)],
+    ) -> (Vec<Option<Crossing>>, Vec<Option<Offered>>) {
+        (self.nearest_all(rays, ranges), vec![None; rays.len()])
+    }
 
     /// The octree's tracer, for the queries beyond the nearest hit (the `certain` buffer);
     /// `None` for an oracle without one.
@@ -171,6 +182,18 @@ impl<'a> Tracer<'a> {
         ranges: &[(f64, f64); PACKET],
         found: &mut [Option<Crossing>; PACKET],
     ) -> bool {
+        self.nearest_packet_noting(rays, ranges, found, &mut Unnoted)
+    }
+
+    /// [`Tracer::nearest_packet`] that tells `notes` what the search offers each ray
+    /// ([`Octree::intersect_packet_noting`]): the same answers.
+    pub fn nearest_packet_noting(
+        &self,
+        rays: &[Ray; PACKET],
+        ranges: &[(f64, f64); PACKET],
+        found: &mut [Option<Crossing>; PACKET],
+        notes: &mut impl Notes,
+    ) -> bool {
         if !plain_packet(ranges) {
             return false;
         }
@@ -180,7 +203,7 @@ impl<'a> Tracer<'a> {
         let mut hits = [None; PACKET];
         let packed = self
             .octree
-            .intersect_packet_into(self.scene, &origins, &dirs, &t_max, &mut hits);
+            .intersect_packet_noting(self.scene, &origins, &dirs, &t_max, &mut hits, notes);
         if packed {
             for (found, hit) in found.iter_mut().zip(hits) {
                 *found = hit.map(Crossing::from);
@@ -193,6 +216,30 @@ impl<'a> Tracer<'a> {
     /// [`PACKET`] rays that can go together are traced as packets (the same answers, fewer
     /// node visits for coherent rays such as a camera's), the others one by one.
     pub fn nearest_all(&self, rays: &[Ray], ranges: &[(f64, f64)]) -> Vec<Option<Crossing>> {
+        self.nearest_all_with::<false>(rays, ranges, &mut Vec::new())
+    }
+
+    /// [`Tracer::nearest_all`], with, for each ray traced in a packet, the primitives its
+    /// search offered it and how far it searched ([`PacketOffers`]: for the `certain` AOV);
+    /// `None` for a ray traced alone.
+    pub fn nearest_all_offered(
+        &self,
+        rays: &[Ray],
+        ranges: &[(f64, f64)],
+    ) -> (Vec<Option<Crossing>>, Vec<Option<Offered>>) {
+        let mut offered = Vec::with_capacity(rays.len());
+        let hits = self.nearest_all_with::<true>(rays, ranges, &mut offered);
+        (hits, offered)
+    }
+
+    /// [`Tracer::nearest_all`], noting the offers into `offered` when `NOTE` (a constant, so
+    /// that the plain search compiles as if there were nothing to note).
+    fn nearest_all_with<const NOTE: bool>(
+        &self,
+        rays: &[Ray],
+        ranges: &[(f64, f64)],
+        offered: &mut Vec<Option<Offered>>,
+    ) -> Vec<Option<Crossing>> {
         let one = |(ray, &(t_min, t_max)): (&Ray, &(f64, f64))| self.nearest(ray, t_min, t_max);
         let mut hits = Vec::with_capacity(rays.len());
         let (packets, rest) = rays.as_chunks::<PACKET>();
@@ -206,15 +253,43 @@ impl<'a> Tracer<'a> {
                 let start = hits.len();
                 hits.resize(start + PACKET, None);
                 let found = hits[start..].as_mut_array().expect("PACKET slots");
-                if self.nearest_packet(packet, range, found) {
+                let packed = match NOTE {
+                    false => self.nearest_packet(packet, range, found),
+                    true => self.noted_packet(packet, range, found, offered),
+                };
+                if packed {
                     continue;
                 }
                 hits.truncate(start);
             }
             hits.extend(packet.iter().zip(range).map(one));
+            if NOTE {
+                offered.extend([None; PACKET]);
+            }
         }
         hits.extend(rest.iter().zip(rest_ranges).map(one));
+        if NOTE {
+            offered.resize(hits.len(), None);
+        }
         hits
+    }
+
+    /// [`Tracer::nearest_packet_noting`] with [`PacketOffers`], the offers appended to
+    /// `offered` when the rays went as a packet.
+    fn noted_packet(
+        &self,
+        rays: &[Ray; PACKET],
+        ranges: &[(f64, f64); PACKET],
+        found: &mut [Option<Crossing>; PACKET],
+        offered: &mut Vec<Option<Offered>>,
+    ) -> bool {
+        let mut notes = PacketOffers::default();
+        if !self.nearest_packet_noting(rays, ranges, found, &mut notes) {
+            return false;
+        }
+        notes.finish(found.map(|hit| hit.map(|h| h.t)), &ranges.map(|r| r.1));
+        offered.extend(notes.rays.map(Some));
+        true
     }
 
     /// Whether the ray has any crossing with `t_min < t <= t_max` (and `t > 0`): exactly
@@ -388,6 +463,14 @@ impl NearestHits for Tracer<'_> {
 
     fn nearest_all(&self, rays: &[Ray], ranges: &[(f64, f64)]) -> Vec<Option<Crossing>> {
         Tracer::nearest_all(self, rays, ranges)
+    }
+
+    fn nearest_all_offered(
+        &self,
+        rays: &[Ray],
+        ranges: &[(f64, f64)],
+    ) -> (Vec<Option<Crossing>>, Vec<Option<Offered>>) {
+        Tracer::nearest_all_offered(self, rays, ranges)
     }
 
     fn tracer(&self) -> Option<Tracer<'_>> {

@@ -76,6 +76,7 @@ mod lanes;
 mod layout;
 mod leaf;
 mod nearest;
+mod notes;
 mod packet;
 mod traverse;
 mod wide;
@@ -88,6 +89,7 @@ use cells::Builder;
 use glam::DVec3;
 use lanes::Lanes;
 use layout::Layout;
+pub use notes::{Notes, Offered, PacketOffers, Unnoted, OFFERED};
 pub use packet::WIDTH as PACKET;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -334,7 +336,22 @@ impl Octree {
         t_max: &[f64; PACKET],
         best: &mut [Option<Hit>; PACKET],
     ) -> bool {
-        self.intersect_packet_with(set, local_origins, dirs, t_max, None, best)
+        self.intersect_packet_with(set, local_origins, dirs, t_max, None, best, &mut Unnoted)
+    }
+
+    /// [`Octree::intersect_packet_into`] that also tells `notes` what it offers each ray,
+    /// keeping each ray's limit at `notes.reach` of its best hit (module `notes`): the same
+    /// hits.
+    pub fn intersect_packet_noting<P: PrimitiveSet>(
+        &self,
+        set: &P,
+        local_origins: &[DVec3; PACKET],
+        dirs: &[DVec3; PACKET],
+        t_max: &[f64; PACKET],
+        best: &mut [Option<Hit>; PACKET],
+        notes: &mut impl Notes,
+    ) -> bool {
+        self.intersect_packet_with(set, local_origins, dirs, t_max, None, best, notes)
     }
 
     /// [`Octree::intersect_packet`] for rays already prepared (their `local_origin` and `dir`
@@ -348,13 +365,24 @@ impl Octree {
         let local_origins = rays.map(|ray| ray.local_origin);
         let dirs = rays.map(|ray| ray.dir);
         let mut best = [None; PACKET];
-        self.intersect_packet_with(set, &local_origins, &dirs, t_max, Some(rays), &mut best)
-            .then_some(best)
+        let unnoted = &mut Unnoted;
+        self.intersect_packet_with(
+            set,
+            &local_origins,
+            &dirs,
+            t_max,
+            Some(rays),
+            &mut best,
+            unnoted,
+        )
+        .then_some(best)
     }
 
     /// [`Octree::intersect_packet_into`], with the rays prepared for the primitive tests as
-    /// `given`, or else by [`super::prepare_ray`] when the first of them reaches a leaf.
-    fn intersect_packet_with<P: PrimitiveSet>(
+    /// `given`, or else by [`super::prepare_ray`] when the first of them reaches a leaf, and
+    /// `notes` told what each ray is offered.
+    #[allow(clippy::too_many_arguments)]
+    fn intersect_packet_with<P: PrimitiveSet, N: Notes>(
         &self,
         set: &P,
         local_origins: &[DVec3; PACKET],
@@ -362,6 +390,7 @@ impl Octree {
         t_max: &[f64; PACKET],
         given: Option<&[PreparedRay<P::RayData>; PACKET]>,
         best: &mut [Option<Hit>; PACKET],
+        notes: &mut N,
     ) -> bool {
         let mut own = None;
         let mut packet_data = None;
@@ -389,9 +418,10 @@ impl Octree {
                     let i = rays.trailing_zeros() as usize;
                     let new = kept
                         .map(|(&prim, _)| prim)
-                        .filter(|&prim| tested.check_in(prim, rays) != 0);
+                        .filter(|&prim| tested.check_in(prim, rays) != 0)
+                        .inspect(|&prim| notes.offer(i, prim));
                     test_leaf(set, new, &prepared[i], t_max[i], &mut best[i]);
-                    limits[i] = best[i].map_or(t_max[i], |b| b.t);
+                    limits[i] = best[i].map_or(t_max[i], |b| notes.reach(b.t));
                     return;
                 }
                 let packet = packet_data.get_or_insert_with(|| set.prepare_packet(prepared));
@@ -399,6 +429,11 @@ impl Octree {
                     let active = tested.check_in(prim, rays);
                     if active == 0 {
                         continue;
+                    }
+                    if N::NOTING {
+                        for i in set_bits(active) {
+                            notes.offer(i, prim);
+                        }
                     }
                     let hits = set.intersect_packet(
                         prim as usize,
@@ -412,7 +447,7 @@ impl Octree {
                         let hit = Hit { t: ts[i], prim };
                         if hit.beats(&best[i]) {
                             best[i] = Some(hit);
-                            limits[i] = hit.t;
+                            limits[i] = notes.reach(hit.t);
                         }
                     }
                 }

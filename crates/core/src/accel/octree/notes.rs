@@ -1,0 +1,162 @@
+//! What a packet search may note beside its nearest hits, for the `certain` AOV
+//! ([`crate::render::bounds`]): the primitives it offered each ray, and how far beyond its
+//! best hit each ray's search went.
+//!
+//! A decision is certain when no primitive other than the hit may have an exact crossing up
+//! to `t + δ` (the hit's bound). Every such primitive is offered to the ray by a search that
+//! goes that far: the node culling and the leaf filter only drop what the ray cannot reach
+//! within the search's limit (see module `leaf`: boxes grown by the build margin), and the
+//! mailbox only drops repeats. So the search keeps each ray's limit a little beyond its best
+//! hit so far ([`Notes::reach`]), records what it offers, and the decision then weighs those
+//! primitives alone, without a second traversal, whenever `t + δ` lies within the reach.
+//! Widening the limit cannot change the nearest hit: a crossing between the best hit and
+//! the widened limit is tested and loses to the best.
+
+use super::PACKET;
+
+/// What [`super::Octree::intersect_packet_noting`] tells its notes.
+pub trait Notes {
+    /// Whether there is anything to note (a constant, so that the plain search's loops over
+    /// the offered rays compile away).
+    const NOTING: bool;
+
+    /// The limit the search keeps for a ray whose best hit so far is at `t`: `t` for a plain
+    /// search, a little more to see competitors beyond it.
+    fn reach(&self, t: f64) -> f64;
+
+    /// Primitive `prim` was offered to ray `ray` of the packet (it passed the leaf filter,
+    /// for the first time along the ray).
+    fn offer(&mut self, ray: usize, prim: u32);
+}
+
+/// The plain search: nothing noted, nothing widened.
+pub struct Unnoted;
+
+impl Notes for Unnoted {
+    const NOTING: bool = false;
+
+    #[inline(always)]
+    fn reach(&self, t: f64) -> f64 {
+        t
+    }
+
+    #[inline(always)]
+    fn offer(&mut self, _: usize, _: u32) {}
+}
+
+/// Primitives noted per ray: more and the ray's list is marked incomplete.
+pub const OFFERED: usize = 12;
+
+/// The primitives a search offered one ray, and how far it searched.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Offered {
+    prims: [u32; OFFERED],
+    /// How many of `prims` hold primitives; `OFFERED + 1` once more were offered than fit.
+    len: u8,
+    /// The search found every crossing with `0 < t ≤ reach` among the offered primitives.
+    pub reach: f64,
+}
+
+impl Offered {
+    /// Nothing offered yet.
+    const EMPTY: Offered = Offered {
+        prims: [0; OFFERED],
+        len: 0,
+        reach: 0.0,
+    };
+
+    /// The offered primitives, or `None` when more were offered than fit.
+    pub fn prims(&self) -> Option<&[u32]> {
+        self.prims.get(..usize::from(self.len))
+    }
+}
+
+/// The notes of a packet's search that looks a relative `2⁻³⁰` beyond each best hit (far more
+/// than the bound of any hit that can be certain: those are a few ulps of `t`, and the
+/// decision falls back to its own search beyond the reach).
+#[derive(Debug, Clone, Copy)]
+pub struct PacketOffers {
+    /// Per ray of the packet.
+    pub rays: [Offered; PACKET],
+}
+
+impl Default for PacketOffers {
+    fn default() -> PacketOffers {
+        PacketOffers {
+            rays: [Offered::EMPTY; PACKET],
+        }
+    }
+}
+
+impl PacketOffers {
+    /// The widened limit of a ray whose best hit is at `t` (`t` itself when not finite).
+    #[inline(always)]
+    pub fn widen(t: f64) -> f64 {
+        (t * (1.0 + 1.0 / f64::from(1u32 << 30))).next_up()
+    }
+}
+
+impl PacketOffers {
+    /// Sets each ray's reach once the search is done: the widened limit of its best hit
+    /// `best[i]` (a ray parameter), or its `t_max` for a miss.
+    pub fn finish(&mut self, best: [Option<f64>; PACKET], t_max: &[f64; PACKET]) {
+        for ((noted, best), &t_max) in self.rays.iter_mut().zip(best).zip(t_max) {
+            noted.reach = best.map_or(t_max, PacketOffers::widen);
+        }
+    }
+}
+
+impl Notes for PacketOffers {
+    const NOTING: bool = true;
+
+    #[inline(always)]
+    fn reach(&self, t: f64) -> f64 {
+        PacketOffers::widen(t)
+    }
+
+    #[inline(always)]
+    fn offer(&mut self, ray: usize, prim: u32) {
+        let noted = &mut self.rays[ray];
+        let len = usize::from(noted.len);
+        if len < OFFERED {
+            noted.prims[len] = prim;
+            noted.len += 1;
+        } else {
+            noted.len = OFFERED as u8 + 1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The list holds what was offered, and says so when it overflows.
+    #[test]
+    fn offers_fill_then_overflow() {
+        let mut notes = PacketOffers::default();
+        for prim in 0..OFFERED as u32 {
+            notes.offer(3, prim);
+        }
+        let all: Vec<u32> = (0..OFFERED as u32).collect();
+        assert_eq!(notes.rays[3].prims(), Some(all.as_slice()));
+        assert_eq!(notes.rays[2].prims(), Some(&[][..]));
+        notes.offer(3, 99);
+        assert_eq!(notes.rays[3].prims(), None);
+        notes.offer(3, 100);
+        assert_eq!(notes.rays[3].prims(), None);
+    }
+
+    /// The widened limit is above `t` by about `2⁻³⁰` of it, and stays infinite.
+    #[test]
+    fn the_reach_is_a_little_beyond() {
+        for t in [1e-300, 0.1, 1.0, 3e7, 1e300] {
+            let w = PacketOffers::widen(t);
+            assert!(
+                w > t && (w - t) / t < 1e-9 && (w - t) / t > 9e-10,
+                "{t} {w}"
+            );
+        }
+        assert_eq!(PacketOffers::widen(f64::INFINITY), f64::INFINITY);
+    }
+}
