@@ -141,11 +141,10 @@ fn fill<T: Copy>(
 }
 
 /// Where the hits of one block of rays are turned into AOV values.
-struct Block<'a, S: ?Sized> {
+struct Block<'a> {
     tracer: &'a dyn NearestHits,
     /// The tracer's scene.
     scene: &'a Scene,
-    source: &'a S,
     /// The index of the block's first ray.
     start: usize,
     /// The camera's eye and view axis (zeros without a camera).
@@ -161,13 +160,16 @@ struct Block<'a, S: ?Sized> {
     order: Option<Vec<usize>>,
     /// What each ray's search offered it, for `certain` (empty when it is not asked).
     offered: Vec<Option<Offered>>,
+    /// The block's rays, in their own order: made once for the search, then read by every
+    /// column (a camera ray takes about a hundred instructions to make).
+    rays: Vec<Ray>,
 }
 
-impl<S: RaySource + ?Sized> Block<'_, S> {
-    /// The `j`-th ray of the block.
+impl Block<'_> {
+    /// The `j`-th ray of the block (made once, by the search's set-up).
     #[inline(always)]
     fn ray(&self, j: usize) -> Ray {
-        self.source.ray(self.start + j)
+        self.rays[j]
     }
 
     /// The hit's object and primitive.
@@ -307,8 +309,8 @@ impl<S: RaySource + ?Sized> Block<'_, S> {
 /// The CPU must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn block_bounds_avx2<S: RaySource + ?Sized>(
-    block: &Block<'_, S>,
+unsafe fn block_bounds_avx2(
+    block: &Block<'_>,
     hits: &[Option<Crossing>],
 ) -> Vec<Option<(HitBound, f64)>> {
     block_bounds(block, hits)
@@ -317,10 +319,7 @@ unsafe fn block_bounds_avx2<S: RaySource + ?Sized>(
 /// The bounds of [`Block::hit_bounds`], a loop rather than `map` and `collect` (closures and
 /// the collecting function are compiled apart, outside [`block_bounds_avx2`]'s instructions).
 #[inline(always)]
-fn block_bounds<S: RaySource + ?Sized>(
-    block: &Block<'_, S>,
-    hits: &[Option<Crossing>],
-) -> Vec<Option<(HitBound, f64)>> {
+fn block_bounds(block: &Block<'_>, hits: &[Option<Crossing>]) -> Vec<Option<(HitBound, f64)>> {
     let mut bounds = Vec::with_capacity(hits.len());
     for (j, hit) in hits.iter().enumerate() {
         let Some(hit) = hit else {
@@ -356,12 +355,9 @@ fn tile_order(len: usize, width: Option<usize>) -> Option<Vec<usize>> {
 /// `values`, given in the traced `order`, put back in the rays' own order (an empty list
 /// stays empty).
 #[inline(always)]
-fn in_place<T: Copy>(order: &[usize], values: Vec<Option<T>>) -> Vec<Option<T>> {
-    if values.is_empty() {
-        return values;
-    }
-    let mut in_place = vec![None; order.len()];
-    for (&j, value) in order.iter().zip(values) {
+fn in_place<T: Copy>(order: &[usize], values: Vec<T>) -> Vec<T> {
+    let mut in_place = values.clone();
+    for (&j, &value) in order.iter().zip(&values) {
         in_place[j] = value;
     }
     in_place
@@ -421,7 +417,6 @@ where
         let mut block = Block {
             tracer,
             scene: tracer.scene(),
-            source: rays.source,
             start,
             eye,
             forward,
@@ -430,6 +425,7 @@ where
             decide: aovs.contains(&Aov::Certain),
             order: tile_order(len, width),
             offered: Vec::new(),
+            rays: Vec::new(),
         };
         let indices: Vec<usize> = match &block.order {
             Some(order) => order.iter().map(|&j| block.start + j).collect(),
@@ -454,6 +450,10 @@ where
             offered = in_place(order, offered);
         }
         block.offered = offered;
+        block.rays = match &block.order {
+            Some(order) => in_place(order, ray_list),
+            None => ray_list,
+        };
         for (slot, &aov) in slots.iter_mut().zip(aovs) {
             block.fill(aov, slot, &hits);
         }
