@@ -197,3 +197,17 @@ fn certain_is_the_same_for_a_ray_alone_and_in_a_packet() {
         "{uncertain} of 800 uncertain: the scene should give both"
     );
 }
+
+/// A ray that cannot be traced (a zero direction, a NaN origin) is a miss, never a certain
+/// one; a plain miss beside it is certain.
+#[test]
+fn rays_that_were_not_traced_are_not_certain() {
+    let rays = vec![
+        Ray::new(DVec3::new(5.0, 5.0, 1.0), DVec3::NEG_Z),
+        Ray::new(DVec3::new(0.5, 0.5, 1.0), DVec3::ZERO),
+        Ray::new(DVec3::new(f64::NAN, 0.5, 1.0), DVec3::NEG_Z),
+    ];
+    let (depth, _, certain) = square_at(0.1, rays);
+    assert_eq!(depth, [f64::INFINITY; 3]);
+    assert_eq!(certain, [1, 0, 0]);
+}

@@ -8,7 +8,7 @@ use crate::bound::residual;
 use crate::bound::HitBound;
 use crate::geometry::Ray;
 use crate::scene::{Crossing, Probe, Scene};
-use crate::trace::Tracer;
+use crate::trace::{traceable, Tracer};
 use glam::DVec3;
 use std::ops::Mul;
 
@@ -78,7 +78,7 @@ pub fn certain(
     hit: Option<(&Crossing, &HitBound)>,
     range: (f64, f64),
 ) -> bool {
-    let Some(limit) = probe_limit(hit, range) else {
+    let Some(limit) = probe_limit(ray, hit, range) else {
         return false;
     };
     let scene = tracer.scene;
@@ -98,7 +98,8 @@ pub fn certain_packet(
     hits: &[Option<(&Crossing, &HitBound)>; PACKET],
     ranges: &[(f64, f64); PACKET],
 ) -> [bool; PACKET] {
-    let limits: [Option<f64>; PACKET] = std::array::from_fn(|i| probe_limit(hits[i], ranges[i]));
+    let limits: [Option<f64>; PACKET] =
+        std::array::from_fn(|i| probe_limit(&rays[i], hits[i], ranges[i]));
     if limits.iter().all(Option::is_none) {
         return [false; PACKET];
     }
@@ -135,7 +136,7 @@ pub fn certain_offered(
     range: (f64, f64),
     offered: &Offered,
 ) -> Option<bool> {
-    let Some(limit) = probe_limit(hit, range) else {
+    let Some(limit) = probe_limit(ray, hit, range) else {
         return Some(false);
     };
     let prims = offered.prims()?;
@@ -155,8 +156,16 @@ pub fn certain_offered(
 
 /// How far `certain`'s search for a competitor goes: `t + δ` for a hit whose own decision is
 /// certain and which lies inside `(t_min, t_max]` by more than its bound, `t_max` for a miss;
-/// `None` when the ray is uncertain already.
-fn probe_limit(hit: Option<(&Crossing, &HitBound)>, (t_min, t_max): (f64, f64)) -> Option<f64> {
+/// `None` when the ray is uncertain already, or was not traced (a ray or range
+/// [`traceable`] refuses is a miss with a warning, or an error, never a certain one).
+fn probe_limit(
+    ray: &Ray,
+    hit: Option<(&Crossing, &HitBound)>,
+    (t_min, t_max): (f64, f64),
+) -> Option<f64> {
+    if !traceable(ray, t_min, t_max) {
+        return None;
+    }
     let Some((_, bound)) = hit else {
         return Some(t_max);
     };
