@@ -320,28 +320,15 @@ impl Octree {
         t_max: &[f64; PACKET],
     ) -> Option<[Option<Hit>; PACKET]> {
         let mut best = [None; PACKET];
-        self.intersect_packet_into(set, local_origins, dirs, t_max, &mut best)
+        self.intersect_packet_noting(set, local_origins, dirs, t_max, &mut best, &mut Unnoted)
             .then_some(best)
     }
 
-    /// [`Octree::intersect_packet`] into `best` (all `None` on entry): false, with `best`
-    /// untouched, when the rays cannot go as one packet. Spares the caller the copies of a
-    /// returned array.
+    /// [`Octree::intersect_packet`] into `best` (all `None` on entry), telling `notes` what it
+    /// offers each ray and keeping each ray's limit at `notes.reach` of its best hit (module
+    /// `notes`; [`Unnoted`] for a plain search): the same hits. False, with `best` untouched,
+    /// when the rays cannot go as one packet. Spares the caller the copies of a returned array.
     #[inline]
-    pub fn intersect_packet_into<P: PrimitiveSet>(
-        &self,
-        set: &P,
-        local_origins: &[DVec3; PACKET],
-        dirs: &[DVec3; PACKET],
-        t_max: &[f64; PACKET],
-        best: &mut [Option<Hit>; PACKET],
-    ) -> bool {
-        self.intersect_packet_with(set, local_origins, dirs, t_max, None, best, &mut Unnoted)
-    }
-
-    /// [`Octree::intersect_packet_into`] that also tells `notes` what it offers each ray,
-    /// keeping each ray's limit at `notes.reach` of its best hit (module `notes`): the same
-    /// hits.
     pub fn intersect_packet_noting<P: PrimitiveSet>(
         &self,
         set: &P,
@@ -378,7 +365,7 @@ impl Octree {
         .then_some(best)
     }
 
-    /// [`Octree::intersect_packet_into`], with the rays prepared for the primitive tests as
+    /// [`Octree::intersect_packet_noting`], with the rays prepared for the primitive tests as
     /// `given`, or else by [`super::prepare_ray`] when the first of them reaches a leaf, and
     /// `notes` told what each ray is offered.
     #[allow(clippy::too_many_arguments)]
