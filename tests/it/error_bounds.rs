@@ -3,7 +3,7 @@
 use glam::DVec3;
 use raycast::accel::{Octree, OctreeParams};
 use raycast::geometry::Ray;
-use raycast::render::{render, Aov};
+use raycast::render::{render, trace, Aov, Rays};
 use raycast::scene::SceneBuilder;
 use raycast::trace::Tracer;
 
@@ -150,9 +150,9 @@ fn error_does_not_depend_on_certain_being_asked() {
     }
 }
 
-/// `certain` is decided the same way for a ray alone and in a packet of eight (decided from
-/// what the packet's search offered each ray, or by one packet traversal where that cannot
-/// tell): rays straight down at two overlapping squares 1e-16 apart on the left (uncertain
+/// `certain` is decided the same way for a ray in a packet of eight, alone, and alone with a
+/// range that does not start at 0 (decided from what the packet's or the ray's search
+/// offered it, or by a traversal of its own where that cannot tell): rays straight down at two overlapping squares 1e-16 apart on the left (uncertain
 /// where both are crossed), a plain square in the middle, with rays on and 1e-15 beside its
 /// diagonal and edges, misses beside it, a stack of fourteen squares on the right (more
 /// primitives offered than are noted), and packets that mix all of these.
@@ -191,6 +191,21 @@ fn certain_is_the_same_for_a_ray_alone_and_in_a_packet() {
         .map(|b| b.flags(Aov::Certain).unwrap()[0])
         .collect();
     assert_eq!(together, alone.as_slice());
+    // From the smallest positive `tmin` (the same hits here): no search notes its offers,
+    // so every ray's competitors are looked for by a traversal of their own.
+    let probed: Vec<u8> = rays
+        .iter()
+        .map(|ray| {
+            let rays = Rays {
+                source: &vec![*ray],
+                range: |_| (f64::MIN_POSITIVE, f64::INFINITY),
+                refuse_untraceable: false,
+            };
+            let buffers = trace(&tracer, &rays, &[Aov::Certain], |_| {}).unwrap();
+            buffers.flags(Aov::Certain).unwrap()[0]
+        })
+        .collect();
+    assert_eq!(together, probed.as_slice());
     let uncertain = alone.iter().filter(|&&c| c == 0).count();
     assert!(
         (40..760).contains(&uncertain),

@@ -249,12 +249,12 @@ impl Block<'_> {
         }
     }
 
-    /// Fills `out`, the block's part of the `certain` column, from the block's `hits`: eight
-    /// rays at a time in the order they were traced (an image's 4 × 2 tiles), each decided
-    /// from what its packet search offered it ([`super::bounds::certain_offered`]), or, where
-    /// that cannot tell for some ray of the eight, by one packet traversal for all of them
-    /// ([`super::bounds::certain_packet`]); the rest one by one. All 0 for a tracer without
-    /// an octree.
+    /// Fills `out`, the block's part of the `certain` column, from the block's `hits`: each
+    /// ray decided from what its search offered it ([`super::bounds::certain_offered`]),
+    /// eight at a time in the order they were traced (an image's 4 × 2 tiles); where that
+    /// cannot tell for some ray of the eight, by one packet traversal for all of them
+    /// ([`super::bounds::certain_packet`]), and for one of the last rays, by its own
+    /// traversal. All 0 for a tracer without an octree.
     fn certain(&self, out: &mut [u8], hits: &[Option<Crossing>]) {
         let Some(query) = self.tracer.tracer() else {
             out.fill(0);
@@ -294,7 +294,9 @@ impl Block<'_> {
             }
         }
         for &j in rest {
-            let certain = super::bounds::certain(&query, &self.ray(j), hit(j), range(j));
+            let ray = self.ray(j);
+            let certain = offered(j, &ray)
+                .unwrap_or_else(|| super::bounds::certain(&query, &ray, hit(j), range(j)));
             out[j] = u8::from(certain);
         }
     }

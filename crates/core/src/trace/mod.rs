@@ -131,6 +131,25 @@ impl<'a> Tracer<'a> {
         self.nearest_beyond(local, ray.dir, t_min, t_max)
     }
 
+    /// [`Tracer::nearest`], with what its search offered the ray ([`Offered`], for the
+    /// `certain` AOV) when the range starts at 0 (`None` otherwise, and for a ray that is not
+    /// traced).
+    fn nearest_offered(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+    ) -> (Option<Crossing>, Option<Offered>) {
+        if !traceable(ray, t_min, t_max) || t_min != 0.0 {
+            return (self.nearest(ray, t_min, t_max), None);
+        }
+        let local = ray.origin - self.scene.anchor;
+        let mut notes = Offered::EMPTY;
+        let hit = (self.octree).intersect_ray_noting(self.scene, local, ray.dir, t_max, &mut notes);
+        notes.finish(hit.map(|h| h.t), t_max);
+        (hit.map(Crossing::from), Some(notes))
+    }
+
     /// The ray `local + t · dir` (origin relative to the scene's anchor) prepared for the
     /// primitive tests with the octree's kernel.
     fn prepare(&self, local: DVec3, dir: DVec3) -> PreparedRay<SceneRay> {
@@ -219,9 +238,9 @@ impl<'a> Tracer<'a> {
         self.nearest_all_with::<false>(rays, ranges, &mut Vec::new())
     }
 
-    /// [`Tracer::nearest_all`], with, for each ray traced in a packet, the primitives its
-    /// search offered it and how far it searched ([`PacketOffers`]: for the `certain` AOV);
-    /// `None` for a ray traced alone.
+    /// [`Tracer::nearest_all`], with, for each ray, the primitives its search offered it and
+    /// how far it searched ([`Offered`], [`PacketOffers`]: for the `certain` AOV); `None` for
+    /// a ray whose range does not start at 0.
     pub fn nearest_all_offered(
         &self,
         rays: &[Ray],
@@ -240,7 +259,6 @@ impl<'a> Tracer<'a> {
         ranges: &[(f64, f64)],
         offered: &mut Vec<Option<Offered>>,
     ) -> Vec<Option<Crossing>> {
-        let one = |(ray, &(t_min, t_max)): (&Ray, &(f64, f64))| self.nearest(ray, t_min, t_max);
         let mut hits = Vec::with_capacity(rays.len());
         let (packets, rest) = rays.as_chunks::<PACKET>();
         let (packet_ranges, rest_ranges) = ranges.as_chunks::<PACKET>();
@@ -262,16 +280,31 @@ impl<'a> Tracer<'a> {
                 }
                 hits.truncate(start);
             }
-            hits.extend(packet.iter().zip(range).map(one));
+            self.extend_one::<NOTE>(packet, range, &mut hits, offered);
+        }
+        self.extend_one::<NOTE>(rest, rest_ranges, &mut hits, offered);
+        hits
+    }
+
+    /// The nearest hits of `rays` traced one by one, appended to `hits`; with `NOTE`, what
+    /// each search offered its ray appended to `offered`.
+    #[inline(always)]
+    fn extend_one<const NOTE: bool>(
+        &self,
+        rays: &[Ray],
+        ranges: &[(f64, f64)],
+        hits: &mut Vec<Option<Crossing>>,
+        offered: &mut Vec<Option<Offered>>,
+    ) {
+        for (ray, &(t_min, t_max)) in rays.iter().zip(ranges) {
             if NOTE {
-                offered.extend([None; PACKET]);
+                let (hit, noted) = self.nearest_offered(ray, t_min, t_max);
+                hits.push(hit);
+                offered.push(noted);
+            } else {
+                hits.push(self.nearest(ray, t_min, t_max));
             }
         }
-        hits.extend(rest.iter().zip(rest_ranges).map(one));
-        if NOTE {
-            offered.resize(hits.len(), None);
-        }
-        hits
     }
 
     /// [`Tracer::nearest_packet_noting`] with [`PacketOffers`], the offers appended to

@@ -252,7 +252,14 @@ impl Octree {
         ray: &PreparedRay<P::RayData>,
         t_max: f64,
     ) -> Option<Hit> {
-        self.intersect_with(set, ray.local_origin, ray.dir, t_max, Some(ray))
+        self.intersect_with(
+            set,
+            ray.local_origin,
+            ray.dir,
+            t_max,
+            Some(ray),
+            &mut Unnoted,
+        )
     }
 
     /// [`Octree::intersect`] for the ray `local_origin + t · dir`, prepared for the primitive
@@ -264,18 +271,33 @@ impl Octree {
         dir: DVec3,
         t_max: f64,
     ) -> Option<Hit> {
-        self.intersect_with(set, local_origin, dir, t_max, None)
+        self.intersect_with(set, local_origin, dir, t_max, None, &mut Unnoted)
+    }
+
+    /// [`Octree::intersect_ray`] that tells `notes` what it offers the ray and keeps its limit
+    /// at `notes.reach` of its best hit (module `notes`): the same hit.
+    pub fn intersect_ray_noting<P: PrimitiveSet>(
+        &self,
+        set: &P,
+        local_origin: DVec3,
+        dir: DVec3,
+        t_max: f64,
+        notes: &mut impl Notes,
+    ) -> Option<Hit> {
+        self.intersect_with(set, local_origin, dir, t_max, None, notes)
     }
 
     /// [`Octree::intersect`], with the ray prepared for the primitive tests as `given`, or
-    /// else by [`super::prepare_ray`] when it first reaches a leaf.
-    fn intersect_with<P: PrimitiveSet>(
+    /// else by [`super::prepare_ray`] when it first reaches a leaf, and `notes` told what the
+    /// ray is offered (the ray is number 0 to them).
+    fn intersect_with<P: PrimitiveSet, N: Notes>(
         &self,
         set: &P,
         local_origin: DVec3,
         dir: DVec3,
         t_max: f64,
         given: Option<&PreparedRay<P::RayData>>,
+        notes: &mut N,
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut own = None;
@@ -287,7 +309,7 @@ impl Octree {
             let ray = given.unwrap_or_else(|| {
                 own.get_or_insert_with(|| prepare_ray_with(set, kernel, local_origin, dir))
             });
-            let bound = f32_above(best.map_or(t_max, |b| b.t));
+            let bound = f32_above(best.map_or(t_max, |b| notes.reach(b.t)));
             let prims = self.layout.leaf(child);
             let mut batch = Batch::default();
             // Eight references' boxes to a filter test (a written-out loop: the iterator it
@@ -297,12 +319,15 @@ impl Octree {
                 for j in set_bits(kept) {
                     let prim = prims[first + j];
                     if tested.check_in(prim) {
+                        if N::NOTING {
+                            notes.offer(0, prim);
+                        }
                         batch.push(set, prim, ray, t_max, &mut best);
                     }
                 }
             }
             batch.finish(set, ray, t_max, &mut best);
-            best.map_or(t_max, |b| b.t)
+            best.map_or(t_max, |b| notes.reach(b.t))
         };
         traverse::run(&self.layout, kernel, &lanes, t_max, visit, &mut Unobserved);
         best

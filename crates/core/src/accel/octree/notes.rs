@@ -59,7 +59,7 @@ pub struct Offered {
 
 impl Offered {
     /// Nothing offered yet.
-    const EMPTY: Offered = Offered {
+    pub const EMPTY: Offered = Offered {
         prims: [0; OFFERED],
         len: 0,
         reach: 0.0,
@@ -69,11 +69,50 @@ impl Offered {
     pub fn prims(&self) -> Option<&[u32]> {
         self.prims.get(..usize::from(self.len))
     }
+
+    /// Notes `prim` (or that the list overflowed).
+    #[inline(always)]
+    fn note(&mut self, prim: u32) {
+        let len = usize::from(self.len);
+        if len < OFFERED {
+            self.prims[len] = prim;
+            self.len += 1;
+        } else {
+            self.len = OFFERED as u8 + 1;
+        }
+    }
+
+    /// Sets the reach once the search is done: the widened limit of the best hit `best` (a
+    /// ray parameter), or `t_max` for a miss.
+    pub fn finish(&mut self, best: Option<f64>, t_max: f64) {
+        self.reach = best.map_or(t_max, widen);
+    }
 }
 
-/// The notes of a packet's search that looks a relative `2⁻³⁰` beyond each best hit (far more
+/// The widened limit of a ray whose best hit is at `t`: a relative `2⁻³⁰` beyond it (far more
 /// than the bound of any hit that can be certain: those are a few ulps of `t`, and the
-/// decision falls back to its own search beyond the reach).
+/// decision falls back to its own search beyond the reach); `t` itself when not finite.
+#[inline(always)]
+fn widen(t: f64) -> f64 {
+    (t * (1.0 + 1.0 / f64::from(1u32 << 30))).next_up()
+}
+
+/// The notes of one ray's search ([`super::Octree::intersect_ray_noting`]).
+impl Notes for Offered {
+    const NOTING: bool = true;
+
+    #[inline(always)]
+    fn reach(&self, t: f64) -> f64 {
+        widen(t)
+    }
+
+    #[inline(always)]
+    fn offer(&mut self, _: usize, prim: u32) {
+        self.note(prim);
+    }
+}
+
+/// The notes of a packet's search, per ray as [`Offered`]'s.
 #[derive(Debug, Clone, Copy)]
 pub struct PacketOffers {
     /// Per ray of the packet.
@@ -89,19 +128,10 @@ impl Default for PacketOffers {
 }
 
 impl PacketOffers {
-    /// The widened limit of a ray whose best hit is at `t` (`t` itself when not finite).
-    #[inline(always)]
-    pub fn widen(t: f64) -> f64 {
-        (t * (1.0 + 1.0 / f64::from(1u32 << 30))).next_up()
-    }
-}
-
-impl PacketOffers {
-    /// Sets each ray's reach once the search is done: the widened limit of its best hit
-    /// `best[i]` (a ray parameter), or its `t_max` for a miss.
+    /// Sets each ray's reach once the search is done ([`Offered::finish`]).
     pub fn finish(&mut self, best: [Option<f64>; PACKET], t_max: &[f64; PACKET]) {
         for ((noted, best), &t_max) in self.rays.iter_mut().zip(best).zip(t_max) {
-            noted.reach = best.map_or(t_max, PacketOffers::widen);
+            noted.finish(best, t_max);
         }
     }
 }
@@ -111,19 +141,12 @@ impl Notes for PacketOffers {
 
     #[inline(always)]
     fn reach(&self, t: f64) -> f64 {
-        PacketOffers::widen(t)
+        widen(t)
     }
 
     #[inline(always)]
     fn offer(&mut self, ray: usize, prim: u32) {
-        let noted = &mut self.rays[ray];
-        let len = usize::from(noted.len);
-        if len < OFFERED {
-            noted.prims[len] = prim;
-            noted.len += 1;
-        } else {
-            noted.len = OFFERED as u8 + 1;
-        }
+        self.rays[ray].note(prim);
     }
 }
 
@@ -151,12 +174,12 @@ mod tests {
     #[test]
     fn the_reach_is_a_little_beyond() {
         for t in [1e-300, 0.1, 1.0, 3e7, 1e300] {
-            let w = PacketOffers::widen(t);
+            let w = widen(t);
             assert!(
                 w > t && (w - t) / t < 1e-9 && (w - t) / t > 9e-10,
                 "{t} {w}"
             );
         }
-        assert_eq!(PacketOffers::widen(f64::INFINITY), f64::INFINITY);
+        assert_eq!(widen(f64::INFINITY), f64::INFINITY);
     }
 }
