@@ -119,7 +119,7 @@ impl Frame {
 
     /// `x` moved into `[plane 0, plane 255]` (a NaN to plane 0).
     fn clamped(&self, x: f32) -> f32 {
-        x.max(self.plane(0.0)).min(self.plane(255.0))
+        within(x, self.plane(0.0), self.plane(255.0))
     }
 
     /// The largest `q` in `0..=255` with plane `q <= x`, for `x` in `[plane 0, plane 255]`,
@@ -133,6 +133,18 @@ impl Frame {
         const ROUND: f32 = 8_388_608.0; // 2²³
         let guess = ((x - self.plane(0.0)) * self.inv + ROUND) - ROUND;
         guess - f32::from(u8::from(self.plane(guess) > x))
+    }
+}
+
+/// `x` moved into `[lo, hi]` (`lo <= hi`) by plain comparisons, which a NaN fails: it
+/// becomes `lo`. (`f32::max` and `min` do the same with more instructions.)
+#[inline(always)]
+pub(super) fn within(x: f32, lo: f32, hi: f32) -> f32 {
+    let x = if x >= lo { x } else { lo };
+    if x <= hi {
+        x
+    } else {
+        hi
     }
 }
 
