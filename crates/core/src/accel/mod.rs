@@ -79,14 +79,6 @@ pub trait PrimitiveSet: Sync {
         false
     }
 
-    /// True when primitive `index` reaches every face of its [`PrimitiveSet::bounds`] (a
-    /// triangle's bounds are its vertices' box): the octree build then sends a primitive
-    /// whose bounds lie in a cell and cross one of its midplanes into both children without
-    /// asking [`PrimitiveSet::child_mask`]. The default, false, suits looser bounds.
-    fn bounds_attained(&self, _index: usize) -> bool {
-        false
-    }
-
     /// Conservative test: may primitive `index` touch the closed box `cell`?
     fn overlaps(&self, index: usize, cell: &Aabb) -> bool;
 

@@ -404,10 +404,6 @@ impl PrimitiveSet for MeshSet {
         true
     }
 
-    fn bounds_attained(&self, _index: usize) -> bool {
-        true
-    }
-
     fn overlaps(&self, index: usize, cell: &Aabb) -> bool {
         triangle_box::overlaps_box(&self.local(index), cell)
     }

@@ -571,10 +571,6 @@ impl PrimitiveSet for Scene {
         self.instances.is_empty() && self.quadrics.is_empty()
     }
 
-    fn bounds_attained(&self, index: usize) -> bool {
-        matches!(self.top(index), Top::Triangle(_))
-    }
-
     /// Quadrics weigh [`Quadric::TEST_COST`]; triangles and instance boxes 1 (weighing the
     /// instances more changed nothing on the bench's mixed scene, whose top level holds four).
     fn cost(&self, index: usize) -> f64 {

@@ -228,11 +228,8 @@ impl<P: PrimitiveSet> Builder<'_, P> {
     }
 
     /// The children of `cell` (centre `mid`) that primitive `prim` goes into. A primitive
-    /// whose bounds fall in one child goes there directly, and so does one whose bounds lie
-    /// in the cell and span two children, when it reaches its bounds' faces
-    /// ([`PrimitiveSet::bounds_attained`]): its points on the two faces across the midplane
-    /// lie one in each child. One whose bounds span more children, or reach out of the cell,
-    /// is tested exactly against each.
+    /// whose bounds fall in one child goes there directly; one whose bounds span several is
+    /// tested exactly against each.
     pub fn octants(&self, cell: &Aabb, mid: DVec3, prim: u32) -> u8 {
         let margin = DVec3::splat(self.margin);
         let b = &self.bounds[prim as usize];
@@ -246,14 +243,11 @@ impl<P: PrimitiveSet> Builder<'_, P> {
             let higher = if high >> a & 1 != 0 { upper } else { 0 };
             m & (lower | higher)
         });
-        let whole =
-            || cell.expanded(self.margin).holds(b) && self.set.bounds_attained(prim as usize);
-        match reached.count_ones() {
-            1 => reached,
-            2 if whole() => reached,
-            _ => self
-                .set
-                .child_mask(prim as usize, cell, self.margin, reached),
+        if reached.count_ones() == 1 {
+            reached
+        } else {
+            self.set
+                .child_mask(prim as usize, cell, self.margin, reached)
         }
     }
 
