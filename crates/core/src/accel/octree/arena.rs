@@ -7,9 +7,9 @@ use super::OctreeStats;
 use crate::accel::PrimitiveSet;
 use crate::geometry::Aabb;
 
-/// References per reference of its root cell that a subtree is given room for: the bench
-/// scenes' octrees hold 2.5 to 5 references per primitive (reports/octree_profile.md), and
-/// a subtree's cell about as many per reference it starts with.
+/// The room a subtree's arrays are given, in references (and their parts) per reference of
+/// its root cell: the bench scenes' octrees hold 2.5 to 5 references per primitive
+/// (reports/octree_profile.md), and a subtree about as many per reference of its root.
 const ROOM: usize = 3;
 
 /// A node slot not yet written.
@@ -60,8 +60,8 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
     }
 
     /// Room for the subtree of a cell holding `count` references, so that its arrays rarely
-    /// grow (each growth copies them): [`ROOM`] references per reference, a node per leaf of
-    /// a few references.
+    /// grow (each growth copies them): [`ROOM`] references and parts per reference, half a
+    /// node per reference (the bench scenes' octrees have a quarter), a mask per reference.
     fn reserve(&mut self, count: usize) {
         self.refs.reserve(ROOM * count);
         self.parts.reserve(ROOM * count);
