@@ -7,6 +7,11 @@ use super::OctreeStats;
 use crate::accel::PrimitiveSet;
 use crate::geometry::Aabb;
 
+/// The room a subtree's arrays are given, in references (and their parts) per reference of
+/// its root cell: the bench scenes' octrees hold 2.5 to 5 references per primitive
+/// (reports/octree_profile.md), and a subtree about as many per reference of its root.
+const ROOM: usize = 3;
+
 /// A node slot not yet written.
 const VACANT: Node = Node {
     first: 0,
@@ -42,18 +47,30 @@ impl<'b, 'a, P: PrimitiveSet> Arena<'b, 'a, P> {
 
     /// The subtree for `cell` holding `refs`, at `depth`, with at most `budget` references.
     pub fn subtree(mut self, cell: &Aabb, refs: &[u32], depth: u32, budget: f64) -> Subtree {
+        self.reserve(refs.len());
         let (stats, occupied) = self.cell(0, cell, refs, depth, budget);
         self.finish(stats, occupied)
     }
 
     /// `cell` as one leaf holding `refs`, at `depth`.
     pub fn leaf_subtree(mut self, cell: &Aabb, refs: &[u32], depth: u32) -> Subtree {
+        self.parts.reserve_exact(refs.len());
         let (stats, occupied) = self.leaf(0, cell, refs, depth);
         self.finish(stats, occupied)
     }
 
-    /// The subtree built, its arrays trimmed to their length (they grew by doubling, and
-    /// wait for [`super::build`]'s join or the layout).
+    /// Room for the subtree of a cell holding `count` references, so that its arrays rarely
+    /// grow (each growth copies them): [`ROOM`] references and parts per reference, half a
+    /// node per reference (the bench scenes' octrees have a quarter), a mask per reference.
+    fn reserve(&mut self, count: usize) {
+        self.refs.reserve(ROOM * count);
+        self.parts.reserve(ROOM * count);
+        self.nodes.reserve(count / 2);
+        self.masks.reserve(count);
+    }
+
+    /// The subtree built, its arrays trimmed to their length (they were given room, or grew by
+    /// doubling, and wait for [`super::build`]'s join or the layout).
     fn finish(mut self, stats: OctreeStats, occupied: Aabb) -> Subtree {
         self.nodes.shrink_to_fit();
         self.refs.shrink_to_fit();

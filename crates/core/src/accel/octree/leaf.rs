@@ -37,7 +37,7 @@
 
 use super::lanes::{self, Kernel, Lanes};
 use super::layout::{box_words, Layout, HEADER, ROWS};
-use super::wide::{Wide, LEAF};
+use super::wide::{within, Wide, LEAF};
 use rayon::prelude::*;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -74,9 +74,10 @@ fn leaf_words(layout: &Layout, at: usize, parts: &[[f32; 6]]) -> (usize, Vec<u32
         let (lo_q, hi_q) = (node.planes[axis][lane], node.planes[axis + 3][lane]);
         let (lane_lo, lane_hi) = (node.plane(axis, lo_q), node.plane(axis, hi_q));
         for (j, part) in parts[..count].iter().enumerate() {
-            // Clamped into the lane's box (f32::max and min also drop a NaN).
-            let lo = part[axis].max(lane_lo).min(lane_hi);
-            let hi = part[axis + 3].min(lane_hi).max(lane_lo);
+            // Clamped into the lane's box; a NaN becomes the lane's plane on its side (the
+            // upper one through the negations, which are exact).
+            let lo = within(part[axis], lane_lo, lane_hi);
+            let hi = -within(-part[axis + 3], -lane_hi, -lane_lo);
             bytes[axis * count + j] = frame.below(lo);
             bytes[(axis + 3) * count + j] = frame.above(hi);
         }

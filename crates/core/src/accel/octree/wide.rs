@@ -43,11 +43,14 @@ pub(super) struct Wide {
     pub children: [u32; 8],
 }
 
-/// The quantisation frame of one axis: planes `(k + q) · step` for `q = 0..=255`.
+/// The quantisation frame of one axis: planes `(k + q) · step` for `q = 0..=255`. `k`,
+/// `step` and every plane are exact in f32 (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Frame {
-    k: f64,
-    step: f64,
+    k: f32,
+    step: f32,
+    /// `1 / step`, rounded: only for the first guess of [`Frame::floor_q`].
+    inv: f32,
 }
 
 impl Frame {
@@ -67,20 +70,81 @@ impl Frame {
         loop {
             let k = floor_multiple(lo, step);
             if (k + 255.0) * step >= hi {
-                return Some(Frame { k, step });
+                return Some(Frame::on(k, step));
             }
             step = step_at_least(step * (1.0 + 1.0 / 16.0));
         }
     }
 
-    /// The byte of a lower plane `lo`: the largest `q` with `(k + q) · step <= lo`.
-    pub fn below(&self, lo: f32) -> u8 {
-        (floor_multiple(f64::from(lo), self.step) - self.k).clamp(0.0, 255.0) as u8
+    /// The frame of planes `(k + q) · step` (`k` an integer and `step` a frame's step, both
+    /// exact in f32).
+    fn on(k: f64, step: f64) -> Frame {
+        let step = step as f32;
+        Frame {
+            k: k as f32,
+            step,
+            inv: step.recip(),
+        }
     }
 
-    /// The byte of an upper plane `hi`: the smallest `q` with `(k + q) · step >= hi`.
+    /// The plane of `q = 0`, `k · step`.
+    pub fn origin(&self) -> f32 {
+        self.plane(0.0)
+    }
+
+    /// The distance between neighbouring planes.
+    pub fn step(&self) -> f32 {
+        self.step
+    }
+
+    /// The byte of a lower plane `lo`: the largest `q` with `(k + q) · step <= lo` (0 when
+    /// `lo` lies below every plane, 255 when above).
+    pub fn below(&self, lo: f32) -> u8 {
+        self.floor_q(self.clamped(lo)) as u8
+    }
+
+    /// The byte of an upper plane `hi`: the smallest `q` with `(k + q) · step >= hi` (0 when
+    /// `hi` lies below every plane, 255 when above).
     pub fn above(&self, hi: f32) -> u8 {
-        (-floor_multiple(-f64::from(hi), self.step) - self.k).clamp(0.0, 255.0) as u8
+        let x = self.clamped(hi);
+        let q = self.floor_q(x);
+        // `x` is at most plane 255, so a plane below it is below 255 too.
+        (q + f32::from(u8::from(self.plane(q) < x))) as u8
+    }
+
+    /// Plane `q` (an integer from 0 to 255): `(k + q) · step`, exact in f32.
+    fn plane(&self, q: f32) -> f32 {
+        (self.k + q) * self.step
+    }
+
+    /// `x` moved into `[plane 0, plane 255]` (a NaN to plane 0).
+    fn clamped(&self, x: f32) -> f32 {
+        within(x, self.plane(0.0), self.plane(255.0))
+    }
+
+    /// The largest `q` in `0..=255` with plane `q <= x`, for `x` in `[plane 0, plane 255]`,
+    /// without a branch. The quotient `(x − plane 0) / step` is at most 255; computed as
+    /// `(x − plane 0) · (1 / step)` it takes three f32 roundings (the difference, the
+    /// reciprocal, the product) of relative size 2⁻²⁴ each, so it lies within 5·10⁻⁵ of the
+    /// exact one. Its nearest integer (adding and taking away 2²³ rounds a number from 0 to
+    /// 2²³ to an integer, exactly) is then the answer or the one above it, and one exact
+    /// comparison with the plane it stands for settles which (the planes are exact in f32).
+    fn floor_q(&self, x: f32) -> f32 {
+        const ROUND: f32 = 8_388_608.0; // 2²³
+        let guess = ((x - self.plane(0.0)) * self.inv + ROUND) - ROUND;
+        guess - f32::from(u8::from(self.plane(guess) > x))
+    }
+}
+
+/// `x` moved into `[lo, hi]` (`lo <= hi`) by plain comparisons, which a NaN fails: it
+/// becomes `lo`. (`f32::max` and `min` do the same with more instructions.)
+#[inline(always)]
+pub(super) fn within(x: f32, lo: f32, hi: f32) -> f32 {
+    let x = if x >= lo { x } else { lo };
+    if x <= hi {
+        x
+    } else {
+        hi
     }
 }
 
@@ -156,8 +220,8 @@ impl Wide {
                 quantised = false;
                 continue;
             };
-            node.origin[axis] = (frame.k * frame.step) as f32;
-            node.step[axis] = frame.step as f32;
+            node.origin[axis] = frame.origin();
+            node.step[axis] = frame.step();
             for (lane, bounds, _) in occupied(lanes) {
                 node.planes[axis][lane] = frame.below(bounds[axis]);
                 node.planes[axis + 3][lane] = frame.above(bounds[axis + 3]);
@@ -217,10 +281,7 @@ impl Wide {
     /// The frame of `axis` (exact: the stored origin is `k · step` with both factors exact).
     pub fn frame(&self, axis: usize) -> Frame {
         let step = f64::from(self.step[axis]);
-        Frame {
-            k: f64::from(self.origin[axis]) / step,
-            step,
-        }
+        Frame::on(f64::from(self.origin[axis]) / step, step)
     }
 
     /// Lane `lane`'s stored box, decoded: rows as in `planes`.
@@ -287,6 +348,44 @@ mod tests {
                     assert_eq!((lo / step).fract(), 0.0, "{lo} / {step}");
                     assert_eq!((hi / step).fract(), 0.0, "{hi} / {step}");
                 }
+            }
+        }
+    }
+
+    /// The bytes [`Frame::below`] and [`Frame::above`] give for `x`, by their definition in
+    /// f64: the nearest grid plane at or below (above) `x`, as a step count from the frame's
+    /// origin, clamped to a byte.
+    fn bytes_by_definition(frame: &Frame, x: f32) -> (u8, u8) {
+        let (x, k, step) = (f64::from(x), f64::from(frame.k), f64::from(frame.step));
+        let below = floor_multiple(x, step) - k;
+        let above = -floor_multiple(-x, step) - k;
+        (below.clamp(0.0, 255.0) as u8, above.clamp(0.0, 255.0) as u8)
+    }
+
+    #[test]
+    fn bytes_are_the_grid_planes_next_to_a_value() {
+        let v = values(0xf4a3_0001, 9000);
+        for chunk in v.chunks_exact(9) {
+            let (lo, hi) = (chunk[0].min(chunk[1]), chunk[0].max(chunk[1]));
+            let frame = Frame::new(f64::from(lo), f64::from(hi)).expect("finite frame");
+            // Values across the frame and within three widths of it (the reference's quotient
+            // must stay small), on every plane and one f32 step beside it.
+            let width = hi - lo;
+            let mut xs: Vec<f32> = chunk[2..]
+                .iter()
+                .map(|t| lo + t.fract() * 3.0 * width)
+                .collect();
+            xs.extend([lo, hi, lo - width, hi + width]);
+            for q in 0..=255 {
+                let p = frame.plane(f32::from(q as u8));
+                xs.extend([p, p.next_down(), p.next_up()]);
+            }
+            for x in xs {
+                assert_eq!(
+                    (frame.below(x), frame.above(x)),
+                    bytes_by_definition(&frame, x),
+                    "{x} in {frame:?}"
+                );
             }
         }
     }
