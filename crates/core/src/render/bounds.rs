@@ -129,6 +129,7 @@ pub fn certain_packet(
 /// `accel::octree::notes`): the same answer without a second traversal, the offered
 /// primitives weighed as [`certain`] weighs those its traversal meets. `None` when the offers
 /// cannot decide it: more were offered than noted, or `t + δ` lies beyond the search's reach.
+#[inline(always)]
 pub fn certain_offered(
     tracer: &Tracer,
     ray: &Ray,

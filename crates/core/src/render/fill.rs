@@ -272,31 +272,27 @@ impl Block<'_> {
             }
         };
         let (packets, rest) = order.as_chunks::<PACKET>();
-        let offered = |j: usize, ray: &Ray| {
+        let offered = |j: usize| {
             let offered = self.offered.get(j)?.as_ref()?;
-            super::bounds::certain_offered(&query, ray, hit(j), range(j), offered)
+            super::bounds::certain_offered(&query, &self.rays[j], hit(j), range(j), offered)
         };
         for packet in packets {
-            let rays = packet.map(|j| self.ray(j));
-            let decided: [Option<bool>; PACKET] =
-                std::array::from_fn(|k| offered(packet[k], &rays[k]));
-            let flags = match decided.iter().all(Option::is_some) {
-                true => decided.map(|d| d == Some(true)),
-                false => super::bounds::certain_packet(
-                    &query,
-                    &rays,
-                    &packet.map(hit),
-                    &packet.map(range),
-                ),
+            let mut decided = packet.iter().map(|&j| offered(j));
+            let flags = match std::array::from_fn(|_| decided.next().flatten()) {
+                found if found.iter().all(Option::is_some) => found.map(|d| d == Some(true)),
+                _ => {
+                    let rays = packet.map(|j| self.ray(j));
+                    let (hits, ranges) = (packet.map(hit), packet.map(range));
+                    super::bounds::certain_packet(&query, &rays, &hits, &ranges)
+                }
             };
             for (&j, flag) in packet.iter().zip(flags) {
                 out[j] = u8::from(flag);
             }
         }
         for &j in rest {
-            let ray = self.ray(j);
-            let certain = offered(j, &ray)
-                .unwrap_or_else(|| super::bounds::certain(&query, &ray, hit(j), range(j)));
+            let certain = offered(j)
+                .unwrap_or_else(|| super::bounds::certain(&query, &self.rays[j], hit(j), range(j)));
             out[j] = u8::from(certain);
         }
     }
