@@ -24,9 +24,11 @@
 //! certain sign), is certainly in front of the origin and isolated (no tangent), and no other
 //! primitive's bounded crossing may lie in `(0, t + δ_t]`; for a miss, no primitive's bounded
 //! crossing may lie anywhere along the ray. The candidates are those of the octree's leaves
-//! along the ray (a separate traversal, run only for this AOV); the cells are grown by 1e-9 of
-//! the root, so a primitive whose stored geometry or mapped ray may be off by more than 1e-10
-//! of its octree's root counts as a possible crossing.
+//! along the ray up to `t + δ_t`: what the nearest-hit search offered the ray (it looks a
+//! little beyond its best hit when this AOV is asked, module `accel::octree::notes`), or else
+//! a separate traversal; the cells are grown by 1e-9 of the root, so a primitive whose stored
+//! geometry or mapped ray may be off by more than 1e-10 of its octree's root counts as a
+//! possible crossing. A ray that was not traced is not certain.
 //!
 //! USD transform ops are bounded against the exact composition of the op values as read
 //! (rotations in degrees: [`rotation`]). Not covered (the bound takes them as exact): the

@@ -70,8 +70,8 @@ fn depth_bound(t: Bounded, dir: DVec3) -> Bounded {
 /// each candidate passed over by [`crate::bound::triangle::certainly_apart`]'s f64 filters (a
 /// depth range, the sheared triangle's box, the edge functions' signs) before any bounded
 /// recomputation. [`certain_packet`] does the same for eight rays in one packet traversal;
-/// [`certain_offered`] needs no traversal at all for a ray whose packet search noted what it
-/// offered the ray (the render's camera rays).
+/// [`certain_offered`] needs no traversal at all for a ray whose search noted what it offered
+/// the ray (every ray of a render whose range starts at 0).
 pub fn certain(
     tracer: &Tracer,
     ray: &Ray,
