@@ -14,9 +14,7 @@ use glam::DVec3;
 
 #[cfg(feature = "bvh-oracle")]
 pub use bvh::{Bvh, BvhKind, BvhStats};
-pub use octree::{
-    Notes, Octree, OctreeParams, OctreeStats, Offered, PacketOffers, Unnoted, PACKET,
-};
+pub use octree::{Notes, Octree, OctreeParams, OctreeStats, Offered, Unnoted, PACKET};
 
 /// A ray prepared for tracing: world origin and direction plus whatever the primitive set
 /// precomputes per ray (`R`, for instance the watertight triangle frame).

@@ -81,12 +81,11 @@ pub fn certain(
     let Some(limit) = probe_limit(ray, hit, range) else {
         return false;
     };
-    let scene = tracer.scene;
-    let hit = hit.map(|(h, _)| scene.with_inner(h, ray.origin, ray.dir));
-    let probe = probe(tracer, ray, limit, hit.as_ref());
-    let local = ray.origin - scene.anchor;
-    let competes = |prim: u32| scene.may_cross(prim as usize, &probe);
-    !tracer.octree.any_reference(local, ray.dir, limit, competes)
+    let (scene, local) = (tracer.scene, ray.origin - tracer.scene.anchor);
+    no_competitor(tracer, ray, hit, limit, |probe| {
+        let competes = |prim: u32| scene.may_cross(prim as usize, probe);
+        tracer.octree.any_reference(local, ray.dir, limit, competes)
+    })
 }
 
 /// [`certain`] for [`PACKET`] rays (with their hits and ranges), their competitors searched
@@ -145,14 +144,25 @@ pub fn certain_offered(
     if !within {
         return None;
     }
-    let scene = tracer.scene;
-    let hit = hit.map(|(h, _)| scene.with_inner(h, ray.origin, ray.dir));
-    let probe = probe(tracer, ray, limit, hit.as_ref());
-    Some(
-        !prims
+    Some(no_competitor(tracer, ray, hit, limit, |probe| {
+        prims
             .iter()
-            .any(|&prim| scene.may_cross(prim as usize, &probe)),
-    )
+            .any(|&prim| tracer.scene.may_cross(prim as usize, probe))
+    }))
+}
+
+/// Whether `search` finds no competitor of `ray`'s `hit` up to `limit`: it is handed the ray's
+/// probe (the hit's instance triangle found) and says whether some candidate primitive may
+/// cross the ray there ([`Scene::may_cross`]).
+fn no_competitor(
+    tracer: &Tracer,
+    ray: &Ray,
+    hit: Option<(&Crossing, &HitBound)>,
+    limit: f64,
+    search: impl FnOnce(&Probe) -> bool,
+) -> bool {
+    let hit = hit.map(|(h, _)| tracer.scene.with_inner(h, ray.origin, ray.dir));
+    !search(&probe(tracer, ray, limit, hit.as_ref()))
 }
 
 /// How far `certain`'s search for a competitor goes: `t + δ` for a hit whose own decision is

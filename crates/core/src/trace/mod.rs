@@ -18,7 +18,7 @@ pub use distance::{signed, winding_number, NearestPoint, Side, SignRule, Signer}
 #[cfg(feature = "bvh-oracle")]
 pub use oracle::BvhTracer;
 
-use crate::accel::{test_primitive, Hit, Notes, Octree, OctreeParams, Offered, PacketOffers};
+use crate::accel::{test_primitive, Hit, Notes, Octree, OctreeParams, Offered};
 use crate::accel::{PreparedRay, PrimitiveSet, Unnoted, PACKET};
 use crate::geometry::{Ray, RaySource};
 use crate::quadric::Quadric;
@@ -118,14 +118,26 @@ impl<'a> Tracer<'a> {
     /// untraceable ray (see [`Ray::is_valid`]), a NaN or negative `t_min` or a NaN `t_max`.
     /// Ties go to the smaller primitive index, as in [`Hit::beats`].
     pub fn nearest(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Crossing> {
+        self.nearest_noting(ray, t_min, t_max, &mut Unnoted)
+    }
+
+    /// [`Tracer::nearest`] that tells `notes` what the search from 0 offers the ray
+    /// ([`Octree::intersect_ray_noting`]; a range from beyond 0 notes nothing): the same hit.
+    #[inline(always)]
+    fn nearest_noting(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+        notes: &mut impl Notes,
+    ) -> Option<Crossing> {
         if !traceable(ray, t_min, t_max) {
             return None;
         }
         let local = ray.origin - self.scene.anchor;
         if t_min == 0.0 {
-            let hit = self
-                .octree
-                .intersect_ray(self.scene, local, ray.dir, t_max)?;
+            let hit =
+                (self.octree).intersect_ray_noting(self.scene, local, ray.dir, t_max, notes)?;
             return Some(hit.into());
         }
         self.nearest_beyond(local, ray.dir, t_min, t_max)
@@ -140,14 +152,13 @@ impl<'a> Tracer<'a> {
         t_min: f64,
         t_max: f64,
     ) -> (Option<Crossing>, Option<Offered>) {
-        if !traceable(ray, t_min, t_max) || t_min != 0.0 {
+        if t_min != 0.0 || !traceable(ray, t_min, t_max) {
             return (self.nearest(ray, t_min, t_max), None);
         }
-        let local = ray.origin - self.scene.anchor;
         let mut notes = Offered::EMPTY;
-        let hit = (self.octree).intersect_ray_noting(self.scene, local, ray.dir, t_max, &mut notes);
+        let hit = self.nearest_noting(ray, t_min, t_max, &mut notes);
         notes.finish(hit.map(|h| h.t), t_max);
-        (hit.map(Crossing::from), Some(notes))
+        (hit, Some(notes))
     }
 
     /// The ray `local + t · dir` (origin relative to the scene's anchor) prepared for the
@@ -239,7 +250,7 @@ impl<'a> Tracer<'a> {
     }
 
     /// [`Tracer::nearest_all`], with, for each ray, the primitives its search offered it and
-    /// how far it searched ([`Offered`], [`PacketOffers`]: for the `certain` AOV); `None` for
+    /// how far it searched ([`Offered`]: for the `certain` AOV); `None` for
     /// a ray whose range does not start at 0.
     pub fn nearest_all_offered(
         &self,
@@ -307,7 +318,7 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// [`Tracer::nearest_packet_noting`] with [`PacketOffers`], the offers appended to
+    /// [`Tracer::nearest_packet_noting`] with one [`Offered`] per ray, the offers appended to
     /// `offered` when the rays went as a packet.
     fn noted_packet(
         &self,
@@ -316,12 +327,14 @@ impl<'a> Tracer<'a> {
         found: &mut [Option<Crossing>; PACKET],
         offered: &mut Vec<Option<Offered>>,
     ) -> bool {
-        let mut notes = PacketOffers::default();
+        let mut notes = [Offered::EMPTY; PACKET];
         if !self.nearest_packet_noting(rays, ranges, found, &mut notes) {
             return false;
         }
-        notes.finish(found.map(|hit| hit.map(|h| h.t)), &ranges.map(|r| r.1));
-        offered.extend(notes.rays.map(Some));
+        for ((noted, hit), &(_, t_max)) in notes.iter_mut().zip(found.iter()).zip(ranges) {
+            noted.finish(hit.map(|h| h.t), t_max);
+        }
+        offered.extend(notes.map(Some));
         true
     }
 

@@ -90,7 +90,7 @@ use cells::Builder;
 use glam::DVec3;
 use lanes::Lanes;
 use layout::Layout;
-pub use notes::{Notes, Offered, PacketOffers, Unnoted, OFFERED};
+pub use notes::{Notes, Offered, Unnoted, OFFERED};
 pub use packet::WIDTH as PACKET;
 use rayon::prelude::*;
 use serde::Serialize;

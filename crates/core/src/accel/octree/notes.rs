@@ -21,8 +21,15 @@ pub trait Notes {
     const NOTING: bool;
 
     /// The limit the search keeps for a ray whose best hit so far is at `t`: `t` for a plain
-    /// search, a little more to see competitors beyond it.
-    fn reach(&self, t: f64) -> f64;
+    /// search, a little more ([`widen`]) where it notes, to see competitors beyond it.
+    #[inline(always)]
+    fn reach(&self, t: f64) -> f64 {
+        if Self::NOTING {
+            widen(t)
+        } else {
+            t
+        }
+    }
 
     /// Primitive `prim` was offered to ray `ray` of the packet (it passed the leaf filter,
     /// for the first time along the ray).
@@ -34,11 +41,6 @@ pub struct Unnoted;
 
 impl Notes for Unnoted {
     const NOTING: bool = false;
-
-    #[inline(always)]
-    fn reach(&self, t: f64) -> f64 {
-        t
-    }
 
     #[inline(always)]
     fn offer(&mut self, _: usize, _: u32) {}
@@ -102,51 +104,19 @@ impl Notes for Offered {
     const NOTING: bool = true;
 
     #[inline(always)]
-    fn reach(&self, t: f64) -> f64 {
-        widen(t)
-    }
-
-    #[inline(always)]
     fn offer(&mut self, _: usize, prim: u32) {
         self.note(prim);
     }
 }
 
-/// The notes of a packet's search, per ray as [`Offered`]'s.
-#[derive(Debug, Clone, Copy)]
-pub struct PacketOffers {
-    /// Per ray of the packet.
-    pub rays: [Offered; PACKET],
-}
-
-impl Default for PacketOffers {
-    fn default() -> PacketOffers {
-        PacketOffers {
-            rays: [Offered::EMPTY; PACKET],
-        }
-    }
-}
-
-impl PacketOffers {
-    /// Sets each ray's reach once the search is done ([`Offered::finish`]).
-    pub fn finish(&mut self, best: [Option<f64>; PACKET], t_max: &[f64; PACKET]) {
-        for ((noted, best), &t_max) in self.rays.iter_mut().zip(best).zip(t_max) {
-            noted.finish(best, t_max);
-        }
-    }
-}
-
-impl Notes for PacketOffers {
+/// The notes of a packet's search ([`super::Octree::intersect_packet_noting`]): one
+/// [`Offered`] per ray.
+impl Notes for [Offered; PACKET] {
     const NOTING: bool = true;
 
     #[inline(always)]
-    fn reach(&self, t: f64) -> f64 {
-        widen(t)
-    }
-
-    #[inline(always)]
     fn offer(&mut self, ray: usize, prim: u32) {
-        self.rays[ray].note(prim);
+        self[ray].note(prim);
     }
 }
 
@@ -157,17 +127,17 @@ mod tests {
     /// The list holds what was offered, and says so when it overflows.
     #[test]
     fn offers_fill_then_overflow() {
-        let mut notes = PacketOffers::default();
+        let mut notes = [Offered::EMPTY; PACKET];
         for prim in 0..OFFERED as u32 {
             notes.offer(3, prim);
         }
         let all: Vec<u32> = (0..OFFERED as u32).collect();
-        assert_eq!(notes.rays[3].prims(), Some(all.as_slice()));
-        assert_eq!(notes.rays[2].prims(), Some(&[][..]));
+        assert_eq!(notes[3].prims(), Some(all.as_slice()));
+        assert_eq!(notes[2].prims(), Some(&[][..]));
         notes.offer(3, 99);
-        assert_eq!(notes.rays[3].prims(), None);
+        assert_eq!(notes[3].prims(), None);
         notes.offer(3, 100);
-        assert_eq!(notes.rays[3].prims(), None);
+        assert_eq!(notes[3].prims(), None);
     }
 
     /// The widened limit is above `t` by about `2⁻³⁰` of it, and stays infinite.
