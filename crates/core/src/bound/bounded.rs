@@ -46,9 +46,34 @@ pub fn up(x: f64) -> f64 {
 }
 
 /// `x ≥ 0` rounded down past the roundings of its own evaluation.
-#[inline]
+#[inline(always)]
 pub fn down(x: f64) -> f64 {
     (x * (1.0 - SLACK)).next_down().max(0.0)
+}
+
+/// Runs `f` with the fused multiply-add instruction where the CPU has it: what `f` inlines
+/// (the exact product errors below) is then one instruction each rather than a call into the
+/// runtime's `fma`. The same bits either way: a fused multiply-add is correctly rounded on
+/// every CPU. `f` must be an `#[inline(always)]` closure, and what it calls `#[inline(always)]`
+/// too: only code inlined into [`with_fma`] is compiled with the instruction.
+#[inline(always)]
+pub fn fused<R>(f: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU has FMA.
+        return unsafe { with_fma(f) };
+    }
+    f()
+}
+
+/// `f`, compiled with FMA (it is inlined here: its only caller).
+///
+/// # Safety
+/// The CPU must support FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "fma")]
+unsafe fn with_fma<R>(f: impl FnOnce() -> R) -> R {
+    f()
 }
 
 /// Extra absolute bound per product, for the underflow of its rounding error.
@@ -199,13 +224,20 @@ impl std::ops::Neg for Bounded {
 pub type BVec3 = [Bounded; 3];
 
 /// The vector `v` taken as exact.
+#[inline(always)]
 pub fn exact3(v: DVec3) -> BVec3 {
-    v.to_array().map(Bounded::exact)
+    within3(v, 0.0)
 }
 
-/// The vector `v` with the same bound `error` on every component.
+/// The vector `v` with the same bound `error` on every component. (Arrays written out here
+/// and below: the compiler leaves an array's `map` of [`Bounded`]s as calls.)
+#[inline(always)]
 pub fn within3(v: DVec3, error: f64) -> BVec3 {
-    v.to_array().map(|x| Bounded::new(x, error))
+    [
+        Bounded::new(v.x, error),
+        Bounded::new(v.y, error),
+        Bounded::new(v.z, error),
+    ]
 }
 
 /// The bounds of a bounded vector's components.
@@ -219,6 +251,7 @@ pub fn values3(v: &BVec3) -> DVec3 {
 }
 
 /// `a · b` summed left to right, `(a₀b₀ + a₁b₁) + a₂b₂` (glam's order).
+#[inline(always)]
 pub fn dot3(a: &BVec3, b: &BVec3) -> Bounded {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
@@ -227,8 +260,9 @@ pub fn dot3(a: &BVec3, b: &BVec3) -> Bounded {
 pub type BMat3 = [[Bounded; 3]; 3];
 
 /// `m · v` in glam's order: per row `(m₀v₀ + m₁v₁) + m₂v₂`.
+#[inline(always)]
 pub fn mat_vec(m: &BMat3, v: &BVec3) -> BVec3 {
-    [0, 1, 2].map(|i| dot3(&m[i], v))
+    [dot3(&m[0], v), dot3(&m[1], v), dot3(&m[2], v)]
 }
 
 #[cfg(test)]

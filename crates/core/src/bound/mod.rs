@@ -94,6 +94,7 @@ pub fn inverse_norm(a: DMat3, inverse: DMat3) -> f64 {
 /// − (A* − A)x`, so every component is within `‖A*⁻¹‖∞ · (max eᵧ + max |r| + max (a_error·|x|))`
 /// (`inverse_norm` bounds `‖A*⁻¹‖∞`: [`inverse_norm`], widened by
 /// [`transform::perturbed_inverse_norm`] when `a_error` is not zero).
+#[inline(always)]
 pub fn mapped(
     a: DMat3,
     a_error: &DMat3,
@@ -101,14 +102,15 @@ pub fn mapped(
     y: &bounded::BVec3,
     x: DVec3,
 ) -> bounded::BVec3 {
-    let rows = a
-        .transpose()
-        .to_cols_array_2d()
-        .map(|r| r.map(Bounded::exact));
+    let t = a.transpose();
+    let rows = [
+        bounded::exact3(t.x_axis),
+        bounded::exact3(t.y_axis),
+        bounded::exact3(t.z_axis),
+    ];
     let ax = bounded::mat_vec(&rows, &bounded::exact3(x));
-    let residual = (0..3)
-        .map(|i| Bounded::exact(y[i].value).sub(ax[i]).magnitude())
-        .fold(0.0, f64::max);
+    let off = |i: usize| Bounded::exact(y[i].value).sub(ax[i]).magnitude();
+    let residual = 0.0f64.max(off(0)).max(off(1)).max(off(2));
     let y_error = y.iter().map(|c| c.error).fold(0.0, f64::max);
     let mut spread = up(residual + y_error);
     if *a_error != DMat3::ZERO {

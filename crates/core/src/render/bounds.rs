@@ -144,10 +144,17 @@ pub fn certain_offered(
     if !within {
         return None;
     }
+    // Most rays are offered nothing but their own hit: no probe to make for them.
+    let own = hit.map(|(h, _)| h);
+    let mut rivals = prims
+        .iter()
+        .filter(|&&prim| !tracer.scene.is_hit_itself(prim as usize, own))
+        .peekable();
+    if rivals.peek().is_none() {
+        return Some(true);
+    }
     Some(no_competitor(tracer, ray, hit, limit, |probe| {
-        prims
-            .iter()
-            .any(|&prim| tracer.scene.may_cross(prim as usize, probe))
+        rivals.any(|&prim| tracer.scene.may_cross(prim as usize, probe))
     }))
 }
 

@@ -161,16 +161,23 @@ impl Scene {
         Crossing { inner, ..*hit }
     }
 
+    /// Whether top-level primitive `index` is `hit`'s own triangle or quadric: then it is no
+    /// competitor of the hit ([`Scene::may_cross`] says no at once; a quadric's other roots are
+    /// weighed by its hit bound). A hit instance's other triangles may compete.
+    pub fn is_hit_itself(&self, index: usize, hit: Option<&Crossing>) -> bool {
+        hit.is_some_and(|h| h.top as usize == index) && !matches!(self.top(index), Top::Instance(_))
+    }
+
     /// Whether top-level primitive `index` may have an exact crossing with the probe's ray in
     /// `(0, limit]`, other than the probe's hit itself (see [`CELL_SLACK`] for the root).
     pub fn may_cross(&self, index: usize, probe: &Probe) -> bool {
+        if self.is_hit_itself(index, probe.hit) {
+            return false;
+        }
         let own = probe.hit.filter(|h| h.top as usize == index);
         let (origin, dir, limit) = (probe.origin, probe.dir, probe.limit);
         match self.top(index) {
             Top::Triangle(i) => {
-                if own.is_some() {
-                    return false;
-                }
                 let placement = self.placement_of(i);
                 if placement > CELL_SLACK * probe.root {
                     return true;
@@ -185,7 +192,7 @@ impl Scene {
             Top::Instance(k) => self.instance_may_cross(k, origin, dir, limit, own),
             // The hit quadric's other roots are weighed by its hit bound ([`quadric_hit`]).
             Top::Quadric(q) => {
-                if own.is_some() || !self.quadrics[q].may_reach(origin, dir, limit) {
+                if !self.quadrics[q].may_reach(origin, dir, limit) {
                     return false;
                 }
                 quadric_competes(&self.quadrics[q].bound_roots(origin, dir), limit, None)

@@ -34,7 +34,9 @@
 //!   bounded local point `x₀ + t·v + a`.
 
 use super::Quadric;
-use crate::bound::bounded::{down, exact3, gamma, mat_vec, up, BMat3, BVec3, Bounded};
+use crate::bound::bounded::{
+    down, exact3, fused, gamma, mat_vec, up, within3, BMat3, BVec3, Bounded,
+};
 use crate::bound::transform::BoundedMat4;
 use crate::bound::{mapped, Side};
 use glam::{DMat3, DVec3};
@@ -184,9 +186,24 @@ impl Errors {
 }
 
 /// The rows of `m`, each entry within `error`.
+#[inline(always)]
 fn rows(m: DMat3, error: f64) -> BMat3 {
-    let r = m.transpose().to_cols_array_2d();
-    r.map(|row| row.map(|x| Bounded::new(x, error)))
+    let r = m.transpose();
+    [
+        within3(r.x_axis, error),
+        within3(r.y_axis, error),
+        within3(r.z_axis, error),
+    ]
+}
+
+/// The components of `v`, each within its bound in `errors`.
+#[inline(always)]
+fn each_within(v: DVec3, errors: DVec3) -> BVec3 {
+    [
+        Bounded::new(v.x, errors.x),
+        Bounded::new(v.y, errors.y),
+        Bounded::new(v.z, errors.z),
+    ]
 }
 
 /// The quadratic `K t² + L t + M` along the ray, bounded.
@@ -215,8 +232,18 @@ impl Quadric {
 
     /// The crossings of the world ray `origin + t·dir` (exact numbers) with the quadric's
     /// whole surface, the roots as [`Quadric::intersect`] computes them, each with its bound
-    /// and its place against the clip box (see the module docs).
+    /// and its place against the clip box (see the module docs). Compiled with FMA where the
+    /// CPU has it ([`fused`]), as is [`Quadric::bound_root_at`].
     pub fn bound_roots(&self, origin: DVec3, dir: DVec3) -> QuadricBound {
+        fused(
+            #[inline(always)]
+            || self.bound_roots_here(origin, dir),
+        )
+    }
+
+    /// [`Quadric::bound_roots`], inlined into its caller.
+    #[inline(always)]
+    fn bound_roots_here(&self, origin: DVec3, dir: DVec3) -> QuadricBound {
         let x0 = self.to_local * (origin - self.anchor);
         let v = self.to_local * dir;
         let (x0b, vb) = self.bounded_ray(origin, dir);
@@ -229,14 +256,12 @@ impl Quadric {
                 others: if none { Others::None } else { Others::Unknown },
             };
         };
-        let mut distinct = vec![roots[0]];
+        // Pushed one by one: an iterator's fold would be compiled apart, without FMA.
+        let mut bounded = Vec::with_capacity(2);
+        bounded.push(self.root_bound(roots[0], &c, &x0b, &vb));
         if roots[1] != roots[0] {
-            distinct.push(roots[1]);
+            bounded.push(self.root_bound(roots[1], &c, &x0b, &vb));
         }
-        let bounded: Vec<RootBound> = distinct
-            .into_iter()
-            .map(|t| self.root_bound(t, &c, &x0b, &vb))
-            .collect();
         let others = others(&bounded, &c);
         QuadricBound {
             roots: bounded,
@@ -254,10 +279,16 @@ impl Quadric {
 
     /// The local ray as computed, `x₀ = L(o − c)`, `v = L d`, bounded
     /// ([`crate::bound::mapped`]).
+    #[inline(always)]
     fn bounded_ray(&self, origin: DVec3, dir: DVec3) -> (BVec3, BVec3) {
         let e = self.errors();
-        let anchor = [0, 1, 2].map(|i| Bounded::new(self.anchor[i], e.anchor[i]));
-        let offset = [0, 1, 2].map(|i| Bounded::exact(origin[i]).sub(anchor[i]));
+        let anchor = each_within(self.anchor, e.anchor);
+        let from = exact3(origin);
+        let offset = [
+            from[0].sub(anchor[0]),
+            from[1].sub(anchor[1]),
+            from[2].sub(anchor[2]),
+        ];
         let x0 = self.to_local * (origin - self.anchor);
         let v = self.to_local * dir;
         (
@@ -267,10 +298,11 @@ impl Quadric {
     }
 
     /// `K`, `L`, `M` of the local polynomial along the bounded ray.
+    #[inline(always)]
     fn coefficients(&self, x0: &BVec3, v: &BVec3) -> Coefficients {
         use crate::bound::bounded::dot3;
         let q = rows(self.local.q, 0.0);
-        let p = [0, 1, 2].map(|i| Bounded::new(self.local.p[i], self.errors().gradient[i]));
+        let p = each_within(self.local.p, self.errors().gradient);
         let r = Bounded::new(self.local.r, self.errors().constant);
         let qv = mat_vec(&q, v);
         let two = Bounded::exact(2.0);
@@ -284,16 +316,19 @@ impl Quadric {
     /// `g*(t) = f(x₀ + t·v)` and `g*'(t) = ∇f(x₀ + t·v)·v`, bounded. Evaluated at the point
     /// rather than from `K`, `L`, `M`: the errors of the start point then enter weighted by the
     /// gradient at the crossing, not by the (larger) gradient at the ray's origin.
+    #[inline(always)]
     fn value_and_slope(&self, t: f64, x0: &BVec3, v: &BVec3) -> (Bounded, Bounded) {
         use crate::bound::bounded::dot3;
         let tb = Bounded::exact(t);
-        let point: BVec3 = [0, 1, 2].map(|i| x0[i].add(tb.mul(v[i])));
+        let along = |i: usize| x0[i].add(tb.mul(v[i]));
+        let point: BVec3 = [along(0), along(1), along(2)];
         let q = rows(self.local.q, 0.0);
-        let p = [0, 1, 2].map(|i| Bounded::new(self.local.p[i], self.errors().gradient[i]));
+        let p = each_within(self.local.p, self.errors().gradient);
         let r = Bounded::new(self.local.r, self.errors().constant);
         let qp = mat_vec(&q, &point);
         let value = dot3(&point, &qp).add(dot3(&p, &point)).add(r);
-        let gradient: BVec3 = [0, 1, 2].map(|i| Bounded::exact(2.0).mul(qp[i]).add(p[i]));
+        let slope = |i: usize| Bounded::exact(2.0).mul(qp[i]).add(p[i]);
+        let gradient: BVec3 = [slope(0), slope(1), slope(2)];
         (value, dot3(&gradient, v))
     }
 
@@ -302,14 +337,20 @@ impl Quadric {
     /// (see the module docs): the check of one root, without the other root, the clip box or
     /// the other coefficients that [`Quadric::bound_roots`] adds for a decision.
     pub fn bound_root_at(&self, origin: DVec3, dir: DVec3, t: f64) -> (f64, bool) {
-        let (x0, v) = self.bounded_ray(origin, dir);
-        let q = rows(self.local.q, 0.0);
-        let k = crate::bound::bounded::dot3(&v, &mat_vec(&q, &v));
-        let (value, slope) = self.value_and_slope(t, &x0, &v);
-        isolate(value, slope, k)
+        fused(
+            #[inline(always)]
+            || {
+                let (x0, v) = self.bounded_ray(origin, dir);
+                let q = rows(self.local.q, 0.0);
+                let k = crate::bound::bounded::dot3(&v, &mat_vec(&q, &v));
+                let (value, slope) = self.value_and_slope(t, &x0, &v);
+                isolate(value, slope, k)
+            },
+        )
     }
 
     /// The bound of the computed root `t` (see the module docs) and its clip side.
+    #[inline(always)]
     fn root_bound(&self, t: f64, c: &Coefficients, x0: &BVec3, v: &BVec3) -> RootBound {
         let (value, slope) = self.value_and_slope(t, x0, v);
         let (bound, isolated) = isolate(value, slope, c.k);
@@ -322,6 +363,7 @@ impl Quadric {
     }
 
     /// Where the exact point `x₀ + t·v + a` lies against the file's clip box.
+    #[inline(always)]
     fn clip_side(&self, t: Bounded, x0: &BVec3, v: &BVec3) -> Side {
         let Some([min, max]) = self.errors().clip else {
             return Side::Inside;
@@ -349,6 +391,7 @@ impl Quadric {
 /// From `g*(t)` (`value`), `g*'(t)` (`slope`) and `K*`, all bounded: a bound on the distance
 /// from `t` to the nearest exact root, and whether exactly one exact root lies within it (see
 /// the module docs).
+#[inline(always)]
 fn isolate(value: Bounded, slope: Bounded, k: Bounded) -> (f64, bool) {
     let g = value.magnitude();
     let m0 = down(slope.value.abs() - slope.error);
@@ -370,6 +413,7 @@ fn isolate(value: Bounded, slope: Bounded, k: Bounded) -> (f64, bool) {
 }
 
 /// Where exact roots other than `roots` may lie (see the module docs).
+#[inline(always)]
 fn others(roots: &[RootBound], c: &Coefficients) -> Others {
     match roots {
         [a, b] if a.isolated && b.isolated && a.t.value + a.t.error < b.t.value - b.t.error => {
