@@ -40,3 +40,29 @@ impl Kernel {
         }
     }
 }
+
+/// Runs `f` compiled for AVX2 and FMA where the CPU has both ([`Kernel::Avx2`]): what `f`
+/// inlines is then vectorised four f64 lanes wide, and its fused multiply-adds are one
+/// instruction each rather than calls into the runtime. The same bits either way: lane-wise
+/// code does each lane's scalar operations, and a fused multiply-add is correctly rounded on
+/// every CPU. `f` must be an `#[inline(always)]` closure, and what it calls `#[inline(always)]`
+/// too: only code inlined into `with_avx2_here` is compiled for AVX2.
+#[inline(always)]
+pub fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    if Kernel::Avx2.available() {
+        // SAFETY: the CPU has AVX2 and FMA.
+        return unsafe { with_avx2_here(f) };
+    }
+    f()
+}
+
+/// `f`, compiled for AVX2 and FMA (it is inlined here: its only caller).
+///
+/// # Safety
+/// The CPU must support AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn with_avx2_here<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}

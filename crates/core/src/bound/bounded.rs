@@ -51,31 +51,6 @@ pub fn down(x: f64) -> f64 {
     (x * (1.0 - SLACK)).next_down().max(0.0)
 }
 
-/// Runs `f` with the fused multiply-add instruction where the CPU has it: what `f` inlines
-/// (the exact product errors below) is then one instruction each rather than a call into the
-/// runtime's `fma`. The same bits either way: a fused multiply-add is correctly rounded on
-/// every CPU. `f` must be an `#[inline(always)]` closure, and what it calls `#[inline(always)]`
-/// too: only code inlined into [`with_fma`] is compiled with the instruction.
-#[inline(always)]
-pub fn fused<R>(f: impl FnOnce() -> R) -> R {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("fma") {
-        // SAFETY: the CPU has FMA.
-        return unsafe { with_fma(f) };
-    }
-    f()
-}
-
-/// `f`, compiled with FMA (it is inlined here: its only caller).
-///
-/// # Safety
-/// The CPU must support FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "fma")]
-unsafe fn with_fma<R>(f: impl FnOnce() -> R) -> R {
-    f()
-}
-
 /// Extra absolute bound per product, for the underflow of its rounding error.
 const UNDERFLOW: f64 = 4.0 * f64::MIN_POSITIVE * f64::EPSILON;
 

@@ -28,9 +28,10 @@
 //! The bound is on `t` as recomputed here; a caller whose `t` came from elsewhere (the packet
 //! test, or the plane fallback for slivers) adds the difference, which is exact to compute.
 
-use super::bounded::{down, fused, gamma, up, values3, BVec3, Bounded};
+use super::bounded::{down, gamma, up, values3, BVec3, Bounded};
 use super::Side;
 use crate::geometry::triangle::WatertightRay;
+use crate::simd::with_avx2;
 use std::ops::{Div, Mul, Sub};
 
 /// The bound of one ray/triangle pair.
@@ -47,11 +48,11 @@ pub struct TriangleBound {
 }
 
 /// The bound for the ray `origin + t·dir` and the triangle `tri`, all with per-component
-/// bounds on their distance from the exact values (compiled with FMA where the CPU has it,
-/// [`fused`]).
+/// bounds on their distance from the exact values (compiled for AVX2 and FMA where the CPU has them,
+/// [`with_avx2`]).
 #[inline(always)]
 pub fn bound(origin: &BVec3, dir: &BVec3, tri: &[BVec3; 3]) -> TriangleBound {
-    fused(
+    with_avx2(
         #[inline(always)]
         || bound_here(origin, dir, tri),
     )
@@ -79,7 +80,7 @@ fn bound_here(origin: &BVec3, dir: &BVec3, tri: &[BVec3; 3]) -> TriangleBound {
 
 /// Vertex `v` relative to `origin`, permuted to `axes` and sheared by `(s_x, s_y)`: the
 /// watertight test's `(x − s_x z, y − s_y z, z)`. Functions, not closures, so that they inline
-/// into [`fused`]'s FMA code.
+/// into [`with_avx2`]'s FMA code.
 #[inline(always)]
 fn sheared(v: &BVec3, origin: &BVec3, [kx, ky, kz]: [usize; 3], shear: &BVec3) -> BVec3 {
     let (x, y, z) = (

@@ -34,11 +34,10 @@
 //!   bounded local point `x₀ + t·v + a`.
 
 use super::Quadric;
-use crate::bound::bounded::{
-    down, exact3, fused, gamma, mat_vec, up, within3, BMat3, BVec3, Bounded,
-};
+use crate::bound::bounded::{down, exact3, gamma, mat_vec, up, within3, BMat3, BVec3, Bounded};
 use crate::bound::transform::BoundedMat4;
 use crate::bound::{mapped, Side};
+use crate::simd::with_avx2;
 use glam::{DMat3, DVec3};
 use std::ops::{Add, Div, Mul, Neg, Sub};
 use std::sync::OnceLock;
@@ -232,10 +231,10 @@ impl Quadric {
 
     /// The crossings of the world ray `origin + t·dir` (exact numbers) with the quadric's
     /// whole surface, the roots as [`Quadric::intersect`] computes them, each with its bound
-    /// and its place against the clip box (see the module docs). Compiled with FMA where the
-    /// CPU has it ([`fused`]), as is [`Quadric::bound_root_at`].
+    /// and its place against the clip box (see the module docs). Compiled for AVX2 and FMA where
+    /// the CPU has them ([`with_avx2`]), as is [`Quadric::bound_root_at`].
     pub fn bound_roots(&self, origin: DVec3, dir: DVec3) -> QuadricBound {
-        fused(
+        with_avx2(
             #[inline(always)]
             || self.bound_roots_here(origin, dir),
         )
@@ -337,7 +336,7 @@ impl Quadric {
     /// (see the module docs): the check of one root, without the other root, the clip box or
     /// the other coefficients that [`Quadric::bound_roots`] adds for a decision.
     pub fn bound_root_at(&self, origin: DVec3, dir: DVec3, t: f64) -> (f64, bool) {
-        fused(
+        with_avx2(
             #[inline(always)]
             || {
                 let (x0, v) = self.bounded_ray(origin, dir);
