@@ -3,9 +3,11 @@
 
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Ray};
+use framing::fit_eye;
 use glam::{DMat4, DVec3, DVec4};
 use serde::Serialize;
 
+mod framing;
 mod pinhole;
 pub mod views;
 pub use pinhole::{camera_to_world, CameraAxes, Pinhole};
@@ -253,73 +255,4 @@ impl Camera {
             ),
         }
     }
-}
-
-/// The eye, in the camera's axes `[right, up, back]` about `origin`, from which every point
-/// lies inside a centred pyramid of half-widths `tan = [tx, ty]`, as close as that allows;
-/// and the largest `back` coordinate of a point (the nearest point's).
-///
-/// With the eye at `(e_u, e_v, e_w)`, a point `(u, v, w)` is inside when `|u − e_u| ≤ tx·(e_w
-/// − w)`, that is `e_u + tx·e_w ≥ u + tx·w` and `tx·e_w − e_u ≥ tx·w − u`. The tightest eye
-/// meets the largest of each side: `e_w = (max(u + tx·w) + max(tx·w − u)) / (2 tx)` and `e_u`
-/// half their difference (the extreme points at equal angles either side); the same in `v`,
-/// and the farther `e_w` of the two axes binds.
-fn fit_eye(points: &[DVec3], origin: DVec3, axes: [DVec3; 3], tan: [f64; 2]) -> ([f64; 3], f64) {
-    let [right, up, back] = axes;
-    let mut most = [f64::NEG_INFINITY; 4];
-    let mut nearest = f64::NEG_INFINITY;
-    for p in points {
-        let d = *p - origin;
-        let (u, v, w) = (d.dot(right), d.dot(up), d.dot(back));
-        most[0] = most[0].max(u + tan[0] * w);
-        most[1] = most[1].max(tan[0] * w - u);
-        most[2] = most[2].max(v + tan[1] * w);
-        most[3] = most[3].max(tan[1] * w - v);
-        nearest = nearest.max(w);
-    }
-    let e_w = ((most[0] + most[1]) / (2.0 * tan[0])).max((most[2] + most[3]) / (2.0 * tan[1]));
-    let local: Vec<[f64; 3]> = points
-        .iter()
-        .map(|p| {
-            let d = *p - origin;
-            [d.dot(right), d.dot(up), e_w - d.dot(back)]
-        })
-        .collect();
-    let e_u = centring_shift(&local, 0, (most[0] - most[1]) / 2.0);
-    let e_v = centring_shift(&local, 1, (most[2] - most[3]) / 2.0);
-    ([e_u, e_v, e_w], nearest)
-}
-
-/// The eye's shift along image axis `axis` (0: right, 1: up) that centres the points' image:
-/// the largest and the smallest `(c − e) / depth` equal and opposite. In the axis that binds
-/// [`fit_eye`]'s closed form is that shift (`guess`); in the other the points lie at several
-/// depths, so it is found by bisection (the sum of the two extremes falls as `e` grows).
-/// `local` holds each point's right, up and depth from the eye's plane.
-fn centring_shift(local: &[[f64; 3]], axis: usize, guess: f64) -> f64 {
-    let imbalance = |e: f64| {
-        let (lo, hi) = local
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-                let slope = (p[axis] - e) / p[2];
-                (lo.min(slope), hi.max(slope))
-            });
-        lo + hi
-    };
-    let span = local
-        .iter()
-        .map(|p| (p[axis] - guess).abs())
-        .fold(0.0, f64::max);
-    let (mut lo, mut hi) = (guess - span, guess + span);
-    if span.is_nan() || span <= 0.0 || imbalance(lo) < 0.0 || imbalance(hi) > 0.0 {
-        return guess;
-    }
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if imbalance(mid) > 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
 }
