@@ -3,7 +3,7 @@
 //! placement (`--cam-to-world`), with the command line's projection overrides.
 
 use super::{CameraChoice, RenderJob, DEFAULT_SIZE};
-use crate::camera::{Camera, Pinhole, Projection, MAX_SIDE};
+use crate::camera::{Camera, Pinhole, Projection, AUTO_YFOV, MAX_SIDE};
 use crate::error::{Error, Result};
 use crate::render::CameraView;
 use crate::scene::Scene;
@@ -19,16 +19,17 @@ pub(super) fn camera_view(
     if let Some(view) = pinhole_view(job)? {
         return Ok(view);
     }
+    // The automatic camera is framed once the image's size is known.
     let chosen = choose_camera(scene, &job.camera)?;
-    let auto = chosen.is_none();
-    let mut camera = chosen.unwrap_or_else(|| framing(scene, 1.0));
+    let auto = Projection::Perspective { yfov: AUTO_YFOV };
+    let mut projection = chosen.as_ref().map_or(auto, |c| c.projection);
     if let Some(fov) = job.camera.fov_degrees {
         if !(fov > 0.0 && fov < 180.0) {
             return Err(Error::usage(format!(
                 "--fov must lie between 0 and 180 degrees, got {fov}"
             )));
         }
-        camera.projection = Projection::Perspective {
+        projection = Projection::Perspective {
             yfov: fov.to_radians(),
         };
     }
@@ -38,9 +39,12 @@ pub(super) fn camera_view(
                 "--ortho must be a positive height, got {height}"
             )));
         }
-        camera.projection = Projection::Orthographic { ymag: height / 2.0 };
+        projection = Projection::Orthographic { ymag: height / 2.0 };
     }
-    let aspect = camera.aspect_ratio.filter(|a| a.is_finite() && *a > 0.0);
+    let aspect = chosen
+        .as_ref()
+        .and_then(|c| c.aspect_ratio)
+        .filter(|a| a.is_finite() && *a > 0.0);
     let from_aspect = |side: usize, a: f64| ((side as f64 * a).round() as usize).max(1);
     let (width, height) = match (job.width, job.height, aspect) {
         (Some(w), Some(h), _) => (w, h),
@@ -51,7 +55,7 @@ pub(super) fn camera_view(
         (None, None, Some(a)) => (DEFAULT_SIZE, from_aspect(DEFAULT_SIZE, 1.0 / a)),
         (None, None, None) => (DEFAULT_SIZE, DEFAULT_SIZE),
     };
-    if let (Some(a), Some(w), Some(h)) = (aspect, job.width, job.height) {
+    if let (Some(camera), Some(a), Some(w), Some(h)) = (&chosen, aspect, job.width, job.height) {
         let image = w as f64 / h as f64;
         if (image / a - 1.0).abs() > 1e-3 {
             warnings.push(format!(
@@ -63,21 +67,22 @@ pub(super) fn camera_view(
         }
     }
     if let Some(k) = job.camera.intrinsics {
-        camera.projection = Projection::Pinhole(pinhole(k, width, height)?);
+        projection = Projection::Pinhole(pinhole(k, width, height)?);
     }
     if width == 0 || height == 0 || width > MAX_SIDE || height > MAX_SIDE {
         return Err(Error::usage(format!(
             "image size {width}x{height} is out of range (1 to {MAX_SIDE} per side)"
         )));
     }
-    if auto {
-        let projection = camera.projection;
-        camera = Camera {
+    let camera = chosen.unwrap_or_else(|| framing(scene, width as f64 / height as f64));
+    Ok(CameraView::new(
+        Camera {
             projection,
-            ..framing(scene, width as f64 / height as f64)
-        };
-    }
-    Ok(CameraView::new(camera, width, height))
+            ..camera
+        },
+        width,
+        height,
+    ))
 }
 
 /// The automatic camera for an image of width / height `aspect`, upright in the stage's up

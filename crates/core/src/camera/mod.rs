@@ -53,6 +53,10 @@ pub struct Camera {
     pub to_world: DMat4,
 }
 
+/// The vertical field of view of the automatic cameras ([`Camera::framing_image`],
+/// [`Camera::framing_from`]), in radians.
+pub const AUTO_YFOV: f64 = 0.8;
+
 impl Camera {
     /// A pinhole camera of intrinsics `pinhole` placed by `to_world` (raycast's axes, used as
     /// given), named `name`, from `source`.
@@ -110,6 +114,7 @@ impl Camera {
     /// (a chess board's air above the low pieces) take no room. `bounds` stands in when there
     /// are no points.
     pub fn framing_image(points: &[DVec3], bounds: &Aabb, aspect: f64, up: DVec3) -> Camera {
+        let yfov = AUTO_YFOV;
         let bounds = if bounds.is_empty() {
             Aabb::new(DVec3::splat(-1.0), DVec3::ONE)
         } else {
@@ -128,7 +133,6 @@ impl Camera {
         } else {
             DVec3::new(0.4, 0.3, 1.0)
         };
-        let yfov: f64 = 0.8;
         let mut camera = Camera::look_at(
             centre + direction,
             centre,
@@ -164,7 +168,7 @@ impl Camera {
         } else {
             (bounds.center(), (bounds.size().length() * 0.5).max(1e-9))
         };
-        let yfov: f64 = 0.8;
+        let yfov = AUTO_YFOV;
         let distance = radius / (yfov * 0.5).sin() * 1.05;
         let eye = centre + direction.normalize() * distance;
         let mut camera = Camera::look_at(eye, centre, DVec3::Y, Projection::Perspective { yfov })
