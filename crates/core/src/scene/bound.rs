@@ -74,6 +74,22 @@ fn quadric_competes(b: &QuadricBound, limit: f64, skip: Option<usize>) -> bool {
     }
 }
 
+/// Whether the exact plane of the triangle `tri` (vertices within `placement` of the stored
+/// ones) certainly meets the probe's ray beyond its limit, so that the triangle cannot compete:
+/// the f64 watertight test's `t` with the bound of [`residual::plane_error`] (every crossing
+/// of the exact triangle lies on its exact plane). It passes over what the f64 filters of
+/// [`triangle::certainly_apart`] cannot, a closed object's exit face (the ray crosses it, only
+/// farther), for about a quarter of the bounded recomputation.
+fn plane_beyond(probe: &Probe, tri: &[DVec3; 3], placement: f64) -> bool {
+    let Some(t) = probe.watertight.intersect(tri, f64::INFINITY) else {
+        return false;
+    };
+    let ray = NearRay::exact(probe.origin, probe.dir);
+    // `t − δ` rounded down: the exact crossing is at least that.
+    residual::plane_error(&ray, tri, placement, t)
+        .is_some_and(|error| bounded::down(t - error) > probe.limit)
+}
+
 /// The ray parameter where `origin + t·dir` leaves `aabb` (at most; `+∞` if it never does).
 fn exit_t(aabb: &Aabb, origin: DVec3, dir: DVec3) -> f64 {
     (0..3)
@@ -183,7 +199,9 @@ impl Scene {
                     return true;
                 }
                 let tri = self.world.mesh.triangle(i);
-                if triangle::certainly_apart(&probe.watertight, &tri, placement, limit) {
+                if triangle::certainly_apart(&probe.watertight, &tri, placement, limit)
+                    || plane_beyond(probe, &tri, placement)
+                {
                     return false;
                 }
                 let b = triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));
@@ -399,3 +417,6 @@ fn quadric_hit(quadric: &Quadric, origin: DVec3, dir: DVec3, t: f64, decide: boo
         certain: own && !quadric_competes(&b, up(t + error), Some(i)),
     }
 }
+
+#[cfg(test)]
+mod tests;
