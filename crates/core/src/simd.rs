@@ -41,12 +41,13 @@ impl Kernel {
     }
 }
 
-/// Runs `f` compiled for AVX2 and FMA where the CPU has both ([`Kernel::Avx2`]): what `f`
-/// inlines is then vectorised four f64 lanes wide, and its fused multiply-adds are one
-/// instruction each rather than calls into the runtime. The same bits either way: lane-wise
-/// code does each lane's scalar operations, and a fused multiply-add is correctly rounded on
-/// every CPU. `f` must be an `#[inline(always)]` closure, and what it calls `#[inline(always)]`
-/// too: only code inlined into `with_avx2_here` is compiled for AVX2.
+/// Runs `f` compiled for AVX2 and FMA where the CPU has both ([`Kernel::Avx2`]): the fused
+/// multiply-adds of what `f` inlines (the bounded arithmetic's exact product errors,
+/// [`crate::bound::bounded`]) are then one instruction each rather than calls into the
+/// runtime. The same bits either way: a fused multiply-add is correctly rounded on every CPU,
+/// and the compiler neither fuses nor reorders other operations. `f` must be an
+/// `#[inline(always)]` closure, and what it calls `#[inline(always)]` too: only code inlined
+/// into `with_avx2_here` is compiled for AVX2.
 #[inline(always)]
 pub fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]

@@ -79,7 +79,7 @@ fn quadric_competes(b: &QuadricBound, limit: f64, skip: Option<usize>) -> bool {
 /// the f64 watertight test's `t` with the bound of [`residual::plane_error`] (every crossing
 /// of the exact triangle lies on its exact plane). It passes over what the f64 filters of
 /// [`triangle::certainly_apart`] cannot, a closed object's exit face (the ray crosses it, only
-/// farther), for about a quarter of the bounded recomputation.
+/// farther), for less than half the bounded recomputation's instructions.
 fn plane_beyond(probe: &Probe, tri: &[DVec3; 3], placement: f64) -> bool {
     let Some(t) = probe.watertight.intersect(tri, f64::INFINITY) else {
         return false;
