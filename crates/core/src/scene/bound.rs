@@ -13,6 +13,7 @@ use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Aabb;
 use crate::geometry::Ray;
 use crate::quadric::{Others, Quadric, QuadricBound, RootBound};
+use crate::simd::with_avx2;
 use glam::{DMat3, DVec3};
 use std::ops::Sub;
 
@@ -298,16 +299,22 @@ impl Scene {
 
     /// The world ray in instance `k`'s mesh frame as the trace maps it, `L(o − T)` and `L d`,
     /// bounded against the exact image `M̂⁻¹o`, `M̂⁻¹d` through the f64 placement `M̂`
-    /// ([`crate::bound::mapped`]).
+    /// ([`crate::bound::mapped`]; with FMA where the CPU has it, [`with_avx2`]).
     fn instance_ray(&self, k: usize, origin: DVec3, dir: DVec3) -> (BVec3, BVec3) {
         let instance = &self.instances[k];
         let (a, norm) = (instance.to_world.matrix3, instance.inverse_norm());
         let t = instance.to_world.translation;
-        let offset = [0, 1, 2].map(|i| Bounded::exact(origin[i]).sub(Bounded::exact(t[i])));
         let l = instance.to_local.matrix3;
-        (
-            mapped(a, &DMat3::ZERO, norm, &offset, l * (origin - t)),
-            mapped(a, &DMat3::ZERO, norm, &exact3(dir), l * dir),
+        with_avx2(
+            #[inline(always)]
+            || {
+                let (o, t3) = (exact3(origin), exact3(t));
+                let offset = [o[0].sub(t3[0]), o[1].sub(t3[1]), o[2].sub(t3[2])];
+                (
+                    mapped(a, &DMat3::ZERO, norm, &offset, l * (origin - t)),
+                    mapped(a, &DMat3::ZERO, norm, &exact3(dir), l * dir),
+                )
+            },
         )
     }
 
