@@ -1,14 +1,23 @@
 //! The OBJ text as `tobj` and the checker read it: `\` line continuations joined, empty and
 //! unknown statements blanked out with one warning per kind, `#` comments dropped, `v` lines
 //! cut to their position (vertex colours, which no ray needs, dropped: tobj refuses a file
-//! where only some vertices have them, trimesh reads it), every line kept at its number.
+//! where only some vertices have them, trimesh reads it) with trimesh's reading of a number
+//! misspelt `3.1+e2`, a leading byte-order mark dropped, every line kept at its number.
 //!
 //! `tobj` reads one physical line per statement and refuses an empty `usemtl` (a material
 //! must never stop a render), so the text is rewritten first. A joined statement stands on
 //! the first of its physical lines and the lines it swallowed become blank, so that line `n`
 //! of the result is line `n` of the file and messages name the file's own lines.
+//!
+//! Both passes here read every byte of every OBJ file (as much as tobj's parse itself, for a
+//! scanned mesh), so they allocate nothing per line, find lines, comments and words with
+//! plain byte loops (the library's searches are made for long texts, an OBJ line is short)
+//! and try to read a number only where it may be misspelt. The results are exactly those of
+//! `str::lines` and `str::split_whitespace` (the tests hold them to the former code).
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
+use std::str::SplitWhitespace;
 
 /// Statements that mean something without arguments (`g` and `o` start an unnamed group or
 /// object, `s` and `end` take no argument or an optional one); any other OBJ statement with
@@ -35,39 +44,36 @@ struct Skipped {
 /// continues on the next one; the backslash is a word break, as Blender reads it (trimesh
 /// removes the backslash and the line break, which reads the same where a space stands
 /// before the backslash, as exporters write it).
+///
+/// This runs over every line of every OBJ file, so it allocates nothing per line where it
+/// can: a line is borrowed unless it continues, and each statement is written straight into
+/// the result.
 pub fn normalise(text: &str) -> ObjText {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut out = String::with_capacity(text.len());
     let mut empty: BTreeMap<String, Skipped> = BTreeMap::new();
     let mut unknown: BTreeMap<String, Skipped> = BTreeMap::new();
     let mut misspelt = Misspelt::default();
-    let mut lines = text.lines().enumerate();
+    let mut lines = lines(text).enumerate();
     while let Some((n, first)) = lines.next() {
-        let mut statement = first.to_string();
-        let mut swallowed = 0;
-        while let Some(head) = statement.strip_suffix('\\') {
-            let head_len = head.len();
-            statement.truncate(head_len);
-            statement.push(' ');
-            match lines.next() {
-                Some((_, next)) => {
-                    statement.push_str(next);
-                    swallowed += 1;
-                }
-                None => break,
-            }
-        }
+        let (statement, swallowed) = statement(first, &mut lines);
         let line = n + 1;
         // A `#` starts a comment to the end of the line (the checker reads it so too).
-        let content = statement.split('#').next().unwrap_or("").trim();
-        let mut words = content.split_whitespace();
-        match words.next() {
+        let content = match find_byte(&statement, b'#') {
+            Some(comment) => &statement[..comment],
+            None => &statement,
+        }
+        .trim();
+        let mut words = words(content);
+        let keyword = words.next();
+        let arguments = words.clone();
+        match keyword {
             None => {}
-            Some(keyword) if !STATEMENTS.contains(&keyword) => note(&mut unknown, keyword, line),
+            Some(keyword) if !is_statement(keyword) => note(&mut unknown, keyword, line),
             Some(keyword) if words.next().is_none() && !BARE_STATEMENTS.contains(&keyword) => {
                 note(&mut empty, keyword, line)
             }
-            Some("v") => out.push_str(&vertex_line(content, line, &mut misspelt)),
+            Some("v") => push_vertex(&mut out, arguments, line, &mut misspelt),
             Some("usemtl") => {
                 // tobj takes the name after the first space; a tab is a word break too.
                 let name = content["usemtl".len()..].trim();
@@ -103,6 +109,142 @@ pub fn normalise(text: &str) -> ObjText {
     }
 }
 
+/// The statement that starts on physical line `first` and how many of the following `lines`
+/// it swallowed: `first` itself (borrowed) unless it ends in `\`, else the lines joined, each
+/// trailing `\` read as a space, for as long as the line last joined ends in `\` (one on the
+/// last line continues onto nothing).
+fn statement<'a>(
+    first: &'a str,
+    lines: &mut impl Iterator<Item = (usize, &'a str)>,
+) -> (Cow<'a, str>, usize) {
+    if !first.ends_with('\\') {
+        return (Cow::Borrowed(first), 0);
+    }
+    let mut statement = first.to_string();
+    let mut swallowed = 0;
+    while let Some(head) = statement.strip_suffix('\\') {
+        statement.truncate(head.len());
+        statement.push(' ');
+        match lines.next() {
+            Some((_, next)) => {
+                statement.push_str(next);
+                swallowed += 1;
+            }
+            None => break,
+        }
+    }
+    (Cow::Owned(statement), swallowed)
+}
+
+/// The lines of `text` as [`str::lines`] gives them: split after each `\n`, which is dropped
+/// with a `\r` before it, and no empty line after a last `\n`.
+fn lines(text: &str) -> Lines<'_> {
+    Lines(text)
+}
+
+/// The iterator of [`lines`]: the text not yet read.
+struct Lines<'a>(&'a str);
+
+impl<'a> Iterator for Lines<'a> {
+    type Item = &'a str;
+
+    fn next(&mut self) -> Option<&'a str> {
+        if self.0.is_empty() {
+            return None;
+        }
+        let line = match find_byte(self.0, b'\n') {
+            Some(end) => {
+                let line = &self.0[..end];
+                self.0 = &self.0[end + 1..];
+                line.strip_suffix('\r').unwrap_or(line)
+            }
+            None => std::mem::take(&mut self.0),
+        };
+        Some(line)
+    }
+}
+
+/// Where ASCII `byte` first is in `s`: a plain loop, which on lines as short as an OBJ
+/// file's costs about two thirds of [`str::find`]'s search.
+fn find_byte(s: &str, byte: u8) -> Option<usize> {
+    s.bytes().position(|b| b == byte)
+}
+
+/// Whether `word` is one of the [`STATEMENTS`]; those of nearly every line are tried first.
+fn is_statement(word: &str) -> bool {
+    matches!(word, "v" | "f" | "vt" | "vn") || STATEMENTS.contains(&word)
+}
+
+/// The words of `s` exactly as [`str::split_whitespace`] finds them, found byte by byte
+/// (without decoding characters) where `s` is ASCII, as nearly every OBJ line is.
+fn words(s: &str) -> Words<'_> {
+    if s.is_ascii() {
+        Words::Ascii(s)
+    } else {
+        Words::Unicode(s.split_whitespace())
+    }
+}
+
+/// The iterator of [`words`]: the rest of an ASCII string, or the words of any other.
+#[derive(Clone)]
+enum Words<'a> {
+    Ascii(&'a str),
+    Unicode(SplitWhitespace<'a>),
+}
+
+impl<'a> Iterator for Words<'a> {
+    type Item = &'a str;
+
+    fn next(&mut self) -> Option<&'a str> {
+        let rest = match self {
+            Words::Ascii(rest) => rest,
+            Words::Unicode(words) => return words.next(),
+        };
+        let bytes = rest.as_bytes();
+        let mut start = 0;
+        while start < bytes.len() && is_ascii_space(bytes[start]) {
+            start += 1;
+        }
+        if start == bytes.len() {
+            *rest = "";
+            return None;
+        }
+        let mut end = start + 1;
+        while end < bytes.len() && !is_ascii_space(bytes[end]) {
+            end += 1;
+        }
+        let word = &rest[start..end];
+        *rest = &rest[end..];
+        Some(word)
+    }
+
+    fn count(self) -> usize {
+        match self {
+            Words::Ascii(rest) => word_starts(rest.as_bytes()),
+            Words::Unicode(words) => words.count(),
+        }
+    }
+}
+
+/// How many words ASCII `bytes` has: the bytes that are not white space and follow one that
+/// is, or the start.
+fn word_starts(bytes: &[u8]) -> usize {
+    let mut after_space = true;
+    let mut starts = 0;
+    for &b in bytes {
+        let space = is_ascii_space(b);
+        starts += usize::from(after_space && !space);
+        after_space = space;
+    }
+    starts
+}
+
+/// Whether ASCII byte `b` is white space as [`char::is_whitespace`] reads it: a space or `\t`
+/// to `\r` (with the vertical tab, which [`u8::is_ascii_whitespace`] leaves out).
+fn is_ascii_space(b: u8) -> bool {
+    b == b' ' || (b'\t'..=b'\r').contains(&b)
+}
+
 /// Numbers in `v` lines that Rust cannot read but trimesh does: an exponent with its sign
 /// before the `e` (`3.1+e2`, `3.1-e2`), which trimesh reads after deleting the `+e` and `-e`
 /// signs (so both are 3.1e2). The first one, and on how many lines.
@@ -123,16 +265,27 @@ impl Misspelt {
     }
 }
 
-/// A `v` statement as tobj is to read it: `v X Y Z`, with `W` where the line has exactly
-/// four numbers; colours after the position dropped; a number misspelt as [`Misspelt`]
-/// says read as trimesh reads it. A line with fewer than three numbers is left for tobj to
-/// refuse.
-fn vertex_line(content: &str, line: usize, misspelt: &mut Misspelt) -> String {
-    let values: Vec<&str> = content.split_whitespace().skip(1).collect();
-    let kept = if values.len() == 4 { 4 } else { 3 };
-    let mut out = String::from("v");
+/// Writes a `v` statement with these `values` as tobj is to read it: `v X Y Z`, with `W`
+/// where the line has exactly four numbers; colours after the position dropped; a number
+/// misspelt as [`Misspelt`] says read as trimesh reads it. A line with fewer than three
+/// numbers is left for tobj to refuse.
+fn push_vertex<'a>(
+    out: &mut String,
+    values: impl Iterator<Item = &'a str>,
+    line: usize,
+    misspelt: &mut Misspelt,
+) {
+    // Five tell a line of four numbers from a longer one.
+    let mut first = [""; 5];
+    let mut count = 0;
+    for (slot, value) in first.iter_mut().zip(values) {
+        *slot = value;
+        count += 1;
+    }
+    let kept = if count == 4 { 4 } else { count.min(3) };
+    out.push('v');
     let mut fixed = false;
-    for &value in values.iter().take(kept) {
+    for &value in &first[..kept] {
         out.push(' ');
         match trimesh_number(value) {
             Some(read) => {
@@ -146,17 +299,26 @@ fn vertex_line(content: &str, line: usize, misspelt: &mut Misspelt) -> String {
         }
     }
     misspelt.lines += usize::from(fixed);
-    out
 }
 
 /// The number trimesh reads for `word` where Rust reads none but deleting a sign before
 /// an `e` makes one (`3.1+e2` → `3.1e2`).
 fn trimesh_number(word: &str) -> Option<String> {
-    if word.parse::<f64>().is_ok() {
+    // Without a `+e` or `-e` the deletions change nothing, so a word Rust does not read stays
+    // unread: only a word with one can be misspelt (and no number Rust reads has one), and
+    // nearly no word is parsed here.
+    if !has_signed_e(word) || word.parse::<f64>().is_ok() {
         return None;
     }
     let read = word.replace("+e", "e").replace("-e", "e");
     read.parse::<f64>().is_ok().then_some(read)
+}
+
+/// Whether `word` has a `+e` or `-e` in it.
+fn has_signed_e(word: &str) -> bool {
+    word.as_bytes()
+        .windows(2)
+        .any(|pair| matches!(pair, [b'+' | b'-', b'e']))
 }
 
 fn note(kinds: &mut BTreeMap<String, Skipped>, keyword: &str, line: usize) {
@@ -182,8 +344,8 @@ pub fn face_materials(text: &str) -> (Vec<String>, Vec<u32>) {
     let mut names: Vec<String> = Vec::new();
     let mut current = 0;
     let mut per_triangle = Vec::new();
-    for line in text.lines() {
-        let mut words = line.split_whitespace();
+    for line in lines(text) {
+        let mut words = words(line);
         match words.next() {
             Some("usemtl") => {
                 let name = line.trim().split_once(' ').unwrap_or_default().1.trim();
@@ -273,62 +435,4 @@ pub(crate) fn quoted(line: &str) -> String {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn face_materials_follow_usemtl_over_fanned_faces() {
-        let text =
-            "f 1 2 3\nusemtl red\nf 1 2 3 4\nusemtl blue\nf 1 2\nf 1 2 3\nusemtl red\nf 1 2 3\n";
-        let (names, per_triangle) = face_materials(text);
-        assert_eq!(names, ["red", "blue"]);
-        assert_eq!(per_triangle, [0, 1, 1, 2, 1]);
-    }
-
-    #[test]
-    fn continuations_join_on_the_first_line_and_keep_the_count() {
-        let t = normalise("v 0 0 0\nf 1 2 \\\n  3 \\\n 4\nv 1 1 1\n");
-        assert_eq!(t.text, "v 0 0 0\nf 1 2    3   4\n\n\nv 1 1 1\n");
-        assert!(t.warnings.is_empty());
-        let crlf = normalise("f 1 \\\r\n2 3\r\n");
-        assert_eq!(crlf.text, "f 1  2 3\n\n");
-        // A backslash on the last line continues onto nothing.
-        assert_eq!(normalise("f 1 2 3 \\").text, "f 1 2 3\n");
-    }
-
-    #[test]
-    fn empty_and_unknown_statements_warn_once_per_kind() {
-        let t = normalise("usemtl\nvc 1 0 0\nusemtl  \nvc 0 1 0\nvc 1\nfoo\ng\nusemtl\tred\n");
-        assert_eq!(t.text, "\n\n\n\n\n\ng\nusemtl red\n");
-        assert_eq!(
-            t.warnings,
-            [
-                "line 1: empty 'usemtl' statement skipped (and 1 more line)",
-                "line 6: 'foo' is not an OBJ statement: skipped",
-                "line 2: 'vc' is not an OBJ statement: skipped (and 2 more lines)",
-            ]
-        );
-    }
-
-    #[test]
-    fn vertex_lines_keep_their_position_as_trimesh_reads_it() {
-        let t =
-            normalise("v 1 2 3 0.5 0.5 0.5\nv 1 2 3\nv 1 2 3 2\nv 3.1+e2 -1-e1 1e2\nv 1+e1 0 0\n");
-        assert_eq!(
-            t.text,
-            "v 1 2 3\nv 1 2 3\nv 1 2 3 2\nv 3.1e2 -1e1 1e2\nv 1e1 0 0\n"
-        );
-        assert_eq!(
-            t.warnings,
-            ["line 4: '3.1+e2' is not a number: read as 3.1e2, as trimesh reads it (and 1 more line)"]
-        );
-        // Not numbers however read: left for tobj's "position parse error".
-        assert_eq!(normalise("v 1 x 3\n").text, "v 1 x 3\n");
-    }
-
-    #[test]
-    fn comments_and_the_byte_order_mark() {
-        let t = normalise("\u{feff}# a\nv 0 0 0 # b\n\n");
-        assert_eq!(t.text, "\nv 0 0 0\n\n");
-    }
-}
+mod tests;

@@ -1,0 +1,144 @@
+//! The implementation of [`normalise`] and [`face_materials`] before they stopped allocating
+//! per line (commit b8f1813), kept word for word (renamed, `reference_`) as the oracle of the
+//! equivalence test: the two must give the same output for every input. Test code only.
+
+use super::super::{more, note, quoted, Misspelt, ObjText, Skipped, BARE_STATEMENTS, STATEMENTS};
+use std::collections::BTreeMap;
+
+/// Rewrites OBJ `text` (a leading byte-order mark dropped). A physical line ending in `\`
+/// continues on the next one; the backslash is a word break, as Blender reads it (trimesh
+/// removes the backslash and the line break, which reads the same where a space stands
+/// before the backslash, as exporters write it).
+pub(super) fn reference_normalise(text: &str) -> ObjText {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut out = String::with_capacity(text.len());
+    let mut empty: BTreeMap<String, Skipped> = BTreeMap::new();
+    let mut unknown: BTreeMap<String, Skipped> = BTreeMap::new();
+    let mut misspelt = Misspelt::default();
+    let mut lines = text.lines().enumerate();
+    while let Some((n, first)) = lines.next() {
+        let mut statement = first.to_string();
+        let mut swallowed = 0;
+        while let Some(head) = statement.strip_suffix('\\') {
+            let head_len = head.len();
+            statement.truncate(head_len);
+            statement.push(' ');
+            match lines.next() {
+                Some((_, next)) => {
+                    statement.push_str(next);
+                    swallowed += 1;
+                }
+                None => break,
+            }
+        }
+        let line = n + 1;
+        // A `#` starts a comment to the end of the line (the checker reads it so too).
+        let content = statement.split('#').next().unwrap_or("").trim();
+        let mut words = content.split_whitespace();
+        match words.next() {
+            None => {}
+            Some(keyword) if !STATEMENTS.contains(&keyword) => note(&mut unknown, keyword, line),
+            Some(keyword) if words.next().is_none() && !BARE_STATEMENTS.contains(&keyword) => {
+                note(&mut empty, keyword, line)
+            }
+            Some("v") => out.push_str(&reference_vertex_line(content, line, &mut misspelt)),
+            Some("usemtl") => {
+                // tobj takes the name after the first space; a tab is a word break too.
+                let name = content["usemtl".len()..].trim();
+                out.push_str("usemtl ");
+                out.push_str(name);
+            }
+            Some(_) => out.push_str(content),
+        }
+        out.push('\n');
+        for _ in 0..swallowed {
+            out.push('\n');
+        }
+    }
+    let mut warnings: Vec<String> = misspelt.warning().into_iter().collect();
+    for (keyword, s) in &empty {
+        warnings.push(format!(
+            "line {}: empty '{keyword}' statement skipped{}",
+            s.first,
+            more(s.count)
+        ));
+    }
+    for (keyword, s) in &unknown {
+        warnings.push(format!(
+            "line {}: '{}' is not an OBJ statement: skipped{}",
+            s.first,
+            quoted(keyword),
+            more(s.count)
+        ));
+    }
+    ObjText {
+        text: out,
+        warnings,
+    }
+}
+
+/// A `v` statement as tobj is to read it: `v X Y Z`, with `W` where the line has exactly
+/// four numbers; colours after the position dropped; a number misspelt as [`Misspelt`]
+/// says read as trimesh reads it. A line with fewer than three numbers is left for tobj to
+/// refuse.
+fn reference_vertex_line(content: &str, line: usize, misspelt: &mut Misspelt) -> String {
+    let values: Vec<&str> = content.split_whitespace().skip(1).collect();
+    let kept = if values.len() == 4 { 4 } else { 3 };
+    let mut out = String::from("v");
+    let mut fixed = false;
+    for &value in values.iter().take(kept) {
+        out.push(' ');
+        match reference_trimesh_number(value) {
+            Some(read) => {
+                fixed = true;
+                if misspelt.first.is_none() {
+                    misspelt.first = Some((line, value.to_string(), read.clone()));
+                }
+                out.push_str(&read);
+            }
+            None => out.push_str(value),
+        }
+    }
+    misspelt.lines += usize::from(fixed);
+    out
+}
+
+/// The number trimesh reads for `word` where Rust reads none but deleting a sign before
+/// an `e` makes one (`3.1+e2` → `3.1e2`).
+fn reference_trimesh_number(word: &str) -> Option<String> {
+    if word.parse::<f64>().is_ok() {
+        return None;
+    }
+    let read = word.replace("+e", "e").replace("-e", "e");
+    read.parse::<f64>().is_ok().then_some(read)
+}
+
+/// The material of each triangle tobj makes of normalised `text` (faces fanned from their
+/// first corner, in file order): the name of the `usemtl` in force at the face, as an index
+/// into the names returned (in the order first used), from 1; 0 before any `usemtl`.
+pub(super) fn reference_face_materials(text: &str) -> (Vec<String>, Vec<u32>) {
+    let mut names: Vec<String> = Vec::new();
+    let mut current = 0;
+    let mut per_triangle = Vec::new();
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("usemtl") => {
+                let name = line.trim().split_once(' ').unwrap_or_default().1.trim();
+                current = match names.iter().position(|n| n == name) {
+                    Some(i) => i as u32 + 1,
+                    None => {
+                        names.push(name.to_string());
+                        names.len() as u32
+                    }
+                };
+            }
+            Some("f") => {
+                let corners = words.count();
+                per_triangle.extend(std::iter::repeat_n(current, corners.saturating_sub(2)));
+            }
+            _ => {}
+        }
+    }
+    (names, per_triangle)
+}
