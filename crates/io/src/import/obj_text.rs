@@ -87,15 +87,28 @@ pub fn normalise(text: &str) -> ObjText {
             out.push('\n');
         }
     }
+    ObjText {
+        text: out,
+        warnings: warnings(&misspelt, &empty, &unknown),
+    }
+}
+
+/// One warning for the misspelt numbers, then one per kind of empty statement, then one per
+/// kind of unknown statement.
+fn warnings(
+    misspelt: &Misspelt,
+    empty: &BTreeMap<String, Skipped>,
+    unknown: &BTreeMap<String, Skipped>,
+) -> Vec<String> {
     let mut warnings: Vec<String> = misspelt.warning().into_iter().collect();
-    for (keyword, s) in &empty {
+    for (keyword, s) in empty {
         warnings.push(format!(
             "line {}: empty '{keyword}' statement skipped{}",
             s.first,
             more(s.count)
         ));
     }
-    for (keyword, s) in &unknown {
+    for (keyword, s) in unknown {
         warnings.push(format!(
             "line {}: '{}' is not an OBJ statement: skipped{}",
             s.first,
@@ -103,10 +116,7 @@ pub fn normalise(text: &str) -> ObjText {
             more(s.count)
         ));
     }
-    ObjText {
-        text: out,
-        warnings,
-    }
+    warnings
 }
 
 /// The statement that starts on physical line `first` and how many of the following `lines`

@@ -1,8 +1,9 @@
 //! The implementation of [`normalise`] and [`face_materials`] before they stopped allocating
 //! per line (commit b8f1813), kept word for word (renamed, `reference_`) as the oracle of the
-//! equivalence test: the two must give the same output for every input. Test code only.
+//! equivalence test: the two must give the same output for every input. Test code only. The
+//! warnings are made by the module's own `warnings`, which the change did not touch.
 
-use super::super::{more, note, quoted, Misspelt, ObjText, Skipped, BARE_STATEMENTS, STATEMENTS};
+use super::super::{note, warnings, Misspelt, ObjText, Skipped, BARE_STATEMENTS, STATEMENTS};
 use std::collections::BTreeMap;
 
 /// Rewrites OBJ `text` (a leading byte-order mark dropped). A physical line ending in `\`
@@ -55,25 +56,9 @@ pub(super) fn reference_normalise(text: &str) -> ObjText {
             out.push('\n');
         }
     }
-    let mut warnings: Vec<String> = misspelt.warning().into_iter().collect();
-    for (keyword, s) in &empty {
-        warnings.push(format!(
-            "line {}: empty '{keyword}' statement skipped{}",
-            s.first,
-            more(s.count)
-        ));
-    }
-    for (keyword, s) in &unknown {
-        warnings.push(format!(
-            "line {}: '{}' is not an OBJ statement: skipped{}",
-            s.first,
-            quoted(keyword),
-            more(s.count)
-        ));
-    }
     ObjText {
         text: out,
-        warnings,
+        warnings: warnings(&misspelt, &empty, &unknown),
     }
 }
 
