@@ -1,5 +1,5 @@
-//! The implementation of [`normalise`] and [`face_materials`] before they stopped allocating
-//! per line (commit b8f1813), kept word for word (renamed, `reference_`) as the oracle of the
+//! The implementation of [`normalise`] before it stopped allocating per line (commit
+//! b8f1813), kept word for word (renamed, `reference_`) as the oracle of the
 //! equivalence test: the two must give the same output for every input. Test code only. The
 //! warnings are made by the module's own `warnings`, which the change did not touch.
 
@@ -96,34 +96,4 @@ fn reference_trimesh_number(word: &str) -> Option<String> {
     }
     let read = word.replace("+e", "e").replace("-e", "e");
     read.parse::<f64>().is_ok().then_some(read)
-}
-
-/// The material of each triangle tobj makes of normalised `text` (faces fanned from their
-/// first corner, in file order): the name of the `usemtl` in force at the face, as an index
-/// into the names returned (in the order first used), from 1; 0 before any `usemtl`.
-pub(super) fn reference_face_materials(text: &str) -> (Vec<String>, Vec<u32>) {
-    let mut names: Vec<String> = Vec::new();
-    let mut current = 0;
-    let mut per_triangle = Vec::new();
-    for line in text.lines() {
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("usemtl") => {
-                let name = line.trim().split_once(' ').unwrap_or_default().1.trim();
-                current = match names.iter().position(|n| n == name) {
-                    Some(i) => i as u32 + 1,
-                    None => {
-                        names.push(name.to_string());
-                        names.len() as u32
-                    }
-                };
-            }
-            Some("f") => {
-                let corners = words.count();
-                per_triangle.extend(std::iter::repeat_n(current, corners.saturating_sub(2)));
-            }
-            _ => {}
-        }
-    }
-    (names, per_triangle)
 }
