@@ -470,6 +470,41 @@ mod tests {
         assert_eq!(b.others, Others::Unknown);
     }
 
+    /// The bounds compiled with FMA ([`with_avx2`], on a CPU that has it) are those of the
+    /// same code compiled without (the runtime's `fma`), bit for bit: random quadrics of every
+    /// sign pattern, placed by random matrices, against random rays.
+    #[test]
+    fn the_fma_build_gives_the_same_bits() {
+        let mut rng = crate::test_rng::Rng(0x5eed_f3a5);
+        let mut roots = 0;
+        for _ in 0..300 {
+            let c = std::array::from_fn(|_| rng.uniform(-2.0, 2.0));
+            let cut = Some([rng.point(-3.0, -0.5), rng.point(0.5, 3.0)]);
+            let Ok(spec) = QuadricSpec::from_coefficients(c, cut) else {
+                continue;
+            };
+            let (axes, move_by) = (rng.point(0.2, 3.0), rng.point(-1e3, 1e3));
+            let turn = glam::DQuat::from_euler(
+                glam::EulerRot::XYZ,
+                rng.uniform(-3.0, 3.0),
+                rng.uniform(-3.0, 3.0),
+                rng.uniform(-3.0, 3.0),
+            );
+            let matrix = DMat4::from_scale_rotation_translation(axes, turn, move_by);
+            let Ok(q) = Quadric::new(&spec, matrix) else {
+                continue;
+            };
+            for _ in 0..10 {
+                let origin = move_by + rng.point(-8.0, 8.0);
+                let dir = move_by + rng.point(-1.0, 1.0) - origin;
+                let fused = q.bound_roots(origin, dir);
+                assert_eq!(fused, q.bound_roots_here(origin, dir));
+                roots += fused.roots.len();
+            }
+        }
+        assert!(roots > 1000, "{roots} roots");
+    }
+
     /// A crossing on a face of the clip box is at its edge; one well inside or outside is
     /// certain.
     #[test]
