@@ -29,6 +29,17 @@ impl Rng {
         )
     }
 
+    /// A uniform index below `n`.
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+
+    /// `x` moved by up to `ulps` units in the last place either way (through its bits).
+    pub fn nudge(&mut self, x: f64, ulps: u64) -> f64 {
+        let step = self.next() % (2 * ulps + 1);
+        f64::from_bits((x.to_bits() + step).wrapping_sub(ulps))
+    }
+
     /// One of `items`.
     pub fn pick<T: Copy>(&mut self, items: &[T]) -> T {
         items[(self.next() % items.len() as u64) as usize]

@@ -215,6 +215,17 @@ pub fn within3(v: DVec3, error: f64) -> BVec3 {
     ]
 }
 
+/// The components of `v`, each within its own bound in `errors` (the inverse of [`values3`]
+/// and [`errors3`]).
+#[inline(always)]
+pub fn bounded3(v: DVec3, errors: DVec3) -> BVec3 {
+    [
+        Bounded::new(v.x, errors.x),
+        Bounded::new(v.y, errors.y),
+        Bounded::new(v.z, errors.z),
+    ]
+}
+
 /// The bounds of a bounded vector's components.
 pub fn errors3(v: &BVec3) -> DVec3 {
     DVec3::new(v[0].error, v[1].error, v[2].error)
@@ -233,6 +244,17 @@ pub fn dot3(a: &BVec3, b: &BVec3) -> Bounded {
 
 /// A 3×3 matrix of bounded entries, `rows[i][j]`.
 pub type BMat3 = [[Bounded; 3]; 3];
+
+/// The rows of `m`, each entry within `error`.
+#[inline(always)]
+pub fn rows3(m: glam::DMat3, error: f64) -> BMat3 {
+    let r = m.transpose();
+    [
+        within3(r.x_axis, error),
+        within3(r.y_axis, error),
+        within3(r.z_axis, error),
+    ]
+}
 
 /// `m · v` in glam's order: per row `(m₀v₀ + m₁v₁) + m₂v₂`.
 #[inline(always)]

@@ -102,13 +102,7 @@ pub fn mapped(
     y: &bounded::BVec3,
     x: DVec3,
 ) -> bounded::BVec3 {
-    let t = a.transpose();
-    let rows = [
-        bounded::exact3(t.x_axis),
-        bounded::exact3(t.y_axis),
-        bounded::exact3(t.z_axis),
-    ];
-    let ax = bounded::mat_vec(&rows, &bounded::exact3(x));
+    let ax = bounded::mat_vec(&bounded::rows3(a, 0.0), &bounded::exact3(x));
     let off = |i: usize| Bounded::exact(y[i].value).sub(ax[i]).magnitude();
     let residual = 0.0f64.max(off(0)).max(off(1)).max(off(2));
     let y_error = y.iter().map(|c| c.error).fold(0.0, f64::max);

@@ -4,7 +4,9 @@
 use super::instance::StoredMesh;
 use super::{Crossing, Scene, Top};
 use crate::bound::bounded;
-use crate::bound::bounded::{errors3, exact3, gamma, up, values3, BVec3, Bounded};
+use crate::bound::bounded::{
+    bounded3, errors3, exact3, gamma, up, values3, within3, BVec3, Bounded,
+};
 use crate::bound::residual::{self, NearRay};
 use crate::bound::transform::moved;
 use crate::bound::triangle::{self, TriangleBound};
@@ -286,10 +288,7 @@ impl Scene {
     /// World triangle `i` with its placement bound.
     fn world_triangle(&self, i: usize) -> [BVec3; 3] {
         let error = self.placement_of(i);
-        self.world
-            .mesh
-            .triangle(i)
-            .map(|v| v.to_array().map(|x| Bounded::new(x, error)))
+        self.world.mesh.triangle(i).map(|v| within3(v, error))
     }
 
     /// The placement bound of world triangle `i`'s vertices.
@@ -341,7 +340,7 @@ impl Scene {
             let w = (a_error * v.abs() + t_error).to_array().map(up);
             let w = DVec3::from_array(w);
             let spread = (l * w + DVec3::splat(slack * w.max_element())).to_array();
-            [0, 1, 2].map(|c| Bounded::new(v[c], up(spread[c])))
+            bounded3(v, DVec3::from_array(spread.map(up)))
         })
     }
 

@@ -1,6 +1,7 @@
 //! The pruned bisection against the plain one, to the bit.
 
 use super::centring_shift;
+use crate::test_rng::Rng;
 
 /// The plain bisection, every point weighed at every step: the oracle.
 fn reference(local: &[[f64; 3]], axis: usize, guess: f64) -> f64 {
@@ -30,35 +31,6 @@ fn reference(local: &[[f64; 3]], axis: usize, guess: f64) -> f64 {
         }
     }
     0.5 * (lo + hi)
-}
-
-/// Deterministic xorshift64* generator, so the random tests are reproducible.
-struct Rng(u64);
-
-impl Rng {
-    /// 64 random bits.
-    fn bits(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-
-    /// A uniform number in `[lo, hi)`.
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.bits() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-
-    /// A uniform index below `n`.
-    fn below(&mut self, n: usize) -> usize {
-        (self.bits() % n as u64) as usize
-    }
-
-    /// `x` moved by up to `ulps` units in the last place either way.
-    fn nudge(&mut self, x: f64, ulps: u64) -> f64 {
-        let step = self.bits() % (2 * ulps + 1);
-        f64::from_bits((x.to_bits() + step).wrapping_sub(ulps))
-    }
 }
 
 /// A random cloud of one of several kinds, in the eye's frame (right, up, depth).

@@ -34,7 +34,7 @@
 //!   bounded local point `x₀ + t·v + a`.
 
 use super::Quadric;
-use crate::bound::bounded::{down, exact3, gamma, mat_vec, up, within3, BMat3, BVec3, Bounded};
+use crate::bound::bounded::{bounded3, down, exact3, gamma, mat_vec, rows3, up, BVec3, Bounded};
 use crate::bound::transform::BoundedMat4;
 use crate::bound::{mapped, Side};
 use crate::simd::with_avx2;
@@ -149,7 +149,7 @@ impl Errors {
         let linear = DMat3::from_mat4(world);
         let linear_error = DMat3::from_mat4(placement.error);
         let a = exact3(local_anchor);
-        let q = rows(spec.q, 0.0);
+        let q = rows3(spec.q, 0.0);
         let qa = mat_vec(&q, &a);
         let gradient = [0, 1, 2].map(|i| {
             Bounded::exact(2.0)
@@ -160,7 +160,7 @@ impl Errors {
             .add(crate::bound::bounded::dot3(&exact3(spec.p), &a))
             .add(Bounded::exact(spec.r));
         let scaled = |e: f64| up(up(e * scale[0]) * scale[1]);
-        let placed = mat_vec(&rows(linear, 0.0), &a);
+        let placed = mat_vec(&rows3(linear, 0.0), &a);
         let translation = world.w_axis.truncate();
         let composed = crate::bound::transform::moved(&placement.error, local_anchor);
         let anchor = [0, 1, 2].map(|i| {
@@ -182,27 +182,6 @@ impl Errors {
             clip: spec.bounds,
         }
     }
-}
-
-/// The rows of `m`, each entry within `error`.
-#[inline(always)]
-fn rows(m: DMat3, error: f64) -> BMat3 {
-    let r = m.transpose();
-    [
-        within3(r.x_axis, error),
-        within3(r.y_axis, error),
-        within3(r.z_axis, error),
-    ]
-}
-
-/// The components of `v`, each within its bound in `errors`.
-#[inline(always)]
-fn each_within(v: DVec3, errors: DVec3) -> BVec3 {
-    [
-        Bounded::new(v.x, errors.x),
-        Bounded::new(v.y, errors.y),
-        Bounded::new(v.z, errors.z),
-    ]
 }
 
 /// The quadratic `K t² + L t + M` along the ray, bounded.
@@ -281,7 +260,7 @@ impl Quadric {
     #[inline(always)]
     fn bounded_ray(&self, origin: DVec3, dir: DVec3) -> (BVec3, BVec3) {
         let e = self.errors();
-        let anchor = each_within(self.anchor, e.anchor);
+        let anchor = bounded3(self.anchor, e.anchor);
         let from = exact3(origin);
         let offset = [
             from[0].sub(anchor[0]),
@@ -300,8 +279,8 @@ impl Quadric {
     #[inline(always)]
     fn coefficients(&self, x0: &BVec3, v: &BVec3) -> Coefficients {
         use crate::bound::bounded::dot3;
-        let q = rows(self.local.q, 0.0);
-        let p = each_within(self.local.p, self.errors().gradient);
+        let q = rows3(self.local.q, 0.0);
+        let p = bounded3(self.local.p, self.errors().gradient);
         let r = Bounded::new(self.local.r, self.errors().constant);
         let qv = mat_vec(&q, v);
         let two = Bounded::exact(2.0);
@@ -321,8 +300,8 @@ impl Quadric {
         let tb = Bounded::exact(t);
         let along = |i: usize| x0[i].add(tb.mul(v[i]));
         let point: BVec3 = [along(0), along(1), along(2)];
-        let q = rows(self.local.q, 0.0);
-        let p = each_within(self.local.p, self.errors().gradient);
+        let q = rows3(self.local.q, 0.0);
+        let p = bounded3(self.local.p, self.errors().gradient);
         let r = Bounded::new(self.local.r, self.errors().constant);
         let qp = mat_vec(&q, &point);
         let value = dot3(&point, &qp).add(dot3(&p, &point)).add(r);
@@ -340,7 +319,7 @@ impl Quadric {
             #[inline(always)]
             || {
                 let (x0, v) = self.bounded_ray(origin, dir);
-                let q = rows(self.local.q, 0.0);
+                let q = rows3(self.local.q, 0.0);
                 let k = crate::bound::bounded::dot3(&v, &mat_vec(&q, &v));
                 let (value, slope) = self.value_and_slope(t, &x0, &v);
                 isolate(value, slope, k)
