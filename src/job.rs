@@ -224,7 +224,11 @@ fn check_request(job: &RenderJob) -> Result<Vec<Format>> {
     let formats = match &job.formats {
         Some(formats) => request::merge_formats(formats),
         None if rays_mode => vec![Format::Npy],
-        None => vec![Format::Exr, Format::Png],
+        // PNG previews where an AOV has one (`--aov error,certain` alone has none).
+        None if job.aovs.iter().any(|&aov| Format::Png.holds(aov, false)) => {
+            vec![Format::Exr, Format::Png]
+        }
+        None => vec![Format::Exr],
     };
     request::check_files(&job.aovs, &formats, rays_mode)?;
     if let Some(spp) = job.cryptomatte {

@@ -238,7 +238,7 @@ struct RenderArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Output formats: exr, png, npy, ply (a point cloud of the hits, with --aov position;
-    /// default exr,png; npy with --rays).
+    /// default exr,png, exr alone when no AOV asked for has a PNG preview; npy with --rays).
     #[arg(long, value_delimiter = ',')]
     format: Option<Vec<Format>>,
     /// glTF scene by index or name.

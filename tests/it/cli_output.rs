@@ -124,6 +124,42 @@ fn repeated_formats_merge_and_leave_no_partial_files() {
     );
 }
 
+/// The default formats write PNG previews only where an AOV asked for has one: `--aov
+/// error,certain` alone writes EXR files, where asking for `png` by name is still refused.
+#[test]
+fn the_default_formats_leave_out_a_png_with_nothing_to_preview() {
+    let out = temp_dir("no-preview");
+    let cube = fixture("gltf/cube.gltf");
+    let args = [
+        arg(&cube),
+        "--aov",
+        "error,certain",
+        "--width",
+        "16",
+        "--out",
+        arg(&out),
+    ];
+    raycast_ok(&[&args[..], &["--quiet"]].concat());
+    assert_eq!(
+        file_names(&out),
+        ["certain.exr", "error.exr", "raycast.json"]
+    );
+    let with_depth = [arg(&cube), "--aov", "depth,certain", "--width", "16"];
+    let both = temp_dir("preview");
+    raycast_ok(&[&with_depth[..], &["--out", arg(&both), "--quiet"]].concat());
+    assert_eq!(
+        file_names(&both),
+        ["certain.exr", "depth.exr", "depth.png", "raycast.json"]
+    );
+    let named = raycast(&[&args[..], &["--format", "png"]].concat());
+    let stderr = String::from_utf8_lossy(&named.stderr);
+    assert_eq!(named.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--format png would write no file"),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn requests_that_write_no_file_are_usage_errors() {
     let dir = temp_dir("no-file");

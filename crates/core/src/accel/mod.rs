@@ -136,6 +136,27 @@ pub trait PrimitiveSet: Sync {
     ) -> u32 {
         intersect_each(self, index, rays, active, t_max, ts)
     }
+
+    /// [`PrimitiveSet::intersect_packet`], and which of the rays `active` certainly do not
+    /// cross primitive `index` at all (the `certain` AOV's filter, `bound::apart`, for the
+    /// exact ray and primitive): `(hits, apart)`. Used by a search that notes what it offers
+    /// (module `octree::notes`), which then offers a ray nothing it certainly misses. The
+    /// default tells nothing (`apart` 0).
+    #[inline(always)]
+    fn intersect_packet_apart(
+        &self,
+        index: usize,
+        rays: &[PreparedRay<Self::RayData>; PACKET],
+        packet: &Self::PacketData,
+        active: u32,
+        t_max: &[f64; PACKET],
+        ts: &mut [f64; PACKET],
+    ) -> (u32, u32) {
+        (
+            self.intersect_packet(index, rays, packet, active, t_max, ts),
+            0,
+        )
+    }
 }
 
 /// Primitives tested together by [`PrimitiveSet::intersect_group`].

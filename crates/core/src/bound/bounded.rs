@@ -20,10 +20,12 @@
 //! product that overflows falls back to `γ₁|fl(ab)|`.
 //!
 //! The bounds themselves are sums and products of non-negative numbers evaluated in f64: a few
-//! roundings, each at most a relative `u`. [`up`] multiplies each by `1 + 2⁻⁵⁰` (more than
-//! `(1 + u)⁷`) and steps to the next float, so a computed bound is never below its exact
-//! value; [`down`] does the opposite for the divisors. A bound that cannot be made (a divisor
-//! that may be zero) is `+∞`, never NaN.
+//! roundings, each at most a relative `u` (or `2⁻¹⁰⁷⁵` in the subnormal range). [`up`]
+//! multiplies each by `1 + 2⁻⁴⁹` and adds `2⁻¹⁰⁷⁴`: the product, rounded to nearest, is at
+//! least `x(1 + 2⁻⁴⁹)(1 − u) > x(1 + 2⁻⁵⁰)`, more than `x(1 + u)⁷`, and where it is subnormal
+//! the added step covers its rounding, so a computed bound is never below its exact value;
+//! [`down`] does the opposite for the divisors. A bound that cannot be made (a divisor that
+//! may be zero) is `+∞`, never NaN.
 
 use glam::DVec3;
 
@@ -36,19 +38,26 @@ pub fn gamma(n: u32) -> f64 {
     up(nu / (1.0 - nu))
 }
 
-/// Relative slack that covers the roundings of a bound's own evaluation (up to seven).
-const SLACK: f64 = 1.0 / (1u64 << 50) as f64;
+/// Relative slack that covers the roundings of a bound's own evaluation (up to seven, less
+/// than `2⁻⁵⁰`) and the rounding of the product that applies it (`u` more).
+const SLACK: f64 = 1.0 / (1u64 << 49) as f64;
 
-/// `x` rounded up past the roundings of its own evaluation (see the module docs).
+/// The smallest positive f64, `2⁻¹⁰⁷⁴`: one step of the subnormal range.
+const TINY: f64 = f64::from_bits(1);
+
+/// `x ≥ 0` rounded up past the roundings of its own evaluation (see the module docs): a
+/// multiply and an add, no branch.
 #[inline(always)]
 pub fn up(x: f64) -> f64 {
-    (x * (1.0 + SLACK)).next_up()
+    x * (1.0 + SLACK) + TINY
 }
 
-/// `x ≥ 0` rounded down past the roundings of its own evaluation.
+/// `x ≥ 0` rounded down past the roundings of its own evaluation; `0` for a negative or NaN
+/// `x`, `f64::MAX` for `+∞` (a finite value that overflowed is at least that).
 #[inline(always)]
+#[allow(clippy::manual_clamp)] // `clamp` keeps a NaN, which must become 0 here.
 pub fn down(x: f64) -> f64 {
-    (x * (1.0 - SLACK)).next_down().max(0.0)
+    (x * (1.0 - SLACK) - TINY).max(0.0).min(f64::MAX)
 }
 
 /// Extra absolute bound per product, for the underflow of its rounding error.
@@ -293,6 +302,31 @@ mod tests {
         assert_eq!(q.error, f64::INFINITY);
         assert!(!tiny.sign_certain());
         assert!(q.error.is_infinite() && !q.error.is_nan());
+    }
+
+    /// `up` clears `x(1 + 2⁻⁵⁰)` and `down` stays below `x(1 − 2⁻⁵⁰)` (differences of nearby
+    /// floats are exact, so the comparisons are), across the normal and subnormal ranges; the
+    /// ends map as documented.
+    #[test]
+    fn up_and_down_clear_their_slack() {
+        let mut rng = crate::test_rng::Rng(0x0b0_0e5);
+        let eighth_u = 1.0 / (1u64 << 50) as f64;
+        for _ in 0..100_000 {
+            let x = f64::from_bits(rng.next() % f64::MAX.to_bits());
+            let (hi, lo) = (up(x), down(x));
+            assert!(hi - x >= x * eighth_u && hi > x, "up({x:e}) = {hi:e}");
+            assert!(
+                x - lo >= x * eighth_u && lo < x && lo >= 0.0,
+                "down({x:e}) = {lo:e}"
+            );
+        }
+        assert_eq!((up(0.0), down(0.0)), (f64::from_bits(1), 0.0));
+        assert_eq!(
+            (up(f64::INFINITY), down(f64::INFINITY)),
+            (f64::INFINITY, f64::MAX)
+        );
+        assert!(up(f64::NAN).is_nan() && down(f64::NAN) == 0.0);
+        assert_eq!(down(-1.0), 0.0);
     }
 
     #[test]

@@ -37,6 +37,7 @@
 //! vertices, and of the camera's ray generation (the ray traced is the one bounded); an
 //! inverted USD op other than a translation and point instances moved by velocities get `+∞`.
 
+pub mod apart;
 pub mod bounded;
 pub mod residual;
 pub mod rotation;

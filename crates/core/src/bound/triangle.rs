@@ -147,9 +147,20 @@ pub fn certainly_apart(
     {
         return true;
     }
-    let Some(e) = sheared.edges() else {
-        return false;
-    };
+    sheared.edges().is_some_and(|e| opposite(&e))
+}
+
+/// Filter 3 of [`certainly_apart`] alone (what [`super::apart::apart_four`] computes four at
+/// a time): whether two edge functions certainly have opposite signs.
+pub(crate) fn edges_apart(ray: &WatertightRay, tri: &[glam::DVec3; 3], placement: f64) -> bool {
+    let e = Sheared::new(ray, tri, placement).edges();
+    e.is_some_and(|e| opposite(&e))
+}
+
+/// Whether two of the edge functions `e` (each with its bound) are beyond their bounds with
+/// opposite signs.
+#[inline(always)]
+fn opposite(e: &[(f64, f64); 3]) -> bool {
     let positive = e.iter().any(|&(v, err)| v > err);
     let negative = e.iter().any(|&(v, err)| -v > err);
     positive && negative
@@ -209,11 +220,11 @@ impl Sheared {
     /// when one is not finite.
     #[inline(always)]
     fn edges(&self) -> Option<[(f64, f64); 3]> {
-        let (ex, ey, unit) = (self.ex, self.ey, super::bounded::UNIT);
+        let (ex, ey) = (self.ex, self.ey);
         let [a, b, c] = &self.vertices;
         let edge = |p: &[f64; 4], q: &[f64; 4]| {
             let value = p[0] * q[2] - p[2] * q[0];
-            let first = 32.0 * unit * (p[1] * q[3] + p[3] * q[1]);
+            let first = EDGE_ROUNDING * (p[1] * q[3] + p[3] * q[1]);
             let moved = p[1] * ey + q[3] * ex + p[3] * ex + q[1] * ey + 2.0 * ex * ey;
             // Twice: the slack for the second-order terms, then the evaluation's roundings.
             (value, pad(pad(first + moved)))
@@ -230,8 +241,14 @@ impl Sheared {
 /// One multiply and one add where [`up`] would take a step per operation.
 #[inline]
 fn pad(x: f64) -> f64 {
-    x * (1.0 + 1.0 / (1u64 << 30) as f64) + f64::MIN_POSITIVE
+    x * PAD + f64::MIN_POSITIVE
 }
+
+/// The factor of [`pad`], `1 + 2⁻³⁰`.
+pub(super) const PAD: f64 = 1.0 + 1.0 / (1u64 << 30) as f64;
+
+/// `γ₁₇` of filter 3 of [`certainly_apart`], as `32u`.
+pub(super) const EDGE_ROUNDING: f64 = 32.0 * super::bounded::UNIT;
 
 /// Whether the sheared coordinate `at` (`0` for `x`, `2` for `y`; its magnitude bound next to
 /// it) of all three vertices is certainly positive, or certainly negative (filter 2 of

@@ -12,8 +12,15 @@
 //!
 //! Most pairs a leaf offers are refused on the signs alone: the filter spends about forty
 //! instructions per four pairs where the single-ray test spends some sixty per pair.
+//!
+//! For the search that notes what it offers each ray (the `certain` AOV),
+//! [`WatertightPacket::candidates_apart`] also says which refused rays certainly miss the
+//! triangle taken as exact, by the edge filter of [`crate::bound::apart`] on the same sheared
+//! vertices.
 
 use super::triangle::WatertightRay;
+#[cfg(target_arch = "x86_64")]
+use crate::bound::apart;
 use crate::simd::Kernel;
 use crate::simd::PACKET;
 use glam::DVec3;
@@ -79,9 +86,32 @@ impl WatertightPacket {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is only set where the CPU has AVX2.
-            return unsafe { self.candidates_avx2(tri, active) };
+            return unsafe { self.candidates_avx2::<false>(tri, active) }.0;
         }
         self.candidates_portable(tri, active)
+    }
+
+    /// [`WatertightPacket::candidates`], and of the rays `active` those whose exact ray
+    /// certainly misses `tri` taken as exact ([`crate::bound::apart`]: two edge functions
+    /// beyond their rounding bounds with opposite signs, as `certainly_apart` decides it; a
+    /// subset of the refused rays): `(kept, apart)`. `ray(i)` is ray `i`, for the portable
+    /// kernel.
+    #[inline(always)]
+    pub fn candidates_apart<'r>(
+        &self,
+        tri: &[DVec3; 3],
+        active: u32,
+        ray: impl Fn(usize) -> &'r WatertightRay,
+    ) -> (u32, u32) {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is only set where the CPU has AVX2.
+            return unsafe { self.candidates_avx2::<true>(tri, active) };
+        }
+        let kept = self.candidates_portable(tri, active);
+        let lanes = (0..PACKET).filter(|&i| active & (1 << i) != 0);
+        let apart = lanes.filter(|&i| crate::bound::triangle::edges_apart(ray(i), tri, 0.0));
+        (kept, apart.fold(0, |mask, i| mask | 1 << i))
     }
 
     /// [`WatertightPacket::candidates`] one ray after the other.
@@ -102,16 +132,21 @@ impl WatertightPacket {
     ///
     /// # Safety
     /// The CPU must support AVX2.
+    /// With `APART`, also the rays [`WatertightPacket::candidates_apart`] reports (else 0).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn candidates_avx2(&self, tri: &[DVec3; 3], active: u32) -> u32 {
+    unsafe fn candidates_avx2<const APART: bool>(
+        &self,
+        tri: &[DVec3; 3],
+        active: u32,
+    ) -> (u32, u32) {
         match self.axes {
-            [1, 2, 0] => self.avx2_in::<1, 2, 0>(tri, active),
-            [2, 1, 0] => self.avx2_in::<2, 1, 0>(tri, active),
-            [2, 0, 1] => self.avx2_in::<2, 0, 1>(tri, active),
-            [0, 2, 1] => self.avx2_in::<0, 2, 1>(tri, active),
-            [0, 1, 2] => self.avx2_in::<0, 1, 2>(tri, active),
-            _ => self.avx2_in::<1, 0, 2>(tri, active),
+            [1, 2, 0] => self.avx2_in::<1, 2, 0, APART>(tri, active),
+            [2, 1, 0] => self.avx2_in::<2, 1, 0, APART>(tri, active),
+            [2, 0, 1] => self.avx2_in::<2, 0, 1, APART>(tri, active),
+            [0, 2, 1] => self.avx2_in::<0, 2, 1, APART>(tri, active),
+            [0, 1, 2] => self.avx2_in::<0, 1, 2, APART>(tri, active),
+            _ => self.avx2_in::<1, 0, 2, APART>(tri, active),
         }
     }
 
@@ -122,17 +157,17 @@ impl WatertightPacket {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn avx2_in<const KX: usize, const KY: usize, const KZ: usize>(
+    unsafe fn avx2_in<const KX: usize, const KY: usize, const KZ: usize, const APART: bool>(
         &self,
         tri: &[DVec3; 3],
         active: u32,
-    ) -> u32 {
+    ) -> (u32, u32) {
         let vertex = |v: &DVec3| {
             let c = |k| _mm256_set1_pd(v[k]);
             [c(KX), c(KY), c(KZ)]
         };
         let vertices = [vertex(&tri[0]), vertex(&tri[1]), vertex(&tri[2])];
-        let mut kept = 0;
+        let (mut kept, mut apart) = (0, 0);
         for quad in 0..PACKET / 4 {
             let rays = (active >> (4 * quad)) & 0xf;
             if rays != 0 {
@@ -145,10 +180,16 @@ impl WatertightPacket {
                     load(&self.origin[2]),
                 ];
                 let shear = [load(&self.shear[0]), load(&self.shear[1])];
-                kept |= (kept_avx2(&vertices, &origin, &shear) & rays) << (4 * quad);
+                let (k, a) = if APART {
+                    kept_apart_avx2(&vertices, &origin, &shear)
+                } else {
+                    (kept_avx2(&vertices, &origin, &shear), 0)
+                };
+                kept |= (k & rays) << (4 * quad);
+                apart |= (a & rays) << (4 * quad);
             }
         }
-        kept
+        (kept, apart)
     }
 }
 
@@ -260,9 +301,58 @@ unsafe fn kept_avx2(
             _mm256_sub_pd(py, _mm256_mul_pd(shear[1], pz)),
         )
     };
-    let (ax, ay) = sheared(&vertices[0]);
-    let (bx, by) = sheared(&vertices[1]);
-    let (cx, cy) = sheared(&vertices[2]);
+    kept_lanes([
+        sheared(&vertices[0]),
+        sheared(&vertices[1]),
+        sheared(&vertices[2]),
+    ])
+}
+
+/// [`kept_avx2`], and the lanes whose exact ray certainly misses the triangle taken as exact
+/// ([`crate::bound::apart::apart_lanes`]), from the same sheared coordinates.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn kept_apart_avx2(
+    vertices: &[[__m256d; 3]; 3],
+    origin: &[__m256d; 3],
+    shear: &[__m256d; 2],
+) -> (u32, u32) {
+    let moved = apart::margins(_mm256_setzero_pd(), *shear);
+    // Written out: an array's `map` may stay a call here.
+    let sheared = |v: &[__m256d; 3]| {
+        let p = [
+            _mm256_sub_pd(v[0], origin[0]),
+            _mm256_sub_pd(v[1], origin[1]),
+            _mm256_sub_pd(v[2], origin[2]),
+        ];
+        apart::sheared(p, *shear, moved)
+    };
+    let all = [
+        sheared(&vertices[0]),
+        sheared(&vertices[1]),
+        sheared(&vertices[2]),
+    ];
+    let kept = kept_lanes([
+        (all[0][0], all[0][2]),
+        (all[1][0], all[1][2]),
+        (all[2][0], all[2][2]),
+    ]);
+    let apart = _mm256_movemask_pd(apart::apart_lanes(&all, moved)) as u32;
+    (kept, apart)
+}
+
+/// [`kept`] for four lanes from the sheared `(x, y)` of the three vertices.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn kept_lanes([(ax, ay), (bx, by), (cx, cy)]: [(__m256d, __m256d); 3]) -> u32 {
     let edge = |p, q, r, s| _mm256_sub_pd(_mm256_mul_pd(p, q), _mm256_mul_pd(r, s));
     let (u, v, w) = (
         edge(cx, by, cy, bx),

@@ -2,22 +2,30 @@
 //! they bound and mean is said there): a hit's bound, its depth error, and the search for a
 //! competitor that decides `certain`.
 
+use crate::accel::octree::OFFERED;
 use crate::accel::{Offered, PACKET};
 use crate::bound::bounded::{self, gamma, sum_error, up, Bounded};
 use crate::bound::residual;
 use crate::bound::HitBound;
+use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Ray;
-use crate::scene::{Crossing, Probe, Scene};
+use crate::scene::{Crossing, Origins, Probe, Scene};
 use crate::trace::{traceable, Tracer};
 use glam::DVec3;
 use std::ops::Mul;
 
 /// The bound of `hit`, the nearest hit of `ray`: computed once per hit and shared by the
 /// `error` and `certain` AOVs; whether the primitive's own decision is certain only when
-/// `decide` (the `certain` AOV) asks for it.
+/// `decide` (the `certain` AOV) asks for it. `origins` carries mapped origins from hit to hit.
 #[inline(always)]
-pub fn hit_bound(scene: &Scene, ray: &Ray, hit: &Crossing, decide: bool) -> HitBound {
-    scene.hit_bound(hit, ray.origin, ray.dir, decide)
+pub fn hit_bound(
+    scene: &Scene,
+    ray: &Ray,
+    hit: &Crossing,
+    decide: bool,
+    origins: &mut Origins,
+) -> HitBound {
+    scene.hit_bound(hit, (ray.origin, ray.dir), decide, origins)
 }
 
 /// The `error` AOV of a hit of `ray` from its bound: a bound on `|t·|d| − t*·|d||` (see the
@@ -25,7 +33,7 @@ pub fn hit_bound(scene: &Scene, ray: &Ray, hit: &Crossing, decide: bool) -> HitB
 #[inline(always)]
 pub fn depth_error(bound: &HitBound, ray: &Ray) -> f64 {
     let (t, dir) = (bound.t.value, ray.dir);
-    if !(residual::in_range(t) && dir.to_array().into_iter().all(residual::in_range)) {
+    if !residual::all_in_range([t, dir.x, dir.y, dir.z]) {
         return depth_bound(bound.t, dir).error;
     }
     // The exact roundings, by fused multiply-adds (exact in the range checked): `fl(d·d)` is
@@ -82,7 +90,8 @@ pub fn certain(
         return false;
     };
     let (scene, local) = (tracer.scene, ray.origin - tracer.scene.anchor);
-    no_competitor(tracer, ray, hit, limit, |probe| {
+    let watertight = WatertightRay::new(ray.origin, ray.dir);
+    no_competitor(tracer, ray, hit, (watertight, limit), |probe| {
         let competes = |prim: u32| scene.may_cross(prim as usize, probe);
         tracer.octree.any_reference(local, ray.dir, limit, competes)
     })
@@ -109,7 +118,8 @@ pub fn certain_packet(
     });
     let probes: [Probe; PACKET] = std::array::from_fn(|i| {
         let limit = limits[i].unwrap_or(f64::NEG_INFINITY);
-        probe(tracer, &rays[i], limit, inner[i].as_ref())
+        let watertight = WatertightRay::new(rays[i].origin, rays[i].dir);
+        probe(tracer, &rays[i], (watertight, limit), inner[i].as_ref())
     });
     let origins = rays.each_ref().map(|ray| ray.origin - scene.anchor);
     let dirs = rays.each_ref().map(|ray| ray.dir);
@@ -144,32 +154,52 @@ pub fn certain_offered(
     if !within {
         return None;
     }
-    // Most rays are offered nothing but their own hit: no probe to make for them.
-    let own = hit.map(|(h, _)| h);
-    let mut rivals = prims
+    // Most rays are offered nothing but their own hit and neighbours the exact ray passes
+    // beside (four at a time by `Scene::apart`): no probe to make for them.
+    let (scene, own) = (tracer.scene, hit.map(|(h, _)| h));
+    let mut rivals = [0; OFFERED];
+    let mut count = 0;
+    for &prim in prims
         .iter()
-        .filter(|&&prim| !tracer.scene.is_hit_itself(prim as usize, own))
-        .peekable();
-    if rivals.peek().is_none() {
+        .filter(|&&p| !scene.is_hit_itself(p as usize, own))
+    {
+        rivals[count] = prim;
+        count += 1;
+    }
+    if count == 0 {
         return Some(true);
     }
-    Some(no_competitor(tracer, ray, hit, limit, |probe| {
-        rivals.any(|&prim| tracer.scene.may_cross(prim as usize, probe))
-    }))
+    let watertight = WatertightRay::new(ray.origin, ray.dir);
+    let root = root_size(tracer);
+    let apart = scene.apart(&watertight, tracer.octree.kernel(), &rivals[..count], root);
+    let mut left = (0..count)
+        .filter(|k| apart & (1 << k) == 0)
+        .map(|k| rivals[k])
+        .peekable();
+    if left.peek().is_none() {
+        return Some(true);
+    }
+    Some(no_competitor(
+        tracer,
+        ray,
+        hit,
+        (watertight, limit),
+        |probe| left.any(|prim| scene.may_cross(prim as usize, probe)),
+    ))
 }
 
-/// Whether `search` finds no competitor of `ray`'s `hit` up to `limit`: it is handed the ray's
-/// probe (the hit's instance triangle found) and says whether some candidate primitive may
+/// Whether `search` finds no competitor of `ray`'s `hit` up to `reach`'s limit (with the ray's
+/// watertight set-up): it is handed the ray's probe (the hit's instance triangle found) and says whether some candidate primitive may
 /// cross the ray there ([`Scene::may_cross`]).
 fn no_competitor(
     tracer: &Tracer,
     ray: &Ray,
     hit: Option<(&Crossing, &HitBound)>,
-    limit: f64,
+    reach: (WatertightRay, f64),
     search: impl FnOnce(&Probe) -> bool,
 ) -> bool {
     let hit = hit.map(|(h, _)| tracer.scene.with_inner(h, ray.origin, ray.dir));
-    !search(&probe(tracer, ray, limit, hit.as_ref()))
+    !search(&probe(tracer, ray, reach, hit.as_ref()))
 }
 
 /// How far `certain`'s search for a competitor goes: `t + δ` for a hit whose own decision is
@@ -195,8 +225,18 @@ fn probe_limit(
     (!decided).then_some(high)
 }
 
-/// The probe of `ray` up to `limit` against its hit (its instance triangle found).
-fn probe<'a>(tracer: &Tracer, ray: &Ray, limit: f64, hit: Option<&'a Crossing>) -> Probe<'a> {
-    let root = tracer.octree.root().size().max_element();
-    Probe::new(ray, limit, hit, root)
+/// The probe of `ray` (with its watertight set-up) up to `limit` against its hit (its
+/// instance triangle found).
+fn probe<'a>(
+    tracer: &Tracer,
+    ray: &Ray,
+    (watertight, limit): (WatertightRay, f64),
+    hit: Option<&'a Crossing>,
+) -> Probe<'a> {
+    Probe::new(ray, watertight, limit, hit, root_size(tracer))
+}
+
+/// The largest side of the scene octree's root ([`Probe::root`]).
+fn root_size(tracer: &Tracer) -> f64 {
+    tracer.octree.root().size().max_element()
 }

@@ -10,7 +10,7 @@ use crate::accel::{Offered, PACKET};
 use crate::bound::HitBound;
 use crate::geometry::Ray;
 use crate::geometry::RaySource;
-use crate::scene::{Crossing, Located, Scene};
+use crate::scene::{Crossing, Located, Origins, Scene};
 use crate::simd::Kernel;
 use crate::trace::{traceable, NearestHits};
 use glam::DVec3;
@@ -319,13 +319,14 @@ unsafe fn block_bounds_avx2(
 #[inline(always)]
 fn block_bounds(block: &Block<'_>, hits: &[Option<Crossing>]) -> Vec<Option<(HitBound, f64)>> {
     let mut bounds = Vec::with_capacity(hits.len());
+    let mut origins = Origins::default();
     for (j, hit) in hits.iter().enumerate() {
         let Some(hit) = hit else {
             bounds.push(None);
             continue;
         };
         let ray = block.ray(j);
-        let bound = super::bounds::hit_bound(block.scene, &ray, hit, block.decide);
+        let bound = super::bounds::hit_bound(block.scene, &ray, hit, block.decide, &mut origins);
         bounds.push(Some((bound, super::bounds::depth_error(&bound, &ray))));
     }
     bounds

@@ -3,6 +3,7 @@
 
 use super::instance::StoredMesh;
 use super::{Crossing, Scene, Top};
+use crate::bound::apart::{apart_four, LANES};
 use crate::bound::bounded;
 use crate::bound::bounded::{
     bounded3, errors3, exact3, gamma, up, values3, within3, BVec3, Bounded,
@@ -15,7 +16,7 @@ use crate::geometry::triangle::WatertightRay;
 use crate::geometry::Aabb;
 use crate::geometry::Ray;
 use crate::quadric::{Others, Quadric, QuadricBound, RootBound};
-use crate::simd::with_avx2;
+use crate::simd::{with_avx2, Kernel};
 use glam::{DMat3, DVec3};
 use std::ops::Sub;
 
@@ -39,12 +40,20 @@ pub struct Probe<'a> {
 }
 
 impl<'a> Probe<'a> {
-    /// The probe of `ray` up to `limit` against `hit`.
-    pub fn new(ray: &Ray, limit: f64, hit: Option<&'a Crossing>, root: f64) -> Probe<'a> {
+    /// The probe of `ray` up to `limit` against `hit`; `watertight` is the ray's watertight
+    /// set-up (`WatertightRay::new` of its origin and direction), made by the caller, who may
+    /// need it before.
+    pub fn new(
+        ray: &Ray,
+        watertight: WatertightRay,
+        limit: f64,
+        hit: Option<&'a Crossing>,
+        root: f64,
+    ) -> Probe<'a> {
         Probe {
             origin: ray.origin,
             dir: ray.dir,
-            watertight: WatertightRay::new(ray.origin, ray.dir),
+            watertight,
             limit,
             hit,
             root,
@@ -116,8 +125,16 @@ impl Scene {
     /// ([`crate::bound::residual`]), or where that declines by the bounded recomputation of the
     /// watertight test; whether its own decision is certain (which takes that recomputation)
     /// only when `decide` asks for it (`certain` is `false` otherwise).
+    ///
+    /// `origins` keeps quadrics' mapped origins for the next hits.
     #[inline(always)]
-    pub fn hit_bound(&self, hit: &Crossing, origin: DVec3, dir: DVec3, decide: bool) -> HitBound {
+    pub fn hit_bound(
+        &self,
+        hit: &Crossing,
+        (origin, dir): (DVec3, DVec3),
+        decide: bool,
+        origins: &mut Origins,
+    ) -> HitBound {
         let unbounded = HitBound {
             t: Bounded::new(hit.t, f64::INFINITY),
             certain: false,
@@ -159,7 +176,11 @@ impl Scene {
                 let decide = decide.then_some(false);
                 triangle_hit(&ray, &stored_tri, vertex_error, hit.t, decide, full)
             }
-            Top::Quadric(q) => quadric_hit(&self.quadrics[q], origin, dir, hit.t, decide),
+            Top::Quadric(q) => {
+                let quadric = &self.quadrics[q];
+                let x0 = origins.get(hit.top, origin, || quadric.bounded_origin(origin));
+                quadric_hit(quadric, (&x0, origin, dir), hit.t, decide)
+            }
         }
     }
 
@@ -219,6 +240,35 @@ impl Scene {
                 quadric_competes(&self.quadrics[q].bound_roots(origin, dir), limit, None)
             }
         }
+    }
+
+    /// Of the primitives `prims` (at most 32), those [`Scene::may_cross`] certainly says no
+    /// to by the edge functions alone, world triangles four at a time ([`apart_four`] by
+    /// `kernel`): bit `k` for `prims[k]`. Instances, quadrics and a triangle whose placement
+    /// bound `may_cross` would not weigh (see [`CELL_SLACK`]; `root` as in [`Probe`]) are left
+    /// to `may_cross`.
+    pub fn apart(&self, ray: &WatertightRay, kernel: Kernel, prims: &[u32], root: f64) -> u32 {
+        let mut apart = 0;
+        for (g, group) in prims.chunks(LANES).enumerate() {
+            let mut tris = [[DVec3::ZERO; 3]; LANES];
+            let mut placement = [0.0; LANES];
+            let mut active = 0;
+            for (lane, &prim) in group.iter().enumerate() {
+                let Top::Triangle(i) = self.top(prim as usize) else {
+                    continue;
+                };
+                placement[lane] = self.placement_of(i);
+                if placement[lane] > CELL_SLACK * root {
+                    continue;
+                }
+                tris[lane] = self.world.mesh.triangle(i);
+                active |= 1 << lane;
+            }
+            if active != 0 {
+                apart |= apart_four(ray, kernel, &tris, &placement, active) << (LANES * g);
+            }
+        }
+        apart
     }
 
     /// [`Scene::may_cross`] for instance `k`: its own octree along the mapped ray, every
@@ -294,6 +344,13 @@ impl Scene {
     /// The placement bound of world triangle `i`'s vertices.
     fn placement_of(&self, i: usize) -> f64 {
         self.placement[self.world_parts[i] as usize]
+    }
+
+    /// Whether world triangle `i` is exactly as stored (placement bound 0) and the scene's
+    /// rays are searched unmoved (anchor 0), so that the search's watertight set-up is that
+    /// of the exact ray against the exact triangle.
+    pub(super) fn taken_as_exact(&self, i: usize) -> bool {
+        self.anchor == DVec3::ZERO && self.placement_of(i) == 0.0
     }
 
     /// The world ray in instance `k`'s mesh frame as the trace maps it, `L(o − T)` and `L d`,
@@ -403,15 +460,20 @@ fn nearest_root(b: &QuadricBound, t: f64) -> Option<usize> {
 /// and the one the trace reports (the same check at the same `t`, so the same bound) decides:
 /// certain when it is isolated, inside the clip box and in front of the origin, and no other
 /// exact root may be a nearer valid crossing.
-fn quadric_hit(quadric: &Quadric, origin: DVec3, dir: DVec3, t: f64, decide: bool) -> HitBound {
+fn quadric_hit(
+    quadric: &Quadric,
+    (x0, origin, dir): (&BVec3, DVec3, DVec3),
+    t: f64,
+    decide: bool,
+) -> HitBound {
     let alone = || HitBound {
-        t: Bounded::new(t, quadric.bound_root_at(origin, dir, t).0),
+        t: Bounded::new(t, quadric.bound_root_at(x0, dir, t).0),
         certain: false,
     };
     if !decide {
         return alone();
     }
-    let b = quadric.bound_roots(origin, dir);
+    let b = quadric.bound_roots_from(x0, origin, dir);
     let Some(i) = nearest_root(&b, t).filter(|&i| b.roots[i].t.value == t) else {
         return alone();
     };
@@ -423,6 +485,9 @@ fn quadric_hit(quadric: &Quadric, origin: DVec3, dir: DVec3, t: f64, decide: boo
         certain: own && !quadric_competes(&b, up(t + error), Some(i)),
     }
 }
+
+mod origins;
+pub use origins::Origins;
 
 #[cfg(test)]
 mod tests;

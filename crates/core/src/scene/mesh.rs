@@ -323,14 +323,32 @@ impl MeshSet {
         packet: &WatertightPacket,
         ray: impl Fn(usize) -> &'r WatertightRay,
         active: u32,
-        (t_max, ts): (&[f64; PACKET], &mut [f64; PACKET]),
+        limits: (&[f64; PACKET], &mut [f64; PACKET]),
     ) -> u32 {
+        self.triangle_packet::<false>(i, packet, ray, active, limits)
+            .0
+    }
+
+    /// [`MeshSet::intersect_triangle_packet`], `(hits, 0)`; with `APART`, `(hits, apart)`:
+    /// also the rays whose exact ray certainly misses the triangle taken as exact
+    /// ([`WatertightPacket::candidates_apart`]; none for a lone ray, which skips the filter).
+    #[inline(always)]
+    pub(crate) fn triangle_packet<'r, const APART: bool>(
+        &self,
+        i: usize,
+        packet: &WatertightPacket,
+        ray: impl Fn(usize) -> &'r WatertightRay,
+        active: u32,
+        (t_max, ts): (&[f64; PACKET], &mut [f64; PACKET]),
+    ) -> (u32, u32) {
         let tri = self.mesh.triangle(i);
         // A lone ray goes straight to its own test: the filter costs more than it saves.
-        let candidates = if active.is_power_of_two() {
-            active
+        let (candidates, apart) = if active.is_power_of_two() {
+            (active, 0)
+        } else if APART {
+            packet.candidates_apart(&tri, active, &ray)
         } else {
-            packet.candidates(&tri, active)
+            (packet.candidates(&tri, active), 0)
         };
         let mut hits = 0;
         for lane in set_bits(candidates) {
@@ -339,7 +357,7 @@ impl MeshSet {
                 hits |= 1 << lane;
             }
         }
-        hits
+        (hits, apart)
     }
 
     /// [`PrimitiveSet::intersect_group`] for the triangles `indices` and one ray prepared in

@@ -23,6 +23,7 @@
 pub mod attributes;
 mod bound;
 mod builder;
+mod framing;
 mod hits;
 pub mod instance;
 pub mod mesh;
@@ -31,6 +32,7 @@ mod shading;
 pub mod topology;
 
 pub use attributes::Attributes;
+pub use bound::Origins;
 pub use bound::Probe;
 pub use builder::SceneBuilder;
 pub use hits::{Crossing, EdgeRule};
@@ -442,32 +444,6 @@ impl Scene {
         triangles
     }
 
-    /// Points whose projections frame the scene for the automatic camera: every vertex of
-    /// the scene's triangles in world coordinates (instances placed) and the corners of each
-    /// quadric's bounds; past [`FRAMING_POINTS`] vertices, the corners of the remaining
-    /// objects' bounds instead. Each point once (a mesh's corners repeat its shared vertices
-    /// about six times): the framing takes only extremes over the points, which repeats do
-    /// not change, and its bisection passes over them some 120 times.
-    pub fn framing_points(&self) -> Vec<DVec3> {
-        let mut points = Vec::new();
-        for object in &self.objects {
-            let bounds = self.object_bounds(object);
-            if object.quadric.is_some()
-                || points.len() + 3 * object.triangles as usize > FRAMING_POINTS
-            {
-                if !bounds.is_empty() {
-                    points.extend(bounds.corners());
-                }
-                continue;
-            }
-            points.extend(self.mesh_triangles(object).into_iter().flatten());
-        }
-        let mut seen = rustc_hash::FxHashSet::default();
-        seen.reserve(points.len());
-        points.retain(|p| seen.insert(p.to_array().map(f64::to_bits)));
-        points
-    }
-
     /// World-space bounds of one object.
     pub fn object_bounds(&self, object: &Object) -> Aabb {
         self.object_parts(object)
@@ -663,12 +639,51 @@ impl PrimitiveSet for Scene {
         t_max: &[f64; PACKET],
         ts: &mut [f64; PACKET],
     ) -> u32 {
-        match packet {
-            Some(packet) if index < self.world.mesh.len() => {
-                let ray = |i: usize| &rays[i].extra.triangle;
-                (self.world).intersect_triangle_packet(index, packet, ray, active, (t_max, ts))
-            }
-            _ => self.intersect_other_packet(index, rays, active, t_max, ts),
+        self.packet_test::<false>(index, rays, packet, active, (t_max, ts))
+            .0
+    }
+
+    /// For a world triangle taken as exact (its placement bound 0) in a scene whose rays the
+    /// search prepares unmoved (anchor 0: `(o − 0) + 0` is `o`), the packet pre-filter's
+    /// `apart` lanes (`MeshSet::triangle_packet`): the very filter [`Scene::apart`] would
+    /// apply to the exact ray afterwards. Anything else tells nothing.
+    #[inline(always)]
+    fn intersect_packet_apart(
+        &self,
+        index: usize,
+        rays: &[PreparedRay<SceneRay>; PACKET],
+        packet: &Self::PacketData,
+        active: u32,
+        t_max: &[f64; PACKET],
+        ts: &mut [f64; PACKET],
+    ) -> (u32, u32) {
+        self.packet_test::<true>(index, rays, packet, active, (t_max, ts))
+    }
+}
+
+impl Scene {
+    /// [`PrimitiveSet::intersect_packet`], with `APART` its `_apart` form.
+    #[inline(always)]
+    fn packet_test<const APART: bool>(
+        &self,
+        index: usize,
+        rays: &[PreparedRay<SceneRay>; PACKET],
+        packet: &Option<WatertightPacket>,
+        active: u32,
+        (t_max, ts): (&[f64; PACKET], &mut [f64; PACKET]),
+    ) -> (u32, u32) {
+        let Some(packet) = packet.as_ref().filter(|_| index < self.world.mesh.len()) else {
+            return (
+                self.intersect_other_packet(index, rays, active, t_max, ts),
+                0,
+            );
+        };
+        let ray = |i: usize| &rays[i].extra.triangle;
+        let world = &self.world;
+        if APART && self.taken_as_exact(index) {
+            world.triangle_packet::<true>(index, packet, ray, active, (t_max, ts))
+        } else {
+            world.triangle_packet::<false>(index, packet, ray, active, (t_max, ts))
         }
     }
 }

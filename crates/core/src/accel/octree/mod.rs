@@ -443,19 +443,25 @@ impl Octree {
                     if active == 0 {
                         continue;
                     }
-                    if N::NOTING {
-                        for i in set_bits(active) {
+                    let hits = if N::NOTING {
+                        // Offered to the rays that may cross it (those that certainly miss it
+                        // are no competitor of any hit: module `notes`).
+                        let (hits, apart) = set.intersect_packet_apart(
+                            prim as usize,
+                            prepared,
+                            packet,
+                            active,
+                            limits,
+                            &mut ts,
+                        );
+                        for i in set_bits(active & !apart) {
                             notes.offer(i, prim);
                         }
-                    }
-                    let hits = set.intersect_packet(
-                        prim as usize,
-                        prepared,
-                        packet,
-                        active,
-                        limits,
-                        &mut ts,
-                    );
+                        hits
+                    } else {
+                        let index = prim as usize;
+                        set.intersect_packet(index, prepared, packet, active, limits, &mut ts)
+                    };
                     for i in set_bits(hits) {
                         let hit = Hit { t: ts[i], prim };
                         if hit.beats(&best[i]) {

@@ -80,6 +80,32 @@ fn the_filter_keeps_rays_through_the_triangle_and_refuses_rays_beside_it() {
     );
 }
 
+/// A triangle from a small set of corners (so that triangles share edges and vertices
+/// exactly) at a scale from 1e-300 to 1e300, and rays through a vertex, along an edge and in
+/// the triangle's plane.
+fn edge_case(rng: &mut Rng, round: usize) -> ([DVec3; 3], [WatertightRay; PACKET]) {
+    let scale = [1.0, 1e-300, 1e300, 1e-160, 3.0][round % 5];
+    let corner = [
+        rng.point(-1.0, 1.0),
+        rng.point(-1.0, 1.0),
+        rng.point(-1.0, 1.0),
+    ];
+    let pick = |r: &mut Rng| corner[(r.uniform(0.0, 1.0) * 3.0) as usize % 3] * scale;
+    let tri = [pick(rng), rng.point(-1.0, 1.0) * scale, pick(rng)];
+    let origin = rng.point(-4.0, 4.0) * scale;
+    let base = tri[0] + (tri[1] - tri[0]) * rng.uniform(0.0, 1.0) - origin;
+    let rays = std::array::from_fn(|i| {
+        let target = match i {
+            // Through a vertex, along an edge, and in the plane of the triangle.
+            0 => tri[0] - origin,
+            1 => tri[1] - tri[0],
+            _ => base + (tri[2] - tri[1]) * rng.uniform(-0.1, 0.1),
+        };
+        WatertightRay::new(origin, target)
+    });
+    (tri, rays)
+}
+
 /// Whatever the geometry (shared edges and vertices, rays along a triangle's plane, far
 /// origins, subnormal and huge coordinates), every ray the single-ray test hits is kept, and
 /// the kernels agree bit for bit.
@@ -88,26 +114,7 @@ fn no_ray_the_single_ray_test_hits_is_refused() {
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
     let (mut hits, mut tests) = (0, 0);
     for round in 0..50000 {
-        let scale = [1.0, 1e-300, 1e300, 1e-160, 3.0][round % 5];
-        let corner = [
-            rng.point(-1.0, 1.0),
-            rng.point(-1.0, 1.0),
-            rng.point(-1.0, 1.0),
-        ];
-        // Triangles from a small set of corners share edges and vertices exactly.
-        let pick = |r: &mut Rng| corner[(r.uniform(0.0, 1.0) * 3.0) as usize % 3] * scale;
-        let tri = [pick(&mut rng), rng.point(-1.0, 1.0) * scale, pick(&mut rng)];
-        let origin = rng.point(-4.0, 4.0) * scale;
-        let base = tri[0] + (tri[1] - tri[0]) * rng.uniform(0.0, 1.0) - origin;
-        let rays: [WatertightRay; PACKET] = std::array::from_fn(|i| {
-            let target = match i {
-                // Through a vertex, along an edge, and in the plane of the triangle.
-                0 => tri[0] - origin,
-                1 => tri[1] - tri[0],
-                _ => base + (tri[2] - tri[1]) * rng.uniform(-0.1, 0.1),
-            };
-            WatertightRay::new(origin, target)
-        });
+        let (tri, rays) = edge_case(&mut rng, round);
         let Some(packet) = WatertightPacket::new(Kernel::detect(), |i| &rays[i]) else {
             continue;
         };
@@ -121,6 +128,51 @@ fn no_ray_the_single_ray_test_hits_is_refused() {
         tests += 1;
     }
     assert!(tests > 4000 && hits > 6000, "{tests} packets, {hits} hits");
+}
+
+/// The rays [`WatertightPacket::candidates_apart`] reports are exactly those `certainly_apart`'s
+/// edge filter passes over, with either kernel, on the same edge cases and on rays aimed a
+/// little beside a triangle; they are refused, none is hit, and `kept` is
+/// [`WatertightPacket::candidates`]'s.
+#[test]
+fn apart_rays_are_the_edge_filter_s() {
+    let mut rng = Rng(0x6a09_e667_f3bc_c908);
+    let (mut apart_rays, mut refused_rays) = (0, 0);
+    for round in 0..20000 {
+        let (tri, mut rays) = edge_case(&mut rng, round);
+        if round % 2 == 1 {
+            // Beside an edge by a random power of ten of the triangle's size.
+            let size = (tri[1] - tri[0]).length().max(f64::MIN_POSITIVE);
+            for ray in rays.iter_mut().skip(2) {
+                let (_, origin) = ray.shear_and_origin();
+                let edge = tri[2] + (tri[1] - tri[2]) * rng.uniform(0.0, 1.0);
+                let off = rng.point(-1.0, 1.0) * size * 10f64.powf(rng.uniform(-15.0, 0.0));
+                *ray = WatertightRay::new(origin, edge + off - origin);
+            }
+        }
+        let Some(packet) = WatertightPacket::new(Kernel::detect(), |i| &rays[i]) else {
+            continue;
+        };
+        let hit = (0..PACKET)
+            .filter(|&i| rays[i].intersect(&tri, f64::INFINITY).is_some())
+            .fold(0u32, |m, i| m | 1 << i);
+        let filter = (0..PACKET)
+            .filter(|&i| crate::bound::triangle::edges_apart(&rays[i], &tri, 0.0))
+            .fold(0u32, |m, i| m | 1 << i);
+        let active = 0b1101_1111;
+        for packet in kernels(packet) {
+            let (kept, apart) = packet.candidates_apart(&tri, active, |i| &rays[i]);
+            assert_eq!(kept, packet.candidates(&tri, active), "round {round}");
+            assert_eq!(apart, filter & active, "round {round}: {tri:?}");
+            assert_eq!(apart & (kept | hit), 0, "round {round}");
+            refused_rays += (active & !kept).count_ones();
+        }
+        apart_rays += (filter & active).count_ones();
+    }
+    assert!(
+        apart_rays > 2000 && refused_rays > apart_rays,
+        "{apart_rays} {refused_rays}"
+    );
 }
 
 #[test]

@@ -215,16 +215,25 @@ impl Quadric {
     pub fn bound_roots(&self, origin: DVec3, dir: DVec3) -> QuadricBound {
         with_avx2(
             #[inline(always)]
-            || self.bound_roots_here(origin, dir),
+            || self.bound_roots_here(&self.bounded_origin_here(origin), origin, dir),
+        )
+    }
+
+    /// [`Quadric::bound_roots`] with the bounded local origin already made
+    /// ([`Quadric::bounded_origin`] of `origin`).
+    pub fn bound_roots_from(&self, x0b: &BVec3, origin: DVec3, dir: DVec3) -> QuadricBound {
+        with_avx2(
+            #[inline(always)]
+            || self.bound_roots_here(x0b, origin, dir),
         )
     }
 
     /// [`Quadric::bound_roots`], inlined into its caller.
     #[inline(always)]
-    fn bound_roots_here(&self, origin: DVec3, dir: DVec3) -> QuadricBound {
+    fn bound_roots_here(&self, x0b: &BVec3, origin: DVec3, dir: DVec3) -> QuadricBound {
         let x0 = self.to_local * (origin - self.anchor);
         let v = self.to_local * dir;
-        let (x0b, vb) = self.bounded_ray(origin, dir);
+        let (x0b, vb) = (*x0b, self.bounded_dir(dir));
         let c = self.coefficients(&x0b, &vb);
         let Some(roots) = self.local.ray_roots(x0, v) else {
             let disc = c.l.mul(c.l).sub(Bounded::exact(4.0).mul(c.k).mul(c.m));
@@ -255,10 +264,19 @@ impl Quadric {
         self.may_reach_bounds(origin, dir.recip(), limit)
     }
 
-    /// The local ray as computed, `x₀ = L(o − c)`, `v = L d`, bounded
-    /// ([`crate::bound::mapped`]).
+    /// The local origin as computed, `x₀ = L(o − c)`, bounded ([`crate::bound::mapped`]): the
+    /// part of a ray's mapping that rays from one point share (see
+    /// [`crate::scene::Origins`]); with FMA where the CPU has it ([`with_avx2`]).
+    pub fn bounded_origin(&self, origin: DVec3) -> BVec3 {
+        with_avx2(
+            #[inline(always)]
+            || self.bounded_origin_here(origin),
+        )
+    }
+
+    /// [`Quadric::bounded_origin`], inlined into its caller.
     #[inline(always)]
-    fn bounded_ray(&self, origin: DVec3, dir: DVec3) -> (BVec3, BVec3) {
+    fn bounded_origin_here(&self, origin: DVec3) -> BVec3 {
         let e = self.errors();
         let anchor = bounded3(self.anchor, e.anchor);
         let from = exact3(origin);
@@ -268,11 +286,15 @@ impl Quadric {
             from[2].sub(anchor[2]),
         ];
         let x0 = self.to_local * (origin - self.anchor);
+        mapped(e.linear, &e.linear_error, e.inverse_norm, &offset, x0)
+    }
+
+    /// The local direction as computed, `v = L d`, bounded ([`crate::bound::mapped`]).
+    #[inline(always)]
+    fn bounded_dir(&self, dir: DVec3) -> BVec3 {
+        let e = self.errors();
         let v = self.to_local * dir;
-        (
-            mapped(e.linear, &e.linear_error, e.inverse_norm, &offset, x0),
-            mapped(e.linear, &e.linear_error, e.inverse_norm, &exact3(dir), v),
-        )
+        mapped(e.linear, &e.linear_error, e.inverse_norm, &exact3(dir), v)
     }
 
     /// `K`, `L`, `M` of the local polynomial along the bounded ray.
@@ -311,17 +333,18 @@ impl Quadric {
     }
 
     /// A bound on the distance from `t` (a reported crossing of the world ray `origin +
-    /// t·dir`) to the nearest exact root, and whether exactly one exact root lies within it
-    /// (see the module docs): the check of one root, without the other root, the clip box or
-    /// the other coefficients that [`Quadric::bound_roots`] adds for a decision.
-    pub fn bound_root_at(&self, origin: DVec3, dir: DVec3, t: f64) -> (f64, bool) {
+    /// t·dir`, `x0` its [`Quadric::bounded_origin`]) to the nearest exact root, and whether
+    /// exactly one exact root lies within it (see the module docs): the check of one root,
+    /// without the other root, the clip box or the other coefficients that
+    /// [`Quadric::bound_roots`] adds for a decision.
+    pub fn bound_root_at(&self, x0: &BVec3, dir: DVec3, t: f64) -> (f64, bool) {
         with_avx2(
             #[inline(always)]
             || {
-                let (x0, v) = self.bounded_ray(origin, dir);
+                let v = self.bounded_dir(dir);
                 let q = rows3(self.local.q, 0.0);
                 let k = crate::bound::bounded::dot3(&v, &mat_vec(&q, &v));
-                let (value, slope) = self.value_and_slope(t, &x0, &v);
+                let (value, slope) = self.value_and_slope(t, x0, &v);
                 isolate(value, slope, k)
             },
         )
@@ -477,7 +500,10 @@ mod tests {
                 let origin = move_by + rng.point(-8.0, 8.0);
                 let dir = move_by + rng.point(-1.0, 1.0) - origin;
                 let fused = q.bound_roots(origin, dir);
-                assert_eq!(fused, q.bound_roots_here(origin, dir));
+                assert_eq!(
+                    fused,
+                    q.bound_roots_here(&q.bounded_origin_here(origin), origin, dir)
+                );
                 roots += fused.roots.len();
             }
         }

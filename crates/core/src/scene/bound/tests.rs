@@ -10,7 +10,8 @@ fn exit_face() -> [DVec3; 3] {
 /// searched for competitors up to `limit`.
 fn probe(limit: f64) -> Probe<'static> {
     let ray = Ray::new(DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.3, 0.1, -1.0));
-    Probe::new(&ray, limit, None, 2.0)
+    let watertight = WatertightRay::new(ray.origin, ray.dir);
+    Probe::new(&ray, watertight, limit, None, 2.0)
 }
 
 /// The exit face is crossed, so the f64 filters keep it; its plane lies beyond a limit just
