@@ -86,31 +86,32 @@ impl WatertightPacket {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is only set where the CPU has AVX2.
-            return unsafe { self.candidates_avx2::<false>(tri, active) }.0;
+            return unsafe { self.candidates_avx2::<false>(tri, 0.0, active) }.0;
         }
         self.candidates_portable(tri, active)
     }
 
     /// [`WatertightPacket::candidates`], and of the rays `active` those whose exact ray
-    /// certainly misses `tri` taken as exact ([`crate::bound::apart`]: two edge functions
-    /// beyond their rounding bounds with opposite signs, as `certainly_apart` decides it; a
-    /// subset of the refused rays): `(kept, apart)`. `ray(i)` is ray `i`, for the portable
-    /// kernel.
+    /// certainly misses the exact triangle, whose vertices lie within `placement` of `tri`'s
+    /// per coordinate ([`crate::bound::apart`]: two edge functions beyond their rounding
+    /// bounds with opposite signs, as `certainly_apart` decides it; a subset of the refused
+    /// rays): `(kept, apart)`. `ray(i)` is ray `i`, for the portable kernel.
     #[inline(always)]
     pub fn candidates_apart<'r>(
         &self,
         tri: &[DVec3; 3],
+        placement: f64,
         active: u32,
         ray: impl Fn(usize) -> &'r WatertightRay,
     ) -> (u32, u32) {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is only set where the CPU has AVX2.
-            return unsafe { self.candidates_avx2::<true>(tri, active) };
+            return unsafe { self.candidates_avx2::<true>(tri, placement, active) };
         }
         let kept = self.candidates_portable(tri, active);
         let lanes = (0..PACKET).filter(|&i| active & (1 << i) != 0);
-        let apart = lanes.filter(|&i| crate::bound::triangle::edges_apart(ray(i), tri, 0.0));
+        let apart = lanes.filter(|&i| crate::bound::triangle::edges_apart(ray(i), tri, placement));
         (kept, apart.fold(0, |mask, i| mask | 1 << i))
     }
 
@@ -132,21 +133,24 @@ impl WatertightPacket {
     ///
     /// # Safety
     /// The CPU must support AVX2.
-    /// With `APART`, also the rays [`WatertightPacket::candidates_apart`] reports (else 0).
+    /// With `APART`, also the rays [`WatertightPacket::candidates_apart`] reports for
+    /// `placement` (else 0).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn candidates_avx2<const APART: bool>(
         &self,
         tri: &[DVec3; 3],
+        placement: f64,
         active: u32,
     ) -> (u32, u32) {
+        let args = (tri, placement, active);
         match self.axes {
-            [1, 2, 0] => self.avx2_in::<1, 2, 0, APART>(tri, active),
-            [2, 1, 0] => self.avx2_in::<2, 1, 0, APART>(tri, active),
-            [2, 0, 1] => self.avx2_in::<2, 0, 1, APART>(tri, active),
-            [0, 2, 1] => self.avx2_in::<0, 2, 1, APART>(tri, active),
-            [0, 1, 2] => self.avx2_in::<0, 1, 2, APART>(tri, active),
-            _ => self.avx2_in::<1, 0, 2, APART>(tri, active),
+            [1, 2, 0] => self.avx2_in::<1, 2, 0, APART>(args),
+            [2, 1, 0] => self.avx2_in::<2, 1, 0, APART>(args),
+            [2, 0, 1] => self.avx2_in::<2, 0, 1, APART>(args),
+            [0, 2, 1] => self.avx2_in::<0, 2, 1, APART>(args),
+            [0, 1, 2] => self.avx2_in::<0, 1, 2, APART>(args),
+            _ => self.avx2_in::<1, 0, 2, APART>(args),
         }
     }
 
@@ -159,8 +163,7 @@ impl WatertightPacket {
     #[inline]
     unsafe fn avx2_in<const KX: usize, const KY: usize, const KZ: usize, const APART: bool>(
         &self,
-        tri: &[DVec3; 3],
-        active: u32,
+        (tri, placement, active): (&[DVec3; 3], f64, u32),
     ) -> (u32, u32) {
         let vertex = |v: &DVec3| {
             let c = |k| _mm256_set1_pd(v[k]);
@@ -181,7 +184,7 @@ impl WatertightPacket {
                 ];
                 let shear = [load(&self.shear[0]), load(&self.shear[1])];
                 let (k, a) = if APART {
-                    kept_apart_avx2(&vertices, &origin, &shear)
+                    kept_apart_avx2(&vertices, (&origin, &shear), placement)
                 } else {
                     (kept_avx2(&vertices, &origin, &shear), 0)
                 };
@@ -308,8 +311,9 @@ unsafe fn kept_avx2(
     ])
 }
 
-/// [`kept_avx2`], and the lanes whose exact ray certainly misses the triangle taken as exact
-/// ([`crate::bound::apart::apart_lanes`]), from the same sheared coordinates.
+/// [`kept_avx2`], and the lanes whose exact ray certainly misses the exact triangle, within
+/// `placement` of the stored one ([`crate::bound::apart::apart_lanes`]), from the same sheared
+/// coordinates.
 ///
 /// # Safety
 /// The CPU must support AVX2.
@@ -318,10 +322,10 @@ unsafe fn kept_avx2(
 #[inline]
 unsafe fn kept_apart_avx2(
     vertices: &[[__m256d; 3]; 3],
-    origin: &[__m256d; 3],
-    shear: &[__m256d; 2],
+    (origin, shear): (&[__m256d; 3], &[__m256d; 2]),
+    placement: f64,
 ) -> (u32, u32) {
-    let moved = apart::margins(_mm256_setzero_pd(), *shear);
+    let moved = apart::margins(_mm256_set1_pd(placement), *shear);
     // Written out: an array's `map` may stay a call here.
     let sheared = |v: &[__m256d; 3]| {
         let p = [

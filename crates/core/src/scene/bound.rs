@@ -346,11 +346,14 @@ impl Scene {
         self.placement[self.world_parts[i] as usize]
     }
 
-    /// Whether world triangle `i` is exactly as stored (placement bound 0) and the scene's
-    /// rays are searched unmoved (anchor 0), so that the search's watertight set-up is that
-    /// of the exact ray against the exact triangle.
-    pub(super) fn taken_as_exact(&self, i: usize) -> bool {
-        self.anchor == DVec3::ZERO && self.placement_of(i) == 0.0
+    /// World triangle `i`'s placement bound where the search may pass over the triangle for
+    /// a ray [`Scene::apart`] would find apart from it: the scene's rays are searched unmoved
+    /// (anchor 0), so that the search's watertight set-up is the exact ray's, and the bound is
+    /// one `apart` weighs for any octree of the scene (at most [`CELL_SLACK`] times the world
+    /// triangles' extent, which the root's size is not below).
+    pub(super) fn searched_apart(&self, i: usize) -> Option<f64> {
+        let placement = self.placement_of(i);
+        (self.anchor == DVec3::ZERO && placement <= self.apart_placement).then_some(placement)
     }
 
     /// The world ray in instance `k`'s mesh frame as the trace maps it, `L(o − T)` and `L d`,

@@ -4,8 +4,9 @@ use super::instance::{Instance, StoredMesh};
 use super::mesh::{Mesh, MeshSet, Positions};
 use super::shading::PartShading;
 use super::{near_origin, Object, ObjectKind, Part, PartKind, PoseInfo, Scene, StageInfo};
-use crate::accel::OctreeParams;
+use crate::accel::{OctreeParams, PrimitiveSet};
 use crate::bound::transform::BoundedMat4;
+use crate::bound::CELL_SLACK;
 use crate::camera::Camera;
 use crate::diagnostic::{Code, Diagnostic};
 use crate::geometry::Aabb;
@@ -250,6 +251,7 @@ impl SceneBuilder {
             anchor,
         };
         let objects = objects(drafts, &parts, &meshes, &instances);
+        let apart_placement = CELL_SLACK * finite_extent(&world);
         Scene {
             path,
             anchor,
@@ -261,6 +263,7 @@ impl SceneBuilder {
             quadric_parts,
             parts,
             placement,
+            apart_placement,
             shading,
             materials,
             instance_errors,
@@ -273,6 +276,18 @@ impl SceneBuilder {
             pose,
         }
     }
+}
+
+/// The largest side of the union of `world`'s triangles' finite bounds (0 for none): no more
+/// than that of any octree root holding them.
+fn finite_extent(world: &MeshSet) -> f64 {
+    let finite = |b: &Aabb| b.min.is_finite() && b.max.is_finite();
+    let bounds = (0..world.len()).map(|i| world.bounds(i)).filter(finite);
+    let union = bounds.fold(Aabb::EMPTY, Aabb::union);
+    if union.is_empty() {
+        return 0.0;
+    }
+    union.size().max_element()
 }
 
 /// The anchor for coordinates inside `bounds`: the origin when that keeps their digits, else

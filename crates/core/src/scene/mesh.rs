@@ -325,28 +325,31 @@ impl MeshSet {
         active: u32,
         limits: (&[f64; PACKET], &mut [f64; PACKET]),
     ) -> u32 {
-        self.triangle_packet::<false>(i, packet, ray, active, limits)
+        self.triangle_packet::<false>(i, packet, ray, (active, 0.0), limits)
             .0
     }
 
     /// [`MeshSet::intersect_triangle_packet`], `(hits, 0)`; with `APART`, `(hits, apart)`:
-    /// also the rays whose exact ray certainly misses the triangle taken as exact
-    /// ([`WatertightPacket::candidates_apart`]; none for a lone ray, which skips the filter).
+    /// also the rays whose exact ray certainly misses the exact triangle, within `placement`
+    /// of the stored one ([`WatertightPacket::candidates_apart`], for a lone ray too: a rival
+    /// it reports apart is one the decision need not weigh again, at some 500 instructions a
+    /// ray).
     #[inline(always)]
     pub(crate) fn triangle_packet<'r, const APART: bool>(
         &self,
         i: usize,
         packet: &WatertightPacket,
         ray: impl Fn(usize) -> &'r WatertightRay,
-        active: u32,
+        (active, placement): (u32, f64),
         (t_max, ts): (&[f64; PACKET], &mut [f64; PACKET]),
     ) -> (u32, u32) {
         let tri = self.mesh.triangle(i);
-        // A lone ray goes straight to its own test: the filter costs more than it saves.
-        let (candidates, apart) = if active.is_power_of_two() {
+        // Without `APART`, a lone ray goes straight to its own test: the filter costs more than
+        // it saves.
+        let (candidates, apart) = if APART {
+            packet.candidates_apart(&tri, placement, active, &ray)
+        } else if active.is_power_of_two() {
             (active, 0)
-        } else if APART {
-            packet.candidates_apart(&tri, active, &ray)
         } else {
             (packet.candidates(&tri, active), 0)
         };

@@ -226,6 +226,10 @@ pub struct Scene {
     /// file's vertex (0 but for world meshes placed by a transform; see
     /// [`crate::bound::placement_error`]).
     placement: Vec<f64>,
+    /// The largest placement bound the search's edge filter weighs (`Scene::searched_apart`):
+    /// [`crate::bound::CELL_SLACK`] times the largest side of the world triangles' finite
+    /// bounds.
+    apart_placement: f64,
     /// Per part, what the shading lookups need ([`shading`]).
     shading: Vec<shading::PartShading>,
     /// The materials parts are bound to, named as the file names them.
@@ -643,10 +647,11 @@ impl PrimitiveSet for Scene {
             .0
     }
 
-    /// For a world triangle taken as exact (its placement bound 0) in a scene whose rays the
-    /// search prepares unmoved (anchor 0: `(o − 0) + 0` is `o`), the packet pre-filter's
-    /// `apart` lanes (`MeshSet::triangle_packet`): the very filter [`Scene::apart`] would
-    /// apply to the exact ray afterwards. Anything else tells nothing.
+    /// For a world triangle whose placement bound [`Scene::apart`] weighs (see
+    /// `Scene::searched_apart`) in a scene whose rays the search prepares unmoved (anchor 0:
+    /// `(o − 0) + 0` is `o`), the packet pre-filter's `apart` lanes
+    /// (`MeshSet::triangle_packet`): the very filter [`Scene::apart`] would apply to the exact
+    /// ray afterwards. Anything else tells nothing.
     #[inline(always)]
     fn intersect_packet_apart(
         &self,
@@ -680,10 +685,11 @@ impl Scene {
         };
         let ray = |i: usize| &rays[i].extra.triangle;
         let world = &self.world;
-        if APART && self.taken_as_exact(index) {
-            world.triangle_packet::<true>(index, packet, ray, active, (t_max, ts))
-        } else {
-            world.triangle_packet::<false>(index, packet, ray, active, (t_max, ts))
+        match self.searched_apart(index).filter(|_| APART) {
+            Some(placement) => {
+                world.triangle_packet::<true>(index, packet, ray, (active, placement), (t_max, ts))
+            }
+            None => world.triangle_packet::<false>(index, packet, ray, (active, 0.0), (t_max, ts)),
         }
     }
 }

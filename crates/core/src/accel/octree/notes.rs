@@ -14,8 +14,9 @@
 //!
 //! What the packet path tests against several rays at once goes through the set's
 //! [`super::PrimitiveSet::intersect_packet_apart`]: a ray whose exact ray certainly misses the
-//! primitive (for the scene: a world triangle taken as exact, by the edge filter the decision
-//! itself applies, `bound::apart`) is not told of it, since it competes with nothing.
+//! primitive (for the scene: a world triangle, exact or within a placement bound the decision
+//! weighs, by the edge filter the decision itself applies, `bound::apart`; lone rays too) is
+//! not told of it, since it competes with nothing.
 
 use super::PACKET;
 
