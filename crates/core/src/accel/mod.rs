@@ -138,10 +138,10 @@ pub trait PrimitiveSet: Sync {
     }
 
     /// [`PrimitiveSet::intersect_packet`], and which of the rays `active` certainly do not
-    /// cross primitive `index` at all (the `certain` AOV's filter, `bound::apart`, for the
-    /// exact ray and primitive): `(hits, apart)`. Used by a search that notes what it offers
-    /// (module `octree::notes`), which then offers a ray nothing it certainly misses. The
-    /// default tells nothing (`apart` 0).
+    /// cross primitive `index` at all, or certainly cross its interior (the `certain` AOV's
+    /// filters, `bound::apart`, for the exact ray and primitive). Used by a search that notes
+    /// what it offers (module `octree::notes`), which then offers a ray nothing it certainly
+    /// misses. The default tells nothing (`apart` and `inside` 0).
     #[inline(always)]
     fn intersect_packet_apart(
         &self,
@@ -151,12 +151,24 @@ pub trait PrimitiveSet: Sync {
         active: u32,
         t_max: &[f64; PACKET],
         ts: &mut [f64; PACKET],
-    ) -> (u32, u32) {
-        (
-            self.intersect_packet(index, rays, packet, active, t_max, ts),
-            0,
-        )
+    ) -> PacketCrossings {
+        PacketCrossings {
+            hits: self.intersect_packet(index, rays, packet, active, t_max, ts),
+            ..PacketCrossings::default()
+        }
     }
+}
+
+/// What [`PrimitiveSet::intersect_packet_apart`] says of one primitive, a bit per ray.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PacketCrossings {
+    /// The rays that hit it within their limits (their `t` written).
+    pub hits: u32,
+    /// The rays whose exact ray certainly misses the exact primitive.
+    pub apart: u32,
+    /// The rays whose exact ray certainly crosses the exact primitive's interior (for a
+    /// triangle, as `bound::triangle::certainly_inside` decides it).
+    pub inside: u32,
 }
 
 /// Primitives tested together by [`PrimitiveSet::intersect_group`].

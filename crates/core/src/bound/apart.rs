@@ -163,7 +163,20 @@ pub unsafe fn sheared(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
-pub unsafe fn apart_lanes([a, b, c]: &[Sheared4; 3], [ex, ey]: [__m256d; 2]) -> __m256d {
+pub unsafe fn apart_lanes(vertices: &[Sheared4; 3], moved: [__m256d; 2]) -> __m256d {
+    edge_lanes(vertices, moved)[0]
+}
+
+/// [`apart_lanes`], then the lanes whose three edge functions are all beyond their bounds
+/// with one sign: the exact ray crosses the exact triangle's interior, as
+/// `certainly_inside` decides it from the same values.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub unsafe fn edge_lanes([a, b, c]: &[Sheared4; 3], [ex, ey]: [__m256d; 2]) -> [__m256d; 2] {
     let splat = |x: f64| _mm256_set1_pd(x);
     // The edge function `x_p y_q − y_p x_q` and its bound, as `Sheared::edges` has them.
     let edge = |p: &Sheared4, q: &Sheared4| {
@@ -187,7 +200,12 @@ pub unsafe fn apart_lanes([a, b, c]: &[Sheared4; 3], [ex, ey]: [__m256d; 2]) -> 
     let finite = _mm256_and_pd(_mm256_and_pd(f0, f1), f2);
     let positive = _mm256_or_pd(_mm256_or_pd(p0, p1), p2);
     let negative = _mm256_or_pd(_mm256_or_pd(n0, n1), n2);
-    _mm256_and_pd(finite, _mm256_and_pd(positive, negative))
+    let all_positive = _mm256_and_pd(_mm256_and_pd(p0, p1), p2);
+    let all_negative = _mm256_and_pd(_mm256_and_pd(n0, n1), n2);
+    [
+        _mm256_and_pd(finite, _mm256_and_pd(positive, negative)),
+        _mm256_and_pd(finite, _mm256_or_pd(all_positive, all_negative)),
+    ]
 }
 
 /// `|x|` per lane.

@@ -15,8 +15,8 @@
 //!
 //! For the search that notes what it offers each ray (the `certain` AOV),
 //! [`WatertightPacket::candidates_apart`] also says which refused rays certainly miss the
-//! triangle taken as exact, by the edge filter of [`crate::bound::apart`] on the same sheared
-//! vertices.
+//! exact triangle, and which rays certainly cross its interior, by the edge filter of
+//! [`crate::bound::apart`] on the same sheared vertices.
 
 use super::triangle::WatertightRay;
 #[cfg(target_arch = "x86_64")]
@@ -26,6 +26,37 @@ use crate::simd::PACKET;
 use glam::DVec3;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
+
+/// What [`WatertightPacket::candidates_apart`] says of one triangle, a bit per ray.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct EdgeVerdict {
+    /// The rays [`WatertightPacket::candidates`] keeps.
+    pub kept: u32,
+    /// The rays whose exact ray certainly misses the exact triangle (a subset of the refused).
+    pub apart: u32,
+    /// The rays whose exact ray certainly crosses the exact triangle's interior (as
+    /// [`crate::bound::triangle::certainly_inside`] decides it).
+    pub inside: u32,
+}
+
+impl EdgeVerdict {
+    /// The three masks in one word, `PACKET` bits each.
+    #[inline(always)]
+    fn pack(self) -> u32 {
+        self.kept | (self.apart << PACKET) | (self.inside << (2 * PACKET))
+    }
+
+    /// The masks [`EdgeVerdict::pack`] packed.
+    #[inline(always)]
+    fn unpack(word: u32) -> EdgeVerdict {
+        let mask = (1 << PACKET) - 1;
+        EdgeVerdict {
+            kept: word & mask,
+            apart: (word >> PACKET) & mask,
+            inside: (word >> (2 * PACKET)) & mask,
+        }
+    }
+}
 
 /// Up to [`PACKET`] rays prepared for [`WatertightPacket::candidates`]: the rays' shared axis
 /// permutation, and per ray its origin in the permuted axes and its shear.
@@ -86,7 +117,7 @@ impl WatertightPacket {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is only set where the CPU has AVX2.
-            return unsafe { self.candidates_avx2::<false>(tri, 0.0, active) }.0;
+            return unsafe { self.candidates_avx2::<false>(tri, 0.0, active) };
         }
         self.candidates_portable(tri, active)
     }
@@ -95,7 +126,8 @@ impl WatertightPacket {
     /// certainly misses the exact triangle, whose vertices lie within `placement` of `tri`'s
     /// per coordinate ([`crate::bound::apart`]: two edge functions beyond their rounding
     /// bounds with opposite signs, as `certainly_apart` decides it; a subset of the refused
-    /// rays): `(kept, apart)`. `ray(i)` is ray `i`, for the portable kernel.
+    /// rays), and those whose exact ray certainly crosses its interior (all three beyond
+    /// their bounds with one sign). `ray(i)` is ray `i`, for the portable kernel.
     #[inline(always)]
     pub fn candidates_apart<'r>(
         &self,
@@ -103,16 +135,24 @@ impl WatertightPacket {
         placement: f64,
         active: u32,
         ray: impl Fn(usize) -> &'r WatertightRay,
-    ) -> (u32, u32) {
+    ) -> EdgeVerdict {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is only set where the CPU has AVX2.
-            return unsafe { self.candidates_avx2::<true>(tri, placement, active) };
+            let packed = unsafe { self.candidates_avx2::<true>(tri, placement, active) };
+            return EdgeVerdict::unpack(packed);
         }
-        let kept = self.candidates_portable(tri, active);
-        let lanes = (0..PACKET).filter(|&i| active & (1 << i) != 0);
-        let apart = lanes.filter(|&i| crate::bound::triangle::edges_apart(ray(i), tri, placement));
-        (kept, apart.fold(0, |mask, i| mask | 1 << i))
+        use crate::bound::triangle::{certainly_inside, edges_apart};
+        let lanes = |test: &dyn Fn(usize) -> bool| {
+            (0..PACKET)
+                .filter(|&i| active & (1 << i) != 0 && test(i))
+                .fold(0, |mask, i| mask | 1 << i)
+        };
+        EdgeVerdict {
+            kept: self.candidates_portable(tri, active),
+            apart: lanes(&|i| edges_apart(ray(i), tri, placement)),
+            inside: lanes(&|i| certainly_inside(ray(i), tri, placement)),
+        }
     }
 
     /// [`WatertightPacket::candidates`] one ray after the other.
@@ -134,7 +174,8 @@ impl WatertightPacket {
     /// # Safety
     /// The CPU must support AVX2.
     /// With `APART`, also the rays [`WatertightPacket::candidates_apart`] reports for
-    /// `placement` (else 0).
+    /// `placement`, [`EdgeVerdict::pack`]ed (else the kept rays alone: one word, returned in a
+    /// register).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     unsafe fn candidates_avx2<const APART: bool>(
@@ -142,7 +183,7 @@ impl WatertightPacket {
         tri: &[DVec3; 3],
         placement: f64,
         active: u32,
-    ) -> (u32, u32) {
+    ) -> u32 {
         let args = (tri, placement, active);
         match self.axes {
             [1, 2, 0] => self.avx2_in::<1, 2, 0, APART>(args),
@@ -164,13 +205,13 @@ impl WatertightPacket {
     unsafe fn avx2_in<const KX: usize, const KY: usize, const KZ: usize, const APART: bool>(
         &self,
         (tri, placement, active): (&[DVec3; 3], f64, u32),
-    ) -> (u32, u32) {
+    ) -> u32 {
         let vertex = |v: &DVec3| {
             let c = |k| _mm256_set1_pd(v[k]);
             [c(KX), c(KY), c(KZ)]
         };
         let vertices = [vertex(&tri[0]), vertex(&tri[1]), vertex(&tri[2])];
-        let (mut kept, mut apart) = (0, 0);
+        let mut verdict = EdgeVerdict::default();
         for quad in 0..PACKET / 4 {
             let rays = (active >> (4 * quad)) & 0xf;
             if rays != 0 {
@@ -183,16 +224,17 @@ impl WatertightPacket {
                     load(&self.origin[2]),
                 ];
                 let shear = [load(&self.shear[0]), load(&self.shear[1])];
-                let (k, a) = if APART {
+                let [kept, apart, inside] = if APART {
                     kept_apart_avx2(&vertices, (&origin, &shear), placement)
                 } else {
-                    (kept_avx2(&vertices, &origin, &shear), 0)
+                    [kept_avx2(&vertices, &origin, &shear), 0, 0]
                 };
-                kept |= (k & rays) << (4 * quad);
-                apart |= (a & rays) << (4 * quad);
+                verdict.kept |= (kept & rays) << (4 * quad);
+                verdict.apart |= (apart & rays) << (4 * quad);
+                verdict.inside |= (inside & rays) << (4 * quad);
             }
         }
-        (kept, apart)
+        verdict.pack()
     }
 }
 
@@ -311,9 +353,9 @@ unsafe fn kept_avx2(
     ])
 }
 
-/// [`kept_avx2`], and the lanes whose exact ray certainly misses the exact triangle, within
-/// `placement` of the stored one ([`crate::bound::apart::apart_lanes`]), from the same sheared
-/// coordinates.
+/// [`kept_avx2`], the lanes whose exact ray certainly misses the exact triangle, within
+/// `placement` of the stored one, and those whose exact ray certainly crosses its interior
+/// ([`crate::bound::apart::edge_lanes`]), from the same sheared coordinates.
 ///
 /// # Safety
 /// The CPU must support AVX2.
@@ -324,7 +366,7 @@ unsafe fn kept_apart_avx2(
     vertices: &[[__m256d; 3]; 3],
     (origin, shear): (&[__m256d; 3], &[__m256d; 2]),
     placement: f64,
-) -> (u32, u32) {
+) -> [u32; 3] {
     let moved = apart::margins(_mm256_set1_pd(placement), *shear);
     // Written out: an array's `map` may stay a call here.
     let sheared = |v: &[__m256d; 3]| {
@@ -345,8 +387,12 @@ unsafe fn kept_apart_avx2(
         (all[1][0], all[1][2]),
         (all[2][0], all[2][2]),
     ]);
-    let apart = _mm256_movemask_pd(apart::apart_lanes(&all, moved)) as u32;
-    (kept, apart)
+    let [apart, inside] = apart::edge_lanes(&all, moved);
+    [
+        kept,
+        _mm256_movemask_pd(apart) as u32,
+        _mm256_movemask_pd(inside) as u32,
+    ]
 }
 
 /// [`kept`] for four lanes from the sheared `(x, y)` of the three vertices.

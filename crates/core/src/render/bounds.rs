@@ -16,13 +16,15 @@ use std::ops::Mul;
 
 /// The bound of `hit`, the nearest hit of `ray`: computed once per hit and shared by the
 /// `error` and `certain` AOVs; whether the primitive's own decision is certain only when
-/// `decide` (the `certain` AOV) asks for it. `origins` carries mapped origins from hit to hit.
+/// `decide.0` (the `certain` AOV) asks for it, `decide.1` when the search found the exact ray
+/// certainly inside the hit triangle ([`Offered::crosses_inside`]). `origins` carries mapped
+/// origins from hit to hit.
 #[inline(always)]
 pub fn hit_bound(
     scene: &Scene,
     ray: &Ray,
     hit: &Crossing,
-    decide: bool,
+    decide: (bool, bool),
     origins: &mut Origins,
 ) -> HitBound {
     scene.hit_bound(hit, (ray.origin, ray.dir), decide, origins)

@@ -326,7 +326,12 @@ fn block_bounds(block: &Block<'_>, hits: &[Option<Crossing>]) -> Vec<Option<(Hit
             continue;
         };
         let ray = block.ray(j);
-        let bound = super::bounds::hit_bound(block.scene, &ray, hit, block.decide, &mut origins);
+        let inside = || {
+            let offered = block.offered.get(j).and_then(Option::as_ref);
+            offered.is_some_and(|o| o.crosses_inside(hit.top))
+        };
+        let decide = (block.decide, block.decide && inside());
+        let bound = super::bounds::hit_bound(block.scene, &ray, hit, decide, &mut origins);
         bounds.push(Some((bound, super::bounds::depth_error(&bound, &ray))));
     }
     bounds

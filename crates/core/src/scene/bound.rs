@@ -124,7 +124,9 @@ impl Scene {
     /// triangle's `t` is bounded by the residual of its exact plane
     /// ([`crate::bound::residual`]), or where that declines by the bounded recomputation of the
     /// watertight test; whether its own decision is certain (which takes that recomputation)
-    /// only when `decide` asks for it (`certain` is `false` otherwise).
+    /// only when `decide.0` asks for it (`certain` is `false` otherwise); `decide.1` says the
+    /// search already found the exact ray certainly inside a hit world triangle (the test of
+    /// [`triangle::certainly_inside`], which is then not made again).
     ///
     /// `origins` keeps quadrics' mapped origins for the next hits.
     #[inline(always)]
@@ -132,7 +134,7 @@ impl Scene {
         &self,
         hit: &Crossing,
         (origin, dir): (DVec3, DVec3),
-        decide: bool,
+        (decide, known_inside): (bool, bool),
         origins: &mut Origins,
     ) -> HitBound {
         let unbounded = HitBound {
@@ -150,7 +152,7 @@ impl Scene {
                 };
                 let full =
                     || triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));
-                let decide = decide.then(inside);
+                let decide = decide.then(|| known_inside || inside());
                 triangle_hit(&ray, &tri, placement, hit.t, decide, full)
             }
             Top::Instance(k) => {

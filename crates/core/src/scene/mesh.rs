@@ -10,10 +10,12 @@
 //! branch on the storage kind is the same for every triangle of a mesh, so it predicts well.
 
 use super::attributes::{Attributes, MaterialRun};
-use crate::accel::{intersect_each, set_bits, PreparedRay, PrimitiveSet, GROUP, PACKET};
+use crate::accel::{
+    intersect_each, set_bits, PacketCrossings, PreparedRay, PrimitiveSet, GROUP, PACKET,
+};
 use crate::geometry::triangle::{self, WatertightRay};
 use crate::geometry::triangle_box;
-use crate::geometry::triangle_packet::WatertightPacket;
+use crate::geometry::triangle_packet::{EdgeVerdict, WatertightPacket};
 use crate::geometry::Aabb;
 use crate::simd::Kernel;
 use glam::{DAffine3, DVec3, Vec3};
@@ -326,14 +328,14 @@ impl MeshSet {
         limits: (&[f64; PACKET], &mut [f64; PACKET]),
     ) -> u32 {
         self.triangle_packet::<false>(i, packet, ray, (active, 0.0), limits)
-            .0
+            .hits
     }
 
-    /// [`MeshSet::intersect_triangle_packet`], `(hits, 0)`; with `APART`, `(hits, apart)`:
-    /// also the rays whose exact ray certainly misses the exact triangle, within `placement`
-    /// of the stored one ([`WatertightPacket::candidates_apart`], for a lone ray too: a rival
-    /// it reports apart is one the decision need not weigh again, at some 500 instructions a
-    /// ray).
+    /// [`MeshSet::intersect_triangle_packet`]'s hits; with `APART`, also the rays whose exact
+    /// ray certainly misses the exact triangle, within `placement` of the stored one, and
+    /// those that certainly cross its interior ([`WatertightPacket::candidates_apart`], for a
+    /// lone ray too: a rival it reports apart is one the decision need not weigh again, at
+    /// some 500 instructions a ray).
     #[inline(always)]
     pub(crate) fn triangle_packet<'r, const APART: bool>(
         &self,
@@ -342,25 +344,35 @@ impl MeshSet {
         ray: impl Fn(usize) -> &'r WatertightRay,
         (active, placement): (u32, f64),
         (t_max, ts): (&[f64; PACKET], &mut [f64; PACKET]),
-    ) -> (u32, u32) {
+    ) -> PacketCrossings {
         let tri = self.mesh.triangle(i);
         // Without `APART`, a lone ray goes straight to its own test: the filter costs more than
         // it saves.
-        let (candidates, apart) = if APART {
+        let verdict = if APART {
             packet.candidates_apart(&tri, placement, active, &ray)
         } else if active.is_power_of_two() {
-            (active, 0)
+            EdgeVerdict {
+                kept: active,
+                ..EdgeVerdict::default()
+            }
         } else {
-            (packet.candidates(&tri, active), 0)
+            EdgeVerdict {
+                kept: packet.candidates(&tri, active),
+                ..EdgeVerdict::default()
+            }
         };
         let mut hits = 0;
-        for lane in set_bits(candidates) {
+        for lane in set_bits(verdict.kept) {
             if let Some(t) = ray(lane).intersect(&tri, t_max[lane]) {
                 ts[lane] = t;
                 hits |= 1 << lane;
             }
         }
-        (hits, apart)
+        PacketCrossings {
+            hits,
+            apart: verdict.apart,
+            inside: verdict.inside,
+        }
     }
 
     /// [`PrimitiveSet::intersect_group`] for the triangles `indices` and one ray prepared in

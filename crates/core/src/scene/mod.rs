@@ -42,8 +42,8 @@ pub use proximity::Nearest;
 pub use shading::Attribute;
 
 use crate::accel::{
-    intersect_each, intersect_one_by_one, octants_by_overlap, Hit, PreparedRay, PrimitiveSet,
-    GROUP, PACKET,
+    intersect_each, intersect_one_by_one, octants_by_overlap, Hit, PacketCrossings, PreparedRay,
+    PrimitiveSet, GROUP, PACKET,
 };
 use crate::camera::Camera;
 use crate::geometry::triangle::WatertightRay;
@@ -644,14 +644,15 @@ impl PrimitiveSet for Scene {
         ts: &mut [f64; PACKET],
     ) -> u32 {
         self.packet_test::<false>(index, rays, packet, active, (t_max, ts))
-            .0
+            .hits
     }
 
     /// For a world triangle whose placement bound [`Scene::apart`] weighs (see
     /// `Scene::searched_apart`) in a scene whose rays the search prepares unmoved (anchor 0:
     /// `(o − 0) + 0` is `o`), the packet pre-filter's `apart` lanes
     /// (`MeshSet::triangle_packet`): the very filter [`Scene::apart`] would apply to the exact
-    /// ray afterwards. Anything else tells nothing.
+    /// ray afterwards; and its `inside` lanes, the test of [`crate::bound::triangle::certainly_inside`] the
+    /// hit's bound would make. Anything else tells nothing.
     #[inline(always)]
     fn intersect_packet_apart(
         &self,
@@ -661,7 +662,7 @@ impl PrimitiveSet for Scene {
         active: u32,
         t_max: &[f64; PACKET],
         ts: &mut [f64; PACKET],
-    ) -> (u32, u32) {
+    ) -> PacketCrossings {
         self.packet_test::<true>(index, rays, packet, active, (t_max, ts))
     }
 }
@@ -676,16 +677,22 @@ impl Scene {
         packet: &Option<WatertightPacket>,
         active: u32,
         (t_max, ts): (&[f64; PACKET], &mut [f64; PACKET]),
-    ) -> (u32, u32) {
+    ) -> PacketCrossings {
         let Some(packet) = packet.as_ref().filter(|_| index < self.world.mesh.len()) else {
-            return (
-                self.intersect_other_packet(index, rays, active, t_max, ts),
-                0,
-            );
+            return PacketCrossings {
+                hits: self.intersect_other_packet(index, rays, active, t_max, ts),
+                ..PacketCrossings::default()
+            };
         };
         let ray = |i: usize| &rays[i].extra.triangle;
         let world = &self.world;
-        match self.searched_apart(index).filter(|_| APART) {
+        // Asked only with `APART`: the plain search does not read the placement.
+        let apart = if APART {
+            self.searched_apart(index)
+        } else {
+            None
+        };
+        match apart {
             Some(placement) => {
                 world.triangle_packet::<true>(index, packet, ray, (active, placement), (t_max, ts))
             }

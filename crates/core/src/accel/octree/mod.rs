@@ -443,10 +443,10 @@ impl Octree {
                     if active == 0 {
                         continue;
                     }
-                    let hits = if N::NOTING {
+                    let (hits, inside) = if N::NOTING {
                         // Offered to the rays that may cross it (those that certainly miss it
                         // are no competitor of any hit: module `notes`).
-                        let (hits, apart) = set.intersect_packet_apart(
+                        let crossings = set.intersect_packet_apart(
                             prim as usize,
                             prepared,
                             packet,
@@ -454,19 +454,24 @@ impl Octree {
                             limits,
                             &mut ts,
                         );
-                        for i in set_bits(active & !apart) {
+                        for i in set_bits(active & !crossings.apart) {
                             notes.offer(i, prim);
                         }
-                        hits
+                        (crossings.hits, crossings.inside)
                     } else {
                         let index = prim as usize;
-                        set.intersect_packet(index, prepared, packet, active, limits, &mut ts)
+                        let hits =
+                            set.intersect_packet(index, prepared, packet, active, limits, &mut ts);
+                        (hits, 0)
                     };
                     for i in set_bits(hits) {
                         let hit = Hit { t: ts[i], prim };
                         if hit.beats(&best[i]) {
                             best[i] = Some(hit);
                             limits[i] = notes.reach(hit.t);
+                            if inside & (1 << i) != 0 {
+                                notes.inside(i, prim);
+                            }
                         }
                     }
                 }

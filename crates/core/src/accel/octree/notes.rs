@@ -16,7 +16,9 @@
 //! [`super::PrimitiveSet::intersect_packet_apart`]: a ray whose exact ray certainly misses the
 //! primitive (for the scene: a world triangle, exact or within a placement bound the decision
 //! weighs, by the edge filter the decision itself applies, `bound::apart`; lone rays too) is
-//! not told of it, since it competes with nothing.
+//! not told of it, since it competes with nothing. The same filter also says when the exact
+//! ray certainly crosses a hit triangle's interior ([`Notes::inside`]): the hit's bound then
+//! need not test it again.
 
 use super::PACKET;
 
@@ -40,6 +42,10 @@ pub trait Notes {
     /// Primitive `prim` was offered to ray `ray` of the packet (it passed the leaf filter,
     /// for the first time along the ray).
     fn offer(&mut self, ray: usize, prim: u32);
+
+    /// Ray `ray`'s exact ray certainly crosses the interior of `prim`, its best hit so far.
+    #[inline(always)]
+    fn inside(&mut self, _ray: usize, _prim: u32) {}
 }
 
 /// The plain search: nothing noted, nothing widened.
@@ -66,6 +72,9 @@ pub struct Offered {
     len: u8,
     /// The search found every crossing with `0 < t ≤ reach` among the offered primitives.
     pub reach: f64,
+    /// A primitive whose interior the exact ray certainly crosses (the last best hit noted so,
+    /// [`Notes::inside`]).
+    inside: Option<u32>,
 }
 
 impl Offered {
@@ -74,11 +83,18 @@ impl Offered {
         prims: [0; OFFERED],
         len: 0,
         reach: 0.0,
+        inside: None,
     };
 
     /// The offered primitives, or `None` when more were offered than fit.
     pub fn prims(&self) -> Option<&[u32]> {
         self.prims.get(..usize::from(self.len))
+    }
+
+    /// Whether the search found the exact ray certainly crossing the interior of primitive
+    /// `prim` (see [`Notes::inside`]; `false` says nothing).
+    pub fn crosses_inside(&self, prim: u32) -> bool {
+        self.inside == Some(prim)
     }
 
     /// Notes `prim` (or that the list overflowed).
@@ -126,6 +142,11 @@ impl Notes for [Offered; PACKET] {
     #[inline(always)]
     fn offer(&mut self, ray: usize, prim: u32) {
         self[ray].note(prim);
+    }
+
+    #[inline(always)]
+    fn inside(&mut self, ray: usize, prim: u32) {
+        self[ray].inside = Some(prim);
     }
 }
 

@@ -135,11 +135,12 @@ fn no_ray_the_single_ray_test_hits_is_refused() {
 /// little beside a triangle, for a triangle taken as exact and for one whose vertices may be
 /// off by a placement bound (half the rounds, from 1e-17 to 1e-8 of its size), for a packet
 /// and for a lone ray; they are refused, none is hit, and `kept` is
-/// [`WatertightPacket::candidates`]'s.
+/// [`WatertightPacket::candidates`]'s. The rays it reports `inside` are exactly those
+/// `certainly_inside` finds, all kept.
 #[test]
 fn apart_rays_are_the_edge_filter_s() {
     let mut rng = Rng(0x6a09_e667_f3bc_c908);
-    let (mut apart_rays, mut refused_rays) = (0, 0);
+    let (mut apart_rays, mut refused_rays, mut inside_rays) = (0, 0, 0);
     for round in 0..20000 {
         let (tri, mut rays) = edge_case(&mut rng, round);
         if round % 2 == 1 {
@@ -163,22 +164,31 @@ fn apart_rays_are_the_edge_filter_s() {
             0 | 1 => 0.0,
             _ => size * 10f64.powf(rng.uniform(-17.0, -8.0)),
         };
-        let filter = (0..PACKET)
-            .filter(|&i| crate::bound::triangle::edges_apart(&rays[i], &tri, placement))
-            .fold(0u32, |m, i| m | 1 << i);
+        let lanes = |test: &dyn Fn(usize) -> bool| {
+            (0..PACKET)
+                .filter(|&i| test(i))
+                .fold(0u32, |m, i| m | 1 << i)
+        };
+        use crate::bound::triangle::{certainly_inside, edges_apart};
+        let filter = lanes(&|i| edges_apart(&rays[i], &tri, placement));
+        let inside = lanes(&|i| certainly_inside(&rays[i], &tri, placement));
         let active = [0b1101_1111, 1 << (round % PACKET)][round / 4 % 2];
         for packet in kernels(packet) {
-            let (kept, apart) = packet.candidates_apart(&tri, placement, active, |i| &rays[i]);
+            let verdict = packet.candidates_apart(&tri, placement, active, |i| &rays[i]);
+            let kept = verdict.kept;
             assert_eq!(kept, packet.candidates(&tri, active), "round {round}");
-            assert_eq!(apart, filter & active, "round {round}: {tri:?}");
-            assert_eq!(apart & (kept | hit), 0, "round {round}");
+            assert_eq!(verdict.apart, filter & active, "round {round}: {tri:?}");
+            assert_eq!(verdict.apart & (kept | hit), 0, "round {round}");
+            assert_eq!(verdict.inside, inside & active, "round {round}: {tri:?}");
+            assert_eq!(verdict.inside & !kept, 0, "round {round}");
             refused_rays += (active & !kept).count_ones();
         }
         apart_rays += (filter & active).count_ones();
+        inside_rays += (inside & active).count_ones();
     }
     assert!(
-        apart_rays > 1000 && refused_rays > apart_rays,
-        "{apart_rays} {refused_rays}"
+        apart_rays > 1000 && refused_rays > apart_rays && inside_rays > 500,
+        "{apart_rays} {refused_rays} {inside_rays}"
     );
 }
 
