@@ -115,6 +115,24 @@ pub trait PrimitiveSet: Sync {
         intersect_one_by_one(self, indices, ray, t_max, ts)
     }
 
+    /// [`PrimitiveSet::intersect_group`], and which primitives of the group the exact ray
+    /// certainly does not cross at all, or crosses in the interior, bit `k` for `indices[k]`
+    /// (as [`PrimitiveSet::intersect_packet_apart`] says it for the rays of a packet). The
+    /// default tells nothing (`apart` and `inside` 0).
+    #[inline(always)]
+    fn intersect_group_apart(
+        &self,
+        indices: &[u32],
+        ray: &PreparedRay<Self::RayData>,
+        t_max: f64,
+        ts: &mut [f64; GROUP],
+    ) -> PacketCrossings {
+        PacketCrossings {
+            hits: self.intersect_group(indices, ray, t_max, ts),
+            ..PacketCrossings::default()
+        }
+    }
+
     /// Per-packet data computed once by [`PrimitiveSet::prepare_packet`].
     type PacketData;
 

@@ -225,7 +225,7 @@ impl WatertightPacket {
                 ];
                 let shear = [load(&self.shear[0]), load(&self.shear[1])];
                 let [kept, apart, inside] = if APART {
-                    kept_apart_avx2(&vertices, (&origin, &shear), placement)
+                    kept_apart_avx2(&vertices, (&origin, &shear), _mm256_set1_pd(placement))
                 } else {
                     [kept_avx2(&vertices, &origin, &shear), 0, 0]
                 };
@@ -247,9 +247,39 @@ impl WatertightRay {
         #[cfg(target_arch = "x86_64")]
         if kernel == Kernel::Avx2 {
             // SAFETY: the CPU has AVX2.
-            return unsafe { self.candidates_avx2(tris, active) };
+            return unsafe { self.candidates_avx2::<false>(tris, active, &[0.0; 4]) };
         }
         self.candidates_portable(tris, active)
+    }
+
+    /// [`WatertightRay::candidates`], and of the triangles `active` those the exact ray
+    /// certainly misses, and those whose interior it certainly crosses, the exact triangle
+    /// `i` within `placement[i]` of `tris[i]` (as [`WatertightPacket::candidates_apart`] says
+    /// it for rays), by `kernel`.
+    pub fn candidates_apart(
+        &self,
+        kernel: Kernel,
+        tris: &[[DVec3; 3]; 4],
+        active: u32,
+        placement: &[f64; 4],
+    ) -> EdgeVerdict {
+        #[cfg(target_arch = "x86_64")]
+        if kernel == Kernel::Avx2 {
+            // SAFETY: the CPU has AVX2.
+            let packed = unsafe { self.candidates_avx2::<true>(tris, active, placement) };
+            return EdgeVerdict::unpack(packed);
+        }
+        use crate::bound::triangle::{certainly_inside, edges_apart};
+        let lanes = |test: &dyn Fn(usize) -> bool| {
+            (0..4)
+                .filter(|&i| active & (1 << i) != 0 && test(i))
+                .fold(0, |mask, i| mask | 1 << i)
+        };
+        EdgeVerdict {
+            kept: self.candidates_portable(tris, active),
+            apart: lanes(&|i| edges_apart(self, &tris[i], placement[i])),
+            inside: lanes(&|i| certainly_inside(self, &tris[i], placement[i])),
+        }
     }
 
     /// [`WatertightRay::candidates`] one triangle after the other.
@@ -264,20 +294,27 @@ impl WatertightRay {
     }
 
     /// [`WatertightRay::candidates`] in one AVX2 register per coordinate, one instance per
-    /// axis permutation.
+    /// axis permutation; with `APART`, [`WatertightRay::candidates_apart`]'s verdict,
+    /// [`EdgeVerdict::pack`]ed.
     ///
     /// # Safety
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn candidates_avx2(&self, tris: &[[DVec3; 3]; 4], active: u32) -> u32 {
+    unsafe fn candidates_avx2<const APART: bool>(
+        &self,
+        tris: &[[DVec3; 3]; 4],
+        active: u32,
+        placement: &[f64; 4],
+    ) -> u32 {
+        let args = (tris, active, placement);
         match self.axes {
-            [1, 2, 0] => self.avx2_in::<1, 2, 0>(tris, active),
-            [2, 1, 0] => self.avx2_in::<2, 1, 0>(tris, active),
-            [2, 0, 1] => self.avx2_in::<2, 0, 1>(tris, active),
-            [0, 2, 1] => self.avx2_in::<0, 2, 1>(tris, active),
-            [0, 1, 2] => self.avx2_in::<0, 1, 2>(tris, active),
-            _ => self.avx2_in::<1, 0, 2>(tris, active),
+            [1, 2, 0] => self.avx2_in::<1, 2, 0, APART>(args),
+            [2, 1, 0] => self.avx2_in::<2, 1, 0, APART>(args),
+            [2, 0, 1] => self.avx2_in::<2, 0, 1, APART>(args),
+            [0, 2, 1] => self.avx2_in::<0, 2, 1, APART>(args),
+            [0, 1, 2] => self.avx2_in::<0, 1, 2, APART>(args),
+            _ => self.avx2_in::<1, 0, 2, APART>(args),
         }
     }
 
@@ -288,10 +325,9 @@ impl WatertightRay {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn avx2_in<const KX: usize, const KY: usize, const KZ: usize>(
+    unsafe fn avx2_in<const KX: usize, const KY: usize, const KZ: usize, const APART: bool>(
         &self,
-        tris: &[[DVec3; 3]; 4],
-        active: u32,
+        (tris, active, placement): (&[[DVec3; 3]; 4], u32, &[f64; 4]),
     ) -> u32 {
         // Coordinate `k` of vertex `j` of the four triangles, lane `i` for triangle `i`.
         let gather = |j: usize, k: usize| {
@@ -302,7 +338,18 @@ impl WatertightRay {
         let o = |k| _mm256_set1_pd(self.origin[k]);
         let origin = [o(KX), o(KY), o(KZ)];
         let shear = [_mm256_set1_pd(self.shear.x), _mm256_set1_pd(self.shear.y)];
-        kept_avx2(&vertices, &origin, &shear) & active
+        if !APART {
+            return kept_avx2(&vertices, &origin, &shear) & active;
+        }
+        // SAFETY: four f64 in `placement`.
+        let placement = unsafe { _mm256_loadu_pd(placement.as_ptr()) };
+        let [kept, apart, inside] = kept_apart_avx2(&vertices, (&origin, &shear), placement);
+        EdgeVerdict {
+            kept: kept & active,
+            apart: apart & active,
+            inside: inside & active,
+        }
+        .pack()
     }
 }
 
@@ -354,8 +401,8 @@ unsafe fn kept_avx2(
 }
 
 /// [`kept_avx2`], the lanes whose exact ray certainly misses the exact triangle, within
-/// `placement` of the stored one, and those whose exact ray certainly crosses its interior
-/// ([`crate::bound::apart::edge_lanes`]), from the same sheared coordinates.
+/// `placement` (per lane) of the stored one, and those whose exact ray certainly crosses its
+/// interior ([`crate::bound::apart::edge_lanes`]), from the same sheared coordinates.
 ///
 /// # Safety
 /// The CPU must support AVX2.
@@ -365,9 +412,9 @@ unsafe fn kept_avx2(
 unsafe fn kept_apart_avx2(
     vertices: &[[__m256d; 3]; 3],
     (origin, shear): (&[__m256d; 3], &[__m256d; 2]),
-    placement: f64,
+    placement: __m256d,
 ) -> [u32; 3] {
-    let moved = apart::margins(_mm256_set1_pd(placement), *shear);
+    let moved = apart::margins(placement, *shear);
     // Written out: an array's `map` may stay a call here.
     let sheared = |v: &[__m256d; 3]| {
         let p = [

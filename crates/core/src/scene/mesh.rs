@@ -387,27 +387,59 @@ impl MeshSet {
         t_max: f64,
         ts: &mut [f64; GROUP],
     ) -> u32 {
+        self.triangle_group::<false>(indices, (ray, kernel), (t_max, ts), &[0.0; GROUP])
+            .hits
+    }
+
+    /// [`MeshSet::intersect_triangles`]'s hits; with `APART`, also the triangles the exact ray
+    /// certainly misses and those whose interior it certainly crosses, triangle `indices[k]`
+    /// taken within `placement[k]` of the stored one
+    /// ([`WatertightRay::candidates_apart`]).
+    #[inline(always)]
+    pub(crate) fn triangle_group<const APART: bool>(
+        &self,
+        indices: &[u32],
+        (ray, kernel): (&WatertightRay, Kernel),
+        (t_max, ts): (f64, &mut [f64; GROUP]),
+        placement: &[f64; GROUP],
+    ) -> PacketCrossings {
         let Some(last) = indices.len().checked_sub(1) else {
-            return 0;
+            return PacketCrossings::default();
         };
-        if last == 0 {
+        if last == 0 && !APART {
             let t = self.intersect_triangle(indices[0] as usize, ray, t_max);
             ts[0] = t.unwrap_or(0.0);
-            return u32::from(t.is_some());
+            return PacketCrossings {
+                hits: u32::from(t.is_some()),
+                ..PacketCrossings::default()
+            };
         }
         // The lanes left over in a group of fewer than four hold its first triangle.
         let mut tris = [self.mesh.triangle(indices[0] as usize); GROUP];
         for (tri, &i) in tris.iter_mut().zip(indices).skip(1) {
             *tri = self.mesh.triangle(i as usize);
         }
+        let active = (1 << indices.len()) - 1;
+        let verdict = if APART {
+            ray.candidates_apart(kernel, &tris, active, placement)
+        } else {
+            EdgeVerdict {
+                kept: ray.candidates(kernel, &tris, active),
+                ..EdgeVerdict::default()
+            }
+        };
         let mut hits = 0;
-        for k in set_bits(ray.candidates(kernel, &tris, (1 << indices.len()) - 1)) {
+        for k in set_bits(verdict.kept) {
             if let Some(t) = ray.intersect(&tris[k], t_max) {
                 ts[k] = t;
                 hits |= 1 << k;
             }
         }
-        hits
+        PacketCrossings {
+            hits,
+            apart: verdict.apart,
+            inside: verdict.inside,
+        }
     }
 
     /// Unit normal of triangle `i` from its winding, mapped to the world by `to_world` (the

@@ -625,6 +625,42 @@ impl PrimitiveSet for Scene {
         intersect_one_by_one(self, indices, ray, t_max, ts)
     }
 
+    /// For a group of world triangles, the group pre-filter's `apart` and `inside` lanes of
+    /// those `Scene::searched_apart` admits (as [`PrimitiveSet::intersect_packet_apart`]
+    /// says them for packets); anything else tells nothing.
+    #[inline(always)]
+    fn intersect_group_apart(
+        &self,
+        indices: &[u32],
+        ray: &PreparedRay<SceneRay>,
+        t_max: f64,
+        ts: &mut [f64; GROUP],
+    ) -> PacketCrossings {
+        let triangles = self.world.mesh.len();
+        if !indices.iter().all(|&i| (i as usize) < triangles) {
+            return PacketCrossings {
+                hits: intersect_one_by_one(self, indices, ray, t_max, ts),
+                ..PacketCrossings::default()
+            };
+        }
+        let (mut placement, mut searched) = ([0.0; GROUP], 0);
+        for (k, &i) in indices.iter().enumerate() {
+            if let Some(p) = self.searched_apart(i as usize) {
+                placement[k] = p;
+                searched |= 1 << k;
+            }
+        }
+        let ray = (&ray.extra.triangle, ray.kernel);
+        let crossings = self
+            .world
+            .triangle_group::<true>(indices, ray, (t_max, ts), &placement);
+        PacketCrossings {
+            apart: crossings.apart & searched,
+            inside: crossings.inside & searched,
+            ..crossings
+        }
+    }
+
     type PacketData = Option<WatertightPacket>;
 
     fn prepare_packet(&self, rays: &[PreparedRay<SceneRay>; PACKET]) -> Self::PacketData {

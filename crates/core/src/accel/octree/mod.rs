@@ -82,7 +82,9 @@ mod probe;
 mod traverse;
 mod wide;
 
-use super::{f32_above, prepare_ray_with, set_bits, Hit, PreparedRay, PrimitiveSet, GROUP};
+use super::{
+    f32_above, prepare_ray_with, set_bits, Hit, PacketCrossings, PreparedRay, PrimitiveSet, GROUP,
+};
 use crate::geometry::Aabb;
 pub use crate::simd::Kernel;
 use build::cube_around;
@@ -320,14 +322,11 @@ impl Octree {
                 for j in set_bits(kept) {
                     let prim = prims[first + j];
                     if tested.check_in(prim) {
-                        if N::NOTING {
-                            notes.offer(0, prim);
-                        }
-                        batch.push(set, prim, ray, t_max, &mut best);
+                        batch.push(set, prim, ray, (t_max, &mut best), (&mut *notes, 0));
                     }
                 }
             }
-            batch.finish(set, ray, t_max, &mut best);
+            batch.finish(set, ray, (t_max, &mut best), (&mut *notes, 0));
             best.map_or(t_max, |b| notes.reach(b.t))
         };
         traverse::run(&self.layout, kernel, &lanes, t_max, visit, &mut Unobserved);
@@ -431,9 +430,8 @@ impl Octree {
                     let i = rays.trailing_zeros() as usize;
                     let new = kept
                         .map(|(&prim, _)| prim)
-                        .filter(|&prim| tested.check_in(prim, rays) != 0)
-                        .inspect(|&prim| notes.offer(i, prim));
-                    test_leaf(set, new, &prepared[i], t_max[i], &mut best[i]);
+                        .filter(|&prim| tested.check_in(prim, rays) != 0);
+                    test_leaf(set, new, &prepared[i], (t_max[i], &mut best[i]), (notes, i));
                     limits[i] = best[i].map_or(t_max[i], |b| notes.reach(b.t));
                     return;
                 }
@@ -541,20 +539,20 @@ impl Mailbox {
 }
 
 /// Tests the primitives `prims` of a leaf (those the ray has not met yet) against `ray`,
-/// [`GROUP`] at a time ([`test_group`]).
+/// [`GROUP`] at a time ([`test_group`]), telling `notes` what it offers ray `noted.1`.
 #[inline(always)]
-fn test_leaf<P: PrimitiveSet>(
+fn test_leaf<P: PrimitiveSet, N: Notes>(
     set: &P,
     prims: impl Iterator<Item = u32>,
     ray: &PreparedRay<P::RayData>,
-    t_max: f64,
-    best: &mut Option<Hit>,
+    (t_max, best): (f64, &mut Option<Hit>),
+    noted: (&mut N, usize),
 ) {
     let mut batch = Batch::default();
     for prim in prims {
-        batch.push(set, prim, ray, t_max, best);
+        batch.push(set, prim, ray, (t_max, best), (&mut *noted.0, noted.1));
     }
-    batch.finish(set, ray, t_max, best);
+    batch.finish(set, ray, (t_max, best), noted);
 }
 
 /// A ray's primitives gathered [`GROUP`] at a time for [`test_group`].
@@ -567,58 +565,77 @@ struct Batch {
 impl Batch {
     /// Adds `prim`; a full group is tested at once.
     #[inline(always)]
-    fn push<P: PrimitiveSet>(
+    fn push<P: PrimitiveSet, N: Notes>(
         &mut self,
         set: &P,
         prim: u32,
         ray: &PreparedRay<P::RayData>,
-        t_max: f64,
-        best: &mut Option<Hit>,
+        search: (f64, &mut Option<Hit>),
+        noted: (&mut N, usize),
     ) {
         self.prims[self.len] = prim;
         self.len += 1;
         if self.len == GROUP {
-            test_group(set, &self.prims, ray, t_max, best);
+            test_group(set, &self.prims, ray, search, noted);
             self.len = 0;
         }
     }
 
     /// Tests what is left.
     #[inline(always)]
-    fn finish<P: PrimitiveSet>(
+    fn finish<P: PrimitiveSet, N: Notes>(
         &self,
         set: &P,
         ray: &PreparedRay<P::RayData>,
-        t_max: f64,
-        best: &mut Option<Hit>,
+        search: (f64, &mut Option<Hit>),
+        noted: (&mut N, usize),
     ) {
-        test_group(set, &self.prims[..self.len], ray, t_max, best);
+        test_group(set, &self.prims[..self.len], ray, search, noted);
     }
 }
 
 /// Tests the primitives `group` against `ray` ([`PrimitiveSet::intersect_group`]) and keeps in
 /// `best` the hit that beats the others and the one there (see [`Hit::beats`]): the same
-/// answer as testing them one after the other.
+/// answer as testing them one after the other. Where `notes` note, the group is offered to
+/// ray `ray_index` but for the primitives its exact ray certainly misses, and a best hit whose
+/// interior it certainly crosses is noted so ([`PrimitiveSet::intersect_group_apart`]).
 #[inline(always)]
-fn test_group<P: PrimitiveSet>(
+fn test_group<P: PrimitiveSet, N: Notes>(
     set: &P,
     group: &[u32],
     ray: &PreparedRay<P::RayData>,
-    t_max: f64,
-    best: &mut Option<Hit>,
+    (t_max, best): (f64, &mut Option<Hit>),
+    (notes, ray_index): (&mut N, usize),
 ) {
     if group.is_empty() {
         return;
     }
     let mut ts = [0.0; GROUP];
     let bound = best.map_or(t_max, |b| b.t);
-    for k in set_bits(set.intersect_group(group, ray, bound, &mut ts)) {
+    let crossings = if N::NOTING {
+        let crossings = set.intersect_group_apart(group, ray, bound, &mut ts);
+        for (k, &prim) in group.iter().enumerate() {
+            if crossings.apart & (1 << k) == 0 {
+                notes.offer(ray_index, prim);
+            }
+        }
+        crossings
+    } else {
+        PacketCrossings {
+            hits: set.intersect_group(group, ray, bound, &mut ts),
+            ..PacketCrossings::default()
+        }
+    };
+    for k in set_bits(crossings.hits) {
         let hit = Hit {
             t: ts[k],
             prim: group[k],
         };
         if hit.beats(best) {
             *best = Some(hit);
+            if crossings.inside & (1 << k) != 0 {
+                notes.inside(ray_index, group[k]);
+            }
         }
     }
 }

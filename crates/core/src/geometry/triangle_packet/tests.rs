@@ -310,3 +310,66 @@ fn no_triangle_the_single_ray_test_hits_is_refused() {
     }
     assert!(hits > 6000, "{hits} hits");
 }
+
+/// [`WatertightRay::candidates_apart`] says of each of four triangles what the one-triangle
+/// filters say (`edges_apart`, `certainly_inside`, lane for lane, with a placement bound of
+/// its own per lane, zero in a quarter of the lanes), `kept` is
+/// [`WatertightRay::candidates`]'s, and both kernels agree: on triangles crossed well inside or
+/// passed well beside (scales 1e-6 to 1e6), and on triangles sharing vertices and edges with
+/// rays through them (scales 1e-300 to 1e300).
+#[test]
+fn the_group_verdict_is_the_one_triangle_filters() {
+    use crate::bound::triangle::{certainly_inside, edges_apart};
+    let mut rng = Rng(0x1f83_d9ab_fb41_bd6b);
+    let (mut apart_lanes, mut inside_lanes) = (0, 0);
+    for round in 0..8000 {
+        let scale = [1e-6, 1.0, 1e6, 1e-300, 1e300][round % 5];
+        let origin = rng.point(-4.0, 4.0) * scale;
+        let dir = rng.point(-1.0, 1.0);
+        let tris: [[DVec3; 3]; 4] = std::array::from_fn(|k| {
+            let point = origin + dir * rng.uniform(0.5, 20.0) * scale;
+            let spread = |r: &mut Rng| point + r.point(-1.0, 1.0) * scale;
+            if round % 2 == 0 || k == 0 {
+                [spread(&mut rng), spread(&mut rng), spread(&mut rng)]
+            } else {
+                // Sharing an edge with the group's first triangle.
+                let first = [spread(&mut rng), spread(&mut rng), spread(&mut rng)];
+                [first[0], first[1], spread(&mut rng)]
+            }
+        });
+        let ray = WatertightRay::new(origin, dir);
+        let placement: [f64; 4] = std::array::from_fn(|k| {
+            let size = (tris[k][1] - tris[k][0]).length();
+            if k == round % 4 {
+                0.0
+            } else {
+                size * 10f64.powf(rng.uniform(-17.0, -6.0))
+            }
+        });
+        let active = 1 + (round as u32 % 15);
+        let lanes = |test: &dyn Fn(usize) -> bool| {
+            (0..4)
+                .filter(|&k| active & (1 << k) != 0 && test(k))
+                .fold(0u32, |m, k| m | 1 << k)
+        };
+        let apart = lanes(&|k| edges_apart(&ray, &tris[k], placement[k]));
+        let inside = lanes(&|k| certainly_inside(&ray, &tris[k], placement[k]));
+        for kernel in [Kernel::detect(), Kernel::Portable] {
+            let verdict = ray.candidates_apart(kernel, &tris, active, &placement);
+            assert_eq!(
+                verdict.kept,
+                ray.candidates(kernel, &tris, active),
+                "{round}"
+            );
+            assert_eq!(verdict.apart, apart, "round {round}: {tris:?}");
+            assert_eq!(verdict.inside, inside, "round {round}: {tris:?}");
+            assert_eq!(verdict.apart & verdict.kept, 0, "round {round}");
+        }
+        apart_lanes += apart.count_ones();
+        inside_lanes += inside.count_ones();
+    }
+    assert!(
+        apart_lanes > 2000 && inside_lanes > 500,
+        "{apart_lanes} {inside_lanes}"
+    );
+}
