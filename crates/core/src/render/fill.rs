@@ -190,12 +190,17 @@ impl Block<'_> {
     /// ([`super::bounds::depth_error`]), made on first use and shared by the `error` and
     /// `certain` columns.
     fn hit_bounds(&self, hits: &[Option<Crossing>]) -> &[Option<(HitBound, f64)>] {
-        self.bounds.get_or_init(|| match self.kernel() {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Kernel::Avx2` is only chosen where `Kernel::available` said so.
-            Kernel::Avx2 => unsafe { block_bounds_avx2(self, hits) },
-            _ => block_bounds(self, hits),
-        })
+        self.bounds
+            .get_or_init(|| match (self.kernel(), self.decide) {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: `Kernel::Avx2` is only chosen where `Kernel::available` said so.
+                (Kernel::Avx2, true) => unsafe { block_bounds_avx2::<true>(self, hits) },
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: as above.
+                (Kernel::Avx2, false) => unsafe { block_bounds_avx2::<false>(self, hits) },
+                (_, true) => block_bounds::<true>(self, hits),
+                (_, false) => block_bounds::<false>(self, hits),
+            })
     }
 
     /// Fills `slot`, the block's part of the column of `aov`, from the block's `hits`.
@@ -307,17 +312,22 @@ impl Block<'_> {
 /// The CPU must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn block_bounds_avx2(
+unsafe fn block_bounds_avx2<const DECIDE: bool>(
     block: &Block<'_>,
     hits: &[Option<Crossing>],
 ) -> Vec<Option<(HitBound, f64)>> {
-    block_bounds(block, hits)
+    block_bounds::<DECIDE>(block, hits)
 }
 
 /// The bounds of [`Block::hit_bounds`], a loop rather than `map` and `collect` (closures and
-/// the collecting function are compiled apart, outside [`block_bounds_avx2`]'s instructions).
+/// the collecting function are compiled apart, outside [`block_bounds_avx2`]'s instructions);
+/// `DECIDE` is the block's `decide`, a constant so that the `error` column alone compiles
+/// without the decision's lookups.
 #[inline(always)]
-fn block_bounds(block: &Block<'_>, hits: &[Option<Crossing>]) -> Vec<Option<(HitBound, f64)>> {
+fn block_bounds<const DECIDE: bool>(
+    block: &Block<'_>,
+    hits: &[Option<Crossing>],
+) -> Vec<Option<(HitBound, f64)>> {
     let mut bounds = Vec::with_capacity(hits.len());
     let mut origins = Origins::default();
     for (j, hit) in hits.iter().enumerate() {
@@ -330,7 +340,7 @@ fn block_bounds(block: &Block<'_>, hits: &[Option<Crossing>]) -> Vec<Option<(Hit
             let offered = block.offered.get(j).and_then(Option::as_ref);
             offered.is_some_and(|o| o.crosses_inside(hit.top))
         };
-        let decide = (block.decide, block.decide && inside());
+        let decide = (DECIDE, DECIDE && inside());
         let bound = super::bounds::hit_bound(block.scene, &ray, hit, decide, &mut origins);
         bounds.push(Some((bound, super::bounds::depth_error(&bound, &ray))));
     }
