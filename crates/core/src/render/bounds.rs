@@ -156,9 +156,13 @@ pub fn certain_offered(
     if !within {
         return None;
     }
-    // Most rays are offered nothing but their own hit and neighbours the exact ray passes
-    // beside (four at a time by `Scene::apart`): no probe to make for them.
+    // Most rays are offered nothing but their own hit (the search leaves out what they
+    // certainly miss), and the rest mostly neighbours the exact ray passes beside (four at a
+    // time by `Scene::apart`): no probe to make for them.
     let (scene, own) = (tracer.scene, hit.map(|(h, _)| h));
+    if prims.iter().all(|&p| scene.is_hit_itself(p as usize, own)) {
+        return Some(true);
+    }
     let mut rivals = [0; OFFERED];
     let mut count = 0;
     for &prim in prims

@@ -282,17 +282,23 @@ impl Block<'_> {
             super::bounds::certain_offered(&query, &self.rays[j], hit(j), range(j), offered)
         };
         for packet in packets {
-            let mut decided = packet.iter().map(|&j| offered(j));
-            let flags = match std::array::from_fn(|_| decided.next().flatten()) {
-                found if found.iter().all(Option::is_some) => found.map(|d| d == Some(true)),
-                _ => {
-                    let rays = packet.map(|j| self.ray(j));
-                    let (hits, ranges) = (packet.map(hit), packet.map(range));
-                    super::bounds::certain_packet(&query, &rays, &hits, &ranges)
-                }
-            };
-            for (&j, flag) in packet.iter().zip(flags) {
+            // Written out, stopping at the first ray the offers cannot decide (the others are
+            // then decided with it by the packet probe).
+            let mut decided = true;
+            for &j in packet {
+                let Some(flag) = offered(j) else {
+                    decided = false;
+                    break;
+                };
                 out[j] = u8::from(flag);
+            }
+            if !decided {
+                let rays = packet.map(|j| self.ray(j));
+                let (hits, ranges) = (packet.map(hit), packet.map(range));
+                let flags = super::bounds::certain_packet(&query, &rays, &hits, &ranges);
+                for (&j, flag) in packet.iter().zip(flags) {
+                    out[j] = u8::from(flag);
+                }
             }
         }
         for &j in rest {
