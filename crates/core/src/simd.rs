@@ -67,3 +67,28 @@ pub fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
 unsafe fn with_avx2_here<R>(f: impl FnOnce() -> R) -> R {
     f()
 }
+
+/// Runs `$body` with `$kx`, `$ky`, `$kz` bound as constants to the axis permutation `$axes`
+/// (a watertight ray's `[kx, ky, kz]`, one of the six): one compiled instance of `$body` per
+/// permutation, so that picking a permuted coordinate in an AVX2 kernel is picking a field.
+#[cfg(target_arch = "x86_64")]
+macro_rules! per_axes {
+    ($axes:expr, |$kx:ident, $ky:ident, $kz:ident| $body:expr) => {
+        match $axes {
+            [1, 2, 0] => per_axes!(@ 1, 2, 0, $kx, $ky, $kz, $body),
+            [2, 1, 0] => per_axes!(@ 2, 1, 0, $kx, $ky, $kz, $body),
+            [2, 0, 1] => per_axes!(@ 2, 0, 1, $kx, $ky, $kz, $body),
+            [0, 2, 1] => per_axes!(@ 0, 2, 1, $kx, $ky, $kz, $body),
+            [0, 1, 2] => per_axes!(@ 0, 1, 2, $kx, $ky, $kz, $body),
+            _ => per_axes!(@ 1, 0, 2, $kx, $ky, $kz, $body),
+        }
+    };
+    (@ $x:literal, $y:literal, $z:literal, $kx:ident, $ky:ident, $kz:ident, $body:expr) => {{
+        const $kx: usize = $x;
+        const $ky: usize = $y;
+        const $kz: usize = $z;
+        $body
+    }};
+}
+#[cfg(target_arch = "x86_64")]
+pub(crate) use per_axes;

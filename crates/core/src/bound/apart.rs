@@ -15,6 +15,8 @@
 
 use super::triangle::edges_apart;
 use crate::geometry::triangle::WatertightRay;
+#[cfg(target_arch = "x86_64")]
+use crate::simd::per_axes;
 use crate::simd::Kernel;
 use glam::DVec3;
 #[cfg(target_arch = "x86_64")]
@@ -66,14 +68,9 @@ unsafe fn apart_avx2(
     tris: &[[DVec3; 3]; LANES],
     placement: &[f64; LANES],
 ) -> u32 {
-    match ray.axes() {
-        [1, 2, 0] => apart_avx2_in::<1, 2, 0>(ray, tris, placement),
-        [2, 1, 0] => apart_avx2_in::<2, 1, 0>(ray, tris, placement),
-        [2, 0, 1] => apart_avx2_in::<2, 0, 1>(ray, tris, placement),
-        [0, 2, 1] => apart_avx2_in::<0, 2, 1>(ray, tris, placement),
-        [0, 1, 2] => apart_avx2_in::<0, 1, 2>(ray, tris, placement),
-        _ => apart_avx2_in::<1, 0, 2>(ray, tris, placement),
-    }
+    per_axes!(ray.axes(), |KX, KY, KZ| apart_avx2_in::<KX, KY, KZ>(
+        ray, tris, placement
+    ))
 }
 
 /// A sheared vertex per lane: `x`, its magnitude bound `X`, `y`, `Y` (see

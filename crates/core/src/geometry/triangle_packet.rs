@@ -21,6 +21,8 @@
 use super::triangle::WatertightRay;
 #[cfg(target_arch = "x86_64")]
 use crate::bound::apart;
+#[cfg(target_arch = "x86_64")]
+use crate::simd::per_axes;
 use crate::simd::Kernel;
 use crate::simd::PACKET;
 use glam::DVec3;
@@ -185,14 +187,8 @@ impl WatertightPacket {
         active: u32,
     ) -> u32 {
         let args = (tri, placement, active);
-        match self.axes {
-            [1, 2, 0] => self.avx2_in::<1, 2, 0, APART>(args),
-            [2, 1, 0] => self.avx2_in::<2, 1, 0, APART>(args),
-            [2, 0, 1] => self.avx2_in::<2, 0, 1, APART>(args),
-            [0, 2, 1] => self.avx2_in::<0, 2, 1, APART>(args),
-            [0, 1, 2] => self.avx2_in::<0, 1, 2, APART>(args),
-            _ => self.avx2_in::<1, 0, 2, APART>(args),
-        }
+        per_axes!(self.axes, |KX, KY, KZ| self
+            .avx2_in::<KX, KY, KZ, APART>(args))
     }
 
     /// [`WatertightPacket::candidates_avx2`] for the axis permutation `[KX, KY, KZ]`.
@@ -308,14 +304,8 @@ impl WatertightRay {
         placement: &[f64; 4],
     ) -> u32 {
         let args = (tris, active, placement);
-        match self.axes {
-            [1, 2, 0] => self.avx2_in::<1, 2, 0, APART>(args),
-            [2, 1, 0] => self.avx2_in::<2, 1, 0, APART>(args),
-            [2, 0, 1] => self.avx2_in::<2, 0, 1, APART>(args),
-            [0, 2, 1] => self.avx2_in::<0, 2, 1, APART>(args),
-            [0, 1, 2] => self.avx2_in::<0, 1, 2, APART>(args),
-            _ => self.avx2_in::<1, 0, 2, APART>(args),
-        }
+        per_axes!(self.axes, |KX, KY, KZ| self
+            .avx2_in::<KX, KY, KZ, APART>(args))
     }
 
     /// [`WatertightRay::candidates_avx2`] for the axis permutation `[KX, KY, KZ]`.
