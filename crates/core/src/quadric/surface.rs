@@ -147,7 +147,7 @@ impl Quadric {
     /// clip box. `origin` and `dir` are in world coordinates; `dir` need not be unit length.
     ///
     /// Rays that miss [`Quadric::bounds`] are rejected by a slab test before the exact test,
-    /// with the same answer (see [`Quadric::may_reach_bounds`]).
+    /// with the same answer (see `Quadric::may_reach_bounds`).
     pub fn intersect(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<f64> {
         if !self.may_reach_bounds(origin, dir.recip(), t_max) {
             return None;

@@ -170,7 +170,7 @@ impl Instance {
     /// [`Instance::intersect`] for the rays `active` (bit `i` for ray `i`) of a packet, with
     /// world origins and directions: each ray gets exactly its [`Instance::intersect`] answer
     /// (`None` for the rays not in `active`). The rays [`Instance::may_reach`] lets through go
-    /// through the mesh's octree together when there are [`PACKET_FROM`] of them or more and
+    /// through the mesh's octree together when there are `PACKET_FROM` of them or more and
     /// their directions in the mesh frame can go as one packet, else one by one.
     pub fn intersect_packet(
         &self,

@@ -29,7 +29,7 @@ pub trait Notes {
     const NOTING: bool;
 
     /// The limit the search keeps for a ray whose best hit so far is at `t`: `t` for a plain
-    /// search, a little more ([`widen`]) where it notes, to see competitors beyond it.
+    /// search, a little more (`widen`) where it notes, to see competitors beyond it.
     #[inline(always)]
     fn reach(&self, t: f64) -> f64 {
         if Self::NOTING {
