@@ -21,6 +21,7 @@
 use super::triangle::WatertightRay;
 #[cfg(target_arch = "x86_64")]
 use crate::bound::apart;
+use crate::bound::triangle::{certainly_inside, edges_apart};
 #[cfg(target_arch = "x86_64")]
 use crate::simd::per_axes;
 use crate::simd::Kernel;
@@ -42,6 +43,35 @@ pub struct EdgeVerdict {
 }
 
 impl EdgeVerdict {
+    /// The kept lanes `kept`, saying nothing of the others.
+    #[inline(always)]
+    pub fn kept(kept: u32) -> EdgeVerdict {
+        EdgeVerdict {
+            kept,
+            ..EdgeVerdict::default()
+        }
+    }
+
+    /// The verdict one lane after the other, of the `lanes` lanes `active`: `kept` as the
+    /// portable pre-filter gives it, the others by the one-triangle filters `apart(i)` and
+    /// `inside(i)` (`edges_apart`, `certainly_inside`) of lane `i`.
+    fn portable(
+        (lanes, active, kept): (usize, u32, u32),
+        apart: impl Fn(usize) -> bool,
+        inside: impl Fn(usize) -> bool,
+    ) -> EdgeVerdict {
+        let mask = |test: &dyn Fn(usize) -> bool| {
+            (0..lanes)
+                .filter(|&i| active & (1 << i) != 0 && test(i))
+                .fold(0, |mask, i| mask | 1 << i)
+        };
+        EdgeVerdict {
+            kept,
+            apart: mask(&apart),
+            inside: mask(&inside),
+        }
+    }
+
     /// The three masks in one word, `PACKET` bits each.
     #[inline(always)]
     fn pack(self) -> u32 {
@@ -144,17 +174,11 @@ impl WatertightPacket {
             let packed = unsafe { self.candidates_avx2::<true>(tri, placement, active) };
             return EdgeVerdict::unpack(packed);
         }
-        use crate::bound::triangle::{certainly_inside, edges_apart};
-        let lanes = |test: &dyn Fn(usize) -> bool| {
-            (0..PACKET)
-                .filter(|&i| active & (1 << i) != 0 && test(i))
-                .fold(0, |mask, i| mask | 1 << i)
-        };
-        EdgeVerdict {
-            kept: self.candidates_portable(tri, active),
-            apart: lanes(&|i| edges_apart(ray(i), tri, placement)),
-            inside: lanes(&|i| certainly_inside(ray(i), tri, placement)),
-        }
+        EdgeVerdict::portable(
+            (PACKET, active, self.candidates_portable(tri, active)),
+            |i| edges_apart(ray(i), tri, placement),
+            |i| certainly_inside(ray(i), tri, placement),
+        )
     }
 
     /// [`WatertightPacket::candidates`] one ray after the other.
@@ -265,17 +289,11 @@ impl WatertightRay {
             let packed = unsafe { self.candidates_avx2::<true>(tris, active, placement) };
             return EdgeVerdict::unpack(packed);
         }
-        use crate::bound::triangle::{certainly_inside, edges_apart};
-        let lanes = |test: &dyn Fn(usize) -> bool| {
-            (0..4)
-                .filter(|&i| active & (1 << i) != 0 && test(i))
-                .fold(0, |mask, i| mask | 1 << i)
-        };
-        EdgeVerdict {
-            kept: self.candidates_portable(tris, active),
-            apart: lanes(&|i| edges_apart(self, &tris[i], placement[i])),
-            inside: lanes(&|i| certainly_inside(self, &tris[i], placement[i])),
-        }
+        EdgeVerdict::portable(
+            (4, active, self.candidates_portable(tris, active)),
+            |i| edges_apart(self, &tris[i], placement[i]),
+            |i| certainly_inside(self, &tris[i], placement[i]),
+        )
     }
 
     /// [`WatertightRay::candidates`] one triangle after the other.

@@ -16,15 +16,15 @@ use std::ops::Mul;
 
 /// The bound of `hit`, the nearest hit of `ray`: computed once per hit and shared by the
 /// `error` and `certain` AOVs; whether the primitive's own decision is certain only when
-/// `decide.0` (the `certain` AOV) asks for it, `decide.1` when the search found the exact ray
-/// certainly inside the hit triangle ([`Offered::crosses_inside`]). `origins` carries mapped
-/// origins from hit to hit.
+/// `decide` is `Some` (the `certain` AOV asks for it), `Some(true)` when the search found the
+/// exact ray certainly inside the hit triangle ([`Offered::crosses_inside`]). `origins`
+/// carries mapped origins from hit to hit.
 #[inline(always)]
 pub fn hit_bound(
     scene: &Scene,
     ray: &Ray,
     hit: &Crossing,
-    decide: (bool, bool),
+    decide: Option<bool>,
     origins: &mut Origins,
 ) -> HitBound {
     scene.hit_bound(hit, (ray.origin, ray.dir), decide, origins)
@@ -171,9 +171,6 @@ pub fn certain_offered(
     {
         rivals[count] = prim;
         count += 1;
-    }
-    if count == 0 {
-        return Some(true);
     }
     let watertight = WatertightRay::new(ray.origin, ray.dir);
     let root = root_size(tracer);

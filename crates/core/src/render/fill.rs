@@ -342,11 +342,10 @@ fn block_bounds<const DECIDE: bool>(
             continue;
         };
         let ray = block.ray(j);
-        let inside = || {
+        let decide = DECIDE.then(|| {
             let offered = block.offered.get(j).and_then(Option::as_ref);
             offered.is_some_and(|o| o.crosses_inside(hit.top))
-        };
-        let decide = (DECIDE, DECIDE && inside());
+        });
         let bound = super::bounds::hit_bound(block.scene, &ray, hit, decide, &mut origins);
         bounds.push(Some((bound, super::bounds::depth_error(&bound, &ray))));
     }

@@ -124,7 +124,7 @@ impl Scene {
     /// triangle's `t` is bounded by the residual of its exact plane
     /// ([`crate::bound::residual`]), or where that declines by the bounded recomputation of the
     /// watertight test; whether its own decision is certain (which takes that recomputation)
-    /// only when `decide.0` asks for it (`certain` is `false` otherwise); `decide.1` says the
+    /// only when `decide` is `Some` (`certain` is `false` otherwise); `Some(true)` says the
     /// search already found the exact ray certainly inside a hit world triangle (the test of
     /// [`triangle::certainly_inside`], which is then not made again).
     ///
@@ -134,7 +134,7 @@ impl Scene {
         &self,
         hit: &Crossing,
         (origin, dir): (DVec3, DVec3),
-        (decide, known_inside): (bool, bool),
+        decide: Option<bool>,
         origins: &mut Origins,
     ) -> HitBound {
         let unbounded = HitBound {
@@ -152,7 +152,7 @@ impl Scene {
                 };
                 let full =
                     || triangle::bound(&exact3(origin), &exact3(dir), &self.world_triangle(i));
-                let decide = decide.then(|| known_inside || inside());
+                let decide = decide.map(|known_inside| known_inside || inside());
                 triangle_hit(&ray, &tri, placement, hit.t, decide, full)
             }
             Top::Instance(k) => {
@@ -175,13 +175,13 @@ impl Scene {
                 let stored_tri = tri.map(|v| values3(&v));
                 let full = || triangle::bound(&o, &d, &tri);
                 // The mapped ray is not exact: its side is the bounded recomputation's.
-                let decide = decide.then_some(false);
+                let decide = decide.map(|_| false);
                 triangle_hit(&ray, &stored_tri, vertex_error, hit.t, decide, full)
             }
             Top::Quadric(q) => {
                 let quadric = &self.quadrics[q];
                 let x0 = origins.get(hit.top, origin, || quadric.bounded_origin(origin));
-                quadric_hit(quadric, (&x0, origin, dir), hit.t, decide)
+                quadric_hit(quadric, (&x0, origin, dir), hit.t, decide.is_some())
             }
         }
     }

@@ -301,6 +301,16 @@ pub struct MeshSet {
     pub anchor: DVec3,
 }
 
+/// The lanes `hits` with what the pre-filter's `verdict` says of the others.
+#[inline(always)]
+fn crossings(hits: u32, verdict: &EdgeVerdict) -> PacketCrossings {
+    PacketCrossings {
+        hits,
+        apart: verdict.apart,
+        inside: verdict.inside,
+    }
+}
+
 impl MeshSet {
     /// Triangle `i` relative to the anchor. Where the anchor is not zero the vertices lie
     /// within 1/64 of their distance from the origin (see `Scene`), so the subtraction is exact
@@ -351,15 +361,9 @@ impl MeshSet {
         let verdict = if APART {
             packet.candidates_apart(&tri, placement, active, &ray)
         } else if active.is_power_of_two() {
-            EdgeVerdict {
-                kept: active,
-                ..EdgeVerdict::default()
-            }
+            EdgeVerdict::kept(active)
         } else {
-            EdgeVerdict {
-                kept: packet.candidates(&tri, active),
-                ..EdgeVerdict::default()
-            }
+            EdgeVerdict::kept(packet.candidates(&tri, active))
         };
         let mut hits = 0;
         for lane in set_bits(verdict.kept) {
@@ -368,11 +372,7 @@ impl MeshSet {
                 hits |= 1 << lane;
             }
         }
-        PacketCrossings {
-            hits,
-            apart: verdict.apart,
-            inside: verdict.inside,
-        }
+        crossings(hits, &verdict)
     }
 
     /// [`PrimitiveSet::intersect_group`] for the triangles `indices` and one ray prepared in
@@ -423,10 +423,7 @@ impl MeshSet {
         let verdict = if APART {
             ray.candidates_apart(kernel, &tris, active, placement)
         } else {
-            EdgeVerdict {
-                kept: ray.candidates(kernel, &tris, active),
-                ..EdgeVerdict::default()
-            }
+            EdgeVerdict::kept(ray.candidates(kernel, &tris, active))
         };
         let mut hits = 0;
         for k in set_bits(verdict.kept) {
@@ -435,11 +432,7 @@ impl MeshSet {
                 hits |= 1 << k;
             }
         }
-        PacketCrossings {
-            hits,
-            apart: verdict.apart,
-            inside: verdict.inside,
-        }
+        crossings(hits, &verdict)
     }
 
     /// Unit normal of triangle `i` from its winding, mapped to the world by `to_world` (the

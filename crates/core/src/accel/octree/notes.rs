@@ -137,6 +137,11 @@ impl Notes for Offered {
     fn offer(&mut self, _: usize, prim: u32) {
         self.note(prim);
     }
+
+    #[inline(always)]
+    fn inside(&mut self, _: usize, prim: u32) {
+        self.inside = prim;
+    }
 }
 
 /// The notes of a packet's search ([`super::Octree::intersect_packet_noting`]): one
