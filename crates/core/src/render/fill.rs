@@ -1,10 +1,13 @@
 //! The per-ray outputs (AOVs) of a trace, computed in the same parallel pass as the nearest-hit
 //! search: each task finds the hits of a block of rays (1,024, or whole pairs of an image's
 //! rows, traced in tiles of 4 × 2 pixels) and at once fills the block's part of every output
-//! column, while the block is in cache; no array of hits for all rays is kept.
+//! column, while the block is in cache; no array of hits for all rays is kept. A long list of
+//! rays goes in the order of its origins' cells, its buffers put back in the given order
+//! (module `order`).
 //! The command line's buffers and the Python package's `cast` and `render` are all made by
 //! [`trace`], so they share this loop.
 
+use super::order::{in_place, origin_order, tile_order, OriginOrder, Reordered};
 use super::Aov;
 use crate::accel::{Offered, PACKET};
 use crate::bound::HitBound;
@@ -66,6 +69,23 @@ pub struct Buffers {
 }
 
 impl Buffers {
+    /// The buffers of rays traced in `order`, in the rays' own order.
+    fn in_place(self, order: &OriginOrder) -> Buffers {
+        let columns = self.columns.into_iter().map(|(aov, column)| {
+            let column = match column {
+                Column::Float(v) => Column::Float(order.in_place(&v, 1)),
+                Column::Pair(v) => Column::Pair(order.in_place(&v, 2)),
+                Column::Vector(v) => Column::Vector(order.in_place(&v, 3)),
+                Column::Index(v) => Column::Index(order.in_place(&v, 1)),
+                Column::Flag(v) => Column::Flag(order.in_place(&v, 1)),
+            };
+            (aov, column)
+        });
+        Buffers {
+            columns: columns.collect(),
+        }
+    }
+
     /// The values of `aov`, if it was computed.
     pub fn column(&self, aov: Aov) -> Option<&Column> {
         self.columns.iter().find(|(a, _)| *a == aov).map(|(_, c)| c)
@@ -355,36 +375,6 @@ fn block_bounds<const DECIDE: bool>(
 /// Rays per parallel task (at least; an image's blocks are whole pairs of rows).
 const BLOCK: usize = 1024;
 
-/// The rays of a block in the order they are traced: for an image `width` pixels wide
-/// (blocks starting at an even row), tiles of 4 × 2 pixels, left to right along each pair of
-/// rows, so that each packet of eight neighbouring rays is a tile; `None` to keep the order.
-fn tile_order(len: usize, width: Option<usize>) -> Option<Vec<usize>> {
-    let width = width.filter(|&w| w >= TILE)?;
-    let mut order = Vec::with_capacity(len);
-    for pair in (0..len).step_by(2 * width) {
-        for x in (0..width).step_by(TILE) {
-            for row in [pair, pair + width] {
-                order.extend((row + x..row + (x + TILE).min(width)).filter(|&i| i < len));
-            }
-        }
-    }
-    Some(order)
-}
-
-/// `values`, given in the traced `order`, put back in the rays' own order (an empty list
-/// stays empty).
-#[inline(always)]
-fn in_place<T: Copy>(order: &[usize], values: Vec<T>) -> Vec<T> {
-    let mut in_place = values.clone();
-    for (&j, &value) in order.iter().zip(&values) {
-        in_place[j] = value;
-    }
-    in_place
-}
-
-/// The width of a tile of [`tile_order`] (its height is two rows).
-const TILE: usize = 4;
-
 /// Rays between two progress reports.
 const REPORT: usize = 1 << 16;
 
@@ -407,7 +397,63 @@ pub struct Rays<'a, S: ?Sized, R> {
 /// rays, with counts that only grow. Returns the buffers, or the first refused ray (with
 /// [`Rays::refuse_untraceable`]; blocks after a refused ray found so far are skipped);
 /// whether a ray without a hit is refused is checked with the ray at hand, not read again.
+///
+/// A long list of rays is traced in the order of its origins' cells ([`origin_order`]) and its
+/// buffers put back in the given order: the same values as in the given order.
 pub fn trace<S, R>(
+    tracer: &dyn NearestHits,
+    rays: &Rays<S, R>,
+    aovs: &[Aov],
+    progress: impl FnMut(usize) + Send,
+) -> Result<Buffers, usize>
+where
+    S: RaySource + ?Sized,
+    R: Fn(usize) -> (f64, f64) + Sync,
+{
+    let trace_bytes = tracer
+        .tracer()
+        .map(|t| t.octree.bytes() + t.scene.trace_bytes());
+    match origin_order(rays.source, trace_bytes) {
+        Some(origins) => trace_reordered(tracer, rays, aovs, progress, &origins),
+        None => trace_in_order(tracer, rays, aovs, progress),
+    }
+}
+
+/// [`trace`] in the order `origins`, the buffers put back in the rays' own order; a refused
+/// ray is the first in their own order that cannot be traced, as [`trace_in_order`] says.
+fn trace_reordered<S, R>(
+    tracer: &dyn NearestHits,
+    rays: &Rays<S, R>,
+    aovs: &[Aov],
+    progress: impl FnMut(usize) + Send,
+    origins: &OriginOrder,
+) -> Result<Buffers, usize>
+where
+    S: RaySource + ?Sized,
+    R: Fn(usize) -> (f64, f64) + Sync,
+{
+    let order = &origins.order;
+    let reordered = Rays {
+        source: &Reordered {
+            source: rays.source,
+            order,
+        },
+        range: |k: usize| (rays.range)(order[k]),
+        refuse_untraceable: rays.refuse_untraceable,
+    };
+    match trace_in_order(tracer, &reordered, aovs, progress) {
+        Ok(buffers) => Ok(buffers.in_place(origins)),
+        Err(k) => Err((0..order.len())
+            .find(|&i| {
+                let (t_min, t_max) = (rays.range)(i);
+                !traceable(&rays.source.ray(i), t_min, t_max)
+            })
+            .unwrap_or(order[k])),
+    }
+}
+
+/// [`trace`] in the rays' own order (an image's in tiles).
+fn trace_in_order<S, R>(
     tracer: &dyn NearestHits,
     rays: &Rays<S, R>,
     aovs: &[Aov],
@@ -546,8 +592,13 @@ mod tests {
     use crate::scene::SceneBuilder;
     use crate::trace::Tracer;
 
-    /// 200 000 rays at a unit square, some of them untraceable, in a pool of `threads`.
-    fn trace_with_bad_rays(threads: usize, bad: &[usize]) -> (Result<Buffers, usize>, Vec<usize>) {
+    /// 200 000 rays at a unit square, some of them untraceable, in a pool of `threads`; in
+    /// the order of their origins (which spread along x) when `reorder`.
+    fn trace_with_bad_rays(
+        threads: usize,
+        bad: &[usize],
+        reorder: bool,
+    ) -> (Result<Buffers, usize>, Vec<usize>) {
         let mut builder = SceneBuilder::new();
         let square = [DVec3::ZERO, DVec3::X, DVec3::Y];
         builder.add_mesh("t".into(), "test".into(), vec![square]);
@@ -573,7 +624,14 @@ mod tests {
             .build()
             .unwrap();
         let mut reports = Vec::new();
-        let result = pool.install(|| trace(&tracer, &rays, &[Aov::Depth], |n| reports.push(n)));
+        let report = |n| reports.push(n);
+        let result = pool.install(|| match reorder {
+            true => {
+                let origins = origin_order(&source, Some(usize::MAX)).expect("spread origins");
+                trace_reordered(&tracer, &rays, &[Aov::Depth], report, &origins)
+            }
+            false => trace(&tracer, &rays, &[Aov::Depth], report),
+        });
         (result, reports)
     }
 
@@ -581,9 +639,15 @@ mod tests {
     /// the others lie (blocks after a refused ray may be skipped, blocks before it may not).
     #[test]
     fn the_first_refused_ray_is_reported() {
-        for threads in [1, 2, 4] {
-            for bad in [&[150_001, 70_000, 199_999][..], &[5, 190_000], &[199_999]] {
-                let (result, _) = trace_with_bad_rays(threads, bad);
+        for (threads, reorder) in [(1, false), (2, false), (4, false), (1, true), (2, true)] {
+            // Ray 999 is at the far end of x, ray 1000 at its start: ordered, 1000 goes first.
+            for bad in [
+                &[150_001, 70_000, 199_999][..],
+                &[5, 190_000],
+                &[199_999],
+                &[999, 1000],
+            ] {
+                let (result, _) = trace_with_bad_rays(threads, bad, reorder);
                 let first = bad.iter().copied().min();
                 assert_eq!(result.err(), first, "{threads} threads, bad rays {bad:?}");
             }
@@ -593,8 +657,8 @@ mod tests {
     /// Progress counts only grow, come about every 64 Ki rays and end at the ray count.
     #[test]
     fn progress_grows_to_the_ray_count() {
-        for threads in [1, 2, 4] {
-            let (result, reports) = trace_with_bad_rays(threads, &[]);
+        for (threads, reorder) in [(1, false), (2, false), (4, false), (2, true)] {
+            let (result, reports) = trace_with_bad_rays(threads, &[], reorder);
             let buffers = result.expect("every ray is traceable");
             let depth = buffers.floats(Aov::Depth).expect("depth buffer");
             assert!(
@@ -610,37 +674,48 @@ mod tests {
         }
     }
 
-    /// Every ray of a block is traced exactly once, and (for widths that are a multiple of
-    /// the tile's) each run of eight rays is a 4 × 2 tile of neighbouring pixels.
+    /// A list of rays with spread origins, traced in the order of their origins' cells, gives
+    /// each buffer (one, two and three numbers, labels and flags per ray) exactly as traced in
+    /// the given order.
     #[test]
-    fn tile_order_is_a_permutation_of_whole_tiles() {
-        for (len, width) in [
-            (2048, 1024),
-            (1200, 100),
-            (1000, 7),
-            (12, 4),
-            (5, 4),
-            (301, 301),
-        ] {
-            let order = tile_order(len, Some(width)).unwrap();
-            let mut sorted = order.clone();
-            sorted.sort_unstable();
-            assert_eq!(
-                sorted,
-                (0..len).collect::<Vec<_>>(),
-                "{len} rays, width {width}"
-            );
-            if width % TILE == 0 && len % (2 * width) == 0 {
-                for tile in order.chunks(8) {
-                    let (x, y) = (tile[0] % width, tile[0] / width);
-                    let expected: Vec<usize> = (0..8)
-                        .map(|k| (y + k / TILE) * width + x + k % TILE)
-                        .collect();
-                    assert_eq!(tile, expected.as_slice(), "width {width}");
-                }
-            }
-        }
-        assert_eq!(tile_order(100, None), None);
-        assert_eq!(tile_order(100, Some(3)), None);
+    fn origin_order_gives_the_buffers_of_the_given_order() {
+        let mut rng = crate::test_rng::Rng(0x5eed);
+        let triangles: Vec<[DVec3; 3]> = (0..300)
+            .map(|_| {
+                let a = rng.point(-1.0, 1.0);
+                [a, a + rng.point(-0.3, 0.3), a + rng.point(-0.3, 0.3)]
+            })
+            .collect();
+        let mut builder = SceneBuilder::new();
+        builder.add_mesh("t".into(), "test".into(), triangles);
+        let scene = builder.finish("soup".into());
+        let octree = Octree::build(&scene, OctreeParams::default());
+        let tracer = Tracer::new(&scene, &octree);
+        let source: Vec<Ray> = (0..6000)
+            .map(|_| {
+                let dir = rng.point(-1.0, 1.0);
+                Ray::new(rng.point(-1.5, 1.5), dir)
+            })
+            .collect();
+        let origins = origin_order(&source, Some(usize::MAX)).expect("spread origins");
+        let rays = Rays {
+            source: &source,
+            range: |_| (0.0, f64::INFINITY),
+            refuse_untraceable: false,
+        };
+        let aovs = [
+            Aov::Depth,
+            Aov::Normal,
+            Aov::Uv,
+            Aov::Id,
+            Aov::Error,
+            Aov::Certain,
+        ];
+        let reordered = trace_reordered(&tracer, &rays, &aovs, |_| {}, &origins).unwrap();
+        let given = trace_in_order(&tracer, &rays, &aovs, |_| {}).unwrap();
+        assert_eq!(reordered, given);
+        let depth = given.floats(Aov::Depth).unwrap();
+        let hits = depth.iter().filter(|d| d.is_finite()).count();
+        assert!((600..5400).contains(&hits), "{hits} of 6000 rays hit");
     }
 }

@@ -5,6 +5,7 @@
 
 mod bounds;
 mod fill;
+mod order;
 pub mod samples;
 
 pub use fill::{trace, Buffers, Column, Rays};

@@ -225,8 +225,19 @@ pub fn buffer_bytes(
     let lists = hits.map_or(0, |limit| {
         SPLIT_BYTES + CROSSING_BYTES * ASSUMED_CROSSINGS.min(limit as u64)
     });
-    count.saturating_mul(buffers + 2 * encoding + lists)
+    // A ray list may be traced in the order of its origins: that order, its sort keys, and
+    // one buffer's copy while the buffers are put back in the file's order.
+    let reorder = if rays_mode {
+        ORDER_BYTES + aovs.iter().map(|&a| aov_bytes(a)).max().unwrap_or(0)
+    } else {
+        0
+    };
+    count.saturating_mul(buffers + 2 * encoding + lists + reorder)
 }
+
+/// Bytes per ray of the order a ray list is traced in and of its sort keys
+/// (`raycast_core::render::trace`).
+const ORDER_BYTES: u64 = 12;
 
 /// Refuses a run whose buffers need more than `limit` bytes (`--max-memory`, or by default
 /// [`default_memory_limit`]).
@@ -277,6 +288,9 @@ mod tests {
         // --hits 1: + 10 * (8 + 32).
         let with_hits = buffer_bytes(&aovs, &[Format::Exr], layout, Some(1), 1);
         assert_eq!(with_hits, 960);
+        // 10 rays of a ray file: + 10 * (12 + 24), the order and one buffer's copy.
+        let rays = buffer_bytes(&aovs, &[Format::Npy], Layout::Rays(10), None, 1);
+        assert_eq!(rays, 10 * (32 + 2 * 24 + 36));
         assert!(check_memory(800, Some(800), "buffers").is_ok());
         let e = check_memory(801, Some(800), "buffers").unwrap_err();
         assert!(e.message.contains("--max-memory"), "{e}");
