@@ -65,4 +65,4 @@ done < <(find fixtures ../shared/assets -type f \( -name '*.gltf' -o -name '*.gl
   -o -name '*.usda' -o -name '*.usd' -o -name '*.usdc' -o -name '*.usdz' -o -name '*.ply' -o -name '*.stl' \) \
   -size -8M 2>/dev/null | sort)
 echo "$total files: $same identical, $differ differ, $status changed exit status, $both_fail refused by both"
-[ $messages = 1 ] && echo "messages, sidecars, info and check: $mismatch files differ"
+if [ $messages = 1 ]; then echo "messages, sidecars, info and check: $mismatch files differ"; fi

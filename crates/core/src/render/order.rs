@@ -46,8 +46,8 @@ pub const ORIGIN_ORDER_MIN: usize = 4096;
 /// Scenes whose trace reads fewer bytes than this (octree, vertices, index triples) are traced
 /// in the list's order: they stay in the last-level cache in any order (this machine's is 32
 /// MiB, shared with the streamed rays and buffers), and ordering costs about 25 ns a ray. A
-/// million incoherent rays, one thread: the bunny (3.9 MB) 6 % slower ordered, four bunnies
-/// side by side (15 MB) 12–20 % faster, fifteen (58 MB) 28–46 %; see
+/// million incoherent rays, one thread: the bunny (3.9 MB) 6–8 % slower ordered, four
+/// bunnies side by side (15 MB) 15–40 % faster, fifteen (58 MB) 26–30 %; see
 /// reports/octree_profile.md.
 pub const ORIGIN_ORDER_BYTES: usize = 8 << 20;
 
