@@ -127,10 +127,7 @@ pub trait PrimitiveSet: Sync {
         t_max: f64,
         ts: &mut [f64; GROUP],
     ) -> PacketCrossings {
-        PacketCrossings {
-            hits: self.intersect_group(indices, ray, t_max, ts),
-            ..PacketCrossings::default()
-        }
+        PacketCrossings::hits_only(self.intersect_group(indices, ray, t_max, ts))
     }
 
     /// Per-packet data computed once by [`PrimitiveSet::prepare_packet`].
@@ -170,10 +167,7 @@ pub trait PrimitiveSet: Sync {
         t_max: &[f64; PACKET],
         ts: &mut [f64; PACKET],
     ) -> PacketCrossings {
-        PacketCrossings {
-            hits: self.intersect_packet(index, rays, packet, active, t_max, ts),
-            ..PacketCrossings::default()
-        }
+        PacketCrossings::hits_only(self.intersect_packet(index, rays, packet, active, t_max, ts))
     }
 }
 
@@ -187,6 +181,17 @@ pub struct PacketCrossings {
     /// The rays whose exact ray certainly crosses the exact primitive's interior (for a
     /// triangle, as `bound::triangle::certainly_inside` decides it).
     pub inside: u32,
+}
+
+impl PacketCrossings {
+    /// The rays `hits` hit it; nothing said of the others.
+    #[inline(always)]
+    pub fn hits_only(hits: u32) -> PacketCrossings {
+        PacketCrossings {
+            hits,
+            ..PacketCrossings::default()
+        }
+    }
 }
 
 /// Primitives tested together by [`PrimitiveSet::intersect_group`].

@@ -160,9 +160,6 @@ pub fn certain_offered(
     // certainly miss), and the rest mostly neighbours the exact ray passes beside (four at a
     // time by `Scene::apart`): no probe to make for them.
     let (scene, own) = (tracer.scene, hit.map(|(h, _)| h));
-    if prims.iter().all(|&p| scene.is_hit_itself(p as usize, own)) {
-        return Some(true);
-    }
     let mut rivals = [0; OFFERED];
     let mut count = 0;
     for &prim in prims
@@ -171,6 +168,9 @@ pub fn certain_offered(
     {
         rivals[count] = prim;
         count += 1;
+    }
+    if count == 0 {
+        return Some(true);
     }
     let watertight = WatertightRay::new(ray.origin, ray.dir);
     let root = root_size(tracer);
@@ -192,8 +192,8 @@ pub fn certain_offered(
 }
 
 /// Whether `search` finds no competitor of `ray`'s `hit` up to `reach`'s limit (with the ray's
-/// watertight set-up): it is handed the ray's probe (the hit's instance triangle found) and says whether some candidate primitive may
-/// cross the ray there ([`Scene::may_cross`]).
+/// watertight set-up): it is handed the ray's probe (the hit's instance triangle found) and
+/// says whether some candidate primitive may cross the ray there ([`Scene::may_cross`]).
 fn no_competitor(
     tracer: &Tracer,
     ray: &Ray,

@@ -410,9 +410,10 @@ where
     S: RaySource + ?Sized,
     R: Fn(usize) -> (f64, f64) + Sync,
 {
-    let trace_bytes = tracer
-        .tracer()
-        .map(|t| t.octree.bytes() + t.scene.trace_bytes());
+    let trace_bytes = || {
+        let tracer = tracer.tracer()?;
+        Some(tracer.octree.bytes() + tracer.scene.trace_bytes())
+    };
     match origin_order(rays.source, trace_bytes) {
         Some(origins) => trace_reordered(tracer, rays, aovs, progress, &origins),
         None => trace_in_order(tracer, rays, aovs, progress),

@@ -6,7 +6,7 @@
 //! (the search of one ray is the same in a packet or alone); the buffers are put back in the
 //! given order.
 
-use crate::geometry::{Ray, RaySource};
+use crate::geometry::{Aabb, Ray, RaySource};
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -45,7 +45,8 @@ pub const ORIGIN_ORDER_MIN: usize = 4096;
 
 /// Scenes whose trace reads fewer bytes than this (octree, vertices, index triples) are traced
 /// in the list's order: they stay in the last-level cache in any order (this machine's is 32
-/// MiB, shared with the streamed rays and buffers), and ordering costs about 25 ns a ray. A
+/// MiB, shared with the streamed rays and buffers), and ordering costs about 25 ns a ray to
+/// make and undo, and 35–40 ns more to read the rays out of sequence. A
 /// million incoherent rays, one thread: the bunny (3.9 MB) 6–8 % slower ordered, four
 /// bunnies side by side (15 MB) 15–40 % faster, fifteen (58 MB) 26–30 %; see
 /// reports/octree_profile.md.
@@ -69,25 +70,27 @@ pub struct OriginOrder {
 /// The [`OriginOrder`] of `source`, or `None` to keep its order: for an image's rays (they go
 /// in tiles), for fewer than [`ORIGIN_ORDER_MIN`] rays, when every origin lies in one cell (a
 /// camera's rays), and for a scene whose trace reads fewer than [`ORIGIN_ORDER_BYTES`]
-/// (`trace_bytes`, `None` when unknown): it stays in cache in any order.
+/// (`trace_bytes()`, asked only for a long list; `None` when unknown): it stays in cache in
+/// any order.
 pub fn origin_order<S: RaySource + ?Sized>(
     source: &S,
-    trace_bytes: Option<usize>,
+    trace_bytes: impl FnOnce() -> Option<usize>,
 ) -> Option<OriginOrder> {
     let n = source.len();
-    let small = trace_bytes.is_none_or(|bytes| bytes < ORIGIN_ORDER_BYTES);
-    if source.row_width().is_some() || n < ORIGIN_ORDER_MIN || small {
+    if source.row_width().is_some() || n < ORIGIN_ORDER_MIN {
         return None;
     }
-    let none = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let (lo, hi) = (0..n)
+    if trace_bytes().is_none_or(|bytes| bytes < ORIGIN_ORDER_BYTES) {
+        return None;
+    }
+    let origins = (0..n)
         .into_par_iter()
         .with_min_len(ORIGIN_ORDER_MIN)
         .map(|i| source.ray(i).origin)
         .filter(|o| o.is_finite())
-        .fold(|| none, |(lo, hi), o| (lo.min(o), hi.max(o)))
-        .reduce(|| none, |a, b| (a.0.min(b.0), a.1.max(b.1)));
-    let extent = hi - lo;
+        .fold(|| Aabb::EMPTY, Aabb::grow)
+        .reduce(|| Aabb::EMPTY, Aabb::union);
+    let (lo, extent) = (origins.min, origins.size());
     if !extent.is_finite() || extent.max_element() <= 0.0 {
         return None;
     }
@@ -226,7 +229,7 @@ mod tests {
             .iter()
             .map(|p| Ray::new(DVec3::from_array(p.map(|c| c as f64)), DVec3::X))
             .collect();
-        let order = origin_order(&rays, Some(usize::MAX))
+        let order = origin_order(&rays, || Some(usize::MAX))
             .expect("spread origins")
             .order;
         let mut sorted = order.clone();
@@ -253,7 +256,7 @@ mod tests {
     fn origin_order_leaves_what_it_cannot_improve() {
         let ray = |x: f64| Ray::new(DVec3::new(x, 0.0, 0.0), DVec3::Z);
         let short: Vec<Ray> = (0..100).map(|i| ray(i as f64)).collect();
-        let all = Some(usize::MAX);
+        let all = || Some(usize::MAX);
         assert_eq!(origin_order(&short, all), None);
         let camera: Vec<Ray> = (0..5000).map(|_| ray(1.0)).collect();
         assert_eq!(origin_order(&camera, all), None);
@@ -261,18 +264,23 @@ mod tests {
         assert_eq!(origin_order(&lost, all), None);
         let spread: Vec<Ray> = (0..5000).map(|i| ray(i as f64)).collect();
         assert!(origin_order(&spread, all).is_some());
-        let small = Some(ORIGIN_ORDER_BYTES - 1);
+        let small = || Some(ORIGIN_ORDER_BYTES - 1);
         assert_eq!(
             origin_order(&spread, small),
             None,
             "a scene that stays in cache"
         );
-        assert_eq!(origin_order(&spread, None), None, "an unknown scene size");
+        let unknown = || None;
+        assert_eq!(
+            origin_order(&spread, unknown),
+            None,
+            "an unknown scene size"
+        );
         let mut mixed: Vec<Ray> = (0..5000).map(|i| ray((5000 - i) as f64)).collect();
         mixed[7] = ray(f64::NAN);
         mixed[8] = ray(f64::INFINITY);
         mixed[9] = ray(f64::NEG_INFINITY);
-        let order = origin_order(&mixed, Some(usize::MAX))
+        let order = origin_order(&mixed, || Some(usize::MAX))
             .expect("spread origins")
             .order;
         assert_eq!(order.len(), 5000);
@@ -290,7 +298,7 @@ mod tests {
         let rays: Vec<Ray> = (0..5000)
             .map(|i| Ray::new(DVec3::new(((i * 7919) % 5000) as f64, 0.0, 0.0), DVec3::Z))
             .collect();
-        let origins = origin_order(&rays, Some(usize::MAX)).expect("spread origins");
+        let origins = origin_order(&rays, || Some(usize::MAX)).expect("spread origins");
         for stride in [1, 2, 3] {
             let traced: Vec<f64> = origins
                 .order

@@ -409,10 +409,7 @@ impl MeshSet {
         if last == 0 && !APART {
             let t = self.intersect_triangle(indices[0] as usize, ray, t_max);
             ts[0] = t.unwrap_or(0.0);
-            return PacketCrossings {
-                hits: u32::from(t.is_some()),
-                ..PacketCrossings::default()
-            };
+            return PacketCrossings::hits_only(u32::from(t.is_some()));
         }
         // The lanes left over in a group of fewer than four hold its first triangle.
         let mut tris = [self.mesh.triangle(indices[0] as usize); GROUP];

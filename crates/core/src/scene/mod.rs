@@ -638,10 +638,7 @@ impl PrimitiveSet for Scene {
     ) -> PacketCrossings {
         let triangles = self.world.mesh.len();
         if !indices.iter().all(|&i| (i as usize) < triangles) {
-            return PacketCrossings {
-                hits: intersect_one_by_one(self, indices, ray, t_max, ts),
-                ..PacketCrossings::default()
-            };
+            return PacketCrossings::hits_only(intersect_one_by_one(self, indices, ray, t_max, ts));
         }
         let (mut placement, mut searched) = ([0.0; GROUP], 0);
         for (k, &i) in indices.iter().enumerate() {
@@ -715,10 +712,9 @@ impl Scene {
         (t_max, ts): (&[f64; PACKET], &mut [f64; PACKET]),
     ) -> PacketCrossings {
         let Some(packet) = packet.as_ref().filter(|_| index < self.world.mesh.len()) else {
-            return PacketCrossings {
-                hits: self.intersect_other_packet(index, rays, active, t_max, ts),
-                ..PacketCrossings::default()
-            };
+            return PacketCrossings::hits_only(
+                self.intersect_other_packet(index, rays, active, t_max, ts),
+            );
         };
         let ray = |i: usize| &rays[i].extra.triangle;
         let world = &self.world;

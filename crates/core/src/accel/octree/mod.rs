@@ -621,10 +621,7 @@ fn test_group<P: PrimitiveSet, N: Notes>(
         }
         crossings
     } else {
-        PacketCrossings {
-            hits: set.intersect_group(group, ray, bound, &mut ts),
-            ..PacketCrossings::default()
-        }
+        PacketCrossings::hits_only(set.intersect_group(group, ray, bound, &mut ts))
     };
     for k in set_bits(crossings.hits) {
         let hit = Hit {

@@ -40,7 +40,7 @@ fn trace_with_bad_rays(
     let report = |n| reports.push(n);
     let result = pool.install(|| match reorder {
         true => {
-            let origins = origin_order(&source, Some(usize::MAX)).expect("spread origins");
+            let origins = origin_order(&source, || Some(usize::MAX)).expect("spread origins");
             trace_reordered(&tracer, &rays, &[Aov::Depth], report, &origins)
         }
         false => trace(&tracer, &rays, &[Aov::Depth], report),
@@ -110,7 +110,7 @@ fn origin_order_gives_the_buffers_of_the_given_order() {
             Ray::new(rng.point(-1.5, 1.5), dir)
         })
         .collect();
-    let origins = origin_order(&source, Some(usize::MAX)).expect("spread origins");
+    let origins = origin_order(&source, || Some(usize::MAX)).expect("spread origins");
     let rays = Rays {
         source: &source,
         range: |_| (0.0, f64::INFINITY),
