@@ -160,6 +160,10 @@ pub fn certain_offered(
     // certainly miss), and the rest mostly neighbours the exact ray passes beside (four at a
     // time by `Scene::apart`): no probe to make for them.
     let (scene, own) = (tracer.scene, hit.map(|(h, _)| h));
+    // The common case first, before the rivals' array is made.
+    if prims.iter().all(|&p| scene.is_hit_itself(p as usize, own)) {
+        return Some(true);
+    }
     let mut rivals = [0; OFFERED];
     let mut count = 0;
     for &prim in prims
@@ -168,9 +172,6 @@ pub fn certain_offered(
     {
         rivals[count] = prim;
         count += 1;
-    }
-    if count == 0 {
-        return Some(true);
     }
     let watertight = WatertightRay::new(ray.origin, ray.dir);
     let root = root_size(tracer);
