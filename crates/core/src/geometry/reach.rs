@@ -51,14 +51,15 @@ impl ReachBox {
         enter <= exit
     }
 
-    /// [`ReachBox::may_reach`] for the rays `active` (bit `i` for ray `i`) of a packet, given
-    /// as (origin, direction): the mask of those it lets through, by `kernel`. Every ray is
-    /// tested, without branches, so that the loop compiles to straight-line code.
+    /// [`ReachBox::may_reach`] for the rays `active` (bit `i` for ray `i`) of a packet, ray `i`
+    /// given by `rays(i)` as (origin, direction): the mask of those it lets through, by
+    /// `kernel`. Every ray is tested, without branches, so that the loop compiles to
+    /// straight-line code.
     #[inline]
     pub fn reaching(
         &self,
         kernel: Kernel,
-        rays: &[(DVec3, DVec3); PACKET],
+        rays: impl Fn(usize) -> (DVec3, DVec3),
         active: u32,
         t_max: &[f64; PACKET],
     ) -> u32 {
@@ -78,7 +79,7 @@ impl ReachBox {
     #[target_feature(enable = "avx2")]
     unsafe fn reaching_avx2(
         &self,
-        rays: &[(DVec3, DVec3); PACKET],
+        rays: impl Fn(usize) -> (DVec3, DVec3),
         active: u32,
         t_max: &[f64; PACKET],
     ) -> u32 {
@@ -89,13 +90,14 @@ impl ReachBox {
     #[inline(always)]
     fn reaching_with(
         &self,
-        rays: &[(DVec3, DVec3); PACKET],
+        rays: impl Fn(usize) -> (DVec3, DVec3),
         active: u32,
         t_max: &[f64; PACKET],
     ) -> u32 {
         let mut mask = 0;
-        for (i, &(origin, dir)) in rays.iter().enumerate() {
-            mask |= u32::from(self.may_reach(origin, dir.recip(), t_max[i])) << i;
+        for (i, &t_max) in t_max.iter().enumerate() {
+            let (origin, dir) = rays(i);
+            mask |= u32::from(self.may_reach(origin, dir.recip(), t_max)) << i;
         }
         mask & active
     }
@@ -148,9 +150,9 @@ mod tests {
                 .into_iter()
                 .filter(|k| k.available())
             {
-                assert_eq!(reach.reaching(kernel, &rays, 0xff, &limits), expected);
+                assert_eq!(reach.reaching(kernel, |i| rays[i], 0xff, &limits), expected);
                 assert_eq!(
-                    reach.reaching(kernel, &rays, 0b1010_0101, &limits),
+                    reach.reaching(kernel, |i| rays[i], 0b1010_0101, &limits),
                     expected & 0b1010_0101
                 );
             }

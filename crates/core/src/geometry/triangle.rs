@@ -17,6 +17,14 @@ pub struct WatertightRay {
 }
 
 impl WatertightRay {
+    /// The set-up of the ray `t · (0, 0, 1)` (`new(DVec3::ZERO, DVec3::Z)`), as a constant: it
+    /// stands in where no triangle will be tested, for free.
+    pub const Z_AXIS: WatertightRay = WatertightRay {
+        origin: DVec3::ZERO,
+        axes: [0, 1, 2],
+        shear: DVec3::new(0.0, 0.0, 1.0),
+    };
+
     /// Prepares `origin + t * dir` (same coordinates as the triangles; `dir` non-zero).
     #[inline]
     pub fn new(origin: DVec3, dir: DVec3) -> Self {
@@ -238,6 +246,21 @@ mod tests {
         let ray = WatertightRay::new(DVec3::new(0.0, 0.0, 5.0), DVec3::new(0.0, 0.0, -2.0));
         assert_eq!(ray.intersect(&TRI, f64::INFINITY), Some(2.5));
         assert_eq!(ray.intersect(&TRI, 2.0), None);
+    }
+
+    /// The constant is the set-up `new` makes for the +z axis (kz = 2, no swap, unit shear),
+    /// and it tests like it: the plane z = 0 of the test triangle, met from below at t = 1.
+    #[test]
+    fn the_z_axis_constant_is_the_z_axis_set_up() {
+        let made = WatertightRay::new(DVec3::ZERO, DVec3::Z);
+        let constant = WatertightRay::Z_AXIS;
+        assert_eq!(constant.axes(), made.axes());
+        assert_eq!(constant.shear_and_origin(), made.shear_and_origin());
+        let below = WatertightRay {
+            origin: DVec3::new(0.0, 0.0, -1.0),
+            ..WatertightRay::Z_AXIS
+        };
+        assert_eq!(below.intersect(&TRI, f64::INFINITY), Some(1.0));
     }
 
     #[test]

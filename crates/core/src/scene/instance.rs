@@ -167,58 +167,79 @@ impl Instance {
         self.reach.may_reach(origin, dir.recip(), t_max)
     }
 
-    /// [`Instance::intersect`] for the rays `active` (bit `i` for ray `i`) of a packet, with
-    /// world origins and directions: each ray gets exactly its [`Instance::intersect`] answer
-    /// (`None` for the rays not in `active`). The rays [`Instance::may_reach`] lets through go
-    /// through the mesh's octree together when there are `PACKET_FROM` of them or more and
-    /// their directions in the mesh frame can go as one packet, else one by one.
+    /// [`Instance::intersect`] for the rays `active` (bit `i` for ray `i`) of a packet, ray `i`
+    /// given by `rays(i)` as its world origin and direction: the mask of the rays that hit,
+    /// each with the `t` of its [`Instance::intersect`] answer in `ts`. The rays
+    /// [`Instance::may_reach`] lets through go through the mesh's octree together when there
+    /// are `PACKET_FROM` of them or more and their directions in the mesh frame can go as one
+    /// packet, else one by one.
     pub fn intersect_packet(
         &self,
         kernel: Kernel,
         stored: &StoredMesh,
-        rays: [(DVec3, DVec3); PACKET],
+        rays: impl Fn(usize) -> (DVec3, DVec3),
         active: u32,
-        t_max: &[f64; PACKET],
-    ) -> [Option<Hit>; PACKET] {
+        (t_max, ts): (&[f64; PACKET], &mut [f64; PACKET]),
+    ) -> u32 {
         let active = self.reach.reaching(kernel, &rays, active, t_max);
-        if active.count_ones() as usize >= PACKET_FROM {
-            if let Some(hits) = self.trace_packet(kernel, stored, rays, active, t_max) {
-                return hits;
+        if active == 0 {
+            return 0;
+        }
+        let mut best = [None; PACKET];
+        let as_packet = active.count_ones() as usize >= PACKET_FROM
+            && self.trace_packet(kernel, stored, &rays, active, t_max, &mut best);
+        if !as_packet {
+            for i in set_bits(active) {
+                let (origin, dir) = rays(i);
+                best[i] = self.trace(kernel, stored, origin, dir, t_max[i]);
             }
         }
-        let mut hits = [None; PACKET];
+        let mut hits = 0;
         for i in set_bits(active) {
-            hits[i] = self.trace(kernel, stored, rays[i].0, rays[i].1, t_max[i]);
+            if let Some(hit) = best[i] {
+                ts[i] = hit.t;
+                hits |= 1 << i;
+            }
         }
         hits
     }
 
-    /// The rays `active` (at least one) through the mesh's octree as one packet, or `None`
-    /// when they cannot go as one ([`Octree::intersect_packet`]).
+    /// The rays `active` (at least one) through the mesh's octree as one packet, their
+    /// answers into `best`; false, with `best` untouched, when they cannot go as one
+    /// ([`Octree::intersect_packet_preparing`]). Each ray's set-up for the triangle tests is
+    /// made only if the packet reaches a leaf.
     fn trace_packet(
         &self,
         kernel: Kernel,
         stored: &StoredMesh,
-        rays: [(DVec3, DVec3); PACKET],
+        rays: &impl Fn(usize) -> (DVec3, DVec3),
         active: u32,
         t_max: &[f64; PACKET],
-    ) -> Option<[Option<Hit>; PACKET]> {
+        best: &mut [Option<Hit>; PACKET],
+    ) -> bool {
         // The rays not taking part stand in for the first one that does, with a limit of -inf.
         let first = active.trailing_zeros() as usize;
-        let (origin, dir) = rays[first];
-        let stand_in = self.local_ray(kernel, stored, origin, dir);
+        let stand_in = self.in_frame(rays(first));
+        let mut frame = [stand_in; PACKET];
         let mut limits = [f64::NEG_INFINITY; PACKET];
-        let mut local = [stand_in; PACKET];
         for i in set_bits(active) {
-            let (origin, dir) = rays[i];
             if i != first {
-                local[i] = self.local_ray(kernel, stored, origin, dir);
+                frame[i] = self.in_frame(rays(i));
             }
             limits[i] = t_max[i];
         }
-        stored
-            .octree()
-            .intersect_prepared_packet(&stored.set, &local, &limits)
+        let anchor = stored.set.anchor;
+        let local_origins = frame.map(|(origin, _)| origin - anchor);
+        let dirs = frame.map(|(_, dir)| dir);
+        let prepare = |i: usize| prepared(kernel, stored, frame[i]);
+        stored.octree().intersect_packet_preparing(
+            &stored.set,
+            &local_origins,
+            &dirs,
+            &limits,
+            (kernel, prepare),
+            best,
+        )
     }
 
     /// The world ray `origin + t · dir` in the mesh frame, prepared for its octree.
@@ -229,18 +250,34 @@ impl Instance {
         origin: DVec3,
         dir: DVec3,
     ) -> PreparedRay<WatertightRay> {
+        prepared(kernel, stored, self.in_frame((origin, dir)))
+    }
+
+    /// The world ray `(origin, dir)` in the mesh frame (same `t`).
+    #[inline]
+    fn in_frame(&self, (origin, dir): (DVec3, DVec3)) -> (DVec3, DVec3) {
         // origin - translation first: near the instance that difference is exact or small, so
         // the mesh-frame origin keeps the digits of the ray's offset from the instance rather
         // than those of its distance from the world origin (same operation count as
         // transform_point3)
-        let o = self.to_local.matrix3 * (origin - self.to_world.translation);
-        let d = self.to_local.transform_vector3(dir) + DVec3::ZERO;
-        PreparedRay {
-            local_origin: o - stored.set.anchor,
-            dir: d,
-            extra: WatertightRay::new(o, d),
-            kernel,
-        }
+        let origin = self.to_local.matrix3 * (origin - self.to_world.translation);
+        (origin, self.to_local.transform_vector3(dir) + DVec3::ZERO)
+    }
+}
+
+/// The mesh-frame ray `(origin, dir)` prepared for `stored`'s octree: the octree's coordinates
+/// from its anchor, the watertight set-up from the origin itself.
+#[inline]
+fn prepared(
+    kernel: Kernel,
+    stored: &StoredMesh,
+    (origin, dir): (DVec3, DVec3),
+) -> PreparedRay<WatertightRay> {
+    PreparedRay {
+        local_origin: origin - stored.set.anchor,
+        dir,
+        extra: WatertightRay::new(origin, dir),
+        kernel,
     }
 }
 

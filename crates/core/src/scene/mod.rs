@@ -585,10 +585,18 @@ impl PrimitiveSet for Scene {
         }
     }
 
+    /// Only the world's triangles read the watertight set-up: a scene of instances and
+    /// quadrics alone skips it (with the packet set-up, a tenth of the trace of 15 instanced
+    /// bunnies).
     fn prepare(&self, local_origin: DVec3, dir: DVec3) -> SceneRay {
         let world_origin = local_origin + self.anchor;
+        let triangle = if self.world.mesh.is_empty() {
+            WatertightRay::Z_AXIS
+        } else {
+            WatertightRay::new(world_origin, dir)
+        };
         SceneRay {
-            triangle: WatertightRay::new(world_origin, dir),
+            triangle,
             world_origin,
         }
     }
@@ -660,7 +668,11 @@ impl PrimitiveSet for Scene {
 
     type PacketData = Option<WatertightPacket>;
 
+    /// `None` (no packet pre-filter) for a scene without triangles of its own.
     fn prepare_packet(&self, rays: &[PreparedRay<SceneRay>; PACKET]) -> Self::PacketData {
+        if self.world.mesh.is_empty() {
+            return None;
+        }
         WatertightPacket::new(rays[0].kernel, |i| &rays[i].extra.triangle)
     }
 
@@ -774,16 +786,8 @@ impl Scene {
         };
         let instance = &self.instances[k];
         let stored = &self.meshes[instance.mesh as usize];
-        let world = rays.map(|ray| (ray.extra.world_origin, ray.dir));
-        let hits = instance.intersect_packet(rays[0].kernel, stored, world, active, t_max);
-        let mut hit_rays = 0;
-        for (i, hit) in hits.iter().enumerate() {
-            if let Some(hit) = hit {
-                ts[i] = hit.t;
-                hit_rays |= 1 << i;
-            }
-        }
-        hit_rays
+        let world = |i: usize| (rays[i].extra.world_origin, rays[i].dir);
+        instance.intersect_packet(rays[0].kernel, stored, world, active, (t_max, ts))
     }
 }
 

@@ -363,44 +363,44 @@ impl Octree {
         best: &mut [Option<Hit>; PACKET],
         notes: &mut impl Notes,
     ) -> bool {
-        self.intersect_packet_with(set, local_origins, dirs, t_max, None, best, notes)
+        let kernel = self.kernel;
+        let prepare = |i: usize| prepare_ray_with(set, kernel, local_origins[i], dirs[i]);
+        let rays = (local_origins, dirs, (kernel, prepare));
+        self.intersect_packet_with(set, rays, t_max, best, notes)
     }
 
-    /// [`Octree::intersect_packet`] for rays already prepared (their `local_origin` and `dir`
-    /// are traversed); a ray with a `t_max` of -inf takes no part.
-    pub fn intersect_prepared_packet<P: PrimitiveSet>(
-        &self,
-        set: &P,
-        rays: &[PreparedRay<P::RayData>; PACKET],
-        t_max: &[f64; PACKET],
-    ) -> Option<[Option<Hit>; PACKET]> {
-        let local_origins = rays.map(|ray| ray.local_origin);
-        let dirs = rays.map(|ray| ray.dir);
-        let mut best = [None; PACKET];
-        let unnoted = &mut Unnoted;
-        self.intersect_packet_with(
-            set,
-            &local_origins,
-            &dirs,
-            t_max,
-            Some(rays),
-            &mut best,
-            unnoted,
-        )
-        .then_some(best)
-    }
-
-    /// [`Octree::intersect_packet_noting`], with the rays prepared for the primitive tests as
-    /// `given`, or else by [`super::prepare_ray`] when the first of them reaches a leaf, and
-    /// `notes` told what each ray is offered.
+    /// [`Octree::intersect_packet_noting`] without notes, for rays whose primitive data the
+    /// caller prepares: `prepare(i)` gives ray `i` prepared for `kernel` (its `local_origin`
+    /// and `dir` those given here), asked for once the packet reaches a leaf. A ray with a
+    /// `t_max` of -inf takes no part. The mapped rays of an instance come this way: their
+    /// set-up is made from the origin in the mesh frame, not from the anchored one.
     #[allow(clippy::too_many_arguments)]
-    fn intersect_packet_with<P: PrimitiveSet, N: Notes>(
+    pub fn intersect_packet_preparing<P: PrimitiveSet>(
         &self,
         set: &P,
         local_origins: &[DVec3; PACKET],
         dirs: &[DVec3; PACKET],
         t_max: &[f64; PACKET],
-        given: Option<&[PreparedRay<P::RayData>; PACKET]>,
+        (kernel, prepare): (Kernel, impl Fn(usize) -> PreparedRay<P::RayData>),
+        best: &mut [Option<Hit>; PACKET],
+    ) -> bool {
+        let rays = (local_origins, dirs, (kernel, prepare));
+        self.intersect_packet_with(set, rays, t_max, best, &mut Unnoted)
+    }
+
+    /// [`Octree::intersect_packet_noting`] for the rays `(local_origins, dirs, (kernel,
+    /// prepare))`, prepared for the primitive tests by `prepare` (by `kernel`) when the first
+    /// of them reaches a leaf, and `notes` told what each ray is offered.
+    #[allow(clippy::type_complexity)]
+    fn intersect_packet_with<P: PrimitiveSet, N: Notes>(
+        &self,
+        set: &P,
+        (local_origins, dirs, (kernel, prepare)): (
+            &[DVec3; PACKET],
+            &[DVec3; PACKET],
+            (Kernel, impl Fn(usize) -> PreparedRay<P::RayData>),
+        ),
+        t_max: &[f64; PACKET],
         best: &mut [Option<Hit>; PACKET],
         notes: &mut N,
     ) -> bool {
@@ -408,7 +408,6 @@ impl Octree {
         let mut packet_data = None;
         let mut tested = PacketMailbox::default();
         let mut ts = [0.0; PACKET];
-        let kernel = given.map_or(self.kernel, |rays| rays[0].kernel);
         packet::run(
             &self.layout,
             kernel,
@@ -417,13 +416,8 @@ impl Octree {
             self.scale,
             *t_max,
             |rays, refs, reach, limits| {
-                let prepared = given.unwrap_or_else(|| {
-                    own.get_or_insert_with(|| {
-                        std::array::from_fn(|i| {
-                            prepare_ray_with(set, kernel, local_origins[i], dirs[i])
-                        })
-                    })
-                });
+                let prepared: &[_; PACKET] =
+                    own.get_or_insert_with(|| std::array::from_fn(&prepare));
                 let kept = refs.iter().zip(reach).filter(|(_, &rays)| rays != 0);
                 if rays.is_power_of_two() {
                     // A ray alone: its primitives in groups, as in `intersect_ray`.
