@@ -155,8 +155,12 @@ impl Instance {
         dir: DVec3,
         t_max: f64,
     ) -> Option<Hit> {
-        let ray = self.local_ray(kernel, stored, origin, dir);
-        stored.octree().intersect(&stored.set, &ray, t_max)
+        let frame = self.in_frame((origin, dir));
+        let prepare = || prepared(kernel, stored, frame);
+        let local = (frame.0 - stored.set.anchor, frame.1);
+        stored
+            .octree()
+            .intersect_preparing(&stored.set, local, t_max, (kernel, prepare))
     }
 
     /// Whether the world ray `origin + t · dir` may meet the instance with `0 <= t <= t_max`:
@@ -240,17 +244,6 @@ impl Instance {
             (kernel, prepare),
             best,
         )
-    }
-
-    /// The world ray `origin + t · dir` in the mesh frame, prepared for its octree.
-    fn local_ray(
-        &self,
-        kernel: Kernel,
-        stored: &StoredMesh,
-        origin: DVec3,
-        dir: DVec3,
-    ) -> PreparedRay<WatertightRay> {
-        prepared(kernel, stored, self.in_frame((origin, dir)))
     }
 
     /// The world ray `(origin, dir)` in the mesh frame (same `t`).
@@ -337,8 +330,8 @@ mod tests {
                 let target = world.transform_point3((tri[0] + tri[1] + tri[2]) / 3.0);
                 let origin = target + rng.point(-5.0 * scale, 5.0 * scale);
                 let dir = target - origin;
-                let ray = instance.local_ray(Kernel::detect(), &stored, origin, dir);
-                if let Some(hit) = stored.octree().intersect(&stored.set, &ray, f64::INFINITY) {
+                let kernel = Kernel::detect();
+                if let Some(hit) = instance.trace(kernel, &stored, origin, dir, f64::INFINITY) {
                     assert!(instance.may_reach(origin, dir, hit.t), "round {round}");
                     hits += 1;
                 }

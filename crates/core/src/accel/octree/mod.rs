@@ -255,18 +255,28 @@ impl Octree {
         ray: &PreparedRay<P::RayData>,
         t_max: f64,
     ) -> Option<Hit> {
-        self.intersect_with(
-            set,
-            ray.local_origin,
-            ray.dir,
-            t_max,
-            Some(ray),
-            &mut Unnoted,
-        )
+        let local = (ray.local_origin, ray.dir);
+        self.intersect_preparing(set, local, t_max, (ray.kernel, || *ray))
     }
 
-    /// [`Octree::intersect`] for the ray `local_origin + t · dir`, prepared for the primitive
-    /// tests ([`super::prepare_ray`]) only when it reaches a leaf: most camera rays reach none.
+    /// The nearest hit with `0 < t <= t_max` of the ray `local_origin + t · dir`, exactly the
+    /// hit [`super::brute_force`] finds, for a ray whose primitive data the caller prepares:
+    /// `prepare()` gives it prepared for `kernel` (with this `local_origin` and `dir`), asked
+    /// for once the ray reaches a leaf. The mapped rays of an instance come this way (their
+    /// set-up is made from the origin in the mesh frame, not from the anchored one).
+    pub fn intersect_preparing<P: PrimitiveSet>(
+        &self,
+        set: &P,
+        (local_origin, dir): (DVec3, DVec3),
+        t_max: f64,
+        (kernel, prepare): (Kernel, impl Fn() -> PreparedRay<P::RayData>),
+    ) -> Option<Hit> {
+        let ray = (local_origin, dir, (kernel, prepare));
+        self.intersect_with(set, ray, t_max, &mut Unnoted)
+    }
+
+    /// [`Octree::intersect_preparing`] for a ray prepared by [`super::prepare_ray`] (only
+    /// when it reaches a leaf: most camera rays reach none).
     pub fn intersect_ray<P: PrimitiveSet>(
         &self,
         set: &P,
@@ -274,7 +284,7 @@ impl Octree {
         dir: DVec3,
         t_max: f64,
     ) -> Option<Hit> {
-        self.intersect_with(set, local_origin, dir, t_max, None, &mut Unnoted)
+        self.intersect_ray_noting(set, local_origin, dir, t_max, &mut Unnoted)
     }
 
     /// [`Octree::intersect_ray`] that tells `notes` what it offers the ray and keeps its limit
@@ -287,31 +297,31 @@ impl Octree {
         t_max: f64,
         notes: &mut impl Notes,
     ) -> Option<Hit> {
-        self.intersect_with(set, local_origin, dir, t_max, None, notes)
+        let kernel = self.kernel;
+        let prepare = move || prepare_ray_with(set, kernel, local_origin, dir);
+        self.intersect_with(set, (local_origin, dir, (kernel, prepare)), t_max, notes)
     }
 
-    /// [`Octree::intersect`], with the ray prepared for the primitive tests as `given`, or
-    /// else by [`super::prepare_ray`] when it first reaches a leaf, and `notes` told what the
-    /// ray is offered (the ray is number 0 to them).
+    /// [`Octree::intersect_preparing`] for the ray `(local_origin, dir, (kernel, prepare))`,
+    /// and `notes` told what the ray is offered (the ray is number 0 to them).
+    #[allow(clippy::type_complexity)]
     fn intersect_with<P: PrimitiveSet, N: Notes>(
         &self,
         set: &P,
-        local_origin: DVec3,
-        dir: DVec3,
+        (local_origin, dir, (kernel, prepare)): (
+            DVec3,
+            DVec3,
+            (Kernel, impl Fn() -> PreparedRay<P::RayData>),
+        ),
         t_max: f64,
-        given: Option<&PreparedRay<P::RayData>>,
         notes: &mut N,
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut own = None;
         let mut tested = Mailbox::default();
-        // A ray prepared elsewhere brings its kernel (an instance's rays, the top octree's).
-        let kernel = given.map_or(self.kernel, |ray| ray.kernel);
         let lanes = Lanes::new(local_origin, dir + DVec3::ZERO, self.scale);
         let visit = |child, _, _| {
-            let ray = given.unwrap_or_else(|| {
-                own.get_or_insert_with(|| prepare_ray_with(set, kernel, local_origin, dir))
-            });
+            let ray: &_ = own.get_or_insert_with(&prepare);
             let bound = f32_above(best.map_or(t_max, |b| notes.reach(b.t)));
             let prims = self.layout.leaf(child);
             let mut batch = Batch::default();
@@ -374,7 +384,6 @@ impl Octree {
     /// and `dir` those given here), asked for once the packet reaches a leaf. A ray with a
     /// `t_max` of -inf takes no part. The mapped rays of an instance come this way: their
     /// set-up is made from the origin in the mesh frame, not from the anchored one.
-    #[allow(clippy::too_many_arguments)]
     pub fn intersect_packet_preparing<P: PrimitiveSet>(
         &self,
         set: &P,
