@@ -290,7 +290,11 @@ pub fn prepare_ray<P: PrimitiveSet>(
     prepare_ray_with(set, Kernel::detect(), local_origin, dir)
 }
 
-/// [`prepare_ray`] for the kernel `kernel` (which the CPU must run).
+/// [`prepare_ray`] for the kernel `kernel` (which the CPU must run). Always inlined, with
+/// `Scene::prepare`: as calls they cost 0.3–1 % of a trace's instructions (callgrind, depth:
+/// bunny 512² camera 264.6 M → 263.1 M, helmet incoherent 46.26 M → 45.94 M, quadric scene
+/// 52.6 M → 52.1 M).
+#[inline(always)]
 pub fn prepare_ray_with<P: PrimitiveSet>(
     set: &P,
     kernel: Kernel,

@@ -398,8 +398,8 @@ pub struct Rays<'a, S: ?Sized, R> {
 /// [`Rays::refuse_untraceable`]; blocks after a refused ray found so far are skipped);
 /// whether a ray without a hit is refused is checked with the ray at hand, not read again.
 ///
-/// A long list of rays is traced in the order of its origins' cells ([`origin_order`]) and its
-/// buffers put back in the given order: the same values as in the given order.
+/// A long list of rays is traced in the order of its origins' cells (module `render::order`)
+/// and its buffers put back in the given order: the same values as in the given order.
 pub fn trace<S, R>(
     tracer: &dyn NearestHits,
     rays: &Rays<S, R>,

@@ -587,7 +587,8 @@ impl PrimitiveSet for Scene {
 
     /// Only the world's triangles read the watertight set-up: a scene of instances and
     /// quadrics alone skips it (with the top level's packet set-up, 4 % of the trace of 15
-    /// instanced bunnies' camera rays).
+    /// instanced bunnies' camera rays). Always inlined (see [`crate::accel::prepare_ray_with`]).
+    #[inline(always)]
     fn prepare(&self, local_origin: DVec3, dir: DVec3) -> SceneRay {
         let world_origin = local_origin + self.anchor;
         let triangle = if self.world.mesh.is_empty() {
