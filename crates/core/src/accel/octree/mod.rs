@@ -269,7 +269,7 @@ impl Octree {
         set: &P,
         (local_origin, dir): (DVec3, DVec3),
         t_max: f64,
-        (kernel, prepare): (Kernel, impl Fn() -> PreparedRay<P::RayData>),
+        (kernel, prepare): (Kernel, impl Fn() -> PreparedRay<P::RayData> + Copy),
     ) -> Option<Hit> {
         let ray = (local_origin, dir, (kernel, prepare));
         self.intersect_with(set, ray, t_max, &mut Unnoted)
@@ -311,7 +311,7 @@ impl Octree {
         (local_origin, dir, (kernel, prepare)): (
             DVec3,
             DVec3,
-            (Kernel, impl Fn() -> PreparedRay<P::RayData>),
+            (Kernel, impl Fn() -> PreparedRay<P::RayData> + Copy),
         ),
         t_max: f64,
         notes: &mut N,
@@ -321,7 +321,7 @@ impl Octree {
         let mut tested = Mailbox::default();
         let lanes = Lanes::new(local_origin, dir + DVec3::ZERO, self.scale);
         let visit = |child, _, _| {
-            let ray: &_ = own.get_or_insert_with(&prepare);
+            let ray: &_ = own.get_or_insert_with(prepare);
             let bound = f32_above(best.map_or(t_max, |b| notes.reach(b.t)));
             let prims = self.layout.leaf(child);
             let mut batch = Batch::default();
@@ -390,7 +390,7 @@ impl Octree {
         local_origins: &[DVec3; PACKET],
         dirs: &[DVec3; PACKET],
         t_max: &[f64; PACKET],
-        (kernel, prepare): (Kernel, impl Fn(usize) -> PreparedRay<P::RayData>),
+        (kernel, prepare): (Kernel, impl Fn(usize) -> PreparedRay<P::RayData> + Copy),
         best: &mut [Option<Hit>; PACKET],
     ) -> bool {
         let rays = (local_origins, dirs, (kernel, prepare));
@@ -407,7 +407,7 @@ impl Octree {
         (local_origins, dirs, (kernel, prepare)): (
             &[DVec3; PACKET],
             &[DVec3; PACKET],
-            (Kernel, impl Fn(usize) -> PreparedRay<P::RayData>),
+            (Kernel, impl Fn(usize) -> PreparedRay<P::RayData> + Copy),
         ),
         t_max: &[f64; PACKET],
         best: &mut [Option<Hit>; PACKET],
@@ -426,7 +426,7 @@ impl Octree {
             *t_max,
             |rays, refs, reach, limits| {
                 let prepared: &[_; PACKET] =
-                    own.get_or_insert_with(|| std::array::from_fn(&prepare));
+                    own.get_or_insert_with(|| std::array::from_fn(prepare));
                 let kept = refs.iter().zip(reach).filter(|(_, &rays)| rays != 0);
                 if rays.is_power_of_two() {
                     // A ray alone: its primitives in groups, as in `intersect_ray`.
