@@ -439,7 +439,7 @@ where
             source: rays.source,
             order,
         },
-        range: |k: usize| (rays.range)(order[k]),
+        range: |k: usize| (rays.range)(order[k] as usize),
         refuse_untraceable: rays.refuse_untraceable,
     };
     match trace_in_order(tracer, &reordered, aovs, progress) {
@@ -449,7 +449,7 @@ where
                 let (t_min, t_max) = (rays.range)(i);
                 !traceable(&rays.source.ray(i), t_min, t_max)
             })
-            .unwrap_or(order[k])),
+            .unwrap_or(order[k] as usize)),
     }
 }
 

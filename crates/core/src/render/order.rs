@@ -59,25 +59,27 @@ const CELL_BITS: u32 = 5;
 
 /// The order of a list of rays by the cell of their origin along a Morton curve over the box
 /// of their finite origins (a counting sort, stable: rays of one cell keep their order).
+/// Indices are `u32`: with the sort keys, 12 bytes a ray, as the command line's memory
+/// estimate counts it (`raycast_io`'s `buffer_bytes`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct OriginOrder {
     /// The rays' indices in the order they are traced.
-    pub order: Vec<usize>,
+    pub order: Vec<u32>,
     /// Each ray's place in `order`.
-    place: Vec<usize>,
+    place: Vec<u32>,
 }
 
 /// The [`OriginOrder`] of `source`, or `None` to keep its order: for an image's rays (they go
-/// in tiles), for fewer than [`ORIGIN_ORDER_MIN`] rays, when every origin lies in one cell (a
-/// camera's rays), and for a scene whose trace reads fewer than [`ORIGIN_ORDER_BYTES`]
-/// (`trace_bytes()`, asked only for a long list; `None` when unknown): it stays in cache in
-/// any order.
+/// in tiles), for fewer than [`ORIGIN_ORDER_MIN`] rays or 2³² or more, when every origin lies
+/// in one cell (a camera's rays), and for a scene whose trace reads fewer than
+/// [`ORIGIN_ORDER_BYTES`] (`trace_bytes()`, asked only for a long list; `None` when unknown):
+/// it stays in cache in any order.
 pub fn origin_order<S: RaySource + ?Sized>(
     source: &S,
     trace_bytes: impl FnOnce() -> Option<usize>,
 ) -> Option<OriginOrder> {
     let n = source.len();
-    if source.row_width().is_some() || n < ORIGIN_ORDER_MIN {
+    if source.row_width().is_some() || n < ORIGIN_ORDER_MIN || u32::try_from(n).is_err() {
         return None;
     }
     if trace_bytes().is_none_or(|bytes| bytes < ORIGIN_ORDER_BYTES) {
@@ -111,9 +113,9 @@ pub fn origin_order<S: RaySource + ?Sized>(
         (*slot, next) = (next, next + *slot);
     }
     let (mut order, mut place) = (vec![0; n], vec![0; n]);
-    for (i, &key) in keys.iter().enumerate() {
+    for (i, &key) in (0u32..).zip(&keys) {
         let slot = &mut starts[key as usize];
-        (order[*slot], place[i]) = (i, *slot);
+        (order[*slot], place[i as usize]) = (i, *slot as u32);
         *slot += 1;
     }
     Some(OriginOrder { order, place })
@@ -127,7 +129,10 @@ impl OriginOrder {
         out.par_chunks_mut(stride)
             .zip(self.place.par_iter())
             .with_min_len(ORIGIN_ORDER_MIN)
-            .for_each(|(ray, &k)| ray.copy_from_slice(&values[k * stride..(k + 1) * stride]));
+            .for_each(|(ray, &k)| {
+                let k = k as usize;
+                ray.copy_from_slice(&values[k * stride..(k + 1) * stride]);
+            });
         out
     }
 }
@@ -152,7 +157,7 @@ pub struct Reordered<'a, S: ?Sized> {
     /// The rays in their given order.
     pub source: &'a S,
     /// The order they are traced in.
-    pub order: &'a [usize],
+    pub order: &'a [u32],
 }
 
 impl<S: RaySource + ?Sized> RaySource for Reordered<'_, S> {
@@ -162,7 +167,7 @@ impl<S: RaySource + ?Sized> RaySource for Reordered<'_, S> {
 
     #[inline(always)]
     fn ray(&self, index: usize) -> Ray {
-        self.source.ray(self.order[index])
+        self.source.ray(self.order[index] as usize)
     }
 
     fn view_axis(&self) -> Option<(DVec3, DVec3)> {
@@ -231,7 +236,10 @@ mod tests {
             .collect();
         let order = origin_order(&rays, || Some(usize::MAX))
             .expect("spread origins")
-            .order;
+            .order
+            .iter()
+            .map(|&i| i as usize)
+            .collect::<Vec<_>>();
         let mut sorted = order.clone();
         sorted.sort_unstable();
         assert_eq!(sorted, (0..rays.len()).collect::<Vec<_>>());
@@ -282,7 +290,10 @@ mod tests {
         mixed[9] = ray(f64::NEG_INFINITY);
         let order = origin_order(&mixed, || Some(usize::MAX))
             .expect("spread origins")
-            .order;
+            .order
+            .iter()
+            .map(|&i| i as usize)
+            .collect::<Vec<_>>();
         assert_eq!(order.len(), 5000);
         // NaN and −∞ fall in the first cell (before every finite x, in their given order), +∞
         // in the last, with the largest finite x.
@@ -303,7 +314,7 @@ mod tests {
             let traced: Vec<f64> = origins
                 .order
                 .iter()
-                .flat_map(|&i| (0..stride).map(move |c| (10 * i + c) as f64))
+                .flat_map(|&i| (0..stride).map(move |c| (10 * i as usize + c) as f64))
                 .collect();
             let own = origins.in_place(&traced, stride);
             let expected: Vec<f64> = (0..5000)

@@ -156,8 +156,8 @@ impl Instance {
         t_max: f64,
     ) -> Option<Hit> {
         let frame = self.in_frame((origin, dir));
-        let prepare = || prepared(kernel, stored, frame);
-        let local = (frame.0 - stored.set.anchor, frame.1);
+        let local = anchored(stored, frame);
+        let prepare = || prepared(kernel, local, frame.0);
         stored
             .octree()
             .intersect_preparing(&stored.set, local, t_max, (kernel, prepare))
@@ -232,10 +232,10 @@ impl Instance {
             }
             limits[i] = t_max[i];
         }
-        let anchor = stored.set.anchor;
-        let local_origins = frame.map(|(origin, _)| origin - anchor);
-        let dirs = frame.map(|(_, dir)| dir);
-        let prepare = |i: usize| prepared(kernel, stored, frame[i]);
+        let local = frame.map(|ray| anchored(stored, ray));
+        let local_origins = local.map(|(origin, _)| origin);
+        let dirs = local.map(|(_, dir)| dir);
+        let prepare = |i: usize| prepared(kernel, local[i], frame[i].0);
         stored.octree().intersect_packet_preparing(
             &stored.set,
             &local_origins,
@@ -258,16 +258,24 @@ impl Instance {
     }
 }
 
-/// The mesh-frame ray `(origin, dir)` prepared for `stored`'s octree: the octree's coordinates
-/// from its anchor, the watertight set-up from the origin itself.
+/// The mesh-frame ray `(origin, dir)` in the coordinates of `stored`'s octree (the origin from
+/// its anchor).
+#[inline]
+fn anchored(stored: &StoredMesh, (origin, dir): (DVec3, DVec3)) -> (DVec3, DVec3) {
+    (origin - stored.set.anchor, dir)
+}
+
+/// A mesh-frame ray prepared for its octree: `local`, the ray in the octree's coordinates
+/// ([`anchored`]), is traversed; the watertight set-up is made from `origin`, the ray's origin
+/// in the mesh frame itself.
 #[inline]
 fn prepared(
     kernel: Kernel,
-    stored: &StoredMesh,
-    (origin, dir): (DVec3, DVec3),
+    (local_origin, dir): (DVec3, DVec3),
+    origin: DVec3,
 ) -> PreparedRay<WatertightRay> {
     PreparedRay {
-        local_origin: origin - stored.set.anchor,
+        local_origin,
         dir,
         extra: WatertightRay::new(origin, dir),
         kernel,

@@ -235,8 +235,8 @@ pub fn buffer_bytes(
     count.saturating_mul(buffers + 2 * encoding + lists + reorder)
 }
 
-/// Bytes per ray of the order a ray list is traced in and of its sort keys
-/// (`raycast_core::render::trace`).
+/// Bytes per ray of the order a ray list is traced in (`raycast_core::render::trace`): the
+/// order and each ray's place in it, and the sort keys, four bytes each.
 const ORDER_BYTES: u64 = 12;
 
 /// Refuses a run whose buffers need more than `limit` bytes (`--max-memory`, or by default
