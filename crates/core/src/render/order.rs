@@ -179,6 +179,12 @@ impl<S: RaySource + ?Sized> RaySource for Reordered<'_, S> {
 mod tests {
     use super::*;
 
+    /// The order `origin_order` traces `rays` in, through a scene too large for the cache.
+    fn traced_order(rays: &Vec<Ray>) -> Vec<usize> {
+        let origins = origin_order(rays, || Some(usize::MAX)).expect("spread origins");
+        origins.order.iter().map(|&i| i as usize).collect()
+    }
+
     /// Every ray of a block is traced exactly once, and (for widths that are a multiple of
     /// the tile's) each run of eight rays is a 4 × 2 tile of neighbouring pixels.
     #[test]
@@ -234,12 +240,7 @@ mod tests {
             .iter()
             .map(|p| Ray::new(DVec3::from_array(p.map(|c| c as f64)), DVec3::X))
             .collect();
-        let order = origin_order(&rays, || Some(usize::MAX))
-            .expect("spread origins")
-            .order
-            .iter()
-            .map(|&i| i as usize)
-            .collect::<Vec<_>>();
+        let order = traced_order(&rays);
         let mut sorted = order.clone();
         sorted.sort_unstable();
         assert_eq!(sorted, (0..rays.len()).collect::<Vec<_>>());
@@ -288,12 +289,7 @@ mod tests {
         mixed[7] = ray(f64::NAN);
         mixed[8] = ray(f64::INFINITY);
         mixed[9] = ray(f64::NEG_INFINITY);
-        let order = origin_order(&mixed, || Some(usize::MAX))
-            .expect("spread origins")
-            .order
-            .iter()
-            .map(|&i| i as usize)
-            .collect::<Vec<_>>();
+        let order = traced_order(&mixed);
         assert_eq!(order.len(), 5000);
         // NaN and −∞ fall in the first cell (before every finite x, in their given order), +∞
         // in the last, with the largest finite x.
